@@ -1,0 +1,1 @@
+"""Pure-numpy algorithm core. Nothing in this package may import pydrake."""

@@ -1,0 +1,1 @@
+"""Drake LeafSystems that wrap the numpy core (:mod:`drake_disamb.core`)."""
