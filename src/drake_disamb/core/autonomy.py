@@ -1,0 +1,149 @@
+"""Potential-field autonomy: one 6-D end-effector command per goal (pure numpy).
+
+Paper, Section "Shared Control": every goal ``g`` has a potential field that treats ``g`` as an
+attractor and every *other* goal as a repeller; the autonomy command is the sum of the attractor
+and repeller velocities, in the full 6-D Cartesian space (FACTS section 6). For goal ``i``::
+
+    v_i = k_t (x_gi - x_r) + sum_{j != i, |x_r - x_gj| < rho} (x_r - x_gj) / (mu |x_r - x_gj|^2)
+    w_i = k_r * orientation_error(q_r, q_gi)
+
+with ``1/mu`` the repeller gain (m^2/s: a repeller at distance ``d`` pushes at ``gain / d`` m/s)
+and ``rho`` its influence radius (m). ``v_i`` and ``w_i`` are then each saturated to their maximum
+norms (the authors' simulation clipped the command norm to 0.2). Commands are ordered like the
+paper, ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), in the world frame W.
+
+Degenerate scenes never give NaN: a goal exactly at the robot has a zero attractor; a repeller
+whose goal sits exactly at the robot has no direction and contributes zero; a repeller's magnitude
+is capped at :data:`REPELLER_SPEED_CAP_FACTOR` times the maximum linear speed before summation
+(it is saturated afterwards anyway); a single goal has no repellers.
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core.geometry import _check_last, _check_quat, _orientation_error
+
+REPELLER_SPEED_CAP_FACTOR = 1e3
+"""A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
+
+
+def _is_real(value: object) -> bool:
+    """True for a finite real number (not a bool)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
+@dataclass(frozen=True)
+class PotentialFieldConfig:
+    """Gains and limits of the per-goal potential field.
+
+    Attributes:
+        attractor_gain_translation: ``k_t`` (1/s): linear velocity per metre of position error.
+        attractor_gain_rotation: ``k_r`` (1/s): angular velocity per radian of orientation error.
+        repeller_gain: ``1/mu`` (m^2/s): a repeller at distance ``d`` pushes at ``gain / d`` m/s.
+            0 disables repellers.
+        repeller_radius: Influence radius ``rho`` (m) beyond which a goal does not repel.
+        max_linear_speed: Saturation of the translational part (m/s).
+        max_angular_speed: Saturation of the rotational part (rad/s).
+
+    The defaults suit the MICO tasks (goals 0.2-0.4 m apart, FACTS section 8): 1/s attractors reach
+    the 0.2 m/s cap farther than 0.2 m from the goal and slow down smoothly inside it; a repeller
+    felt within 0.1 m pushes at 0.02 m/s at its edge and at the full 0.2 m/s 1 cm from a goal.
+    """
+
+    attractor_gain_translation: float = 1.0
+    attractor_gain_rotation: float = 1.0
+    repeller_gain: float = 0.002
+    repeller_radius: float = 0.1
+    max_linear_speed: float = 0.2
+    max_angular_speed: float = 0.4
+
+    def __post_init__(self) -> None:
+        for name in (
+            "attractor_gain_translation",
+            "attractor_gain_rotation",
+            "repeller_gain",
+            "repeller_radius",
+        ):
+            value = getattr(self, name)
+            if not (_is_real(value) and value >= 0):
+                raise ValueError(f"PotentialFieldConfig.{name}: expected a finite number >= 0, got {value!r}")
+        for name in ("max_linear_speed", "max_angular_speed"):
+            value = getattr(self, name)
+            if not (_is_real(value) and value > 0):
+                raise ValueError(f"PotentialFieldConfig.{name}: expected a finite number > 0, got {value!r}")
+
+
+def _saturate(v: NDArray[np.float64], max_norm: float) -> NDArray[np.float64]:
+    """Scale each vector along the last axis down to at most ``max_norm``."""
+    norm = np.sqrt(np.sum(v * v, axis=-1, keepdims=True))
+    return v * np.minimum(1.0, max_norm / np.maximum(norm, 1e-300))
+
+
+def _potential_field_commands(
+    position: NDArray[np.float64],
+    quat: NDArray[np.float64],
+    goal_positions: NDArray[np.float64],
+    goal_quats: NDArray[np.float64],
+    config: PotentialFieldConfig,
+) -> NDArray[np.float64]:
+    """Unchecked kernel of :func:`potential_field_commands` (unit quaternions assumed)."""
+    diff = goal_positions - position[..., None, :]  # (..., n, 3), robot -> goal
+    v = config.attractor_gain_translation * diff
+    n = goal_positions.shape[-2]
+    if n > 1 and config.repeller_gain > 0:
+        dist = np.sqrt(np.sum(diff * diff, axis=-1, keepdims=True))  # (..., n, 1)
+        active = (dist < config.repeller_radius) & (dist > 0.0)
+        safe = np.where(active, dist, 1.0)
+        speed = np.minimum(config.repeller_gain / safe, REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed)
+        rep = np.where(active, -diff / safe * speed, 0.0)  # goal j pushes the robot away from it
+        # Goal i feels every repeller except its own: an exact masked sum (no cancellation).
+        others = 1.0 - np.eye(n)
+        v = v + np.einsum("ij,...jk->...ik", others, rep)
+    w = config.attractor_gain_rotation * _orientation_error(quat[..., None, :], goal_quats)
+    return np.concatenate(
+        (_saturate(v, config.max_linear_speed), _saturate(w, config.max_angular_speed)), axis=-1
+    )
+
+
+def potential_field_commands(
+    position: ArrayLike,
+    quat: ArrayLike,
+    goal_positions: ArrayLike,
+    goal_quats: ArrayLike,
+    config: PotentialFieldConfig | None = None,
+) -> NDArray[np.float64]:
+    """Per-goal autonomy commands ``u_a`` (``(..., n, 6)``, ``[vx, vy, vz, wx, wy, wz]`` in W).
+
+    Args:
+        position: End-effector position(s) ``(..., 3)`` (m).
+        quat: End-effector orientation(s) ``(..., 4)`` ``[qw, qx, qy, qz]``.
+        goal_positions: ``(..., n, 3)`` goal positions (m).
+        goal_quats: ``(..., n, 4)`` goal orientations.
+        config: Gains and limits; ``None`` means the defaults.
+
+    Leading dimensions broadcast together. Row ``i`` drives the robot towards goal ``i`` and away
+    from every other goal within the repeller radius; translational and rotational parts are each
+    saturated. Never NaN (see the module docstring for the degenerate cases).
+    """
+    cfg = PotentialFieldConfig() if config is None else config
+    p = _check_last(position, 3, "position")
+    q = _check_quat(quat, "quat")
+    gp = _check_last(goal_positions, 3, "goal_positions")
+    gq = _check_quat(goal_quats, "goal_quats")
+    if gp.ndim < 2 or gq.ndim < 2:
+        raise ValueError(
+            "goal_positions/goal_quats: expected shapes (..., n, 3) and (..., n, 4), "
+            f"got {gp.shape} and {gq.shape}"
+        )
+    if gp.shape[-2] != gq.shape[-2]:
+        raise ValueError(
+            f"goal_quats: expected {gp.shape[-2]} goals like goal_positions, got shape {gq.shape}"
+        )
+    if gp.shape[-2] < 1:
+        raise ValueError("goal_positions: expected at least one goal, got 0")
+    return _potential_field_commands(p, q, gp, gq, cfg)

@@ -1,0 +1,124 @@
+"""Potential-field autonomy core (drake_disamb.core.autonomy)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
+from drake_disamb.core.geometry import orientation_error, quat_from_rotvec
+
+IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
+
+
+def _reference(position, quat, goal_positions, goal_quats, cfg: PotentialFieldConfig) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Goal-by-goal loop straight from the formula in FACTS section 6."""
+    n = len(goal_positions)
+    out = np.zeros((n, 6))
+    for i in range(n):
+        v = cfg.attractor_gain_translation * (goal_positions[i] - position)
+        for j in range(n):
+            if j == i:
+                continue
+            d = position - goal_positions[j]
+            dist = np.linalg.norm(d)
+            if 0.0 < dist < cfg.repeller_radius:
+                mu = 1.0 / cfg.repeller_gain
+                v = v + d / (mu * dist**2)
+        w = cfg.attractor_gain_rotation * orientation_error(quat, goal_quats[i])
+        if np.linalg.norm(v) > cfg.max_linear_speed:
+            v = v / np.linalg.norm(v) * cfg.max_linear_speed
+        if np.linalg.norm(w) > cfg.max_angular_speed:
+            w = w / np.linalg.norm(w) * cfg.max_angular_speed
+        out[i] = np.concatenate([v, w])
+    return out
+
+
+def _random_scene(rng: np.random.Generator, n: int):  # type: ignore[no-untyped-def]
+    position = rng.uniform(-0.3, 0.3, 3)
+    quat = quat_from_rotvec(rng.normal(scale=1.0, size=3))
+    goals = position + rng.uniform(-0.15, 0.15, (n, 3))  # many inside the repeller radius
+    goal_quats = quat_from_rotvec(rng.normal(scale=1.0, size=(n, 3)))
+    return position, quat, goals, goal_quats
+
+
+def test_matches_loop_reference_on_random_scenes() -> None:
+    rng = np.random.default_rng(0)
+    cfg = PotentialFieldConfig(repeller_gain=0.01, repeller_radius=0.15)
+    for n in (1, 2, 3, 5, 8):
+        for _ in range(10):
+            scene = _random_scene(rng, n)
+            np.testing.assert_allclose(
+                potential_field_commands(*scene, cfg), _reference(*scene, cfg), atol=1e-12
+            )
+
+
+def test_batched_equals_single() -> None:
+    rng = np.random.default_rng(1)
+    scenes = [_random_scene(rng, 4) for _ in range(6)]
+    stacked = [np.stack(parts) for parts in zip(*scenes, strict=True)]
+    batched = potential_field_commands(*stacked)
+    assert batched.shape == (6, 4, 6)
+    for b, scene in enumerate(scenes):
+        np.testing.assert_allclose(batched[b], potential_field_commands(*scene), atol=1e-15)
+
+
+def test_attractor_direction_and_saturation() -> None:
+    cfg = PotentialFieldConfig()
+    far = potential_field_commands([0, 0, 0], IDENTITY, [[1.0, 0, 0]], [IDENTITY], cfg)[0]
+    np.testing.assert_allclose(far[:3], [cfg.max_linear_speed, 0, 0], atol=1e-15)
+    near = potential_field_commands([0, 0, 0], IDENTITY, [[0.05, 0, 0]], [IDENTITY], cfg)[0]
+    np.testing.assert_allclose(near[:3], [0.05 * cfg.attractor_gain_translation, 0, 0], atol=1e-15)
+    # Rotation: goal rotated 1 rad about z -> command about +z, saturated to 0.4 rad/s.
+    rot = potential_field_commands([0, 0, 0], IDENTITY, [[0, 0, 0]], [quat_from_rotvec([0, 0, 1.0])], cfg)[0]
+    np.testing.assert_allclose(rot, [0, 0, 0, 0, 0, cfg.max_angular_speed], atol=1e-15)
+
+
+def test_repeller_pushes_away_only_within_radius_and_not_from_own_goal() -> None:
+    cfg = PotentialFieldConfig(attractor_gain_translation=0.0, repeller_gain=0.002, repeller_radius=0.1)
+    goals = np.array([[0.05, 0.0, 0.0], [0.0, 0.5, 0.0]])
+    u = potential_field_commands([0, 0, 0], IDENTITY, goals, [IDENTITY, IDENTITY], cfg)
+    # Goal 0 (5 cm away, inside the radius) repels the command for goal 1 at gain / d = 0.04 m/s, along -x.
+    np.testing.assert_allclose(u[1, :3], [-0.04, 0.0, 0.0], atol=1e-15)
+    # Goal 1 is outside the radius: no repeller on the command for goal 0; its own goal never repels.
+    np.testing.assert_allclose(u[0, :3], 0.0, atol=1e-15)
+
+
+def test_robot_on_a_goal_and_single_goal_never_nan() -> None:
+    cfg = PotentialFieldConfig()
+    goals = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1e-300, 0.0, 0.0], [0.2, 0.1, 0.0]])
+    quats = np.tile(IDENTITY, (4, 1))
+    u = potential_field_commands([0, 0, 0], IDENTITY, goals, quats, cfg)
+    assert np.all(np.isfinite(u))
+    assert np.all(np.linalg.norm(u[:, :3], axis=-1) <= cfg.max_linear_speed + 1e-15)
+    np.testing.assert_allclose(u[0, 3:], 0.0)
+    single = potential_field_commands([0, 0, 0], IDENTITY, goals[:1], quats[:1], cfg)
+    np.testing.assert_array_equal(single, np.zeros((1, 6)))
+
+
+def test_permuting_goals_permutes_commands() -> None:
+    rng = np.random.default_rng(2)
+    position, quat, goals, goal_quats = _random_scene(rng, 5)
+    perm = rng.permutation(5)
+    u = potential_field_commands(position, quat, goals, goal_quats)
+    np.testing.assert_allclose(
+        potential_field_commands(position, quat, goals[perm], goal_quats[perm]), u[perm], atol=1e-15
+    )
+
+
+def test_config_validation() -> None:
+    with pytest.raises(ValueError, match="max_linear_speed"):
+        PotentialFieldConfig(max_linear_speed=0.0)
+    with pytest.raises(ValueError, match="repeller_radius"):
+        PotentialFieldConfig(repeller_radius=float("nan"))
+    with pytest.raises(ValueError, match="attractor_gain_rotation"):
+        PotentialFieldConfig(attractor_gain_rotation=-1.0)
+
+
+def test_shape_validation() -> None:
+    with pytest.raises(ValueError, match="goal_quats"):
+        potential_field_commands([0, 0, 0], IDENTITY, [[1, 0, 0], [0, 1, 0]], [IDENTITY], None)
+    with pytest.raises(ValueError, match="goal_positions"):
+        potential_field_commands([0, 0, 0], IDENTITY, [[1, 0]], [IDENTITY], None)
+    with pytest.raises(ValueError, match="quat"):
+        potential_field_commands([0, 0, 0], [0, 0, 0, 0], [[1, 0, 0]], [IDENTITY], None)
