@@ -1,0 +1,190 @@
+"""Blending-based shared control (pure numpy).
+
+Paper, equations (sc) and (alpha) (FACTS section 6)::
+
+    u = alpha * u_{a, g*} + (1 - alpha) * u_h,        g* = argmax_i p_i
+
+    alpha = 0                                   if p(g*) <= rho1
+          = rho3 (p(g*) - rho1) / (rho2 - rho1) if rho1 < p(g*) <= rho2
+          = rho3                                if p(g*) > rho2
+
+with ``rho_i`` in ``[0, 1]``, ``rho2 > rho1``, and in the paper's implementation
+``rho1 = 1.2 / n_g``, ``rho2 = 1.4 / n_g``, ``rho3 = 0.7``. Commands are ``[vx, vy, vz, wx, wy, wz]``
+(m/s, rad/s) in the world frame. Every function broadcasts over leading batch dimensions.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+RHO1_TIMES_N = 1.2
+"""Paper default: ``rho1 = 1.2 / n_g``."""
+RHO2_TIMES_N = 1.4
+"""Paper default: ``rho2 = 1.4 / n_g``."""
+RHO3_DEFAULT = 0.7
+"""Paper default: the maximum share of the autonomy."""
+
+NO_INPUT_TOLERANCE = 1e-9
+"""A human command whose every entry is at most this (m/s or rad/s) in magnitude counts as no input."""
+
+
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def resolve_rhos(
+    n_goals: int, rho1: float | None = None, rho2: float | None = None, rho3: float = RHO3_DEFAULT
+) -> tuple[float, float, float]:
+    """The thresholds ``(rho1, rho2, rho3)``, with ``None`` replaced by the paper's defaults.
+
+    Raises ``ValueError`` (naming the parameter and its value) unless every rho is in ``[0, 1]`` and
+    ``rho2 > rho1``. With one goal the paper's defaults (1.2, 1.4) lie outside ``[0, 1]``, so
+    ``rho1`` and ``rho2`` must then be given explicitly.
+    """
+    if not (isinstance(n_goals, numbers.Integral) and not isinstance(n_goals, bool) and n_goals >= 1):
+        raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
+    r1 = RHO1_TIMES_N / n_goals if rho1 is None else rho1
+    r2 = RHO2_TIMES_N / n_goals if rho2 is None else rho2
+    for name, value, given in (("rho1", r1, rho1), ("rho2", r2, rho2), ("rho3", rho3, rho3)):
+        if not (_is_real(value) and 0.0 <= value <= 1.0):
+            hint = "" if given is not None else f" (paper default for n_goals={n_goals}; pass it explicitly)"
+            raise ValueError(f"{name}: expected a number in [0, 1], got {value!r}{hint}")
+    if not r2 > r1:
+        raise ValueError(f"rho2: expected rho2 > rho1 = {r1!r}, got {r2!r}")
+    return float(r1), float(r2), float(rho3)
+
+
+def blending_alpha(
+    p_star: ArrayLike,
+    n_goals: int,
+    rho1: float | None = None,
+    rho2: float | None = None,
+    rho3: float = RHO3_DEFAULT,
+) -> NDArray[np.float64] | float:
+    """The piecewise-linear blending factor of the paper for the top belief ``p_star``.
+
+    ``p_star`` may be a scalar or an array (elementwise). A non-finite ``p_star`` gives 0 (no
+    confidence, no assistance). Returns a float for a scalar input, else an array.
+    """
+    r1, r2, r3 = resolve_rhos(n_goals, rho1, rho2, rho3)
+    p = np.asarray(p_star, dtype=float)
+    ramp = r3 * (p - r1) / (r2 - r1)
+    alpha = np.where(p <= r1, 0.0, np.where(p <= r2, ramp, r3))
+    alpha = np.where(np.isfinite(p), alpha, 0.0)
+    return float(alpha) if alpha.ndim == 0 else alpha
+
+
+def blend(u_h: ArrayLike, u_a: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]:
+    """``alpha * u_a + (1 - alpha) * u_h`` (broadcast; ``alpha`` has the batch shape, no command axis).
+
+    ``alpha`` must lie in ``[0, 1]``.
+    """
+    a = np.asarray(alpha, dtype=float)
+    if not np.all((a >= 0.0) & (a <= 1.0)):
+        raise ValueError(f"alpha: expected numbers in [0, 1], got {a.tolist()!r}")
+    uh = np.asarray(u_h, dtype=float)
+    ua = np.asarray(u_a, dtype=float)
+    a = a[..., None]
+    return a * ua + (1.0 - a) * uh
+
+
+def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float) -> NDArray[np.float64]:
+    """Scale the translational and rotational parts of 6-D commands down to the given norms.
+
+    Each part keeps its direction; a part already within its limit is unchanged.
+    """
+    v = np.asarray(u, dtype=float)
+    if v.shape[-1] != 6:
+        raise ValueError(f"u: expected shape (..., 6), got {v.shape}")
+    out = v.copy()
+    for sl, limit in ((slice(0, 3), max_linear_speed), (slice(3, 6), max_angular_speed)):
+        part = v[..., sl]
+        norm = np.sqrt(np.sum(part * part, axis=-1, keepdims=True))
+        out[..., sl] = part * np.minimum(1.0, limit / np.maximum(norm, 1e-300))
+    return out
+
+
+def has_input(u_h: ArrayLike, tolerance: float = NO_INPUT_TOLERANCE) -> NDArray[np.bool_] | bool:
+    """True where the human command has any entry larger than ``tolerance`` in magnitude."""
+    u = np.asarray(u_h, dtype=float)
+    result = np.any(np.abs(u) > tolerance, axis=-1)
+    return bool(result) if np.ndim(result) == 0 else result
+
+
+@dataclass(frozen=True)
+class BlendingConfig:
+    """Settings of the shared-control blender.
+
+    Attributes:
+        rho1: Belief at or below which the autonomy gets no share; ``None`` = ``1.2 / n_goals``.
+        rho2: Belief above which the autonomy gets ``rho3``; ``None`` = ``1.4 / n_goals``.
+        rho3: Maximum autonomy share (paper 0.7).
+        assist_without_input: If True, blend even when the user gives no command (the paper's
+            law taken literally: a stationary user is driven toward ``g*`` at up to
+            ``rho3 * |u_a|``). If False (default), the autonomy only assists while the user
+            commands the arm; with no input the blended command is zero. See
+            :class:`drake_disamb.systems.blending.SharedControlBlender` for why.
+        max_linear_speed: Limit (m/s) on the norm of the blended translation. The default is the
+            largest blended translation seen in the study logs (FACTS section 5).
+        max_angular_speed: Limit (rad/s) on the norm of the blended rotation; default the largest
+            joystick rotation in the logs.
+    """
+
+    rho1: float | None = None
+    rho2: float | None = None
+    rho3: float = RHO3_DEFAULT
+    assist_without_input: bool = False
+    max_linear_speed: float = 0.26
+    max_angular_speed: float = 0.67
+
+    def __post_init__(self) -> None:
+        for name in ("max_linear_speed", "max_angular_speed"):
+            value = getattr(self, name)
+            if not (_is_real(value) and value > 0):
+                raise ValueError(f"BlendingConfig.{name}: expected a finite number > 0, got {value!r}")
+        if not isinstance(self.assist_without_input, bool):
+            raise ValueError(
+                "BlendingConfig.assist_without_input: expected True or False, "
+                f"got {self.assist_without_input!r}"
+            )
+
+    def rhos(self, n_goals: int) -> tuple[float, float, float]:
+        """``(rho1, rho2, rho3)`` for ``n_goals`` goals (validated)."""
+        return resolve_rhos(n_goals, self.rho1, self.rho2, self.rho3)
+
+
+def shared_control(
+    u_h: ArrayLike, belief: ArrayLike, u_a: ArrayLike, config: BlendingConfig
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | float, NDArray[np.int64] | int]:
+    """The full blending step: ``g*``, ``alpha``, the blended and speed-limited command.
+
+    Args:
+        u_h: Human commands ``(..., 6)``.
+        belief: Beliefs ``(..., n)`` (``g* = argmax``, ties to the lowest index).
+        u_a: Per-goal autonomy commands ``(..., n, 6)``.
+        config: Blending settings.
+
+    Returns:
+        ``(u, alpha, g_star)``. ``alpha`` is the share actually applied: 0 where the user gives no
+        input unless ``config.assist_without_input``.
+    """
+    uh = np.asarray(u_h, dtype=float)
+    p = np.asarray(belief, dtype=float)
+    ua = np.asarray(u_a, dtype=float)
+    n = p.shape[-1]
+    g_star = np.argmax(p, axis=-1)
+    p_star = np.take_along_axis(p, g_star[..., None], axis=-1)[..., 0]
+    r1, r2, r3 = config.rhos(n)
+    alpha = np.asarray(blending_alpha(p_star, n, r1, r2, r3))
+    if not config.assist_without_input:
+        alpha = np.where(has_input(uh), alpha, 0.0)
+    ua_star = np.take_along_axis(ua, g_star[..., None, None], axis=-2)[..., 0, :]
+    u = clamp_speed(blend(uh, ua_star, alpha), config.max_linear_speed, config.max_angular_speed)
+    if alpha.ndim == 0:
+        return u, float(alpha), int(g_star)
+    return u, alpha, g_star

@@ -1,0 +1,112 @@
+"""Shared-control blender: the paper's blending law as a Drake system."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, Context, LeafSystem
+
+from drake_disamb.core.blending import BlendingConfig, shared_control
+
+__all__ = ["BlendingConfig", "SharedControlBlender"]
+
+
+class SharedControlBlender(LeafSystem):
+    """Blend the human command with the autonomy's command for the most likely goal.
+
+    ``u = alpha * u_a(g*) + (1 - alpha) * u_h`` with ``g* = argmax belief`` (ties to the lowest
+    index) and the paper's piecewise-linear ``alpha(p(g*))`` (:mod:`drake_disamb.core.blending`),
+    then the translational and rotational parts are each limited to ``config.max_linear_speed``
+    (0.26 m/s) and ``config.max_angular_speed`` (0.67 rad/s).
+
+    .. pydrake_system::
+
+        name: SharedControlBlender
+        input_ports:
+        - u_h
+        - belief
+        - u_a
+        output_ports:
+        - u
+        - alpha
+        - g_star
+
+    Input ports:
+        u_h (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world frame.
+        belief (n): probability of each goal.
+        u_a (n * 6): per-goal autonomy commands, goal i in entries ``6 i .. 6 i + 5``, same order
+            and frame as ``u_h``.
+
+    Output ports (direct feedthrough, stateless):
+        u (6): blended, speed-limited command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world
+            frame (the paper's order, not Drake's ``[w; v]``).
+        alpha (1): the autonomy's share actually applied, in ``[0, rho3]``.
+        g_star (1): index of the most likely goal.
+
+    **No user input.** The paper blends "always", so with ``assist_without_input=True`` a user who
+    lets go is still driven toward ``g*`` at up to ``rho3 |u_a|`` (0.14 m/s with the default
+    autonomy) until the belief relaxes below ``rho1`` -- a few seconds with the DFT's time
+    constants, i.e. tens of centimetres. The default here is ``False``: the autonomy only assists
+    while the user commands the arm (``u_h != 0``); with no input ``alpha`` is 0 and ``u`` is zero.
+    Reasons: (1) letting go of the interface must stop an assistive arm, the user's basic safety
+    expectation; (2) users give no arm input exactly while they switch modes, request
+    disambiguation or drive the gripper (zero ``u_h`` in the gripper mode), and a head-array user
+    spends much of a trial cycling modes -- moving the arm then, possibly toward the wrong goal,
+    happens while their attention is on the mode display; (3) the disambiguation algorithm plans
+    from the pose at the request and the arm should not drift while it computes (2-2.5 s in the
+    paper). Set ``assist_without_input=True`` to reproduce the paper's law literally.
+
+    Non-finite inputs never reach the arm: a NaN/inf entry of ``u_h`` or ``u_a`` is read as 0, a
+    non-finite belief as 0 (if nothing finite is left, ``g*`` = 0 with ``alpha`` = 0), with one
+    warning per system.
+    """
+
+    def __init__(self, n_goals: int, config: BlendingConfig | None = None, **overrides: object) -> None:
+        super().__init__()
+        if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
+            raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
+        if config is not None and not isinstance(config, BlendingConfig):
+            raise ValueError(f"config: expected a BlendingConfig, got {config!r}")
+        cfg = BlendingConfig() if config is None else config
+        self.config = replace(cfg, **overrides) if overrides else cfg
+        self.n_goals = int(n_goals)
+        self.rhos = self.config.rhos(self.n_goals)  # validates rho1 < rho2 in [0, 1]
+        self._u_h_port = self.DeclareVectorInputPort("u_h", 6)
+        self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
+        self._u_a_port = self.DeclareVectorInputPort("u_a", 6 * self.n_goals)
+        self.DeclareVectorOutputPort("u", 6, self._calc_u)
+        self.DeclareVectorOutputPort("alpha", 1, self._calc_alpha)
+        self.DeclareVectorOutputPort("g_star", 1, self._calc_g_star)
+        self._warned = False
+
+    def _compute(self, context: Context) -> tuple[np.ndarray, float, int]:
+        u_h = np.asarray(self._u_h_port.Eval(context), dtype=float)
+        p = np.asarray(self._belief_port.Eval(context), dtype=float)
+        u_a = np.asarray(self._u_a_port.Eval(context), dtype=float).reshape(self.n_goals, 6)
+        finite = np.isfinite(u_h).all() and np.isfinite(p).all() and np.isfinite(u_a).all()
+        if not finite:
+            if not self._warned:
+                warnings.warn(
+                    f"{self.get_name()}: non-finite input (u_h={u_h.tolist()}, belief={p.tolist()}, "
+                    "u_a has NaN/inf: "
+                    f"{not np.isfinite(u_a).all()}); non-finite entries read as 0",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                self._warned = True
+            u_h = np.where(np.isfinite(u_h), u_h, 0.0)
+            u_a = np.where(np.isfinite(u_a), u_a, 0.0)
+            p = np.where(np.isfinite(p), p, 0.0)
+        u, alpha, g_star = shared_control(u_h, p, u_a, self.config)
+        return u, float(alpha), int(g_star)
+
+    def _calc_u(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._compute(context)[0])
+
+    def _calc_alpha(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector([self._compute(context)[1]])
+
+    def _calc_g_star(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector([self._compute(context)[2]])
