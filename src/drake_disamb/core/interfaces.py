@@ -1,0 +1,388 @@
+"""Control interfaces: control modes, raw-signal layouts and the interface update (pure numpy).
+
+Two interfaces of the study (paper Section "Study Methods", FACTS section 5):
+
+- **2-axis joystick** (``"joystick"``): continuous axes in ``[-1, 1]``, a mode button that cycles
+  through 5 control modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper``.
+- **Switch-based head array** (``"head_array"``): three switches; *back* cycles through 7 modes
+  ``vx, vy, vz, wx, wy, wz, gripper``; *left* / *right* drive the selected dimension in the
+  positive / negative direction at a fixed speed.
+
+Both have a separate disambiguation-request button. Control modes are tuples of dimension indices
+(0 = vx ... 5 = wz, :data:`GRIPPER_DIM` = 6 for the gripper); arm modes come first, the gripper
+mode last, and the disambiguation system's mode indices index that same list.
+
+Raw signals are one 4-vector per interface (so a simulated user, a recorded log or a live browser
+can drive it), see :data:`RAW_LAYOUTS`:
+
+- joystick: ``[axis_x, axis_y, mode_button, disambiguation_button]``; axes in ``[-1, 1]``
+  (clipped), buttons 0/1 (a level ``>= button_threshold`` counts as pressed). The k-th dimension
+  of the current mode is driven by the k-th axis (a one-dimensional mode and the gripper mode use
+  ``axis_x``).
+- head array: ``[left, right, back, disambiguation_button]``, every entry a 0/1 switch level.
+  ``left - right`` drives the selected dimension (both pressed cancel).
+
+Non-finite raw entries never reach the arm: they are read as 0 (released / centred) and counted.
+
+The update (:func:`interface_update`) is what the Drake system runs every control period: it
+detects rising edges of the buttons (a held button counts once), cycles the mode on a mode-button
+press, handles a disambiguation request by asking for the disambiguation system's choice (only on
+the request's rising edge), holds the sanitised raw signal, and returns the events it logged.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+GRIPPER_DIM = 6
+"""Dimension index of the gripper in a control mode (0..5 are vx, vy, vz, wx, wy, wz)."""
+
+DIM_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz", "gripper")
+"""Human-readable names of the dimension indices 0..6."""
+
+InterfaceKind = Literal["joystick", "head_array"]
+INTERFACE_KINDS: tuple[str, ...] = ("joystick", "head_array")
+
+MODES: dict[str, tuple[tuple[int, ...], ...]] = {
+    "joystick": ((0, 1), (0, 2), (3, 5), (4,), (GRIPPER_DIM,)),
+    "head_array": ((0,), (1,), (2,), (3,), (4,), (5,), (GRIPPER_DIM,)),
+}
+"""Control modes per interface: arm modes first, the gripper mode last."""
+
+RAW_SIZE = 4
+"""Length of the raw signal vector of every interface."""
+
+RAW_LAYOUTS: dict[str, tuple[str, ...]] = {
+    "joystick": ("axis_x", "axis_y", "mode_button", "disambiguation_button"),
+    "head_array": ("left", "right", "back", "disambiguation_button"),
+}
+"""Meaning of each raw entry per interface."""
+
+MODE_BUTTON = 2
+"""Raw index of the mode-switch button (joystick ``mode_button``, head array ``back``)."""
+
+REQUEST_BUTTON = 3
+"""Raw index of the disambiguation-request button."""
+
+DEFAULT_SPEEDS: dict[str, tuple[float, float]] = {
+    "joystick": (0.13, 0.4),
+    "head_array": (0.1, 0.2),
+}
+"""Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs (FACTS 5)."""
+
+EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch"]
+
+
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def check_kind(kind: str) -> str:
+    """Return ``kind`` if it names an interface, else raise ``ValueError``."""
+    if kind not in INTERFACE_KINDS:
+        raise ValueError(f"interface kind: expected one of {INTERFACE_KINDS}, got {kind!r}")
+    return kind
+
+
+def interface_modes(kind: str) -> tuple[tuple[int, ...], ...]:
+    """All control modes of an interface (arm modes first, gripper mode last)."""
+    return MODES[check_kind(kind)]
+
+
+def arm_modes(kind: str) -> tuple[tuple[int, ...], ...]:
+    """The arm modes of an interface (every mode but the gripper mode)."""
+    return interface_modes(kind)[:-1]
+
+
+@dataclass(frozen=True)
+class InterfaceConfig:
+    """Settings of one interface.
+
+    Attributes:
+        kind: ``"joystick"`` or ``"head_array"``.
+        max_linear_speed: Speed (m/s) of a translational dimension at full deflection / switch on;
+            ``None`` takes the interface default (joystick 0.13, head array 0.1).
+        max_angular_speed: Same for rotational dimensions (rad/s); ``None``: joystick 0.4,
+            head array 0.2.
+        gripper_speed: Finger opening speed (m/s) at full deflection / switch on (positive opens).
+        button_threshold: A button or switch level ``>=`` this counts as pressed.
+        control_period: Period (s) of the interface update.
+        initial_mode: Mode index at the start of a trial (the study randomised it).
+    """
+
+    kind: str = "joystick"
+    max_linear_speed: float | None = None
+    max_angular_speed: float | None = None
+    gripper_speed: float = 0.02
+    button_threshold: float = 0.5
+    control_period: float = 0.01
+    initial_mode: int = 0
+
+    def __post_init__(self) -> None:
+        check_kind(self.kind)
+        lin, ang = DEFAULT_SPEEDS[self.kind]
+        if self.max_linear_speed is None:
+            object.__setattr__(self, "max_linear_speed", lin)
+        if self.max_angular_speed is None:
+            object.__setattr__(self, "max_angular_speed", ang)
+        for name in ("max_linear_speed", "max_angular_speed", "gripper_speed", "control_period"):
+            value = getattr(self, name)
+            if not (_is_real(value) and value > 0):
+                raise ValueError(f"InterfaceConfig.{name}: expected a finite number > 0, got {value!r}")
+        if not (_is_real(self.button_threshold) and 0.0 < self.button_threshold <= 1.0):
+            raise ValueError(
+                "InterfaceConfig.button_threshold: expected a number in (0, 1], "
+                f"got {self.button_threshold!r}"
+            )
+        n = len(MODES[self.kind])
+        if not (isinstance(self.initial_mode, numbers.Integral) and 0 <= self.initial_mode < n):
+            raise ValueError(
+                f"InterfaceConfig.initial_mode: expected an integer in [0, {n - 1}] for {self.kind}, "
+                f"got {self.initial_mode!r}"
+            )
+
+    @property
+    def modes(self) -> tuple[tuple[int, ...], ...]:
+        """All control modes (gripper mode last)."""
+        return MODES[self.kind]
+
+    @property
+    def arm_modes(self) -> tuple[tuple[int, ...], ...]:
+        """The arm modes (all but the gripper mode)."""
+        return MODES[self.kind][:-1]
+
+    @property
+    def raw_layout(self) -> tuple[str, ...]:
+        """Names of the raw entries."""
+        return RAW_LAYOUTS[self.kind]
+
+    def dim_speeds(self) -> NDArray[np.float64]:
+        """Speed of each dimension 0..6 at full deflection: 3 linear, 3 angular, gripper."""
+        return np.array([self.max_linear_speed] * 3 + [self.max_angular_speed] * 3 + [self.gripper_speed])
+
+
+@dataclass(frozen=True)
+class InterfaceEvent:
+    """One logged interface event.
+
+    Attributes:
+        time: Simulation time (s) of the update that saw it.
+        kind: ``"mode_switch"`` (manual press), ``"disambiguation_request"`` (request press) or
+            ``"disambiguation_switch"`` (the mode change a request caused).
+        from_mode: Mode index before the event.
+        to_mode: Mode index after it (equal to ``from_mode`` for a request).
+    """
+
+    time: float
+    kind: EventKind
+    from_mode: int
+    to_mode: int
+
+
+@dataclass(frozen=True)
+class InterfaceState:
+    """Everything the interface remembers between updates.
+
+    Attributes:
+        mode: Current mode index.
+        prev_mode_button: Mode-button level (0/1) seen at the last update.
+        prev_request_button: Request-button level (0/1) seen at the last update.
+        mode_switch_count: Manual mode switches so far (mode-button presses).
+        request_count: Disambiguation requests so far (request-button presses).
+        nonfinite_count: Updates whose raw signal held a NaN or infinity.
+        held_raw: The sanitised raw signal of the last update; the commands are computed from it.
+    """
+
+    mode: int = 0
+    prev_mode_button: float = 0.0
+    prev_request_button: float = 0.0
+    mode_switch_count: int = 0
+    request_count: int = 0
+    nonfinite_count: int = 0
+    held_raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
+
+    VECTOR_SIZE = 6 + RAW_SIZE
+
+    def to_vector(self) -> NDArray[np.float64]:
+        """Flat vector ``[mode, prev_mode, prev_req, n_switch, n_req, n_bad, raw (4)]`` (Drake state)."""
+        head = [
+            self.mode,
+            self.prev_mode_button,
+            self.prev_request_button,
+            self.mode_switch_count,
+            self.request_count,
+            self.nonfinite_count,
+        ]
+        return np.concatenate((np.asarray(head, dtype=float), np.asarray(self.held_raw, dtype=float)))
+
+    @classmethod
+    def from_vector(cls, x: ArrayLike) -> InterfaceState:
+        """Inverse of :meth:`to_vector`."""
+        v = np.asarray(x, dtype=float)
+        if v.shape != (cls.VECTOR_SIZE,):
+            raise ValueError(f"InterfaceState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
+        return cls(
+            mode=int(round(v[0])),
+            prev_mode_button=float(v[1]),
+            prev_request_button=float(v[2]),
+            mode_switch_count=int(round(v[3])),
+            request_count=int(round(v[4])),
+            nonfinite_count=int(round(v[5])),
+            held_raw=v[6:].copy(),
+        )
+
+
+def initial_state(config: InterfaceConfig) -> InterfaceState:
+    """The state at the start of a trial: ``config.initial_mode``, nothing pressed, zero counts."""
+    return InterfaceState(mode=int(config.initial_mode))
+
+
+def sanitize_raw(raw: ArrayLike, config: InterfaceConfig) -> tuple[NDArray[np.float64], bool]:
+    """Clean a raw signal: non-finite entries -> 0, axes clipped to ``[-1, 1]``, buttons -> 0/1.
+
+    Returns ``(clean, had_nonfinite)``. A raw signal of the wrong length is a ``ValueError``.
+    """
+    r = np.asarray(raw, dtype=float).reshape(-1)
+    if r.shape != (RAW_SIZE,):
+        raise ValueError(
+            f"raw ({config.kind} {list(RAW_LAYOUTS[config.kind])}): "
+            f"expected {RAW_SIZE} numbers, got {r.tolist()}"
+        )
+    finite = np.isfinite(r)
+    r = np.where(finite, r, 0.0)
+    clean = np.empty(RAW_SIZE)
+    if config.kind == "joystick":
+        clean[:2] = np.clip(r[:2], -1.0, 1.0)
+    else:
+        clean[:2] = (r[:2] >= config.button_threshold).astype(float)
+    clean[2:] = (r[2:] >= config.button_threshold).astype(float)
+    return clean, not bool(np.all(finite))
+
+
+def command_from_raw(
+    clean_raw: ArrayLike, mode: int, config: InterfaceConfig
+) -> tuple[NDArray[np.float64], float]:
+    """The 6-D arm command and the gripper command of a sanitised raw signal in mode ``mode``.
+
+    Returns ``(u_h, gripper)``: ``u_h`` is ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s; zero in the
+    gripper mode), ``gripper`` the finger opening speed (m/s; nonzero only in the gripper mode).
+    """
+    r = np.asarray(clean_raw, dtype=float)
+    dims = config.modes[mode]
+    if config.kind == "joystick":
+        drives = r[: len(dims)]
+    else:
+        drives = np.full(len(dims), r[0] - r[1])
+    speeds = config.dim_speeds()
+    u7 = np.zeros(7)
+    for dim, drive in zip(dims, drives, strict=True):
+        u7[dim] = drive * speeds[dim]
+    return u7[:6], float(u7[GRIPPER_DIM])
+
+
+def next_mode(mode: int, n_modes: int) -> int:
+    """The mode a mode-button press selects: the next one, cycling."""
+    return (int(mode) + 1) % int(n_modes)
+
+
+def parse_disambiguation_mode(value: float | None, n_arm_modes: int) -> int | None:
+    """Read the disambiguation system's choice: an arm-mode index, or ``None`` to keep the mode.
+
+    ``None`` (input not connected), -1, and invalid values (non-finite, non-integer, out of range)
+    all keep the mode; the caller warns about invalid ones (see :func:`interface_update`).
+    """
+    if value is None:
+        return None
+    v = float(value)
+    if not math.isfinite(v) or v != round(v):
+        return None
+    m = int(round(v))
+    if 0 <= m < n_arm_modes:
+        return m
+    return None
+
+
+def interface_update(
+    state: InterfaceState,
+    raw: ArrayLike,
+    time: float,
+    config: InterfaceConfig,
+    read_disambiguation_mode: Callable[[], float | None] | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> tuple[InterfaceState, list[InterfaceEvent]]:
+    """One control-period update of an interface.
+
+    Args:
+        state: The state before the update.
+        raw: The raw signal now (any values; sanitised here).
+        time: Current time (s), stamped on the events.
+        config: The interface.
+        read_disambiguation_mode: Called only when the request button has a rising edge; returns the
+            disambiguation system's choice (arm-mode index, -1 = keep) or ``None`` when there is no
+            disambiguation system (manual paradigm: the request is logged, the mode kept).
+        warn: Called with a message on the first non-finite raw signal and on an invalid
+            disambiguation choice.
+
+    Returns:
+        ``(new_state, events)``. A mode-button rising edge cycles the mode (``mode_switch``). A
+        request-button rising edge logs ``disambiguation_request`` and, if the disambiguation system
+        picks an arm mode different from the current one, switches to it
+        (``disambiguation_switch``). When both rise in the same update the manual switch is applied
+        first and the disambiguation choice last. Only manual switches count in
+        ``mode_switch_count``; requests count in ``request_count`` (the paper's "button presses" is
+        their sum).
+    """
+    clean, bad = sanitize_raw(raw, config)
+    events: list[InterfaceEvent] = []
+    mode = int(state.mode)
+    switches = state.mode_switch_count
+    requests = state.request_count
+    nonfinite = state.nonfinite_count
+    if bad:
+        if nonfinite == 0 and warn is not None:
+            warn(
+                f"raw signal {np.asarray(raw, dtype=float).tolist()} has non-finite entries "
+                f"({config.kind} layout {list(RAW_LAYOUTS[config.kind])}); they are read as 0"
+            )
+        nonfinite += 1
+
+    mode_level = clean[MODE_BUTTON]
+    if mode_level > 0.5 and state.prev_mode_button <= 0.5:
+        new = next_mode(mode, len(config.modes))
+        events.append(InterfaceEvent(float(time), "mode_switch", mode, new))
+        mode = new
+        switches += 1
+
+    request_level = clean[REQUEST_BUTTON]
+    if request_level > 0.5 and state.prev_request_button <= 0.5:
+        requests += 1
+        events.append(InterfaceEvent(float(time), "disambiguation_request", mode, mode))
+        value = read_disambiguation_mode() if read_disambiguation_mode is not None else None
+        choice = parse_disambiguation_mode(value, len(config.arm_modes))
+        if value is not None and choice is None and float(value) != -1.0 and warn is not None:
+            warn(
+                f"disambiguation_mode: expected -1 or an arm-mode index in [0, {len(config.arm_modes) - 1}] "
+                f"for {config.kind}, got {value!r}; keeping mode {mode}"
+            )
+        if choice is not None and choice != mode:
+            events.append(InterfaceEvent(float(time), "disambiguation_switch", mode, choice))
+            mode = choice
+
+    new_state = replace(
+        state,
+        mode=mode,
+        prev_mode_button=float(mode_level),
+        prev_request_button=float(request_level),
+        mode_switch_count=switches,
+        request_count=requests,
+        nonfinite_count=nonfinite,
+        held_raw=clean,
+    )
+    return new_state, events

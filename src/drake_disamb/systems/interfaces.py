@@ -1,0 +1,227 @@
+"""Interface systems: a 2-axis joystick and a 3-switch head array, each with a request button.
+
+The logic (raw layout, modes, speeds, edge detection, request handling) is in
+:mod:`drake_disamb.core.interfaces`; these systems hold its state and run its update every
+control period. Both share :class:`InterfaceSystem`; :class:`JoystickInterface` and
+:class:`HeadArrayInterface` only choose the interface kind.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
+
+from drake_disamb.core.interfaces import (
+    RAW_LAYOUTS,
+    RAW_SIZE,
+    InterfaceConfig,
+    InterfaceEvent,
+    InterfaceState,
+    command_from_raw,
+    initial_state,
+    interface_update,
+)
+
+__all__ = ["HeadArrayInterface", "InterfaceEvent", "InterfaceSystem", "JoystickInterface", "make_interface"]
+
+
+class InterfaceSystem(LeafSystem):
+    """A control interface: raw device signals in, the human command and mode bookkeeping out.
+
+    .. pydrake_system::
+
+        name: InterfaceSystem
+        input_ports:
+        - raw
+        - disambiguation_mode
+        output_ports:
+        - u_h
+        - gripper_command
+        - mode
+        - request_count
+        - mode_switch_count
+        - nonfinite_count
+        - event_log
+
+    Input ports:
+        raw (4): the device signals. Joystick ``[axis_x, axis_y, mode_button,
+            disambiguation_button]`` (axes in [-1, 1], clipped; buttons 0/1). Head array ``[left,
+            right, back, disambiguation_button]`` (switches 0/1). Levels ``>= button_threshold``
+            (0.5) count as pressed; NaN/inf entries are read as 0 (counted in
+            ``nonfinite_count``, warned once).
+        disambiguation_mode (1): the disambiguation system's choice, an index into ``arm_modes``
+            or -1 = keep the current mode. Evaluated only in an update that sees a rising edge of
+            the request button. May be left unconnected (manual paradigm): requests are then logged
+            and counted but the mode is kept.
+
+    Output ports (all computed from state, so none depends directly on an input):
+        u_h (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s) in the world frame, from
+            the raw signal held at the last update and the current mode; zero in the gripper mode.
+            (The paper's order, not Drake's ``[w; v]``.)
+        gripper_command (1): finger opening speed (m/s, positive opens); nonzero only in the
+            gripper mode.
+        mode (1): current mode index into ``modes``.
+        request_count (1): disambiguation requests so far.
+        mode_switch_count (1): manual mode switches so far (disambiguation switches not counted).
+        nonfinite_count (1): updates whose raw signal held NaN/inf.
+        event_log (abstract): ``tuple[InterfaceEvent, ...]``, every mode switch and request with
+            its time, in order.
+
+    State: discrete ``[mode, previous mode-button level, previous request-button level, mode-switch
+    count, request count, non-finite count, held raw (4)]`` and the abstract event log; both are
+    updated together by a periodic unrestricted update every ``config.control_period`` seconds
+    (first update at t = 0).
+
+    Attributes:
+        config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
+        modes: All control modes as lists of dimension indices (0..5 = vx..wz, 6 = gripper);
+            the gripper mode is the last entry.
+        arm_modes: ``modes`` without the gripper mode (what the disambiguation system indexes).
+        raw_layout: The names of the raw entries.
+    """
+
+    def __init__(self, config: InterfaceConfig) -> None:
+        super().__init__()
+        if not isinstance(config, InterfaceConfig):
+            raise ValueError(f"config: expected an InterfaceConfig, got {config!r}")
+        self.config = config
+        self.modes: list[list[int]] = [list(m) for m in config.modes]
+        self.arm_modes: list[list[int]] = [list(m) for m in config.arm_modes]
+        self.raw_layout: tuple[str, ...] = RAW_LAYOUTS[config.kind]
+
+        self._state_index = self.DeclareDiscreteState(initial_state(config).to_vector())
+        self._log_index = self.DeclareAbstractState(AbstractValue.Make(()))
+
+        self._raw_port = self.DeclareVectorInputPort("raw", RAW_SIZE)
+        self._disamb_port = self.DeclareVectorInputPort("disambiguation_mode", 1)
+
+        from_state = {self.all_state_ticket()}
+        self.DeclareVectorOutputPort("u_h", 6, self._calc_u_h, prerequisites_of_calc=from_state)
+        self.DeclareVectorOutputPort(
+            "gripper_command", 1, self._calc_gripper, prerequisites_of_calc=from_state
+        )
+        counters = (("mode", 0), ("mode_switch_count", 3), ("request_count", 4), ("nonfinite_count", 5))
+        for name, slot in counters:
+            self.DeclareVectorOutputPort(
+                name, 1, self._make_copy_calc(slot), prerequisites_of_calc=from_state
+            )
+        self.DeclareAbstractOutputPort(
+            "event_log",
+            lambda: AbstractValue.Make(()),
+            self._calc_event_log,
+            prerequisites_of_calc=from_state,
+        )
+        self.DeclarePeriodicUnrestrictedUpdateEvent(config.control_period, 0.0, self._update)
+
+    # -- helpers ---------------------------------------------------------------------------------
+
+    def _read_state(self, context: Context) -> InterfaceState:
+        return InterfaceState.from_vector(context.get_discrete_state(self._state_index).get_value())
+
+    def get_interface_state(self, context: Context) -> InterfaceState:
+        """The interface's state in ``context`` as a core :class:`InterfaceState`."""
+        return self._read_state(context)
+
+    def set_mode(self, context: Context, mode: int) -> None:
+        """Set the current mode in ``context`` (e.g. a randomised initial mode)."""
+        if not (isinstance(mode, int | np.integer) and 0 <= mode < len(self.modes)):
+            raise ValueError(f"mode: expected an integer in [0, {len(self.modes) - 1}], got {mode!r}")
+        state = replace(self._read_state(context), mode=int(mode))
+        context.get_mutable_discrete_state(self._state_index).set_value(state.to_vector())
+
+    def get_event_log(self, context: Context) -> tuple[InterfaceEvent, ...]:
+        """The events logged so far in ``context``."""
+        return context.get_abstract_state(self._log_index).get_value()
+
+    # -- update and outputs ------------------------------------------------------------------------
+
+    def _update(self, context: Context, state: State) -> EventStatus:
+        before = self._read_state(context)
+        raw = self._raw_port.Eval(context)
+
+        def read_disambiguation_mode() -> float | None:
+            if not self._disamb_port.HasValue(context):
+                return None
+            return float(self._disamb_port.Eval(context)[0])
+
+        def warn(message: str) -> None:
+            warnings.warn(f"{self.get_name()}: {message}", RuntimeWarning, stacklevel=2)
+
+        after, events = interface_update(
+            before, raw, context.get_time(), self.config, read_disambiguation_mode, warn
+        )
+        state.get_mutable_discrete_state(self._state_index).set_value(after.to_vector())
+        if events:
+            log = context.get_abstract_state(self._log_index).get_value()
+            state.get_mutable_abstract_state(self._log_index).set_value(tuple(log) + tuple(events))
+        return EventStatus.Succeeded()
+
+    def _calc_u_h(self, context: Context, output: BasicVector) -> None:
+        s = self._read_state(context)
+        u_h, _ = command_from_raw(s.held_raw, s.mode, self.config)
+        output.SetFromVector(u_h)
+
+    def _calc_gripper(self, context: Context, output: BasicVector) -> None:
+        s = self._read_state(context)
+        _, gripper = command_from_raw(s.held_raw, s.mode, self.config)
+        output.SetFromVector([gripper])
+
+    def _make_copy_calc(self, slot: int):
+        def calc(context: Context, output: BasicVector) -> None:
+            output.SetFromVector([context.get_discrete_state(self._state_index).get_value()[slot]])
+
+        return calc
+
+    def _calc_event_log(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(context.get_abstract_state(self._log_index).get_value())
+
+
+class JoystickInterface(InterfaceSystem):
+    """2-axis joystick with a mode button and a request button (5 modes, see :class:`InterfaceSystem`).
+
+    Modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper``; ``axis_x`` drives the first dimension of
+    the mode, ``axis_y`` the second. Speeds at full deflection: 0.13 m/s, 0.4 rad/s by default.
+    Ports as :class:`InterfaceSystem`: inputs ``raw`` (4: axis_x, axis_y, mode_button,
+    disambiguation_button), ``disambiguation_mode`` (1); outputs ``u_h`` (6), ``gripper_command``
+    (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count`` (1), ``nonfinite_count`` (1),
+    ``event_log`` (abstract).
+    """
+
+    def __init__(self, config: InterfaceConfig | None = None, **overrides: object) -> None:
+        cfg = config if config is not None else InterfaceConfig(kind="joystick")
+        cfg = replace(cfg, **overrides) if overrides else cfg
+        if cfg.kind != "joystick":
+            raise ValueError(f"config.kind: expected 'joystick', got {cfg.kind!r}")
+        super().__init__(cfg)
+        self.set_name("joystick")
+
+
+class HeadArrayInterface(InterfaceSystem):
+    """3-switch head array with a request button (7 single-dimension modes, see :class:`InterfaceSystem`).
+
+    ``back`` cycles ``vx, vy, vz, wx, wy, wz, gripper``; ``left`` / ``right`` drive the selected
+    dimension positive / negative at 0.1 m/s or 0.2 rad/s by default. Ports as
+    :class:`InterfaceSystem`: inputs ``raw`` (4: left, right, back, disambiguation_button),
+    ``disambiguation_mode`` (1); outputs ``u_h`` (6), ``gripper_command`` (1), ``mode`` (1),
+    ``request_count`` (1), ``mode_switch_count`` (1), ``nonfinite_count`` (1), ``event_log``
+    (abstract).
+    """
+
+    def __init__(self, config: InterfaceConfig | None = None, **overrides: object) -> None:
+        cfg = config if config is not None else InterfaceConfig(kind="head_array")
+        cfg = replace(cfg, **overrides) if overrides else cfg
+        if cfg.kind != "head_array":
+            raise ValueError(f"config.kind: expected 'head_array', got {cfg.kind!r}")
+        super().__init__(cfg)
+        self.set_name("head_array")
+
+
+def make_interface(config: InterfaceConfig) -> InterfaceSystem:
+    """The interface system for ``config.kind``."""
+    if config.kind == "joystick":
+        return JoystickInterface(config)
+    return HeadArrayInterface(config)

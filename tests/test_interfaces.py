@@ -1,0 +1,317 @@
+"""Interfaces: core update logic and the joystick / head-array systems in isolation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drake_disamb.core.interfaces import (
+    GRIPPER_DIM,
+    InterfaceConfig,
+    InterfaceState,
+    command_from_raw,
+    initial_state,
+    interface_update,
+    sanitize_raw,
+)
+
+DT = 0.01
+
+# ---------------------------------------------------------------------------------------------
+# core
+# ---------------------------------------------------------------------------------------------
+
+
+def test_mode_lists() -> None:
+    joy = InterfaceConfig(kind="joystick")
+    head = InterfaceConfig(kind="head_array")
+    assert joy.modes == ((0, 1), (0, 2), (3, 5), (4,), (GRIPPER_DIM,))
+    assert head.modes == tuple((d,) for d in range(7))
+    assert joy.arm_modes == joy.modes[:-1] and head.arm_modes == head.modes[:-1]
+    assert (joy.max_linear_speed, joy.max_angular_speed) == (0.13, 0.4)
+    assert (head.max_linear_speed, head.max_angular_speed) == (0.1, 0.2)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"kind": "sip_and_puff"}, "kind"),
+        ({"kind": "joystick", "initial_mode": 5}, "initial_mode"),
+        ({"kind": "head_array", "initial_mode": -1}, "initial_mode"),
+        ({"max_linear_speed": 0.0}, "max_linear_speed"),
+        ({"max_angular_speed": float("inf")}, "max_angular_speed"),
+        ({"control_period": -0.01}, "control_period"),
+        ({"button_threshold": 0.0}, "button_threshold"),
+    ],
+)
+def test_config_validation(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=field):
+        InterfaceConfig(**kwargs)
+
+
+def test_state_vector_round_trip() -> None:
+    s = InterfaceState(3, 1.0, 0.0, 7, 2, 1, np.array([0.5, -1.0, 1.0, 0.0]))
+    back = InterfaceState.from_vector(s.to_vector())
+    assert back == s
+    np.testing.assert_array_equal(back.held_raw, s.held_raw)
+    with pytest.raises(ValueError, match="InterfaceState"):
+        InterfaceState.from_vector(np.zeros(3))
+
+
+def test_sanitize_raw() -> None:
+    joy = InterfaceConfig(kind="joystick")
+    clean, bad = sanitize_raw([2.0, np.nan, 0.7, np.inf], joy)
+    np.testing.assert_array_equal(clean, [1.0, 0.0, 1.0, 0.0])
+    assert bad
+    clean, bad = sanitize_raw([-3.0, 0.25, 0.2, 1.0], joy)
+    np.testing.assert_array_equal(clean, [-1.0, 0.25, 0.0, 1.0])
+    assert not bad
+    head = InterfaceConfig(kind="head_array")
+    clean, _ = sanitize_raw([0.9, 0.1, 1, 0], head)
+    np.testing.assert_array_equal(clean, [1, 0, 1, 0])
+    with pytest.raises(ValueError, match="raw"):
+        sanitize_raw([0, 0, 0], joy)
+
+
+def test_joystick_commands_per_mode() -> None:
+    joy = InterfaceConfig(kind="joystick")
+    raw = np.array([0.5, -1.0, 0.0, 0.0])
+    u, g = command_from_raw(raw, 0, joy)  # {vx, vy}
+    np.testing.assert_allclose(u, [0.065, -0.13, 0, 0, 0, 0])
+    assert g == 0.0
+    u, _ = command_from_raw(raw, 1, joy)  # {vx, vz}
+    np.testing.assert_allclose(u, [0.065, 0, -0.13, 0, 0, 0])
+    u, _ = command_from_raw(raw, 2, joy)  # {wx, wz}
+    np.testing.assert_allclose(u, [0, 0, 0, 0.2, 0, -0.4])
+    u, _ = command_from_raw(raw, 3, joy)  # {wy}: axis_x only
+    np.testing.assert_allclose(u, [0, 0, 0, 0, 0.2, 0])
+    u, g = command_from_raw(raw, 4, joy)  # gripper
+    np.testing.assert_allclose(u, 0.0)
+    assert g == pytest.approx(0.5 * joy.gripper_speed)
+
+
+def test_head_array_commands_per_mode() -> None:
+    head = InterfaceConfig(kind="head_array")
+    for mode in range(6):
+        u, g = command_from_raw(np.array([1.0, 0, 0, 0]), mode, head)
+        expected = np.zeros(6)
+        expected[mode] = 0.1 if mode < 3 else 0.2
+        np.testing.assert_allclose(u, expected)
+        u, _ = command_from_raw(np.array([0, 1.0, 0, 0]), mode, head)
+        np.testing.assert_allclose(u, -expected)
+        assert g == 0.0
+    u, _ = command_from_raw(np.array([1.0, 1.0, 0, 0]), 0, head)  # both switches cancel
+    np.testing.assert_allclose(u, 0.0)
+    u, g = command_from_raw(np.array([0, 1.0, 0, 0]), 6, head)  # gripper closes
+    np.testing.assert_allclose(u, 0.0)
+    assert g == -head.gripper_speed
+
+
+def test_core_update_disambiguation_choice_is_read_only_on_a_rising_edge() -> None:
+    cfg = InterfaceConfig(kind="head_array", initial_mode=0)
+    calls: list[int] = []
+
+    def choice() -> float:
+        calls.append(1)
+        return 4.0
+
+    s = initial_state(cfg)
+    s, ev = interface_update(s, [0, 0, 0, 1], 0.0, cfg, choice)
+    assert s.mode == 4 and s.request_count == 1 and len(calls) == 1
+    assert [e.kind for e in ev] == ["disambiguation_request", "disambiguation_switch"]
+    for k in range(1, 5):  # held: no new request, no new read
+        s, ev = interface_update(s, [0, 0, 0, 1], k * DT, cfg, choice)
+        assert ev == []
+    assert len(calls) == 1 and s.request_count == 1
+
+
+def test_core_update_invalid_choice_warns_and_keeps_mode() -> None:
+    cfg = InterfaceConfig(kind="joystick", initial_mode=1)
+    messages: list[str] = []
+    s = initial_state(cfg)
+    s, ev = interface_update(s, [0, 0, 0, 1], 0.0, cfg, lambda: 4.0, messages.append)  # 4 = gripper
+    assert s.mode == 1 and [e.kind for e in ev] == ["disambiguation_request"]
+    assert len(messages) == 1 and "disambiguation_mode" in messages[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# Systems
+# ---------------------------------------------------------------------------------------------
+
+
+class _Driver:
+    """Steps an interface system tick by tick with fixed input values (a Simulator underneath)."""
+
+    def __init__(self, system, disambiguation_mode: float | None = None) -> None:
+        from pydrake.systems.analysis import Simulator
+
+        self.system = system
+        self.sim = Simulator(system)
+        self.ctx = self.sim.get_mutable_context()
+        self.k = 0
+        if disambiguation_mode is not None:
+            system.GetInputPort("disambiguation_mode").FixValue(self.ctx, [disambiguation_mode])
+        system.GetInputPort("raw").FixValue(self.ctx, np.zeros(4))
+        self.sim.Initialize()
+
+    def tick(self, raw) -> None:
+        """Hold ``raw`` for one update (the update at time k * DT)."""
+        self.system.GetInputPort("raw").FixValue(self.ctx, np.asarray(raw, dtype=float))
+        self.sim.AdvanceTo(self.k * DT + 0.5 * DT)
+        self.k += 1
+
+    def out(self, name: str):
+        return self.system.GetOutputPort(name).Eval(self.ctx)
+
+    def scalar(self, name: str) -> float:
+        return float(self.out(name)[0])
+
+
+def test_joystick_mode_cycling_counts_rising_edges_only() -> None:
+    from drake_disamb.systems.interfaces import JoystickInterface
+
+    d = _Driver(JoystickInterface())
+    seen = []
+    for _ in range(5):  # press and hold for 3 ticks, release for 2: one switch per press
+        for _ in range(3):
+            d.tick([0, 0, 1, 0])
+        d.tick([0, 0, 0, 0])
+        d.tick([0, 0, 0, 0])
+        seen.append(int(d.scalar("mode")))
+    assert seen == [1, 2, 3, 4, 0]  # cycles through all 5 modes (gripper last) and wraps
+    assert d.scalar("mode_switch_count") == 5
+    assert d.scalar("request_count") == 0
+    log = d.system.get_event_log(d.ctx)
+    assert [(e.kind, e.from_mode, e.to_mode) for e in log] == [
+        ("mode_switch", 0, 1),
+        ("mode_switch", 1, 2),
+        ("mode_switch", 2, 3),
+        ("mode_switch", 3, 4),
+        ("mode_switch", 4, 0),
+    ]
+    assert [e.time for e in log] == pytest.approx([0.0, 0.05, 0.10, 0.15, 0.20])
+    assert d.out("event_log") == log  # the abstract output port carries the same tuple
+
+
+def test_head_array_back_cycles_seven_modes() -> None:
+    from drake_disamb.systems.interfaces import HeadArrayInterface
+
+    d = _Driver(HeadArrayInterface(initial_mode=5))
+    modes = []
+    for _ in range(8):
+        d.tick([0, 0, 1, 0])
+        d.tick([0, 0, 0, 0])
+        modes.append(int(d.scalar("mode")))
+    assert modes == [6, 0, 1, 2, 3, 4, 5, 6]
+    assert d.scalar("mode_switch_count") == 8
+
+
+def test_request_switches_mode_in_the_same_update() -> None:
+    from drake_disamb.systems.interfaces import HeadArrayInterface
+
+    d = _Driver(HeadArrayInterface(initial_mode=0), disambiguation_mode=4)
+    d.tick([1, 0, 0, 1])  # left held and request pressed in the same update
+    assert d.scalar("mode") == 4  # switched by this very update
+    assert d.scalar("request_count") == 1 and d.scalar("mode_switch_count") == 0
+    np.testing.assert_allclose(d.out("u_h"), [0, 0, 0, 0, 0.2, 0])  # held "left" now drives wy
+    d.tick([0, 0, 0, 1])  # still held: no second request
+    assert d.scalar("request_count") == 1
+    log = d.system.get_event_log(d.ctx)
+    assert [(e.kind, e.from_mode, e.to_mode) for e in log] == [
+        ("disambiguation_request", 0, 0),
+        ("disambiguation_switch", 0, 4),
+    ]
+
+
+def test_request_minus_one_keeps_mode() -> None:
+    from drake_disamb.systems.interfaces import JoystickInterface
+
+    d = _Driver(JoystickInterface(initial_mode=2), disambiguation_mode=-1)
+    d.tick([0, 0, 0, 1])
+    d.tick([0, 0, 0, 0])
+    d.tick([0, 0, 0, 1])
+    assert d.scalar("mode") == 2
+    assert d.scalar("request_count") == 2
+    assert [e.kind for e in d.system.get_event_log(d.ctx)] == ["disambiguation_request"] * 2
+
+
+def test_request_without_disambiguation_system_is_logged_only() -> None:
+    from drake_disamb.systems.interfaces import JoystickInterface
+
+    d = _Driver(JoystickInterface(initial_mode=3))  # disambiguation_mode left unconnected
+    d.tick([0, 0, 0, 1])
+    assert d.scalar("mode") == 3 and d.scalar("request_count") == 1
+
+
+def test_nonfinite_raw_gives_zero_command() -> None:
+    from drake_disamb.systems.interfaces import JoystickInterface
+
+    d = _Driver(JoystickInterface())
+    d.tick([0.5, 0.5, 0, 0])
+    np.testing.assert_allclose(d.out("u_h"), [0.065, 0.065, 0, 0, 0, 0])
+    with pytest.warns(RuntimeWarning, match="non-finite"):
+        d.tick([np.nan, np.inf, np.nan, -np.inf])
+    np.testing.assert_array_equal(d.out("u_h"), np.zeros(6))
+    assert d.scalar("nonfinite_count") == 1
+    assert d.scalar("mode_switch_count") == 0 and d.scalar("request_count") == 0
+    d.tick([np.nan, 0.5, 0, 0])  # only the bad axis is zeroed
+    np.testing.assert_allclose(d.out("u_h"), [0, 0.065, 0, 0, 0, 0])
+    assert d.scalar("nonfinite_count") == 2
+
+
+def test_speed_limits_and_clipping_are_config_fields() -> None:
+    from drake_disamb.systems.interfaces import HeadArrayInterface, JoystickInterface
+
+    d = _Driver(JoystickInterface(max_linear_speed=0.05, max_angular_speed=0.3, initial_mode=2))
+    d.tick([5.0, -5.0, 0, 0])  # clipped to [1, -1]
+    np.testing.assert_allclose(d.out("u_h"), [0, 0, 0, 0.3, 0, -0.3])
+    d = _Driver(HeadArrayInterface(max_linear_speed=0.07, initial_mode=2))
+    d.tick([0, 1, 0, 0])
+    np.testing.assert_allclose(d.out("u_h"), [0, 0, -0.07, 0, 0, 0])
+
+
+def test_gripper_mode_drives_only_the_gripper() -> None:
+    from drake_disamb.systems.interfaces import JoystickInterface
+
+    d = _Driver(JoystickInterface(initial_mode=4, gripper_speed=0.03))
+    d.tick([-1.0, 1.0, 0, 0])
+    np.testing.assert_array_equal(d.out("u_h"), np.zeros(6))
+    assert d.scalar("gripper_command") == pytest.approx(-0.03)
+    d = _Driver(JoystickInterface(initial_mode=0))
+    d.tick([-1.0, 1.0, 0, 0])
+    assert d.scalar("gripper_command") == 0.0
+
+
+def test_outputs_come_from_state() -> None:
+    from drake_disamb.systems.interfaces import HeadArrayInterface, JoystickInterface
+
+    for system in (JoystickInterface(), HeadArrayInterface()):
+        raw = system.GetInputPort("raw").get_index()
+        disamb = system.GetInputPort("disambiguation_mode").get_index()
+        for i in range(system.num_output_ports()):
+            assert not system.HasDirectFeedthrough(raw, i)
+            assert not system.HasDirectFeedthrough(disamb, i)
+    # The raw signal is only seen after an update.
+    system = JoystickInterface()
+    ctx = system.CreateDefaultContext()
+    system.GetInputPort("raw").FixValue(ctx, [1.0, 1.0, 0.0, 0.0])
+    np.testing.assert_array_equal(system.GetOutputPort("u_h").Eval(ctx), np.zeros(6))
+
+
+def test_set_mode_and_attributes() -> None:
+    from drake_disamb.systems.interfaces import HeadArrayInterface, JoystickInterface, make_interface
+
+    joy = JoystickInterface()
+    assert joy.modes == [[0, 1], [0, 2], [3, 5], [4], [6]] and joy.arm_modes == joy.modes[:-1]
+    assert joy.raw_layout == ("axis_x", "axis_y", "mode_button", "disambiguation_button")
+    ctx = joy.CreateDefaultContext()
+    joy.set_mode(ctx, 3)
+    assert joy.GetOutputPort("mode").Eval(ctx)[0] == 3
+    with pytest.raises(ValueError, match="mode"):
+        joy.set_mode(ctx, 5)
+    head = make_interface(InterfaceConfig(kind="head_array", initial_mode=6))
+    assert isinstance(head, HeadArrayInterface)
+    assert head.GetOutputPort("mode").Eval(head.CreateDefaultContext())[0] == 6
+    assert len(head.arm_modes) == 6
+    with pytest.raises(ValueError, match="kind"):
+        JoystickInterface(InterfaceConfig(kind="head_array"))
