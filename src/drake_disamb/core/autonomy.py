@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.geometry import _check_last, _check_quat, _orientation_error
+from drake_disamb.core.geometry import _check_last, _check_quat, _norm3, _orientation_error
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
@@ -80,7 +80,7 @@ class PotentialFieldConfig:
 
 def _saturate(v: NDArray[np.float64], max_norm: float) -> NDArray[np.float64]:
     """Scale each vector along the last axis down to at most ``max_norm``."""
-    norm = np.sqrt(np.sum(v * v, axis=-1, keepdims=True))
+    norm = _norm3(v)
     return v * np.minimum(1.0, max_norm / np.maximum(norm, 1e-300))
 
 
@@ -96,14 +96,13 @@ def _potential_field_commands(
     v = config.attractor_gain_translation * diff
     n = goal_positions.shape[-2]
     if n > 1 and config.repeller_gain > 0:
-        dist = np.sqrt(np.sum(diff * diff, axis=-1, keepdims=True))  # (..., n, 1)
+        dist = _norm3(diff)  # (..., n, 1)
         active = (dist < config.repeller_radius) & (dist > 0.0)
         safe = np.where(active, dist, 1.0)
         speed = np.minimum(config.repeller_gain / safe, REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed)
         rep = np.where(active, -diff / safe * speed, 0.0)  # goal j pushes the robot away from it
         # Goal i feels every repeller except its own: an exact masked sum (no cancellation).
-        others = 1.0 - np.eye(n)
-        v = v + np.einsum("ij,...jk->...ik", others, rep)
+        v = v + (1.0 - np.eye(n)) @ rep
     w = config.attractor_gain_rotation * _orientation_error(quat[..., None, :], goal_quats)
     return np.concatenate(
         (_saturate(v, config.max_linear_speed), _saturate(w, config.max_angular_speed)), axis=-1

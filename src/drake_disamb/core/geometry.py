@@ -56,6 +56,13 @@ def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
 # ----------------------------------------------------------------------------------------------
 
 
+def _norm3(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Euclidean norm over a last axis of length 3, keepdims (component arithmetic: numpy's
+    reductions over a short last axis are several times slower)."""
+    x, y, z = v[..., 0:1], v[..., 1:2], v[..., 2:3]
+    return np.sqrt(x * x + y * y + z * z)
+
+
 def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[np.float64]:
     w1, x1, y1, z1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
     w2, x2, y2, z2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
@@ -75,7 +82,7 @@ def _quat_conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _quat_from_rotvec(rv: NDArray[np.float64]) -> NDArray[np.float64]:
-    angle = np.sqrt(np.sum(rv * rv, axis=-1, keepdims=True))
+    angle = _norm3(rv)
     half = 0.5 * angle
     small = angle < _SMALL_ANGLE
     # sin(a/2)/a, with its series 1/2 - a^2/48 for tiny angles.
@@ -89,7 +96,7 @@ def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
     q = np.where(q[..., :1] < 0.0, -q, q)
     w = q[..., :1]
     v = q[..., 1:]
-    s = np.sqrt(np.sum(v * v, axis=-1, keepdims=True))
+    s = _norm3(v)
     angle = 2.0 * np.arctan2(s, w)
     small = s < 0.5 * _SMALL_ANGLE
     # angle / s, with its series 2/w (w ~ 1 here) for tiny rotations.
@@ -163,7 +170,8 @@ def _integrate_pose(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     new_position = position + twist_vw[..., :3] * dt
     new_quat = _quat_multiply(_quat_from_rotvec(twist_vw[..., 3:6] * dt), quat)
-    new_quat = new_quat / np.sqrt(np.sum(new_quat * new_quat, axis=-1, keepdims=True))
+    w, x, y, z = new_quat[..., 0:1], new_quat[..., 1:2], new_quat[..., 2:3], new_quat[..., 3:4]
+    new_quat = new_quat / np.sqrt(w * w + x * x + y * y + z * z)
     return new_position, new_quat
 
 

@@ -1,0 +1,683 @@
+"""Intent disambiguation (paper Algorithm 1): vectorised forward projection, features, D_k, D_m.
+
+For every probed control dimension ``k`` and both directions, the belief is projected forward
+from the current time ``t_a`` under a constant probe command ``+/- s e_k``: each step of length
+``delta_t`` first updates the belief with the project's inference update (the very same function
+the live system uses, :func:`drake_disamb.core.inference.dft_euler_step` or
+:func:`~drake_disamb.core.inference.bayes_step`, taken in their two halves) at the current pose,
+then moves a kinematic point robot (position and orientation) by the probe. All ``2 n_k`` probes
+run together as one batch (leading probe axis), never one after another.
+
+From the projected beliefs (paper Section "Features of D_k", FACTS section 4):
+
+- at ``t_b``: ``Gamma = max p``, ``Omega = max p - second max p`` and
+  ``Lambda = sum_{i<j} |p_i - p_j|``;
+- between ``t_b`` and ``t_c``: ``Upsilon = sum_{i<j} |g_i - g_j|`` with
+  ``g = (p(t_c) - p(t_b)) / dx_k`` when ``divide_upsilon`` (paper) or ``g = p(t_c) - p(t_b)``
+  (authors' code). ``dx_k`` is the projected displacement along ``k``: metres for a translational
+  dimension, the rotation angle about axis ``k`` (rad) for a rotational one;
+- ``D = w Gamma Lambda Omega + (1 - w) Upsilon`` per probe, ``D_k = D_k+ + D_k-``,
+  ``D_m = sum_{k in m} D_k``, ``m* = argmax D_m`` and ``k* = argmax D_k``.
+
+Ties: modes whose ``D_m`` lie within ``tie_tolerance`` (relative to the largest) of the best are
+equal. If every mode is equal the current mode is kept (``mode = None``); if the current mode is
+among several equally best modes it is kept too; otherwise the first of the best modes wins.
+
+Two named presets (:func:`preset`):
+
+- ``"authors-r3"`` reproduces the authors' R^3 simulation (FACTS sections 1 and 4).
+- ``"mico"`` (the robot system's default, also ``DisambiguationConfig()``): see
+  :func:`mico_config` for the parameters and why.
+
+Degenerate scenes (one goal, goals at the robot, a certain belief, zero displacement) give valid,
+finite results: every division is guarded.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core.autonomy import PotentialFieldConfig, _potential_field_commands
+from drake_disamb.core.geometry import (
+    _check_last,
+    _check_quat,
+    _orientation_error,
+    _quat_from_rotvec,
+    _quat_multiply,
+)
+from drake_disamb.core.inference import (
+    BAYES_SIGMA,
+    DFTParams,
+    bayes_likelihood,
+    check_transition,
+    dft_drive,
+    dft_euler_update,
+    posterior_update,
+)
+
+DIMENSION_NAMES: tuple[str, ...] = ("vx", "vy", "vz", "wx", "wy", "wz")
+"""Names of the six control dimensions, in the paper's order."""
+
+INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes")
+"""Inference updates the forward projection can use."""
+
+PRESETS: tuple[str, ...] = ("mico", "authors-r3")
+"""Names accepted by :func:`preset`."""
+
+FEATURE_NAMES: tuple[str, ...] = ("gamma", "omega", "lambda", "upsilon")
+
+_MIN_DISPLACEMENT = 1e-12
+"""Displacements (m or rad) below this are treated as zero: the gradient is then taken as 0."""
+
+
+def _is_real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and bool(np.isfinite(value))
+
+
+# ----------------------------------------------------------------------------------------------
+# Configuration
+# ----------------------------------------------------------------------------------------------
+
+MICO_DFT = DFTParams(tau1=4.0, tau2=4.0, lam=3.0, directedness=True, agreement=True, proximity=True, R=0.2)
+"""DFT parameters of the ``mico`` preset (see :func:`mico_config`)."""
+
+
+@dataclass(frozen=True)
+class DisambiguationConfig:
+    """Parameters of Algorithm 1. The defaults are the ``mico`` preset.
+
+    Attributes:
+        dimensions: Control dimensions probed (0 = vx ... 5 = wz), ascending, unique. A mode's
+            dimensions that are not probed contribute 0 to its score.
+        probe_speed_translation: Probe magnitude along a translational dimension (m/s).
+        probe_speed_rotation: Probe magnitude along a rotational dimension (rad/s).
+        delta_t: Projection step (s).
+        t_b: Short-term horizon (s after ``t_a``), an integer multiple of ``delta_t``.
+        t_c: Long-term horizon (s), a multiple of ``delta_t`` larger than ``t_b``.
+        w: Weight of the short-term term, in ``[0, 1]``.
+        divide_upsilon: Divide ``p(t_c) - p(t_b)`` by the displacement along ``k`` (paper) or not
+            (authors' code).
+        tie_tolerance: Relative tolerance under which two ``D_m`` are equal (>= 0).
+        inference: ``"dft"`` (:func:`~drake_disamb.core.inference.dft_euler_step`) or ``"bayes"``
+            (:func:`~drake_disamb.core.inference.bayes_step`).
+        dft: DFT parameters (transition matrix and rest state included).
+        bayes_sigma: Std (rad) of the Bayes angle likelihood.
+        bayes_transition: Goal-transition matrix of the Bayes update (``None``: identity).
+        potential_field: Autonomy used for the agreement term (recomputed at every projected pose).
+    """
+
+    dimensions: tuple[int, ...] = (0, 1, 2, 3, 4, 5)
+    probe_speed_translation: float = 0.1
+    probe_speed_rotation: float = 0.2
+    delta_t: float = 0.1
+    t_b: float = 1.0
+    t_c: float = 2.0
+    w: float = 0.5
+    divide_upsilon: bool = True
+    tie_tolerance: float = 1e-3
+    inference: str = "dft"
+    dft: DFTParams = MICO_DFT
+    bayes_sigma: float = BAYES_SIGMA
+    bayes_transition: NDArray[np.float64] | None = field(default=None, compare=False)
+    potential_field: PotentialFieldConfig = field(default_factory=PotentialFieldConfig)
+
+    def __post_init__(self) -> None:
+        dims = tuple(self.dimensions)
+        if (
+            not dims
+            or any(
+                not isinstance(k, int | np.integer) or isinstance(k, bool) or not 0 <= k <= 5 for k in dims
+            )
+            or list(dims) != sorted(set(dims))
+        ):
+            raise ValueError(
+                "DisambiguationConfig.dimensions: expected ascending unique indices in 0..5, "
+                f"got {self.dimensions!r}"
+            )
+        object.__setattr__(self, "dimensions", tuple(int(k) for k in dims))
+        for name in (
+            "probe_speed_translation",
+            "probe_speed_rotation",
+            "delta_t",
+            "t_b",
+            "t_c",
+            "bayes_sigma",
+        ):
+            value = getattr(self, name)
+            if not (_is_real(value) and value > 0):
+                raise ValueError(f"DisambiguationConfig.{name}: expected a finite number > 0, got {value!r}")
+        if not self.t_b < self.t_c:
+            raise ValueError(f"DisambiguationConfig.t_c: expected > t_b = {self.t_b}, got {self.t_c!r}")
+        for name in ("t_b", "t_c"):
+            steps = getattr(self, name) / self.delta_t
+            if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
+                raise ValueError(
+                    f"DisambiguationConfig.{name}: expected a multiple of delta_t = {self.delta_t}, "
+                    f"got {getattr(self, name)!r}"
+                )
+        if self.probe_speed_rotation * (self.t_c - self.t_b) >= np.pi:
+            raise ValueError(
+                "DisambiguationConfig.probe_speed_rotation: the rotation between t_b and t_c must stay "
+                f"below pi rad to be measurable, got {self.probe_speed_rotation!r} rad/s"
+            )
+        if not (_is_real(self.w) and 0.0 <= self.w <= 1.0):
+            raise ValueError(f"DisambiguationConfig.w: expected a number in [0, 1], got {self.w!r}")
+        if not (_is_real(self.tie_tolerance) and self.tie_tolerance >= 0):
+            raise ValueError(
+                "DisambiguationConfig.tie_tolerance: expected a finite number >= 0, "
+                f"got {self.tie_tolerance!r}"
+            )
+        if self.inference not in INFERENCE_METHODS:
+            raise ValueError(
+                f"DisambiguationConfig.inference: expected one of {INFERENCE_METHODS}, got {self.inference!r}"
+            )
+        if not isinstance(self.dft, DFTParams):
+            raise ValueError(f"DisambiguationConfig.dft: expected DFTParams, got {self.dft!r}")
+        if self.bayes_transition is not None:
+            object.__setattr__(
+                self,
+                "bayes_transition",
+                check_transition(self.bayes_transition, "DisambiguationConfig.bayes_transition"),
+            )
+        if not isinstance(self.potential_field, PotentialFieldConfig):
+            raise ValueError(
+                "DisambiguationConfig.potential_field: expected PotentialFieldConfig, "
+                f"got {self.potential_field!r}"
+            )
+
+    @property
+    def steps_b(self) -> int:
+        """Number of projection steps to ``t_b``."""
+        return round(self.t_b / self.delta_t)
+
+    @property
+    def steps_c(self) -> int:
+        """Number of projection steps to ``t_c``."""
+        return round(self.t_c / self.delta_t)
+
+    @property
+    def transition(self) -> NDArray[np.float64] | None:
+        """The goal-transition matrix of the configured inference method (``None``: identity)."""
+        return self.dft.transition if self.inference == "dft" else self.bayes_transition
+
+    def with_transition(self, transition: ArrayLike | None) -> DisambiguationConfig:
+        """A copy whose inference method uses ``transition`` as its goal-transition matrix."""
+        P = None if transition is None else np.asarray(transition, dtype=float)
+        if self.inference == "dft":
+            return dataclasses.replace(self, dft=dataclasses.replace(self.dft, transition=P))
+        return dataclasses.replace(self, bayes_transition=P)
+
+
+_DEFAULT_CONFIG = DisambiguationConfig()
+
+
+def mico_config(**overrides: Any) -> DisambiguationConfig:
+    """The ``mico`` preset: the robot system's default (equal to ``DisambiguationConfig()``).
+
+    - All six dimensions; probes of 0.1 m/s and 0.2 rad/s, the head array's speeds (FACTS section
+      5), so the projection explores motions the user can actually make.
+    - ``delta_t = 0.1 s``, ``t_b = 1 s``, ``t_c = 2 s``, ``w = 0.5`` (paper and authors' code);
+      ``Upsilon`` divided by the displacement (paper), rotations measured as the angle about ``k``.
+    - DFT with directedness, agreement and proximity (paper equation dft_ii) and
+      ``tau1 = tau2 = 4 s``: with no input the study logs show the belief relaxing to uniform over a
+      few seconds. ``lambda = 3 I`` (1/s): the differential excitation between a goal the command
+      points at and one it points away from is about ``3 * 0.23 = 0.7 /s``, so one second of probe
+      motion (10 cm) moves the projected belief clearly while a single 10 ms control step moves
+      the live belief by under 1 %; the authors' ``lambda = 200`` suits their 2 mm, 2 ms steps
+      in simulation but would make the live belief jump to the latest command direction.
+    - ``R = 0.2 m``: about the spacing of the study's goals (FACTS section 8), so proximity only
+      favours a goal once the gripper is clearly nearer to it than to its neighbours.
+    - Agreement uses the per-goal potential-field commands
+      (:func:`~drake_disamb.core.autonomy.potential_field_commands`, default gains) recomputed at
+      every projected pose: this is what makes goals that differ only in orientation pick a
+      rotational mode.
+    """
+    return dataclasses.replace(DisambiguationConfig(), **overrides)
+
+
+def authors_r3_config(**overrides: Any) -> DisambiguationConfig:
+    """The ``authors-r3`` preset: the authors' R^3 simulation (FACTS sections 1 and 4).
+
+    Dimensions x, y, z only; DFT with the directedness term only, ``tau1 = tau2 = 10 s``,
+    ``lambda = 200 I``, ``P = I`` unless given; probe 0.2; ``delta_t = 0.1 s``, ``t_b = 1 s``,
+    ``t_c = 2 s``, ``w = 0.5``; ``Upsilon`` not divided by the displacement; update the belief at
+    the current position, then move the point; no noise.
+    """
+    base = DisambiguationConfig(
+        dimensions=(0, 1, 2),
+        probe_speed_translation=0.2,
+        probe_speed_rotation=0.2,
+        delta_t=0.1,
+        t_b=1.0,
+        t_c=2.0,
+        w=0.5,
+        divide_upsilon=False,
+        tie_tolerance=1e-3,
+        inference="dft",
+        dft=DFTParams(tau1=10.0, tau2=10.0, lam=200.0, directedness=True, agreement=False, proximity=False),
+    )
+    return dataclasses.replace(base, **overrides)
+
+
+def preset(name: str, transition: ArrayLike | None = None) -> DisambiguationConfig:
+    """The named preset (``"mico"`` or ``"authors-r3"``), optionally with a transition matrix."""
+    if name == "mico":
+        cfg = mico_config()
+    elif name == "authors-r3":
+        cfg = authors_r3_config()
+    else:
+        raise ValueError(f"preset: expected one of {PRESETS}, got {name!r}")
+    return cfg if transition is None else cfg.with_transition(transition)
+
+
+# ----------------------------------------------------------------------------------------------
+# Result
+# ----------------------------------------------------------------------------------------------
+
+
+def _mode_label(dims: Sequence[int]) -> str:
+    return "{" + ", ".join(DIMENSION_NAMES[k] for k in dims) + "}" if dims else "{}"
+
+
+@dataclass(frozen=True)
+class DisambiguationResult:
+    """Outcome of one disambiguation request.
+
+    Attributes:
+        mode: ``m*`` as an index into ``modes``, or ``None`` when the current mode is kept (ties).
+        best_mode: ``argmax D_m`` before the tie rule (first of equal maxima).
+        dimension: ``k*`` as a control-dimension index (0 = vx ... 5 = wz).
+        dimensions: The probed dimensions; the per-dimension arrays follow this order.
+        scores_plus: ``D_k+``, shape ``(n_k,)``.
+        scores_minus: ``D_k-``, shape ``(n_k,)``.
+        dimension_scores: ``D_k = D_k+ + D_k-``, shape ``(n_k,)``.
+        mode_scores: ``D_m``, shape ``(n_modes,)``.
+        features: ``{"gamma", "omega", "lambda", "upsilon"}`` -> ``(2, n_k)`` arrays, row 0 for
+            ``+e_k`` and row 1 for ``-e_k``.
+        modes: The control modes (dimension indices).
+        current_mode: The mode in use when the request came (``None`` if not given).
+        w: Weight of the short-term term used.
+        tie_tolerance: Relative tie tolerance used.
+    """
+
+    mode: int | None
+    best_mode: int
+    dimension: int
+    dimensions: tuple[int, ...]
+    scores_plus: NDArray[np.float64]
+    scores_minus: NDArray[np.float64]
+    dimension_scores: NDArray[np.float64]
+    mode_scores: NDArray[np.float64]
+    features: dict[str, NDArray[np.float64]]
+    modes: tuple[tuple[int, ...], ...]
+    current_mode: int | None
+    w: float
+    tie_tolerance: float
+
+    @property
+    def kept(self) -> bool:
+        """True when the current mode is kept (no switch)."""
+        return self.mode is None
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (the ``disambiguate`` command's output format)."""
+        return {
+            "mode": self.mode,
+            "best_mode": self.best_mode,
+            "dimension": self.dimension,
+            "dimensions": list(self.dimensions),
+            "dimension_scores": {
+                "plus": self.scores_plus.tolist(),
+                "minus": self.scores_minus.tolist(),
+                "total": self.dimension_scores.tolist(),
+            },
+            "mode_scores": self.mode_scores.tolist(),
+            "features": {
+                name: {"plus": values[0].tolist(), "minus": values[1].tolist()}
+                for name, values in self.features.items()
+            },
+        }
+
+    def explain(self) -> str:
+        """A short human-readable account of why the mode won and which features dominated."""
+        lines: list[str] = []
+        order = np.argsort(-self.mode_scores, kind="stable")
+        best = int(order[0])
+        scores = ", ".join(
+            f"{i} {_mode_label(m)} = {s:.4g}"
+            for i, (m, s) in enumerate(zip(self.modes, self.mode_scores, strict=True))
+        )
+        if self.mode is None:
+            cur = "the current mode" if self.current_mode is None else f"the current mode {self.current_mode}"
+            if np.all(self.mode_scores >= self.mode_scores.max() * (1 - self.tie_tolerance)):
+                lines.append(
+                    f"Kept {cur}: every mode scores the same within {self.tie_tolerance:g} (relative); "
+                    "moving in any mode would tell the goals apart equally (or not at all)."
+                )
+            else:
+                lines.append(
+                    f"Kept {cur}: it is among the equally best modes (within {self.tie_tolerance:g})."
+                )
+        else:
+            runner = [int(i) for i in order if int(i) != self.mode]
+            label = _mode_label(self.modes[self.mode])
+            text = f"Chose mode {self.mode} {label} with D_m = {self.mode_scores[self.mode]:.4g}"
+            if runner:
+                r = runner[0]
+                ratio = (
+                    self.mode_scores[self.mode] / self.mode_scores[r] if self.mode_scores[r] > 0 else np.inf
+                )
+                text += f"; runner-up mode {r} {_mode_label(self.modes[r])} scores {self.mode_scores[r]:.4g}"
+                text += f" ({ratio:.3g}x)" if np.isfinite(ratio) else " (nothing to disambiguate there)"
+            lines.append(text + ".")
+        lines.append(f"Mode scores D_m: {scores}.")
+        # Which features drove the winning (or best) mode.
+        focus = self.mode if self.mode is not None else best
+        idx = [self.dimensions.index(k) for k in self.modes[focus] if k in self.dimensions]
+        if idx:
+            g, o, lam, ups = (self.features[n][:, idx] for n in FEATURE_NAMES)
+            short = float(np.sum(self.w * g * lam * o))
+            long = float(np.sum((1 - self.w) * ups))
+            total = short + long
+            if total > 0:
+                share = short / total
+                dom = (
+                    "short-term certainty at t_b (w*Gamma*Lambda*Omega)"
+                    if share >= 0.5
+                    else ("long-term spread of belief gradients (1-w)*Upsilon")
+                )
+                lines.append(
+                    f"In mode {focus} the score is {100 * max(share, 1 - share):.0f} % {dom}: "
+                    f"short-term {short:.4g}, long-term {long:.4g}."
+                )
+            else:
+                lines.append(f"Mode {focus} leaves the belief unchanged: every feature is zero.")
+        k = self.dimensions.index(self.dimension)
+        sign = 0 if self.scores_plus[k] >= self.scores_minus[k] else 1
+        f = {n: float(self.features[n][sign, k]) for n in FEATURE_NAMES}
+        lines.append(
+            f"Best dimension k* = {DIMENSION_NAMES[self.dimension]} (D_k = {self.dimension_scores[k]:.4g}; "
+            f"D+ = {self.scores_plus[k]:.4g}, D- = {self.scores_minus[k]:.4g}); moving "
+            f"{'+' if sign == 0 else '-'}{DIMENSION_NAMES[self.dimension]} gives Gamma = {f['gamma']:.3f}, "
+            f"Omega = {f['omega']:.3f}, Lambda = {f['lambda']:.3f}, Upsilon = {f['upsilon']:.4g}."
+        )
+        return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------------------------------
+# Validation of a request
+# ----------------------------------------------------------------------------------------------
+
+
+def validate_modes(modes: Sequence[Sequence[int]]) -> tuple[tuple[int, ...], ...]:
+    """``modes`` as tuples of dimension indices; ``ValueError`` naming the bad entry."""
+    if isinstance(modes, str | bytes) or not isinstance(modes, Sequence) or len(modes) == 0:
+        raise ValueError(f"modes: expected a non-empty list of lists of dimension indices, got {modes!r}")
+    out = []
+    for i, m in enumerate(modes):
+        if isinstance(m, str | bytes) or not isinstance(m, Sequence | np.ndarray):
+            raise ValueError(f"modes[{i}]: expected a list of dimension indices 0..5, got {m!r}")
+        dims = []
+        for k in m:
+            if isinstance(k, bool) or not isinstance(k, int | np.integer) or not 0 <= int(k) <= 5:
+                raise ValueError(f"modes[{i}]: expected dimension indices 0..5, got {list(m)!r}")
+            dims.append(int(k))
+        if len(set(dims)) != len(dims):
+            raise ValueError(f"modes[{i}]: repeated dimension index in {dims!r}")
+        out.append(tuple(dims))
+    return tuple(out)
+
+
+def _validate_belief(belief: ArrayLike, n: int) -> NDArray[np.float64]:
+    p = _check_last(belief, n, "belief")
+    if p.ndim != 1:
+        raise ValueError(f"belief: expected a vector of {n} probabilities, got shape {p.shape}")
+    if np.any(p < 0) or abs(p.sum() - 1.0) > 1e-6:
+        raise ValueError(f"belief: expected non-negative entries summing to 1, got {p.tolist()!r}")
+    return p / p.sum()
+
+
+def _check_transition_size(P: ArrayLike | None, n: int) -> None:
+    """Contents are checked when the config is built (``check_transition``); here only the size."""
+    if P is not None and np.shape(P) != (n, n):
+        raise ValueError(f"transition: expected a {n}x{n} matrix (one row per goal), got shape {np.shape(P)}")
+
+
+# ----------------------------------------------------------------------------------------------
+# Forward projection and features
+# ----------------------------------------------------------------------------------------------
+
+
+def probe_commands(config: DisambiguationConfig) -> NDArray[np.float64]:
+    """The ``2 n_k`` probe twists, shape ``(2, n_k, 6)``: row 0 ``+s e_k``, row 1 ``-s e_k``."""
+    dims = np.asarray(config.dimensions)
+    speed = np.where(dims < 3, config.probe_speed_translation, config.probe_speed_rotation)
+    plus = np.zeros((dims.size, 6))
+    plus[np.arange(dims.size), dims] = speed
+    return np.stack((plus, -plus))
+
+
+@dataclass(frozen=True)
+class Projection:
+    """Projected beliefs and displacements, probe axes ``(2, n_k)`` (``+e_k`` first).
+
+    Attributes:
+        p_b: Beliefs at ``t_b``, ``(2, n_k, n)``.
+        p_c: Beliefs at ``t_c``, ``(2, n_k, n)``.
+        displacement: Displacement along ``k`` between ``t_b`` and ``t_c`` (m or rad), ``(2, n_k)``.
+    """
+
+    p_b: NDArray[np.float64]
+    p_c: NDArray[np.float64]
+    displacement: NDArray[np.float64]
+
+
+def forward_projection(
+    belief: NDArray[np.float64],
+    position: NDArray[np.float64],
+    orientation: NDArray[np.float64],
+    goal_positions: NDArray[np.float64],
+    goal_orientations: NDArray[np.float64],
+    config: DisambiguationConfig,
+) -> Projection:
+    """Project the belief for every probe at once (inputs already validated; unit quaternions).
+
+    Step ``s`` (``s = 0 .. steps_c - 1``) updates the belief at pose ``s`` with the probe command,
+    then moves the pose. The poses do not depend on the belief, so all of them -- and the per-goal
+    autonomy commands at them (agreement term) and the belief-independent part of the update (the
+    DFT drive or the Bayes likelihood) -- are computed up front in one vectorised call; only the
+    recursion of the update runs step by step, over the whole probe batch. This is exactly
+    :func:`~drake_disamb.core.inference.dft_euler_step` /
+    :func:`~drake_disamb.core.inference.bayes_step`, which are these two halves composed.
+    """
+    U = probe_commands(config).reshape(-1, 6)  # (P, 6)
+    n_probe = U.shape[0]
+    dt = config.delta_t
+    nb, nc = config.steps_b, config.steps_c
+    steps = np.arange(nc + 1, dtype=float)[:, None, None]  # (nc + 1, 1, 1)
+    # Pose after s steps of a constant world-frame twist: x + s v dt, exp(s w dt) (x) q.
+    X = position + steps * (U[:, :3] * dt)  # (nc + 1, P, 3)
+    Q = _quat_multiply(_quat_from_rotvec(steps * (U[:, 3:] * dt)), orientation)  # (nc + 1, P, 4)
+    p = np.broadcast_to(belief, (n_probe, belief.size))
+    # The inference update, split as in inference.py: the p-independent part (DFT drive or Bayes
+    # likelihood) for every step and probe in one call, then the recursion over the probe batch.
+    # dft_euler_step = dft_euler_update o dft_drive; bayes_step = posterior_update o bayes_likelihood.
+    if config.inference == "dft":
+        UA = None
+        if config.dft.agreement:
+            UA = _potential_field_commands(
+                X[:nc], Q[:nc], goal_positions, goal_orientations, config.potential_field
+            )  # (nc, P, n, 6)
+        drive = dft_drive(U, X[:nc], goal_positions, config.dft, UA)  # (nc, P, n)
+
+        def update(p: NDArray[np.float64], s: int) -> NDArray[np.float64]:
+            return dft_euler_update(p, drive[s], config.dft, dt)
+
+    else:
+        lik = bayes_likelihood(U, X[:nc], goal_positions, config.bayes_sigma)  # (nc, P, n)
+
+        def update(p: NDArray[np.float64], s: int) -> NDArray[np.float64]:
+            return posterior_update(p, lik[s], config.bayes_transition)
+
+    p_b = p
+    for s in range(nc):
+        p = update(p, s)
+        if s + 1 == nb:
+            p_b = p
+    # Displacement along k between t_b and t_c: position component, or rotation angle about axis k.
+    dims = np.asarray(config.dimensions)
+    trans = (X[nc] - X[nb])[np.arange(n_probe), np.tile(np.minimum(dims, 2), 2)]
+    rot = _orientation_error(Q[nb], Q[nc])[np.arange(n_probe), np.tile(np.maximum(dims - 3, 0), 2)]
+    disp = np.where(np.tile(dims < 3, 2), trans, rot)
+    n_k = dims.size
+    return Projection(
+        p_b=p_b.reshape(2, n_k, -1), p_c=p.reshape(2, n_k, -1), displacement=disp.reshape(2, n_k)
+    )
+
+
+def _pairwise_abs_sum(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``sum_{i<j} |a_i - a_j|`` over the last axis."""
+    return 0.5 * np.sum(np.abs(a[..., :, None] - a[..., None, :]), axis=(-2, -1))
+
+
+def belief_features(
+    p_b: NDArray[np.float64], p_c: NDArray[np.float64], displacement: NDArray[np.float64], divide: bool
+) -> dict[str, NDArray[np.float64]]:
+    """Gamma, Omega, Lambda (at ``t_b``) and Upsilon (``t_c`` vs ``t_b``), each shape ``(...)``.
+
+    With one goal the second maximum is taken as 0 (so ``Omega = Gamma``; ``Lambda = 0`` anyway).
+    With ``divide``, displacements below 1e-12 give a zero gradient instead of a division by zero.
+    """
+    srt = np.sort(p_b, axis=-1)
+    gamma = srt[..., -1]
+    second = srt[..., -2] if p_b.shape[-1] > 1 else np.zeros_like(gamma)
+    diff = p_c - p_b
+    if divide:
+        d = np.abs(displacement)[..., None]
+        ok = d > _MIN_DISPLACEMENT
+        diff = np.where(ok, diff / np.where(ok, d, 1.0), 0.0)
+    return {
+        "gamma": gamma,
+        "omega": gamma - second,
+        "lambda": _pairwise_abs_sum(p_b),
+        "upsilon": _pairwise_abs_sum(diff),
+    }
+
+
+def select_mode(
+    mode_scores: NDArray[np.float64], current_mode: int | None, tie_tolerance: float
+) -> tuple[int | None, int]:
+    """Apply the tie rule. Returns ``(mode or None when the current mode is kept, argmax)``."""
+    best = int(np.argmax(mode_scores))
+    top = float(mode_scores[best])
+    tied = mode_scores >= top - tie_tolerance * abs(top)
+    if np.all(tied):
+        return None, best
+    if current_mode is not None and 0 <= current_mode < mode_scores.size and tied[current_mode]:
+        return None, best
+    return best, best
+
+
+# ----------------------------------------------------------------------------------------------
+# Entry point
+# ----------------------------------------------------------------------------------------------
+
+
+def disambiguate(
+    belief: ArrayLike,
+    position: ArrayLike,
+    goal_positions: ArrayLike,
+    modes: Sequence[Sequence[int]],
+    config: DisambiguationConfig | None = None,
+    *,
+    orientation: ArrayLike | None = None,
+    goal_orientations: ArrayLike | None = None,
+    current_mode: int | None = None,
+) -> DisambiguationResult:
+    """Run Algorithm 1 and pick the disambiguating control mode.
+
+    Args:
+        belief: Current belief ``p(t_a)`` over the ``n`` goals (non-negative, sums to 1).
+        position: End-effector position ``(3,)`` (m, world frame).
+        goal_positions: ``(n, 3)`` goal positions (m).
+        modes: Control modes, each a list of dimension indices (0 = vx ... 5 = wz); the returned
+            mode is an index into this list.
+        config: Algorithm parameters (default: the ``mico`` preset).
+        orientation: End-effector orientation ``[qw, qx, qy, qz]`` (default identity).
+        goal_orientations: ``(n, 4)`` goal orientations (default: the end-effector's, i.e. no
+            orientation preference between goals).
+        current_mode: Index of the mode in use (may be past the end of ``modes``, e.g. the
+            gripper mode); kept on ties.
+
+    Returns:
+        A :class:`DisambiguationResult`.
+    """
+    cfg = _DEFAULT_CONFIG if config is None else config
+    mode_dims = validate_modes(modes)
+    x = _check_last(position, 3, "position")
+    if x.ndim != 1:
+        raise ValueError(f"position: expected 3 numbers, got shape {x.shape}")
+    gp = _check_last(goal_positions, 3, "goal_positions")
+    if gp.ndim != 2 or gp.shape[0] < 1:
+        raise ValueError(f"goal_positions: expected shape (n, 3) with n >= 1, got {gp.shape}")
+    n = gp.shape[0]
+    p = _validate_belief(belief, n)
+    q = np.array([1.0, 0.0, 0.0, 0.0]) if orientation is None else _check_quat(orientation, "orientation")
+    if q.ndim != 1:
+        raise ValueError(f"orientation: expected 4 numbers, got shape {q.shape}")
+    if goal_orientations is None:
+        gq = np.broadcast_to(q, (n, 4))
+    else:
+        gq = _check_quat(goal_orientations, "goal_orientations")
+        if gq.shape != (n, 4):
+            raise ValueError(f"goal_orientations: expected shape ({n}, 4), got {gq.shape}")
+    if current_mode is not None and (
+        isinstance(current_mode, bool) or not isinstance(current_mode, int | np.integer) or current_mode < 0
+    ):
+        raise ValueError(f"current_mode: expected a non-negative integer or None, got {current_mode!r}")
+    if cfg.inference == "dft":
+        _check_transition_size(cfg.dft.transition, n)
+        if cfg.dft.rest is not None and np.shape(cfg.dft.rest) != (n,):
+            raise ValueError(f"dft.rest: expected {n} entries, got {np.asarray(cfg.dft.rest).tolist()!r}")
+        lam = np.asarray(cfg.dft.lam, dtype=float)
+        if lam.ndim != 0 and lam.shape != (n, n):
+            raise ValueError(f"dft.lam: expected a scalar or a {n}x{n} matrix, got shape {lam.shape}")
+    else:
+        _check_transition_size(cfg.bayes_transition, n)
+
+    proj = forward_projection(p, x, q, gp, gq, cfg)
+    feats = belief_features(proj.p_b, proj.p_c, proj.displacement, cfg.divide_upsilon)
+    D = (
+        cfg.w * feats["gamma"] * feats["lambda"] * feats["omega"] + (1.0 - cfg.w) * feats["upsilon"]
+    )  # (2, n_k)
+    D_k = D[0] + D[1]
+    index = {k: i for i, k in enumerate(cfg.dimensions)}
+    member = np.zeros((len(mode_dims), len(cfg.dimensions)))
+    for m, dims in enumerate(mode_dims):
+        for k in dims:
+            if k in index:
+                member[m, index[k]] = 1.0
+    D_m = member @ D_k
+    mode, best = select_mode(D_m, None if current_mode is None else int(current_mode), cfg.tie_tolerance)
+    return DisambiguationResult(
+        mode=mode,
+        best_mode=best,
+        dimension=cfg.dimensions[int(np.argmax(D_k))],
+        dimensions=cfg.dimensions,
+        scores_plus=D[0],
+        scores_minus=D[1],
+        dimension_scores=D_k,
+        mode_scores=D_m,
+        features=feats,
+        modes=mode_dims,
+        current_mode=None if current_mode is None else int(current_mode),
+        w=cfg.w,
+        tie_tolerance=cfg.tie_tolerance,
+    )
