@@ -1,0 +1,654 @@
+"""Typed task scenarios: dataclasses loaded from YAML with a strict loader.
+
+A :class:`Scenario` describes one shared-control trial: the task's goals (grouped in stages for
+multi-step tasks), the interface and mode-switching paradigm, the parameters of every component
+(inference, disambiguation, blending, autonomy, simulated user), the control rate, the success
+tolerance and the seed. Two scenarios are embedded as package data
+(``drake_disamb/tasks/reaching.yaml`` and ``pouring.yaml``); :func:`load_scenario` accepts one of
+those names or a path to a YAML file.
+
+The loader is strict: an unknown key, a value of the wrong type, a NaN or infinite number, an
+empty goal list, a goal outside the arm's reach or a malformed YAML file raises ``ValueError``
+naming the field path and the value, e.g.
+``scenario.goals[2].position: expected 3 finite numbers, got [0.1, nan, 0.2]``.
+
+Units are SI; positions are in the MICO base frame W (metres), orientations are unit quaternions
+``[qw, qx, qy, qz]`` of the end-effector frame in W (Drake's w-first order).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import yaml
+
+from drake_disamb.core.autonomy import PotentialFieldConfig
+from drake_disamb.core.blending import BlendingConfig
+from drake_disamb.core.disambiguation import MICO_DFT, PRESETS
+from drake_disamb.core.inference import DFTParams
+from drake_disamb.core.user import UserConfig
+
+INTERFACES: tuple[str, ...] = ("joystick", "head_array")
+"""Interface names accepted by :attr:`Scenario.interface`."""
+
+PARADIGMS: tuple[str, ...] = ("manual", "disambiguation")
+"""Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
+
+INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
+"""Intent-inference methods accepted by :attr:`InferenceSpec.method`."""
+
+EMBEDDED_TASKS: tuple[str, ...] = ("reaching", "pouring")
+"""Names of the scenarios shipped as package data in ``drake_disamb/tasks``."""
+
+MICO_SHOULDER_POSITION: tuple[float, float, float] = (0.0, 0.0, 0.2755)
+"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (FACTS section 7)."""
+
+MICO_REACH: float = 0.7
+"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (FACTS section 7)."""
+
+MIN_START_CLEARANCE: float = 0.05
+"""A goal closer than this (m) to the gripper's start position is rejected: the task would be trivial."""
+
+
+# ----------------------------------------------------------------------------------------------
+# Dataclasses
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass
+class ObjectSpec:
+    """The object drawn (and placed in the scene) at a goal.
+
+    Attributes:
+        shape: ``"box"``, ``"cylinder"`` or ``"sphere"``.
+        size: Box: ``[lx, ly, lz]``; cylinder: ``[radius, length]`` (axis along z of W);
+            sphere: ``[radius]`` (m).
+        color: ``[r, g, b, a]`` in ``[0, 1]``.
+        offset: Object centre minus goal position (m, in W). A reaching goal sits at the object
+            (offset 0); a pour pose sits above its container (negative z offset).
+    """
+
+    shape: Literal["box", "cylinder", "sphere"] = "box"
+    size: list[float] = field(default_factory=lambda: [0.05, 0.05, 0.05])
+    color: list[float] = field(default_factory=lambda: [0.6, 0.6, 0.6, 1.0])
+    offset: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclass
+class GoalSpec:
+    """One goal pose of the end effector, and the object that marks it.
+
+    Attributes:
+        name: Unique name (used in plots and logs).
+        position: ``[x, y, z]`` (m, in W).
+        orientation: ``[qw, qx, qy, qz]`` of the end-effector frame in W (normalised on load).
+        stage: Index into :attr:`Scenario.stages` of the stage whose goal set holds this goal.
+        object: What to draw at the goal.
+    """
+
+    name: str
+    position: list[float]
+    orientation: list[float] = field(default_factory=lambda: [1.0, 0.0, 0.0, 0.0])
+    stage: int = 0
+    object: ObjectSpec = field(default_factory=ObjectSpec)
+
+
+@dataclass
+class StageSpec:
+    """One step of a multi-step task.
+
+    Attributes:
+        name: Stage name (e.g. ``"pour"``, ``"place"``).
+        hold_time: How long (s) the end effector must stay at a goal to complete the stage;
+            ``None`` uses :attr:`SuccessSpec.hold_time`.
+    """
+
+    name: str = "reach"
+    hold_time: float | None = None
+
+
+@dataclass
+class SuccessSpec:
+    """When a goal counts as reached: within both tolerances, continuously for ``hold_time``.
+
+    Attributes:
+        position_tolerance: Distance (m) between the end-effector origin and the goal position.
+        orientation_tolerance: Angle (rad) of the rotation between the end-effector and goal
+            orientations.
+        hold_time: Time (s) the end effector must stay within both tolerances.
+    """
+
+    position_tolerance: float = 0.02
+    orientation_tolerance: float = 0.15
+    hold_time: float = 0.3
+
+
+@dataclass
+class InferenceSpec:
+    """Intent inference.
+
+    Attributes:
+        method: ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
+        dft: Parameters of the field-theoretic update; default the ``mico`` disambiguation preset's
+            (:data:`drake_disamb.core.disambiguation.MICO_DFT`), so that the live belief and the
+            disambiguation's forward projection run the same update.
+    """
+
+    method: Literal["dft", "bayes", "memory"] = "dft"
+    dft: DFTParams = MICO_DFT
+
+
+@dataclass
+class DisambiguationSpec:
+    """Disambiguation (Algorithm 1).
+
+    Attributes:
+        preset: Name of a preset in :mod:`drake_disamb.core.disambiguation` (``"mico"`` or
+            ``"authors-r3"``).
+    """
+
+    preset: str = "mico"
+
+
+@dataclass
+class UserSpec:
+    """The simulated user.
+
+    Attributes:
+        goals: Intended goal per stage: an index into that stage's goal list (the goals of the
+            stage in the order they appear in :attr:`Scenario.goals`).
+        config: The user's behaviour (:class:`drake_disamb.core.user.UserConfig`). The builder
+            sets its ``seed`` from :attr:`Scenario.seed` and its ``rho1`` from the blending
+            thresholds, and turns its disambiguation requests off in the manual paradigm. Its
+            success tolerances must not exceed the task's (:class:`SuccessSpec`): the user stops
+            commanding once it believes it has arrived.
+    """
+
+    goals: list[int] = field(default_factory=lambda: [0])
+    config: UserConfig = field(default_factory=UserConfig)
+
+
+@dataclass
+class CarriedObjectSpec:
+    """An object held in the gripper from the start of the trial (e.g. the cup when pouring).
+
+    Attributes:
+        shape, size, color: As in :class:`ObjectSpec`.
+        offset: Object centre in the end-effector frame (m).
+        orientation: ``[qw, qx, qy, qz]`` of the object in the end-effector frame. The default
+            turns a cylinder's axis (its z) onto the end-effector x axis: with the gripper's
+            approach axis horizontal and its fingers closing horizontally, the cup stands upright.
+    """
+
+    shape: Literal["box", "cylinder", "sphere"] = "cylinder"
+    size: list[float] = field(default_factory=lambda: [0.035, 0.09])
+    color: list[float] = field(default_factory=lambda: [0.9, 0.9, 0.95, 1.0])
+    offset: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    orientation: list[float] = field(
+        default_factory=lambda: [0.7071067811865476, 0.0, 0.7071067811865476, 0.0]
+    )
+
+
+@dataclass
+class Scenario:
+    """One shared-control trial, in the style of Drake's typed scenario structs.
+
+    Attributes:
+        task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
+        description: Free text.
+        interface: ``"joystick"`` or ``"head_array"``.
+        paradigm: ``"manual"`` or ``"disambiguation"``.
+        inference, disambiguation, blending, autonomy, user: Component settings.
+        control_period: Period (s) of the control loop (interface, autonomy, blending,
+            differential IK); 0.01 s = 100 Hz, the MICO's Cartesian velocity interface.
+        duration: Simulated-time limit (s) of a trial.
+        success: Success tolerance.
+        seed: Seed of every random draw in the trial.
+        initial_mode: Index into the interface's mode list of the mode at the start.
+        start_joint_positions: The arm's 6 joint angles (rad) at the start; ``None`` means the
+            station's home configuration.
+        goals: Every goal of every stage.
+        stages: The task's stages, in order (one for single-step tasks). Every stage has the
+            same number of goals: the goal set switches when a stage completes.
+        carried_object: An object held in the gripper from the start, or ``None``.
+    """
+
+    task: str = "reaching"
+    description: str = ""
+    interface: Literal["joystick", "head_array"] = "head_array"
+    paradigm: Literal["manual", "disambiguation"] = "disambiguation"
+    inference: InferenceSpec = field(default_factory=InferenceSpec)
+    disambiguation: DisambiguationSpec = field(default_factory=DisambiguationSpec)
+    blending: BlendingConfig = field(default_factory=BlendingConfig)
+    autonomy: PotentialFieldConfig = field(default_factory=PotentialFieldConfig)
+    user: UserSpec = field(default_factory=UserSpec)
+    control_period: float = 0.01
+    duration: float = 60.0
+    success: SuccessSpec = field(default_factory=SuccessSpec)
+    seed: int = 0
+    initial_mode: int = 0
+    start_joint_positions: list[float] | None = None
+    goals: list[GoalSpec] = field(default_factory=list)
+    stages: list[StageSpec] = field(default_factory=lambda: [StageSpec()])
+    carried_object: CarriedObjectSpec | None = None
+
+    # -- derived views -------------------------------------------------------------------------
+
+    @property
+    def n_stages(self) -> int:
+        """Number of stages."""
+        return len(self.stages)
+
+    def stage_goals(self, stage: int) -> list[GoalSpec]:
+        """The goals of ``stage``, in the order they appear in :attr:`goals`."""
+        return [g for g in self.goals if g.stage == stage]
+
+    @property
+    def n_goals(self) -> int:
+        """Number of goals per stage (the size of the belief)."""
+        return len(self.stage_goals(0))
+
+    def stage_goal_poses(self, stage: int) -> np.ndarray:
+        """``(n_goals, 7)`` array of ``[x, y, z, qw, qx, qy, qz]`` for ``stage``."""
+        return np.array([[*g.position, *_unit(g.orientation)] for g in self.stage_goals(stage)], dtype=float)
+
+    def hold_time(self, stage: int) -> float:
+        """Hold time (s) of ``stage``."""
+        h = self.stages[stage].hold_time
+        return self.success.hold_time if h is None else h
+
+
+def _unit(q: Sequence[float]) -> list[float]:
+    a = np.asarray(q, dtype=float)
+    return (a / np.linalg.norm(a)).tolist()
+
+
+# ----------------------------------------------------------------------------------------------
+# Strict loader
+# ----------------------------------------------------------------------------------------------
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    text = repr(value)
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _convert(tp: Any, value: Any, path: str) -> Any:
+    """Convert plain YAML data ``value`` to type ``tp``; raise ``ValueError`` naming ``path``."""
+    origin = typing.get_origin(tp)
+    args = typing.get_args(tp)
+    if tp is Any:
+        return value
+    if origin in (typing.Union, types.UnionType):
+        if value is None:
+            if type(None) in args:
+                return None
+            raise ValueError(f"{path}: expected a value, got None")
+        errors = []
+        for arg in args:
+            if arg is type(None):
+                continue
+            try:
+                return _convert(arg, value, path)
+            except ValueError as exc:
+                errors.append(str(exc))
+        raise ValueError(errors[0] if len(errors) == 1 else f"{path}: no accepted type matches {_fmt(value)}")
+    if origin is Literal:
+        if value not in args:
+            choices = ", ".join(repr(a) for a in args)
+            raise ValueError(f"{path}: expected one of {choices}, got {_fmt(value)}")
+        return value
+    if dataclasses.is_dataclass(tp):
+        return _load_dataclass(tp, value, path)
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ValueError(f"{path}: expected true or false, got {_fmt(value)}")
+        return value
+    if tp is int:
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise ValueError(f"{path}: expected an integer, got {_fmt(value)}")
+        return value
+    if tp is float:
+        if not _is_number(value) or not math.isfinite(value):
+            raise ValueError(f"{path}: expected a finite number, got {_fmt(value)}")
+        return float(value)
+    if tp is str:
+        if not isinstance(value, str):
+            raise ValueError(f"{path}: expected a string, got {_fmt(value)}")
+        return value
+    if origin is list:
+        if not isinstance(value, list):
+            raise ValueError(f"{path}: expected a list, got {_fmt(value)}")
+        (item,) = args
+        return [_convert(item, v, f"{path}[{i}]") for i, v in enumerate(value)]
+    if origin is np.ndarray or tp is np.ndarray:
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{path}: expected numbers, got {_fmt(value)}") from exc
+        if any(isinstance(v, bool) for v in np.asarray(value, dtype=object).ravel()):
+            raise ValueError(f"{path}: expected numbers, got {_fmt(value)}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{path}: expected finite numbers, got {_fmt(value)}")
+        return arr
+    raise TypeError(f"{path}: unsupported field type {tp!r}")  # pragma: no cover (programming error)
+
+
+def _load_dataclass(cls: Any, data: Any, path: str) -> Any:
+    if isinstance(data, cls):
+        return data
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a mapping of {cls.__name__} fields, got {_fmt(data)}")
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    for key in data:
+        if key not in fields:
+            known = ", ".join(sorted(fields))
+            raise ValueError(f"{path}.{key}: unknown key (known keys of {cls.__name__}: {known})")
+    kwargs = {}
+    for name in fields:
+        if name in data:
+            kwargs[name] = _convert(hints[name], data[name], f"{path}.{name}")
+    missing = [
+        name
+        for name, f in fields.items()
+        if name not in kwargs
+        and f.default is dataclasses.MISSING
+        and f.default_factory is dataclasses.MISSING
+    ]
+    if missing:
+        raise ValueError(f"{path}.{missing[0]}: required field missing")
+    try:
+        return cls(**kwargs)
+    except ValueError as exc:  # e.g. DFTParams / PotentialFieldConfig self-validation
+        raise ValueError(f"{path}: {exc}") from exc
+
+
+# ----------------------------------------------------------------------------------------------
+# Validation
+# ----------------------------------------------------------------------------------------------
+
+
+def _check_vec(value: Sequence[float], n: int | tuple[int, ...], path: str) -> np.ndarray:
+    sizes = (n,) if isinstance(n, int) else n
+    a = np.asarray(value, dtype=float)
+    if a.ndim != 1 or a.size not in sizes or not np.all(np.isfinite(a)):
+        what = " or ".join(str(s) for s in sizes)
+        raise ValueError(f"{path}: expected {what} finite numbers, got {_fmt(list(value))}")
+    return a
+
+
+def _check_positive(value: float, path: str, allow_zero: bool = False) -> None:
+    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
+    if not ok:
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{path}: expected a finite number {bound}, got {_fmt(value)}")
+
+
+def _check_object(obj: ObjectSpec | CarriedObjectSpec, path: str) -> None:
+    sizes = {"box": 3, "cylinder": 2, "sphere": 1}
+    size = _check_vec(obj.size, sizes[obj.shape], f"{path}.size")
+    if np.any(size <= 0):
+        raise ValueError(f"{path}.size: expected positive dimensions, got {_fmt(obj.size)}")
+    color = _check_vec(obj.color, 4, f"{path}.color")
+    if np.any((color < 0) | (color > 1)):
+        raise ValueError(f"{path}.color: expected [r, g, b, a] in [0, 1], got {_fmt(obj.color)}")
+    _check_vec(obj.offset, 3, f"{path}.offset")
+
+
+def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
+    """Check every cross-field constraint of ``scenario``; return it unchanged.
+
+    Raises:
+        ValueError: naming the field path (``scenario.goals[2].position`` ...) and the value.
+    """
+    s = scenario
+    if s.interface not in INTERFACES:
+        raise ValueError(f"{name}.interface: expected one of {', '.join(INTERFACES)}, got {s.interface!r}")
+    if s.paradigm not in PARADIGMS:
+        raise ValueError(f"{name}.paradigm: expected one of {', '.join(PARADIGMS)}, got {s.paradigm!r}")
+    if s.inference.method not in INFERENCE_METHODS:
+        raise ValueError(
+            f"{name}.inference.method: expected one of {', '.join(INFERENCE_METHODS)}, "
+            f"got {s.inference.method!r}"
+        )
+    if s.disambiguation.preset not in PRESETS:
+        raise ValueError(
+            f"{name}.disambiguation.preset: expected one of {', '.join(PRESETS)}, "
+            f"got {s.disambiguation.preset!r}"
+        )
+    _check_positive(s.control_period, f"{name}.control_period")
+    _check_positive(s.duration, f"{name}.duration")
+    if s.control_period > 0.1:
+        raise ValueError(f"{name}.control_period: expected at most 0.1 s, got {s.control_period!r}")
+    _check_positive(s.success.position_tolerance, f"{name}.success.position_tolerance")
+    _check_positive(s.success.orientation_tolerance, f"{name}.success.orientation_tolerance")
+    _check_positive(s.success.hold_time, f"{name}.success.hold_time", allow_zero=True)
+    if s.seed < 0:
+        raise ValueError(f"{name}.seed: expected a non-negative integer, got {s.seed!r}")
+    if s.initial_mode < 0:
+        raise ValueError(f"{name}.initial_mode: expected a non-negative mode index, got {s.initial_mode!r}")
+    if s.start_joint_positions is not None:
+        _check_vec(s.start_joint_positions, 6, f"{name}.start_joint_positions")
+
+    if not s.stages:
+        raise ValueError(f"{name}.stages: expected at least one stage, got []")
+    for i, stage in enumerate(s.stages):
+        if stage.hold_time is not None:
+            _check_positive(stage.hold_time, f"{name}.stages[{i}].hold_time", allow_zero=True)
+    if not s.goals:
+        raise ValueError(f"{name}.goals: expected at least one goal, got []")
+    names: set[str] = set()
+    shoulder = np.asarray(MICO_SHOULDER_POSITION)
+    for i, g in enumerate(s.goals):
+        path = f"{name}.goals[{i}]"
+        if g.name in names:
+            raise ValueError(f"{path}.name: duplicate goal name {g.name!r}")
+        names.add(g.name)
+        pos = _check_vec(g.position, 3, f"{path}.position")
+        q = _check_vec(g.orientation, 4, f"{path}.orientation")
+        if np.linalg.norm(q) < 1e-6:
+            raise ValueError(f"{path}.orientation: expected a non-zero quaternion, got {_fmt(g.orientation)}")
+        dist = float(np.linalg.norm(pos - shoulder))
+        if dist > MICO_REACH:
+            raise ValueError(
+                f"{path}.position: goal {g.name!r} is out of the arm's reach: {dist:.3f} m from the "
+                f"shoulder at {list(MICO_SHOULDER_POSITION)} (reach {MICO_REACH} m), got {_fmt(g.position)}"
+            )
+        if not 0 <= g.stage < len(s.stages):
+            raise ValueError(
+                f"{path}.stage: expected a stage index in [0, {len(s.stages) - 1}], got {g.stage!r}"
+            )
+        _check_object(g.object, f"{path}.object")
+    counts = [len(s.stage_goals(k)) for k in range(len(s.stages))]
+    for k, count in enumerate(counts):
+        if count == 0:
+            raise ValueError(f"{name}.stages[{k}]: stage {s.stages[k].name!r} has no goals")
+        if count != counts[0]:
+            raise ValueError(
+                f"{name}.stages[{k}]: every stage needs the same number of goals ({counts[0]} in stage 0), "
+                f"got {count}"
+            )
+    try:
+        s.blending.rhos(counts[0])
+    except ValueError as exc:
+        raise ValueError(f"{name}.blending: {exc}") from exc
+    if len(s.user.goals) != len(s.stages):
+        raise ValueError(
+            f"{name}.user.goals: expected one intended goal index per stage ({len(s.stages)}), "
+            f"got {_fmt(s.user.goals)}"
+        )
+    for k, idx in enumerate(s.user.goals):
+        if not 0 <= idx < counts[k]:
+            raise ValueError(
+                f"{name}.user.goals[{k}]: expected a goal index in [0, {counts[k] - 1}], got {idx!r}"
+            )
+    u = s.user.config
+    for user_field, task_field in (
+        ("success_position_tolerance", "position_tolerance"),
+        ("success_orientation_tolerance", "orientation_tolerance"),
+    ):
+        if getattr(u, user_field) > getattr(s.success, task_field):
+            raise ValueError(
+                f"{name}.user.config.{user_field}: expected at most {name}.success.{task_field} "
+                f"({getattr(s.success, task_field)!r}), got {getattr(u, user_field)!r}"
+            )
+    if s.carried_object is not None:
+        _check_object(s.carried_object, f"{name}.carried_object")
+        q = _check_vec(s.carried_object.orientation, 4, f"{name}.carried_object.orientation")
+        if np.linalg.norm(q) < 1e-6:
+            raise ValueError(
+                f"{name}.carried_object.orientation: expected a non-zero quaternion, "
+                f"got {_fmt(s.carried_object.orientation)}"
+            )
+    return s
+
+
+def check_start_clearance(scenario: Scenario, start_position: Sequence[float]) -> None:
+    """Reject a goal within :data:`MIN_START_CLEARANCE` of the gripper's start position.
+
+    The start position depends on the arm's kinematics, so the builder calls this once the
+    station exists.
+
+    Raises:
+        ValueError: naming ``scenario.goals[i].position`` and the value.
+    """
+    start = np.asarray(start_position, dtype=float)
+    for i, g in enumerate(scenario.goals):
+        if g.stage != 0:
+            continue
+        dist = float(np.linalg.norm(np.asarray(g.position) - start))
+        if dist < MIN_START_CLEARANCE:
+            raise ValueError(
+                f"scenario.goals[{i}].position: goal {g.name!r} is on top of the gripper's start position "
+                f"{np.round(start, 4).tolist()} ({dist:.3f} m < {MIN_START_CLEARANCE} m), "
+                f"got {_fmt(g.position)}"
+            )
+
+
+# ----------------------------------------------------------------------------------------------
+# Public loading API
+# ----------------------------------------------------------------------------------------------
+
+
+def scenario_from_dict(data: Any, name: str = "scenario") -> Scenario:
+    """Build and validate a :class:`Scenario` from plain data (as parsed from YAML)."""
+    return validate_scenario(_load_dataclass(Scenario, data, name), name)
+
+
+def scenario_from_yaml(text: str, source: str = "<string>") -> Scenario:
+    """Parse YAML ``text`` into a validated :class:`Scenario`.
+
+    Raises:
+        ValueError: on malformed YAML (naming ``source`` and the line) or any invalid field.
+    """
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        where = ""
+        mark = getattr(exc, "problem_mark", None)
+        if mark is not None:
+            where = f" at line {mark.line + 1}, column {mark.column + 1}"
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise ValueError(f"{source}: malformed YAML{where}: {problem}") from exc
+    if data is None:
+        raise ValueError(f"{source}: empty YAML document, expected a scenario mapping")
+    return scenario_from_dict(data, "scenario")
+
+
+def embedded_scenario_text(name: str) -> str:
+    """The YAML text of an embedded scenario (``"reaching"`` or ``"pouring"``)."""
+    if name not in EMBEDDED_TASKS:
+        raise ValueError(f"task: expected one of {', '.join(EMBEDDED_TASKS)} or a YAML path, got {name!r}")
+    return resources.files("drake_disamb.tasks").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+
+
+def load_scenario(path_or_name: str | Path) -> Scenario:
+    """Load an embedded scenario by name (``"reaching"``, ``"pouring"``) or a YAML file by path.
+
+    Raises:
+        ValueError: an unknown name, a missing file, malformed YAML or an invalid field.
+    """
+    text_name = str(path_or_name)
+    if isinstance(path_or_name, str) and text_name in EMBEDDED_TASKS:
+        return scenario_from_yaml(embedded_scenario_text(text_name), f"<embedded {text_name}.yaml>")
+    path = Path(path_or_name)
+    if path.suffix.lower() not in (".yaml", ".yml") and not path.exists():
+        raise ValueError(
+            f"task: expected one of {', '.join(EMBEDDED_TASKS)} or a YAML path, got {text_name!r}"
+        )
+    if not path.is_file():
+        raise ValueError(f"task: no such scenario file: {text_name!r}")
+    return scenario_from_yaml(path.read_text(encoding="utf-8"), str(path))
+
+
+def with_overrides(
+    scenario: Scenario,
+    *,
+    interface: str | None = None,
+    paradigm: str | None = None,
+    goal: int | Sequence[int] | None = None,
+    seed: int | None = None,
+) -> Scenario:
+    """A copy of ``scenario`` with command-line overrides applied, validated.
+
+    ``goal`` is one index (used for every stage) or one index per stage.
+    """
+    changes: dict[str, Any] = {}
+    if interface is not None:
+        if interface not in INTERFACES:
+            raise ValueError(f"interface: expected one of {', '.join(INTERFACES)}, got {interface!r}")
+        changes["interface"] = interface
+    if paradigm is not None:
+        if paradigm not in PARADIGMS:
+            raise ValueError(f"paradigm: expected one of {', '.join(PARADIGMS)}, got {paradigm!r}")
+        changes["paradigm"] = paradigm
+    if seed is not None:
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+        changes["seed"] = seed
+    if goal is not None:
+        goals = [goal] * scenario.n_stages if isinstance(goal, int) else list(goal)
+        for i, g in enumerate(goals):
+            if isinstance(g, bool) or not isinstance(g, int):
+                raise ValueError(f"goal[{i}]: expected an integer goal index, got {g!r}")
+        if len(goals) != scenario.n_stages:
+            raise ValueError(
+                f"goal: expected one index or {scenario.n_stages} (one per stage), got {goals!r}"
+            )
+        for k, g in enumerate(goals):
+            n = len(scenario.stage_goals(k))
+            if not 0 <= g < n:
+                raise ValueError(f"goal: expected an index in [0, {n - 1}] for stage {k}, got {g!r}")
+        changes["user"] = dataclasses.replace(scenario.user, goals=goals)
+    return validate_scenario(dataclasses.replace(scenario, **changes))
+
+
+def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
+    """Plain-data form of ``scenario`` (round-trips through :func:`scenario_from_dict`)."""
+
+    def plain(value: Any) -> Any:
+        if dataclasses.is_dataclass(value) and not isinstance(value, type):
+            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value) if f.init}
+        if isinstance(value, np.ndarray):
+            return value.tolist()
+        if isinstance(value, list | tuple):
+            return [plain(v) for v in value]
+        return value
+
+    return plain(scenario)

@@ -1,0 +1,231 @@
+"""The task's goal-set / stage manager and success monitor.
+
+A multi-step task is a sequence of stages, each with its own set of ``n`` goal poses (every stage
+has the same ``n``, so the belief keeps its size). The manager publishes the current stage's goal
+poses; every control period it checks whether the end effector is within the success tolerance
+of one of them and, once it has stayed there for the stage's hold time, records which goal was
+reached and when, and switches to the next stage's goal set. After the last stage the task is
+done (``done`` = 1) and the goal set stays that of the last stage.
+
+The manager does not know the user's intent: it reports which goal was reached in each stage;
+whether that was the intended one is the trial's business (:func:`drake_disamb.builder.run_trial`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+
+from drake_disamb.core.geometry import orientation_error
+
+POSE_SIZE = 7
+
+# Discrete state layout: [stage, candidate goal, hold start time, reached[S], stage end times[S]].
+_STAGE, _CANDIDATE, _HOLD_START, _HEADER = 0, 1, 2, 3
+
+
+def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Position (m) and orientation (rad) errors between one pose and each of ``n`` goal poses.
+
+    Args:
+        ee_pose: ``[x, y, z, qw, qx, qy, qz]``.
+        goal_poses: ``(n, 7)`` goal poses.
+
+    Returns:
+        ``(distances (n,), angles (n,))``; non-finite input gives ``inf`` errors.
+    """
+    x = np.asarray(ee_pose, dtype=float)
+    g = np.asarray(goal_poses, dtype=float).reshape(-1, POSE_SIZE)
+    n = g.shape[0]
+    if not np.all(np.isfinite(x)) or np.linalg.norm(x[3:]) < 1e-9:
+        return np.full(n, np.inf), np.full(n, np.inf)
+    dist = np.linalg.norm(g[:, :3] - x[:3], axis=1)
+    angle = np.linalg.norm(orientation_error(x[3:], g[:, 3:]), axis=-1)
+    return dist, angle
+
+
+class TaskManager(LeafSystem):
+    """Publishes the current stage's goal set; detects a goal reached and held; switches stages.
+
+    .. pydrake_system::
+
+        name: TaskManager
+        input_ports:
+        - ee_pose
+        output_ports:
+        - goal_poses
+        - stage
+        - done
+        - reached_goals
+        - stage_end_times
+
+    Input ports:
+        ee_pose (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m, unit quaternion).
+
+    Output ports:
+        goal_poses (n * 7): the current stage's goal poses, each ``[x, y, z, qw, qx, qy, qz]``
+            (m, unit quaternion), goal after goal.
+        stage (1): index of the current stage; equals the number of stages once done.
+        done (1): 1.0 once every stage is complete, else 0.0.
+        reached_goals (S): per stage, the index of the goal reached (-1 while pending).
+        stage_end_times (S): per stage, the time (s) it completed (NaN while pending).
+
+    A goal counts as reached when the end effector stays within ``position_tolerance`` (m) and
+    ``orientation_tolerance`` (rad) of it for ``hold_times[stage]`` seconds, checked every
+    ``period`` seconds (a periodic discrete update; all outputs depend on the state only, so the
+    manager has no direct feedthrough). A NaN pose never counts as reached.
+    """
+
+    def __init__(
+        self,
+        stage_goal_poses: Sequence[ArrayLike],
+        position_tolerance: float = 0.02,
+        orientation_tolerance: float = 0.15,
+        hold_times: float | Sequence[float] = 0.3,
+        period: float = 0.01,
+    ) -> None:
+        super().__init__()
+        if len(stage_goal_poses) == 0:
+            raise ValueError("stage_goal_poses: expected at least one stage, got 0")
+        goal_sets = []
+        for k, poses in enumerate(stage_goal_poses):
+            a = np.asarray(poses, dtype=float)
+            if a.ndim != 2 or a.shape[1] != POSE_SIZE or a.shape[0] < 1:
+                raise ValueError(f"stage_goal_poses[{k}]: expected shape (n >= 1, 7), got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"stage_goal_poses[{k}]: expected finite numbers, got {a.tolist()!r}")
+            norms = np.linalg.norm(a[:, 3:], axis=1)
+            if np.any(norms < 1e-9):
+                raise ValueError(f"stage_goal_poses[{k}]: a goal quaternion is zero, got {a.tolist()!r}")
+            a = a.copy()
+            a[:, 3:] /= norms[:, None]
+            if goal_sets and a.shape[0] != goal_sets[0].shape[0]:
+                raise ValueError(
+                    f"stage_goal_poses[{k}]: expected {goal_sets[0].shape[0]} goals like stage 0, "
+                    f"got {a.shape[0]}"
+                )
+            goal_sets.append(a)
+        n_stages = len(goal_sets)
+        holds = [float(hold_times)] * n_stages if np.isscalar(hold_times) else [float(h) for h in hold_times]
+        if len(holds) != n_stages:
+            raise ValueError(f"hold_times: expected one per stage ({n_stages}), got {list(holds)!r}")
+        for name, value, strict in (
+            ("position_tolerance", position_tolerance, True),
+            ("orientation_tolerance", orientation_tolerance, True),
+            ("period", period, True),
+            *((f"hold_times[{k}]", h, False) for k, h in enumerate(holds)),
+        ):
+            if not (np.isfinite(value) and (value > 0 if strict else value >= 0)):
+                raise ValueError(
+                    f"{name}: expected a finite number {'> 0' if strict else '>= 0'}, got {value!r}"
+                )
+        self._goal_sets = goal_sets
+        self._n_goals = goal_sets[0].shape[0]
+        self._n_stages = n_stages
+        self._pos_tol = float(position_tolerance)
+        self._ori_tol = float(orientation_tolerance)
+        self._holds = holds
+        self._period = float(period)
+
+        self._ee_pose = self.DeclareVectorInputPort("ee_pose", POSE_SIZE)
+        initial = np.concatenate(([0.0, -1.0, np.nan], np.full(n_stages, -1.0), np.full(n_stages, np.nan)))
+        self._state = self.DeclareDiscreteState(initial)
+        self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
+        self.DeclareVectorOutputPort(
+            "goal_poses",
+            self._n_goals * POSE_SIZE,
+            self._calc_goal_poses,
+            {self.discrete_state_ticket(self._state)},
+        )
+        self.DeclareVectorOutputPort("stage", 1, self._calc_stage, {self.discrete_state_ticket(self._state)})
+        self.DeclareVectorOutputPort("done", 1, self._calc_done, {self.discrete_state_ticket(self._state)})
+        self.DeclareVectorOutputPort(
+            "reached_goals", n_stages, self._calc_reached, {self.discrete_state_ticket(self._state)}
+        )
+        self.DeclareVectorOutputPort(
+            "stage_end_times", n_stages, self._calc_times, {self.discrete_state_ticket(self._state)}
+        )
+
+    # -- properties ---------------------------------------------------------------------------
+
+    @property
+    def n_goals(self) -> int:
+        """Goals per stage."""
+        return self._n_goals
+
+    @property
+    def n_stages(self) -> int:
+        """Number of stages."""
+        return self._n_stages
+
+    def goal_poses_of_stage(self, stage: int) -> NDArray[np.float64]:
+        """``(n, 7)`` goal poses of ``stage`` (normalised quaternions)."""
+        return self._goal_sets[stage].copy()
+
+    # -- state access -------------------------------------------------------------------------
+
+    def _stage_index(self, context: Context) -> int:
+        return int(context.get_discrete_state(self._state).get_value()[_STAGE])
+
+    def stage(self, context: Context) -> int:
+        """The current stage index (``n_stages`` once done)."""
+        return self._stage_index(context)
+
+    def is_done(self, context: Context) -> bool:
+        """True once every stage is complete."""
+        return self._stage_index(context) >= self._n_stages
+
+    def reached_goals(self, context: Context) -> list[int]:
+        """Per stage, the index of the goal reached (-1 while pending)."""
+        x = context.get_discrete_state(self._state).get_value()
+        return [int(v) for v in x[_HEADER : _HEADER + self._n_stages]]
+
+    def stage_end_times(self, context: Context) -> list[float]:
+        """Per stage, the completion time (s), NaN while pending."""
+        x = context.get_discrete_state(self._state).get_value()
+        return [float(v) for v in x[_HEADER + self._n_stages :]]
+
+    # -- update -------------------------------------------------------------------------------
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        x = context.get_discrete_state(self._state).get_value().copy()
+        stage = int(x[_STAGE])
+        if stage >= self._n_stages:
+            return
+        t = context.get_time()
+        dist, angle = pose_errors(self._ee_pose.Eval(context), self._goal_sets[stage])
+        inside = np.flatnonzero((dist <= self._pos_tol) & (angle <= self._ori_tol))
+        if inside.size == 0:
+            x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
+        else:
+            goal = int(inside[np.argmin(dist[inside])])
+            if int(x[_CANDIDATE]) != goal or not np.isfinite(x[_HOLD_START]):
+                x[_CANDIDATE], x[_HOLD_START] = float(goal), t
+            # A tiny slack absorbs the rounding of accumulated periodic event times.
+            if t - x[_HOLD_START] >= self._holds[stage] - 1e-9:
+                x[_HEADER + stage] = float(goal)
+                x[_HEADER + self._n_stages + stage] = t
+                x[_STAGE] = float(stage + 1)
+                x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
+        discrete_state.get_mutable_vector(self._state).SetFromVector(x)
+
+    # -- outputs ------------------------------------------------------------------------------
+
+    def _calc_goal_poses(self, context: Context, output: BasicVector) -> None:
+        stage = min(self._stage_index(context), self._n_stages - 1)
+        output.SetFromVector(self._goal_sets[stage].ravel())
+
+    def _calc_stage(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, float(self._stage_index(context)))
+
+    def _calc_done(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, 1.0 if self.is_done(context) else 0.0)
+
+    def _calc_reached(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(np.asarray(self.reached_goals(context), dtype=float))
+
+    def _calc_times(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(np.asarray(self.stage_end_times(context), dtype=float))

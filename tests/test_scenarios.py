@@ -1,0 +1,213 @@
+"""The typed YAML scenarios: embedded tasks, strict loading, validation, CLI overrides."""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from drake_disamb.core.geometry import orientation_error
+from drake_disamb.scenarios import (
+    MICO_REACH,
+    MICO_SHOULDER_POSITION,
+    Scenario,
+    check_start_clearance,
+    embedded_scenario_text,
+    load_scenario,
+    scenario_from_dict,
+    scenario_from_yaml,
+    scenario_to_dict,
+    with_overrides,
+)
+
+FACTS_REACHING = [
+    (0.328, -0.516, 0.100),
+    (-0.116, -0.579, 0.132),
+    (0.124, -0.531, 0.442),
+    (-0.346, -0.389, 0.220),
+    (-0.376, -0.180, 0.102),
+]
+FACTS_POURING = [
+    (0.3314, -0.206, 0.100),
+    (0.306, -0.550, 0.256),
+    (-0.05, -0.627, 0.225),
+    (-0.370, -0.555, 0.3955),
+]
+
+
+def _reaching_dict() -> dict:
+    return yaml.safe_load(embedded_scenario_text("reaching"))
+
+
+def test_reaching_has_the_study_goals_and_defaults() -> None:
+    s = load_scenario("reaching")
+    assert s.task == "reaching"
+    assert s.interface == "head_array" and s.paradigm == "disambiguation"
+    assert s.control_period == pytest.approx(0.01)
+    assert s.duration == pytest.approx(60.0)
+    assert s.success.position_tolerance == pytest.approx(0.02)
+    assert s.success.orientation_tolerance == pytest.approx(0.15)
+    assert s.n_stages == 1 and s.n_goals == 5
+    np.testing.assert_allclose([g.position for g in s.goals], FACTS_REACHING)
+    poses = s.stage_goal_poses(0)
+    np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0)
+    # Documented orientation: approach axis (EE z) radial at the object's azimuth, 30 deg down.
+    from drake_disamb.core.geometry import quat_to_matrix
+
+    for pose in poses:
+        z_axis = quat_to_matrix(pose[3:])[:, 2]
+        azimuth = math.atan2(pose[1], pose[0])
+        assert math.degrees(math.asin(-z_axis[2])) == pytest.approx(30.0, abs=0.1)
+        assert math.atan2(z_axis[1], z_axis[0]) == pytest.approx(azimuth, abs=math.radians(0.6))
+
+
+def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
+    s = load_scenario("pouring")
+    assert s.n_stages == 2 and s.n_goals == 2
+    assert [st.name for st in s.stages] == ["pour", "place"]
+    pour = [tuple(g.position) for g in s.stage_goals(0)]
+    place = [tuple(g.position) for g in s.stage_goals(1)]
+    assert set(pour) == {FACTS_POURING[1], FACTS_POURING[3]}
+    assert set(place) == {FACTS_POURING[0], FACTS_POURING[2]}
+    assert s.carried_object is not None
+    assert s.hold_time(0) == pytest.approx(1.0) and s.hold_time(1) == pytest.approx(s.success.hold_time)
+    # Pour poses are tilted (rolled) relative to the upright placing orientation family.
+    from drake_disamb.core.geometry import quat_to_matrix
+
+    for pose in s.stage_goal_poses(1):
+        assert quat_to_matrix(pose[3:])[2, 0] == pytest.approx(-1.0, abs=1e-3)  # cup axis (EE x) vertical
+    for pose in s.stage_goal_poses(0):
+        assert abs(quat_to_matrix(pose[3:])[2, 0]) < 0.5  # tipped by 70 degrees
+    angle = np.linalg.norm(orientation_error(s.stage_goal_poses(0)[0, 3:], s.stage_goal_poses(0)[1, 3:]))
+    assert angle > 0.5
+
+
+def test_round_trip_through_plain_data() -> None:
+    for name in ("reaching", "pouring"):
+        s = load_scenario(name)
+        assert scenario_from_dict(scenario_to_dict(s)) == s
+
+
+def test_load_from_path_and_yml(tmp_path: Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_text(embedded_scenario_text("reaching"))
+    assert load_scenario(path) == load_scenario("reaching")
+    assert load_scenario(str(path)) == load_scenario("reaching")
+
+
+@pytest.mark.parametrize(
+    ("mutate", "field"),
+    [
+        (lambda d: d.update(colour=1), "scenario.colour: unknown key"),
+        (lambda d: d["goals"][2].update(position=[0.1, float("nan"), 0.2]), "scenario.goals[2].position"),
+        (lambda d: d["goals"][1].update(position=[0.1, 0.2]), "scenario.goals[1].position"),
+        (lambda d: d["goals"][0].update(position="far"), "scenario.goals[0].position"),
+        (lambda d: d.update(goals=[]), "scenario.goals"),
+        (lambda d: d["goals"][4].update(position=[0.0, -0.9, 0.1]), "scenario.goals[4].position"),
+        (lambda d: d.update(interface="keyboard"), "scenario.interface"),
+        (lambda d: d.update(paradigm="auto"), "scenario.paradigm"),
+        (lambda d: d.update(control_period=float("inf")), "scenario.control_period"),
+        (lambda d: d.update(seed=1.5), "scenario.seed"),
+        (lambda d: d.update(seed=True), "scenario.seed"),
+        (lambda d: d["success"].update(position_tolerance=-0.01), "scenario.success.position_tolerance"),
+        (lambda d: d["user"].update(goals=[7]), "scenario.user.goals[0]"),
+        (lambda d: d["user"].update(goals=[0, 1]), "scenario.user.goals"),
+        (lambda d: d["goals"][0]["object"].update(shape="cone"), "scenario.goals[0].object.shape"),
+        (lambda d: d["goals"][0]["object"].update(size=[0.1]), "scenario.goals[0].object.size"),
+        (lambda d: d["goals"][1].update(name=d["goals"][0]["name"]), "scenario.goals[1].name"),
+        (lambda d: d["goals"][1].update(stage=3), "scenario.goals[1].stage"),
+        (lambda d: d["goals"][1].pop("position"), "scenario.goals[1].position: required"),
+        (lambda d: d.update(disambiguation={"preset": "magic"}), "scenario.disambiguation.preset"),
+        (lambda d: d["inference"].update(method="oracle"), "scenario.inference.method"),
+        (lambda d: d["inference"].update(dft={"tau1": -1.0}), "scenario.inference.dft"),
+        (lambda d: d["blending"].update(rho3=2.0), "scenario.blending"),
+        (
+            lambda d: d["user"]["config"].update(success_position_tolerance=0.05),
+            "scenario.user.config.success_position_tolerance",
+        ),
+    ],
+)
+def test_bad_fields_name_the_field(mutate, field: str) -> None:
+    data = _reaching_dict()
+    data.setdefault("inference", {})
+    data.setdefault("blending", {})
+    mutate(data)
+    with pytest.raises(ValueError, match=field.replace("[", r"\[").replace("]", r"\]")):
+        scenario_from_dict(data)
+
+
+def test_out_of_reach_message_gives_distance_and_value() -> None:
+    data = _reaching_dict()
+    far = [0.0, -0.8, 0.2755]
+    data["goals"][3]["position"] = far
+    with pytest.raises(ValueError) as err:
+        scenario_from_dict(data)
+    text = str(err.value)
+    assert "scenario.goals[3].position" in text and "out of the arm's reach" in text and "0.8" in text
+    # Just inside the reach is fine.
+    data["goals"][3]["position"] = [0.0, -(MICO_REACH - 0.01), MICO_SHOULDER_POSITION[2]]
+    scenario_from_dict(data)
+
+
+def test_malformed_yaml_names_file_and_line(tmp_path: Path) -> None:
+    path = tmp_path / "broken.yaml"
+    path.write_text("task: reaching\ngoals: [\n  - name: a\n")
+    with pytest.raises(ValueError, match=r"broken\.yaml: malformed YAML at line"):
+        load_scenario(path)
+    with pytest.raises(ValueError, match="empty YAML"):
+        scenario_from_yaml("", "empty.yaml")
+    with pytest.raises(ValueError, match="expected a mapping"):
+        scenario_from_yaml("- 1\n- 2\n")
+
+
+def test_unknown_task_name_and_missing_file() -> None:
+    with pytest.raises(ValueError, match="task: expected one of reaching, pouring"):
+        load_scenario("juggling")
+    with pytest.raises(ValueError, match="no such scenario file"):
+        load_scenario("/nonexistent/dir/task.yaml")
+
+
+def test_overrides() -> None:
+    s = load_scenario("pouring")
+    o = with_overrides(s, interface="joystick", paradigm="manual", goal=1, seed=7)
+    assert (o.interface, o.paradigm, o.user.goals, o.seed) == ("joystick", "manual", [1, 1], 7)
+    assert with_overrides(s, goal=[1, 0]).user.goals == [1, 0]
+    assert s.user.goals == [0, 0]  # the original is untouched
+    with pytest.raises(ValueError, match="interface: expected one of"):
+        with_overrides(s, interface="sip_and_puff")
+    with pytest.raises(ValueError, match="paradigm"):
+        with_overrides(s, paradigm="telepathy")
+    with pytest.raises(ValueError, match="goal: expected an index in"):
+        with_overrides(s, goal=2)
+    with pytest.raises(ValueError, match="goal: expected one index or 2"):
+        with_overrides(s, goal=[0, 0, 0])
+    with pytest.raises(ValueError, match="seed"):
+        with_overrides(s, seed=-1)
+
+
+def test_stages_need_equal_goal_counts() -> None:
+    data = yaml.safe_load(embedded_scenario_text("pouring"))
+    extra = copy.deepcopy(data["goals"][2])
+    extra["name"] = "third_coaster"
+    extra["position"] = [0.2, -0.4, 0.1]
+    data["goals"].append(extra)
+    with pytest.raises(ValueError, match=r"scenario\.stages\[1\]: every stage needs the same number"):
+        scenario_from_dict(data)
+
+
+def test_start_clearance() -> None:
+    s = load_scenario("reaching")
+    check_start_clearance(s, [0.0, -0.3, 0.4])
+    with pytest.raises(ValueError, match=r"scenario\.goals\[1\]\.position: goal 'green_can' is on top of"):
+        check_start_clearance(s, np.asarray(s.goals[1].position) + 0.01)
+
+
+def test_default_scenario_object_is_invalid_without_goals() -> None:
+    from drake_disamb.scenarios import validate_scenario
+
+    with pytest.raises(ValueError, match=r"scenario\.goals: expected at least one goal"):
+        validate_scenario(Scenario())

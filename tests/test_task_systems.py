@@ -1,0 +1,133 @@
+"""TaskManager: goal-set publication, hold-to-succeed, stage switching, NaN poses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource
+
+from drake_disamb.core.geometry import quat_from_rotvec, quat_multiply
+from drake_disamb.scenarios import load_scenario
+from drake_disamb.systems.task import TaskManager, pose_errors
+
+STAGE_A = np.array([[0.3, -0.5, 0.1, 1, 0, 0, 0], [-0.3, -0.5, 0.1, 1, 0, 0, 0]], dtype=float)
+STAGE_B = np.array([[0.2, -0.2, 0.1, 0, 1, 0, 0], [-0.2, -0.2, 0.1, 0, 1, 0, 0]], dtype=float)
+
+
+def _fixed(system: TaskManager, ee_pose) -> tuple:
+    context = system.CreateDefaultContext()
+    system.get_input_port(0).FixValue(context, np.asarray(ee_pose, dtype=float))
+    return context
+
+
+def _advance(system: TaskManager, context, t_end: float) -> None:
+    simulator = Simulator(system, context)
+    simulator.AdvanceTo(t_end)
+
+
+def test_ports_and_initial_outputs() -> None:
+    tm = TaskManager([STAGE_A, STAGE_B], hold_times=[0.5, 0.2], period=0.01)
+    names = [tm.get_output_port(i).get_name() for i in range(tm.num_output_ports())]
+    assert names == ["goal_poses", "stage", "done", "reached_goals", "stage_end_times"]
+    assert tm.get_input_port(0).get_name() == "ee_pose" and tm.get_input_port(0).size() == 7
+    context = _fixed(tm, [0, 0, 0.5, 1, 0, 0, 0])
+    np.testing.assert_allclose(tm.GetOutputPort("goal_poses").Eval(context), STAGE_A.ravel())
+    assert tm.GetOutputPort("stage").Eval(context)[0] == 0
+    assert tm.GetOutputPort("done").Eval(context)[0] == 0
+    np.testing.assert_array_equal(tm.GetOutputPort("reached_goals").Eval(context), [-1, -1])
+    assert np.all(np.isnan(tm.GetOutputPort("stage_end_times").Eval(context)))
+
+
+def test_far_pose_never_succeeds() -> None:
+    tm = TaskManager([STAGE_A], hold_times=0.1)
+    context = _fixed(tm, [0, 0, 0.5, 1, 0, 0, 0])
+    _advance(tm, context, 1.0)
+    assert not tm.is_done(context)
+
+
+def test_hold_then_switch_stage_then_done() -> None:
+    tm = TaskManager(
+        [STAGE_A, STAGE_B], position_tolerance=0.02, orientation_tolerance=0.15, hold_times=[0.5, 0.2]
+    )
+    # 1.5 cm off and 0.1 rad rotated: inside both tolerances of goal 1 of stage A.
+    q = quat_multiply(quat_from_rotvec([0.0, 0.1, 0.0]), STAGE_A[1, 3:])
+    context = _fixed(tm, [*(STAGE_A[1, :3] + [0.015, 0, 0]), *q])
+    _advance(tm, context, 0.45)
+    assert tm.stage(context) == 0  # not held long enough yet
+    _advance(tm, context, 0.55)
+    assert tm.stage(context) == 1
+    assert tm.reached_goals(context)[0] == 1
+    assert tm.stage_end_times(context)[0] == pytest.approx(0.5, abs=0.011)
+    np.testing.assert_allclose(tm.GetOutputPort("goal_poses").Eval(context), STAGE_B.ravel())
+    # Now hold at goal 0 of stage B.
+    tm.get_input_port(0).FixValue(context, STAGE_B[0])
+    _advance(tm, context, 1.0)
+    assert tm.is_done(context)
+    assert tm.GetOutputPort("done").Eval(context)[0] == 1.0
+    assert tm.reached_goals(context) == [1, 0]
+    _, t1 = tm.stage_end_times(context)
+    assert t1 == pytest.approx(0.55 + 0.2, abs=0.011)  # the new pose arrived at t = 0.55
+    # The last stage's goals stay published after completion.
+    np.testing.assert_allclose(tm.GetOutputPort("goal_poses").Eval(context), STAGE_B.ravel())
+
+
+def test_orientation_outside_tolerance_blocks_success() -> None:
+    tm = TaskManager([STAGE_A], orientation_tolerance=0.15, hold_times=0.0)
+    q = quat_multiply(quat_from_rotvec([0.0, 0.0, 0.2]), STAGE_A[0, 3:])
+    context = _fixed(tm, [*STAGE_A[0, :3], *q])
+    _advance(tm, context, 0.5)
+    assert not tm.is_done(context)
+
+
+def test_leaving_resets_the_hold_timer() -> None:
+    tm = TaskManager([STAGE_A], hold_times=0.3)
+    context = _fixed(tm, STAGE_A[0])
+    _advance(tm, context, 0.2)
+    tm.get_input_port(0).FixValue(context, [0, 0, 0.5, 1, 0, 0, 0])
+    _advance(tm, context, 0.25)
+    tm.get_input_port(0).FixValue(context, STAGE_A[0])
+    _advance(tm, context, 0.5)
+    assert not tm.is_done(context)  # only 0.25 s since it came back
+    _advance(tm, context, 0.6)
+    assert tm.is_done(context)
+
+
+def test_nan_pose_never_counts() -> None:
+    tm = TaskManager([STAGE_A], hold_times=0.0)
+    context = _fixed(tm, [np.nan] * 7)
+    _advance(tm, context, 0.2)
+    assert not tm.is_done(context)
+    d, a = pose_errors([np.nan] * 7, STAGE_A)
+    assert np.all(np.isinf(d)) and np.all(np.isinf(a))
+
+
+def test_bad_construction() -> None:
+    with pytest.raises(ValueError, match="stage_goal_poses"):
+        TaskManager([])
+    with pytest.raises(ValueError, match=r"stage_goal_poses\[1\]: expected 2 goals"):
+        TaskManager([STAGE_A, STAGE_A[:1]])
+    with pytest.raises(ValueError, match=r"stage_goal_poses\[0\]: expected finite"):
+        TaskManager([np.full((2, 7), np.nan)])
+    with pytest.raises(ValueError, match="hold_times"):
+        TaskManager([STAGE_A, STAGE_B], hold_times=[0.1])
+    with pytest.raises(ValueError, match="position_tolerance"):
+        TaskManager([STAGE_A], position_tolerance=0.0)
+
+
+def test_in_a_diagram_with_scenario_goals() -> None:
+    s = load_scenario("pouring")
+    builder = DiagramBuilder()
+    tm = builder.AddSystem(
+        TaskManager(
+            [s.stage_goal_poses(k) for k in range(s.n_stages)], hold_times=[s.hold_time(0), s.hold_time(1)]
+        )
+    )
+    src = builder.AddSystem(ConstantVectorSource(s.stage_goal_poses(0)[1]))
+    builder.Connect(src.get_output_port(), tm.GetInputPort("ee_pose"))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(1.2)
+    ctx = tm.GetMyContextFromRoot(simulator.get_context())
+    assert tm.stage(ctx) == 1 and tm.reached_goals(ctx) == [1, -1]
