@@ -1,0 +1,192 @@
+"""The disambiguation system: Algorithm 1 on request, for the interface's mode switch.
+
+All the algorithm lives in :mod:`drake_disamb.core.disambiguation`; this system only reads its
+inputs, calls :func:`~drake_disamb.core.disambiguation.disambiguate` and keeps the last result.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
+
+from drake_disamb.core.disambiguation import (
+    DisambiguationConfig,
+    DisambiguationResult,
+    disambiguate,
+    validate_modes,
+)
+
+__all__ = ["DisambiguationSystem"]
+
+POSE_SIZE = 7
+"""A pose on a vector port: ``[x, y, z, qw, qx, qy, qz]``."""
+
+
+@dataclass(frozen=True)
+class _Request:
+    """The inputs of one disambiguation request (a snapshot of the input ports)."""
+
+    belief: NDArray[np.float64]
+    ee_pose: NDArray[np.float64]
+    goal_poses: NDArray[np.float64]
+    current_mode: float
+
+
+@dataclass(frozen=True)
+class _Memory:
+    """Abstract state: the request count seen last, the inputs at that tick, the last result."""
+
+    request_count: float
+    previous: _Request | None
+    result: DisambiguationResult | None
+
+
+class DisambiguationSystem(LeafSystem):
+    """Chooses the disambiguating control mode ``m*`` (paper Algorithm 1) on request.
+
+    .. pydrake_system::
+
+        name: DisambiguationSystem
+        input_ports:
+        - belief
+        - ee_pose
+        - goal_poses
+        - current_mode
+        - request_count
+        output_ports:
+        - disambiguation_mode
+        - last_result
+
+    Input ports:
+        belief (n): the current belief over the ``n`` goals (probability vector; renormalised
+            here if it drifted).
+        ee_pose (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m; unit quaternion).
+        goal_poses (n * 7): the goal poses, each ``[x, y, z, qw, qx, qy, qz]`` in W.
+        current_mode (1): the interface's current mode, an index into its mode list (arm modes
+            first, gripper mode last); must come from interface *state*.
+        request_count (1): the interface's running count of disambiguation requests (from its
+            state).
+
+    Output ports:
+        disambiguation_mode (1): ``m*`` as an index into ``modes``, or -1 when the current mode is
+            kept (ties, or inputs that cannot be used -- with a warning). Computed on demand from
+            ``belief``, ``ee_pose``, ``goal_poses`` and ``current_mode`` (direct feedthrough from
+            those four, not from ``request_count``): the interface evaluates it only in the update
+            in which it sees the request button, and switches mode in that same control period.
+        last_result (abstract): the :class:`~drake_disamb.core.disambiguation.DisambiguationResult`
+            of the last request (scores per dimension and mode, features, the chosen mode), or
+            ``None`` before any request. From state.
+
+    State: one abstract value updated by a periodic unrestricted update every ``control_period``
+    seconds (first at t = 0). Each tick stores the inputs it saw; when ``request_count`` has grown
+    since the previous tick, the request was served by the interface in the previous tick, so the
+    result is recomputed from the inputs stored then -- exactly what the interface used --
+    and ``last_result`` shows it one control period after the request.
+
+    Attributes:
+        n_goals: Number of goals.
+        modes: The arm modes (dimension indices), as tuples.
+        config: The :class:`~drake_disamb.core.disambiguation.DisambiguationConfig`.
+    """
+
+    def __init__(
+        self,
+        n_goals: int,
+        modes: Sequence[Sequence[int]],
+        config: DisambiguationConfig | None = None,
+        control_period: float = 0.01,
+    ) -> None:
+        super().__init__()
+        if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
+            raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
+        if not (np.isfinite(control_period) and control_period > 0):
+            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
+        self.n_goals = int(n_goals)
+        self.modes = validate_modes(modes)
+        self.config = DisambiguationConfig() if config is None else config
+        if not isinstance(self.config, DisambiguationConfig):
+            raise ValueError(f"config: expected a DisambiguationConfig, got {config!r}")
+        self._warned = False
+
+        n = self.n_goals
+        self._belief = self.DeclareVectorInputPort("belief", n)
+        self._ee_pose = self.DeclareVectorInputPort("ee_pose", POSE_SIZE)
+        self._goal_poses = self.DeclareVectorInputPort("goal_poses", n * POSE_SIZE)
+        self._current_mode = self.DeclareVectorInputPort("current_mode", 1)
+        self._request_count = self.DeclareVectorInputPort("request_count", 1)
+
+        self._memory_index = self.DeclareAbstractState(AbstractValue.Make(_Memory(0.0, None, None)))
+        feedthrough = {
+            port.ticket() for port in (self._belief, self._ee_pose, self._goal_poses, self._current_mode)
+        }
+        self.DeclareVectorOutputPort(
+            "disambiguation_mode", 1, self._calc_mode, prerequisites_of_calc=feedthrough
+        )
+        self.DeclareAbstractOutputPort(
+            "last_result",
+            lambda: AbstractValue.Make(None),
+            self._calc_last_result,
+            prerequisites_of_calc={self.abstract_state_ticket(self._memory_index)},
+        )
+        self.DeclarePeriodicUnrestrictedUpdateEvent(control_period, 0.0, self._update)
+
+    # ------------------------------------------------------------------------------------------
+
+    def _read(self, context: Context) -> _Request:
+        return _Request(
+            belief=np.array(self._belief.Eval(context), dtype=float),
+            ee_pose=np.array(self._ee_pose.Eval(context), dtype=float),
+            goal_poses=np.array(self._goal_poses.Eval(context), dtype=float),
+            current_mode=float(self._current_mode.Eval(context)[0]),
+        )
+
+    def _solve(self, request: _Request) -> DisambiguationResult | None:
+        """Run the core on one request; unusable inputs give ``None`` (keep the mode) and a warning."""
+        try:
+            p = request.belief
+            if not np.all(np.isfinite(p)) or np.any(p < -1e-9) or np.sum(np.maximum(p, 0.0)) <= 0:
+                raise ValueError(f"belief: expected a probability vector, got {p.tolist()!r}")
+            p = np.maximum(p, 0.0)
+            p = p / p.sum()
+            if not np.isfinite(request.current_mode):
+                raise ValueError(f"current_mode: expected a mode index, got {request.current_mode!r}")
+            current = round(request.current_mode)
+            goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
+            return disambiguate(
+                p,
+                request.ee_pose[:3],
+                goals[:, :3],
+                self.modes,
+                self.config,
+                orientation=request.ee_pose[3:],
+                goal_orientations=goals[:, 3:],
+                current_mode=current if current >= 0 else None,
+            )
+        except ValueError as exc:
+            if not self._warned:
+                warnings.warn(f"DisambiguationSystem: request ignored, the mode is kept: {exc}", stacklevel=2)
+                self._warned = True
+            return None
+
+    def _calc_mode(self, context: Context, output: BasicVector) -> None:
+        result = self._solve(self._read(context))
+        output.SetAtIndex(0, -1.0 if result is None or result.mode is None else float(result.mode))
+
+    def _calc_last_result(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(context.get_abstract_state(self._memory_index).get_value().result)
+
+    def _update(self, context: Context, state: State) -> EventStatus:
+        memory: _Memory = context.get_abstract_state(self._memory_index).get_value()
+        count = float(self._request_count.Eval(context)[0])
+        result = memory.result
+        if np.isfinite(count) and count > memory.request_count and memory.previous is not None:
+            result = self._solve(memory.previous)
+        new = _Memory(count if np.isfinite(count) else memory.request_count, self._read(context), result)
+        state.get_mutable_abstract_state(self._memory_index).set_value(new)
+        return EventStatus.Succeeded()
