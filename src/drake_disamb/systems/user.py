@@ -1,0 +1,152 @@
+"""Simulated user system: drives an interface's ``raw`` input toward its own goal."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
+
+from drake_disamb.core.interfaces import RAW_LAYOUTS, RAW_SIZE, InterfaceConfig
+from drake_disamb.core.user import UserConfig, UserState, user_step
+
+__all__ = ["SimulatedUser", "UserConfig"]
+
+
+class SimulatedUser(LeafSystem):
+    """A deterministic simulated user of a joystick or head array (policy in :mod:`drake_disamb.core.user`).
+
+    .. pydrake_system::
+
+        name: SimulatedUser
+        input_ports:
+        - mode
+        - ee_pose
+        - goal_poses
+        - belief
+        output_ports:
+        - raw
+
+    Input ports:
+        mode (1): the interface's current mode index.
+        ee_pose (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in the world frame (m).
+        goal_poses (n * 7): every goal pose, concatenated; the user's own is entry ``goal_index``.
+        belief (n): the current belief; optional. Unconnected, the user never makes "unhelped"
+            requests (only the start-of-trial one, if configured).
+
+    Output ports:
+        raw (4): the interface's raw signal, computed at the last update and held (no direct
+            feedthrough). Joystick ``[axis_x, axis_y, mode_button, disambiguation_button]``; head
+            array ``[left, right, back, disambiguation_button]``. Button presses last one control
+            period and are followed by at least ``config.reaction_time - reaction_time_jitter``
+            seconds with everything released.
+
+    State: discrete ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
+    raw (4)]``,
+    updated every ``interface.control_period`` seconds from t = 0 (give it the interface's period
+    so each press is seen as exactly one rising edge). At run time a non-finite pose or an invalid
+    mode makes the user let go (raw zeros) with one warning.
+
+    Attributes:
+        interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
+        goal_index: Its goal.
+        config: Its :class:`~drake_disamb.core.user.UserConfig`.
+    """
+
+    def __init__(
+        self,
+        interface_kind: str | InterfaceConfig,
+        goal_index: int,
+        n_goals: int,
+        config: UserConfig | None = None,
+        **overrides: object,
+    ) -> None:
+        super().__init__()
+        if isinstance(interface_kind, InterfaceConfig):
+            self.interface = interface_kind
+        else:
+            self.interface = InterfaceConfig(kind=interface_kind)  # validates the kind
+        if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
+            raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
+        if not (isinstance(goal_index, int | np.integer) and 0 <= goal_index < n_goals):
+            raise ValueError(f"goal_index: expected an integer in [0, {n_goals - 1}], got {goal_index!r}")
+        if config is not None and not isinstance(config, UserConfig):
+            raise ValueError(f"config: expected a UserConfig, got {config!r}")
+        cfg = UserConfig() if config is None else config
+        self.config = replace(cfg, **overrides) if overrides else cfg
+        period = self.interface.control_period
+        if self.config.min_reaction_time < 2 * period:
+            raise ValueError(
+                f"UserConfig.reaction_time: reaction_time - reaction_time_jitter must be at least two "
+                f"control periods ({2 * period} s) so presses are released and the new mode is seen, "
+                f"got {self.config.min_reaction_time!r}"
+            )
+        self.goal_index = int(goal_index)
+        self.n_goals = int(n_goals)
+        self.raw_layout = RAW_LAYOUTS[self.interface.kind]
+
+        self._state_index = self.DeclareDiscreteState(UserState().to_vector())
+        self._mode_port = self.DeclareVectorInputPort("mode", 1)
+        self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
+        self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
+        self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
+        self.DeclareVectorOutputPort(
+            "raw", RAW_SIZE, self._calc_raw, prerequisites_of_calc={self.xd_ticket()}
+        )
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        self._warned = False
+
+    def get_user_state(self, context: Context) -> UserState:
+        """The user's state in ``context`` as a core :class:`~drake_disamb.core.user.UserState`."""
+        return UserState.from_vector(context.get_discrete_state(self._state_index).get_value())
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        state = self.get_user_state(context)
+        mode_value = float(self._mode_port.Eval(context)[0])
+        ee = np.asarray(self._ee_port.Eval(context), dtype=float)
+        goals = np.asarray(self._goal_port.Eval(context), dtype=float)
+        belief = None
+        if self._belief_port.HasValue(context):
+            belief = np.asarray(self._belief_port.Eval(context), dtype=float)
+        n_modes = len(self.interface.modes)
+        usable = (
+            np.isfinite(mode_value)
+            and mode_value == round(mode_value)
+            and 0 <= mode_value < n_modes
+            and np.all(np.isfinite(ee))
+            and np.all(np.isfinite(goals))
+            and np.linalg.norm(ee[3:]) > 1e-12
+        )
+        if usable:
+            try:
+                new = user_step(
+                    state,
+                    context.get_time(),
+                    int(round(mode_value)),
+                    ee,
+                    goals,
+                    self.goal_index,
+                    self.interface,
+                    self.config,
+                    belief,
+                )
+            except ValueError as exc:  # e.g. a zero goal quaternion
+                usable = False
+                reason = str(exc)
+        else:
+            reason = f"mode={mode_value!r}, ee_pose={ee.tolist()}"
+        if not usable:
+            if not self._warned:
+                warnings.warn(
+                    f"{self.get_name()}: unusable inputs ({reason}); the user lets go",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                self._warned = True
+            new = replace(state, raw=np.zeros(RAW_SIZE))
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(new.to_vector())
+        return EventStatus.Succeeded()
+
+    def _calc_raw(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(context.get_discrete_state(self._state_index).get_value()[-RAW_SIZE:])

@@ -1,0 +1,368 @@
+"""Simulated user: core policy, the SimulatedUser system in isolation, and closed loops that reach goals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drake_disamb.core.geometry import integrate_pose, quat_from_rotvec
+from drake_disamb.core.interfaces import (
+    InterfaceConfig,
+    command_from_raw,
+    initial_state,
+    interface_update,
+)
+from drake_disamb.core.user import (
+    NOT_COUNTING,
+    UserConfig,
+    UserState,
+    goal_error,
+    goal_reached,
+    mode_remaining,
+    user_step,
+)
+
+IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
+JOY = InterfaceConfig(kind="joystick")
+HEAD = InterfaceConfig(kind="head_array")
+NO_REQUESTS = UserConfig(request_at_start=False, request_when_unhelped_for=None)
+
+# Two goals; the user's goal 0 is 0.2 m along +x and 0.05 m along -z from the robot.
+EE = np.array([0.0, -0.4, 0.3, *IDENTITY])
+GOALS = np.array([[0.2, -0.4, 0.25, *IDENTITY], [-0.2, -0.5, 0.3, *IDENTITY]])
+
+
+def step(state, t, mode, *, interface=JOY, config=NO_REQUESTS, ee=EE, belief=None, goal=0):
+    return user_step(state, t, mode, ee, GOALS, goal, interface, config, belief)
+
+
+# ---------------------------------------------------------------------------------------------
+# core policy
+# ---------------------------------------------------------------------------------------------
+
+
+def test_config_validation() -> None:
+    with pytest.raises(ValueError, match="success_position_tolerance"):
+        UserConfig(position_tolerance=0.02, success_position_tolerance=0.02)
+    with pytest.raises(ValueError, match="reaction_time_jitter"):
+        UserConfig(reaction_time=0.3, reaction_time_jitter=0.3)
+    with pytest.raises(ValueError, match="min_axis"):
+        UserConfig(min_axis=0.0)
+    with pytest.raises(ValueError, match="request_when_unhelped_for"):
+        UserConfig(request_when_unhelped_for=-1.0)
+    with pytest.raises(ValueError, match="seed"):
+        UserConfig(seed=-3)
+
+
+def test_state_vector_round_trip() -> None:
+    s = UserState(
+        busy_until=1.25,
+        requested_at_start=True,
+        unhelped_since=0.5,
+        draws=3,
+        presses=7,
+        target_mode=2,
+        raw=np.array([0.0, 0.0, 1.0, 0.0]),
+    )
+    assert UserState.from_vector(s.to_vector()) == s
+
+
+def test_error_and_remaining() -> None:
+    err = goal_error(EE, GOALS[0])
+    np.testing.assert_allclose(err, [0.2, 0, -0.05, 0, 0, 0], atol=1e-12)
+    rem = mode_remaining(err, JOY.modes, NO_REQUESTS)
+    np.testing.assert_allclose(rem, [20.0, 20.0, 0.0, 0.0, 0.0])  # |0.2| / 0.01 in both x-modes
+    q = quat_from_rotvec([0.0, 0.3, 0.0])
+    err = goal_error(EE, [*GOALS[0, :3], *q])
+    np.testing.assert_allclose(err[3:], [0.0, 0.3, 0.0], atol=1e-12)
+    assert not goal_reached(err, NO_REQUESTS)
+    assert goal_reached([0.01, 0.01, 0, 0.04, 0.04, 0], NO_REQUESTS)
+
+
+def test_joystick_axes_point_toward_the_goal() -> None:
+    s = step(UserState(), 0.0, 1)  # mode {vx, vz}: axis_x -> vx, axis_y -> vz
+    ax, ay = s.raw[:2]
+    assert ax == 1.0  # 0.2 m / 0.5 s = 0.4 m/s > 0.13 m/s: full deflection
+    assert ay == pytest.approx(-0.05 / 0.5 / 0.13)  # proportional along -z
+    assert s.raw[2] == 0 and s.raw[3] == 0
+    u, _ = command_from_raw(s.raw, 1, JOY)
+    assert u[0] > 0 and u[2] < 0 and u[1] == 0
+
+
+def test_joystick_min_axis_and_done_dimension() -> None:
+    ee = EE.copy()
+    ee[:3] = GOALS[0, :3] + [-0.012, 0.05, 0.005]  # x error 1.2 cm (> tol), z 0.5 cm (done), y 5 cm
+    s = step(UserState(), 0.0, 1, ee=ee)
+    assert s.raw[0] == pytest.approx(0.2)  # would be 0.18, raised to min_axis
+    assert s.raw[1] == 0.0
+
+
+def test_head_array_left_right() -> None:
+    s = step(UserState(), 0.0, 0, interface=HEAD)  # vx, error +0.2 -> left
+    np.testing.assert_array_equal(s.raw, [1, 0, 0, 0])
+    s = step(UserState(), 0.0, 2, interface=HEAD)  # vz, error -0.05 -> right
+    np.testing.assert_array_equal(s.raw, [0, 1, 0, 0])
+
+
+def test_switches_to_the_mode_with_most_left_and_waits_between_presses() -> None:
+    # Head array in mode vy (nothing to do along y): target is vx (largest error), reached by
+    # pressing back 6 times: vy -> vz -> wx -> wy -> wz -> gripper -> vx.
+    s = UserState()
+    mode = 1
+    presses = []
+    t = 0.0
+    for k in range(400):
+        t = k * 0.01
+        s = step(s, t, mode, interface=HEAD)
+        if s.raw[2] == 1.0:
+            presses.append(round(t, 2))
+            mode = (mode + 1) % 7  # what the interface does (one tick later in a diagram)
+        if mode == 0 and s.raw[0] == 1.0:
+            break
+    assert len(presses) == 6
+    assert np.all(np.diff(presses) >= 0.3 - 1e-9)  # one press per reaction time
+    assert presses[0] == 0.0
+    assert s.raw[0] == 1.0  # now driving +x
+
+
+def test_released_between_presses() -> None:
+    s = step(UserState(), 0.0, 3)  # joystick {wy}: nothing to do -> press mode
+    assert s.raw[2] == 1.0
+    s = step(s, 0.01, 3)  # reacting: released
+    np.testing.assert_array_equal(s.raw, np.zeros(4))
+    s = step(s, 0.29, 3)
+    np.testing.assert_array_equal(s.raw, np.zeros(4))
+    s = step(s, 0.30, 3)  # mode still {wy} (as if the press was lost): presses again
+    assert s.raw[2] == 1.0 and s.presses == 2
+
+
+def test_request_at_start_then_when_unhelped() -> None:
+    cfg = UserConfig(request_at_start=True, request_when_unhelped_for=1.0)
+    wrong = np.array([0.2, 0.8])  # argmax is goal 1, not the user's goal 0
+    s = step(UserState(), 0.0, 0, config=cfg, belief=wrong)
+    np.testing.assert_array_equal(s.raw, [0, 0, 0, 1])
+    assert s.requested_at_start and s.unhelped_since == 0.0
+    requests = [0.0]
+    for k in range(1, 350):
+        t = k * 0.01
+        s = step(s, t, 0, config=cfg, belief=wrong)
+        if s.raw[3] == 1.0:
+            requests.append(round(t, 2))
+    assert requests == [0.0, 1.0, 2.0, 3.0]  # every 1 s while unhelped
+
+
+def test_no_request_while_helped() -> None:
+    cfg = UserConfig(request_at_start=False, request_when_unhelped_for=0.5)
+    good = np.array([0.9, 0.1])  # argmax is the user's goal and p* > rho1 = 0.6
+    s = UserState()
+    for k in range(200):
+        s = step(s, k * 0.01, 0, config=cfg, belief=good)
+        assert s.raw[3] == 0.0
+    assert s.unhelped_since == NOT_COUNTING
+    flat = np.array([0.55, 0.45])  # right argmax but p* <= rho1: alpha = 0 -> unhelped
+    presses = 0
+    for k in range(200, 300):
+        s = step(s, k * 0.01, 0, config=cfg, belief=flat)
+        presses += int(s.raw[3] == 1.0)
+    assert presses == 1  # at t = 2.5 s
+
+
+def test_stops_within_tolerance() -> None:
+    ee = EE.copy()
+    ee[:3] = GOALS[0, :3] + [0.005, -0.005, 0.005]
+    s = step(UserState(), 0.0, 0, ee=ee, config=UserConfig())  # even the start request is skipped
+    np.testing.assert_array_equal(s.raw, np.zeros(4))
+
+
+def test_seeded_randomness_is_reproducible() -> None:
+    cfg = UserConfig(reaction_time_jitter=0.1, axis_noise=0.05, seed=7, request_at_start=False)
+
+    def run(config: UserConfig) -> list[float]:
+        s = UserState()
+        out = []
+        for k in range(200):
+            s = step(s, k * 0.01, 2 if k < 100 else 1, config=config)  # {wx, wz} -> press, then drive
+            out.extend([*s.raw, s.busy_until])
+        return out
+
+    a, b = run(cfg), run(cfg)
+    assert a == b
+    c = run(UserConfig(reaction_time_jitter=0.1, axis_noise=0.05, seed=8, request_at_start=False))
+    assert a != c
+
+
+# ---------------------------------------------------------------------------------------------
+# Closed loop in numpy: user -> interface -> kinematic end effector
+# ---------------------------------------------------------------------------------------------
+
+
+def _numpy_loop(interface: InterfaceConfig, ee0: np.ndarray, goal: np.ndarray, t_max: float):
+    cfg = UserConfig(request_at_start=False, request_when_unhelped_for=None)
+    goals = goal[None, :]
+    s_i = initial_state(interface)
+    s_u = UserState()
+    pos, quat = ee0[:3].copy(), ee0[3:].copy()
+    for k in range(int(t_max / interface.control_period)):
+        t = k * interface.control_period
+        u_h, _ = command_from_raw(s_i.held_raw, s_i.mode, interface)  # outputs from state
+        raw = s_u.raw
+        s_u = user_step(s_u, t, s_i.mode, np.concatenate((pos, quat)), goals, 0, interface, cfg)
+        s_i, _ = interface_update(s_i, raw, t, interface)
+        pos, quat = integrate_pose(pos, quat, u_h, interface.control_period)
+        if goal_reached(goal_error(np.concatenate((pos, quat)), goal), cfg):
+            return t, s_i
+    return None, s_i
+
+
+@pytest.mark.parametrize("kind", ["joystick", "head_array"])
+@pytest.mark.parametrize("initial_mode", [0, -1])
+def test_user_reaches_a_6d_goal_without_assistance(kind: str, initial_mode: int) -> None:
+    interface = InterfaceConfig(kind=kind, initial_mode=initial_mode % len(InterfaceConfig(kind=kind).modes))
+    goal = np.array([0.15, -0.55, 0.2, *quat_from_rotvec([0.3, -0.4, 0.5])])
+    t, s_i = _numpy_loop(interface, EE, goal, t_max=60.0)
+    assert t is not None, f"{kind} user did not reach the goal"
+    assert s_i.mode_switch_count >= 3  # it had to visit translation and rotation modes
+
+
+# ---------------------------------------------------------------------------------------------
+# SimulatedUser system
+# ---------------------------------------------------------------------------------------------
+
+
+def _user_context(system, mode, ee=EE, belief=None):
+    from pydrake.systems.analysis import Simulator
+
+    sim = Simulator(system)
+    ctx = sim.get_mutable_context()
+    system.GetInputPort("mode").FixValue(ctx, [float(mode)])
+    system.GetInputPort("ee_pose").FixValue(ctx, np.asarray(ee, dtype=float))
+    system.GetInputPort("goal_poses").FixValue(ctx, GOALS.reshape(-1))
+    if belief is not None:
+        system.GetInputPort("belief").FixValue(ctx, np.asarray(belief, dtype=float))
+    sim.Initialize()
+    return sim, ctx
+
+
+def test_system_output_is_held_state() -> None:
+    from drake_disamb.systems.user import SimulatedUser
+
+    user = SimulatedUser("head_array", 0, 2, NO_REQUESTS)
+    sim, ctx = _user_context(user, mode=0)
+    out = user.get_output_port(0)
+    np.testing.assert_array_equal(out.Eval(ctx), np.zeros(4))  # nothing before the first update
+    sim.AdvanceTo(0.005)
+    np.testing.assert_array_equal(out.Eval(ctx), [1, 0, 0, 0])  # left: +x toward goal 0
+    for i in range(user.num_input_ports()):
+        assert not user.HasDirectFeedthrough(i, 0)
+
+
+def test_system_presses_mode_button_once_and_requests_with_belief() -> None:
+    from drake_disamb.systems.user import SimulatedUser
+
+    cfg = UserConfig(request_at_start=True, request_when_unhelped_for=1.0)
+    user = SimulatedUser(InterfaceConfig(kind="joystick"), 0, 2, cfg)
+    sim, ctx = _user_context(user, mode=3, belief=[0.3, 0.7])  # {wy}: nothing to do there
+    raws = []
+    for k in range(150):
+        sim.AdvanceTo(k * 0.01 + 0.005)
+        raws.append(user.get_output_port(0).Eval(ctx).copy())
+    raws = np.array(raws)
+    request_ticks = np.flatnonzero(raws[:, 3] == 1.0)
+    mode_ticks = np.flatnonzero(raws[:, 2] == 1.0)
+    # Start request, then one after 1 s of a wrong argmax -- due at tick 100 but the user is still
+    # reacting to its mode press at tick 90, so it comes at 120.
+    assert list(request_ticks) == [0, 120]
+    assert list(mode_ticks) == [30, 60, 90]  # one press per 0.3 s reaction time (mode stays 3 here)
+    assert np.all(raws[request_ticks + 1] == 0) and np.all(raws[mode_ticks + 1] == 0)  # released
+    assert user.get_user_state(ctx).presses == 5
+
+
+def test_system_bad_inputs_let_go() -> None:
+    from drake_disamb.systems.user import SimulatedUser
+
+    user = SimulatedUser("joystick", 1, 2, NO_REQUESTS)
+    bad = EE.copy()
+    bad[0] = np.nan
+    sim, ctx = _user_context(user, mode=0, ee=bad)
+    with pytest.warns(RuntimeWarning, match="lets go"):
+        sim.AdvanceTo(0.005)
+    np.testing.assert_array_equal(user.get_output_port(0).Eval(ctx), np.zeros(4))
+
+
+def test_system_constructor_validation() -> None:
+    from drake_disamb.systems.user import SimulatedUser
+
+    with pytest.raises(ValueError, match="goal_index"):
+        SimulatedUser("joystick", 2, 2)
+    with pytest.raises(ValueError, match="kind"):
+        SimulatedUser("sip_and_puff", 0, 2)
+    with pytest.raises(ValueError, match="reaction_time"):
+        SimulatedUser("joystick", 0, 2, UserConfig(reaction_time=0.015))
+
+
+def test_diagram_loop_reaches_goal() -> None:
+    """SimulatedUser -> interface -> blender (with autonomy) -> kinematic end effector -> user."""
+    from pydrake.systems.analysis import Simulator
+    from pydrake.systems.framework import DiagramBuilder, LeafSystem
+    from pydrake.systems.primitives import ConstantVectorSource
+
+    from drake_disamb.core.blending import BlendingConfig
+    from drake_disamb.systems.autonomy import PotentialFieldAutonomy
+    from drake_disamb.systems.blending import SharedControlBlender
+    from drake_disamb.systems.interfaces import HeadArrayInterface
+    from drake_disamb.systems.user import SimulatedUser
+
+    class KinematicEndEffector(LeafSystem):
+        """Test stand-in for the station: integrates ``ee_velocity_command`` (6) into ``ee_pose`` (7)."""
+
+        def __init__(self, pose0: np.ndarray, dt: float) -> None:
+            super().__init__()
+            self.DeclareVectorInputPort("ee_velocity_command", 6)
+            index = self.DeclareDiscreteState(pose0)
+            self.DeclareStateOutputPort("ee_pose", index)
+            self.DeclarePeriodicDiscreteUpdateEvent(dt, 0.0, self._step)
+            self.dt = dt
+
+        def _step(self, context, discrete_state):
+            x = context.get_discrete_state(0).get_value()
+            u = self.get_input_port(0).Eval(context)
+            p, q = integrate_pose(x[:3], x[3:], u, self.dt)
+            discrete_state.get_mutable_vector(0).SetFromVector(np.concatenate((p, q)))
+
+    goals = GOALS.copy()
+    goals[0, 3:] = quat_from_rotvec([0.0, 0.0, 0.3])
+    n = len(goals)
+    b = DiagramBuilder()
+    user = b.AddSystem(SimulatedUser("head_array", 0, n, NO_REQUESTS))
+    iface = b.AddSystem(HeadArrayInterface(initial_mode=5))
+    autonomy = b.AddSystem(PotentialFieldAutonomy(n))
+    blender = b.AddSystem(SharedControlBlender(n, BlendingConfig()))
+    ee = b.AddSystem(KinematicEndEffector(EE, 0.01))
+    goal_src = b.AddSystem(ConstantVectorSource(goals.reshape(-1)))
+    belief = b.AddSystem(ConstantVectorSource(np.array([0.8, 0.2])))  # confident in goal 0: alpha 0.7
+    b.Connect(user.get_output_port(0), iface.GetInputPort("raw"))
+    b.Connect(iface.GetOutputPort("mode"), user.GetInputPort("mode"))
+    b.Connect(ee.get_output_port(0), user.GetInputPort("ee_pose"))
+    b.Connect(goal_src.get_output_port(0), user.GetInputPort("goal_poses"))
+    b.Connect(ee.get_output_port(0), autonomy.GetInputPort("ee_pose"))
+    b.Connect(goal_src.get_output_port(0), autonomy.GetInputPort("goal_poses"))
+    b.Connect(iface.GetOutputPort("u_h"), blender.GetInputPort("u_h"))
+    b.Connect(belief.get_output_port(0), blender.GetInputPort("belief"))
+    b.Connect(autonomy.get_output_port(0), blender.GetInputPort("u_a"))
+    b.Connect(blender.GetOutputPort("u"), ee.get_input_port(0))
+    diagram = b.Build()
+    sim = Simulator(diagram)
+    ctx = sim.get_mutable_context()
+    ee_ctx = ee.GetMyContextFromRoot(ctx)
+    reached = None
+    for k in range(1, 41):
+        sim.AdvanceTo(0.5 * k)
+        pose = ee.get_output_port(0).Eval(ee_ctx)
+        if goal_reached(goal_error(pose, goals[0]), NO_REQUESTS):
+            reached = 0.5 * k
+            break
+    assert reached is not None
+    iface_ctx = iface.GetMyContextFromRoot(ctx)
+    assert iface.GetOutputPort("mode_switch_count").Eval(iface_ctx)[0] >= 1
+    alpha = blender.GetOutputPort("alpha").Eval(blender.GetMyContextFromRoot(ctx))[0]
+    assert alpha in (0.0, pytest.approx(0.7))
