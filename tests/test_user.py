@@ -289,11 +289,30 @@ def test_system_bad_inputs_let_go() -> None:
     np.testing.assert_array_equal(user.get_output_port(0).Eval(ctx), np.zeros(4))
 
 
+def test_system_follows_the_stage_goal_and_lets_go_when_done() -> None:
+    from drake_disamb.systems.user import SimulatedUser
+
+    user = SimulatedUser("head_array", [0, 1], 2, NO_REQUESTS)
+    assert user.goal_indices == (0, 1) and user.goal_index == 0
+    sim, ctx = _user_context(user, mode=0)  # mode vx; goal 0 is at +x, goal 1 at -x
+    out = user.get_output_port(0)
+    sim.AdvanceTo(0.005)  # stage input unconnected: stage 0
+    np.testing.assert_array_equal(out.Eval(ctx), [1, 0, 0, 0])
+    user.GetInputPort("stage").FixValue(ctx, [1.0])
+    sim.AdvanceTo(0.015)
+    np.testing.assert_array_equal(out.Eval(ctx), [0, 1, 0, 0])  # right: -x toward goal 1
+    user.GetInputPort("stage").FixValue(ctx, [2.0])  # task done
+    sim.AdvanceTo(0.025)
+    np.testing.assert_array_equal(out.Eval(ctx), np.zeros(4))
+
+
 def test_system_constructor_validation() -> None:
     from drake_disamb.systems.user import SimulatedUser
 
     with pytest.raises(ValueError, match="goal_index"):
         SimulatedUser("joystick", 2, 2)
+    with pytest.raises(ValueError, match="goal_index"):
+        SimulatedUser("joystick", [0, 5], 2)
     with pytest.raises(ValueError, match="kind"):
         SimulatedUser("sip_and_puff", 0, 2)
     with pytest.raises(ValueError, match="reaction_time"):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -25,6 +26,7 @@ class SimulatedUser(LeafSystem):
         - ee_pose
         - goal_poses
         - belief
+        - stage
         output_ports:
         - raw
 
@@ -34,6 +36,9 @@ class SimulatedUser(LeafSystem):
         goal_poses (n * 7): every goal pose, concatenated; the user's own is entry ``goal_index``.
         belief (n): the current belief; optional. Unconnected, the user never makes "unhelped"
             requests (only the start-of-trial one, if configured).
+        stage (1): the task's current stage (e.g. ``TaskManager``'s ``stage``); optional,
+            unconnected = stage 0. The user's goal is ``goal_index[stage]``; at or past the last
+            stage (the task is done) the user lets go.
 
     Output ports:
         raw (4): the interface's raw signal, computed at the last update and held (no direct
@@ -50,14 +55,14 @@ class SimulatedUser(LeafSystem):
 
     Attributes:
         interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
-        goal_index: Its goal.
+        goal_indices: Its goal per stage (a single-stage task has one entry).
         config: Its :class:`~drake_disamb.core.user.UserConfig`.
     """
 
     def __init__(
         self,
         interface_kind: str | InterfaceConfig,
-        goal_index: int,
+        goal_index: int | Sequence[int],
         n_goals: int,
         config: UserConfig | None = None,
         **overrides: object,
@@ -69,8 +74,14 @@ class SimulatedUser(LeafSystem):
             self.interface = InterfaceConfig(kind=interface_kind)  # validates the kind
         if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
             raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
-        if not (isinstance(goal_index, int | np.integer) and 0 <= goal_index < n_goals):
-            raise ValueError(f"goal_index: expected an integer in [0, {n_goals - 1}], got {goal_index!r}")
+        indices = [goal_index] if isinstance(goal_index, int | np.integer) else list(goal_index)
+        if not indices or not all(
+            isinstance(g, int | np.integer) and not isinstance(g, bool) and 0 <= g < n_goals for g in indices
+        ):
+            raise ValueError(
+                f"goal_index: expected an integer (or one per stage) in [0, {n_goals - 1}], "
+                f"got {goal_index!r}"
+            )
         if config is not None and not isinstance(config, UserConfig):
             raise ValueError(f"config: expected a UserConfig, got {config!r}")
         cfg = UserConfig() if config is None else config
@@ -82,7 +93,7 @@ class SimulatedUser(LeafSystem):
                 f"control periods ({2 * period} s) so presses are released and the new mode is seen, "
                 f"got {self.config.min_reaction_time!r}"
             )
-        self.goal_index = int(goal_index)
+        self.goal_indices: tuple[int, ...] = tuple(int(g) for g in indices)
         self.n_goals = int(n_goals)
         self.raw_layout = RAW_LAYOUTS[self.interface.kind]
 
@@ -91,11 +102,17 @@ class SimulatedUser(LeafSystem):
         self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
+        self._stage_port = self.DeclareVectorInputPort("stage", 1)
         self.DeclareVectorOutputPort(
             "raw", RAW_SIZE, self._calc_raw, prerequisites_of_calc={self.xd_ticket()}
         )
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self._warned = False
+
+    @property
+    def goal_index(self) -> int:
+        """The goal of the first stage (the only one in a single-step task)."""
+        return self.goal_indices[0]
 
     def get_user_state(self, context: Context) -> UserState:
         """The user's state in ``context`` as a core :class:`~drake_disamb.core.user.UserState`."""
@@ -109,9 +126,18 @@ class SimulatedUser(LeafSystem):
         belief = None
         if self._belief_port.HasValue(context):
             belief = np.asarray(self._belief_port.Eval(context), dtype=float)
+        stage = 0.0
+        if self._stage_port.HasValue(context):
+            stage = float(self._stage_port.Eval(context)[0])
+        if np.isfinite(stage) and stage >= len(self.goal_indices):  # the task is done: let go
+            new = replace(state, raw=np.zeros(RAW_SIZE), target_mode=-1)
+            discrete_state.get_mutable_vector(self._state_index).SetFromVector(new.to_vector())
+            return EventStatus.Succeeded()
         n_modes = len(self.interface.modes)
         usable = (
-            np.isfinite(mode_value)
+            np.isfinite(stage)
+            and stage >= 0
+            and np.isfinite(mode_value)
             and mode_value == round(mode_value)
             and 0 <= mode_value < n_modes
             and np.all(np.isfinite(ee))
@@ -126,7 +152,7 @@ class SimulatedUser(LeafSystem):
                     int(round(mode_value)),
                     ee,
                     goals,
-                    self.goal_index,
+                    self.goal_indices[int(stage)],
                     self.interface,
                     self.config,
                     belief,
@@ -135,7 +161,7 @@ class SimulatedUser(LeafSystem):
                 usable = False
                 reason = str(exc)
         else:
-            reason = f"mode={mode_value!r}, ee_pose={ee.tolist()}"
+            reason = f"mode={mode_value!r}, stage={stage!r}, ee_pose={ee.tolist()}"
         if not usable:
             if not self._warned:
                 warnings.warn(
