@@ -13,19 +13,26 @@ Shapes (``...`` is any batch shape, ``n`` the number of goals):
 - ``x_r``: end-effector (robot) position, ``(..., 3)``, m.
 - ``x_g``: goal positions, ``(..., n, 3)``, m.
 - ``u_a``: per-goal autonomy commands, ``(..., n, 6)`` (only needed for the agreement term).
+- ``transition``: goal-transition matrix ``P``, ``(n, n)`` or batched ``(..., n, n)``.
 
 The DFT right-hand side is paper equation (dft_ii) with the time constant split in two, as in the
 authors' code (FACTS section 1)::
 
-    f(p) = -(1/tau1) P^T p + rest/tau2 + lambda @ sigma(xi),   sigma(xi) = 1/(1+exp(-xi)) - 0.5
+    f(p) = -(1/tau1) P^T p + drive,   drive = rest/tau2 + lambda @ sigma(xi)
 
-Two integrations of it are offered:
+with ``sigma(xi) = 1/(1+exp(-xi)) - 0.5``. The ``drive`` does not depend on ``p``: replays compute
+it for every sample of every trial in one call (:func:`dft_drive`) and then run the cheap
+recursion (:func:`dft_euler_update`). Two integrations are offered:
 
 - :func:`dft_euler_step`: the authors' discretisation (explicit Euler, clip entries <= 0 to the
   smallest positive double, renormalise). Used to replay published data.
 - :func:`dft_mass_conserving_rhs`: ``f(p) - p * sum(f(p))``, the first-order equivalent whose
   flow keeps ``sum(p) = 1`` exactly under any explicit Runge-Kutta method. Drake integrates this
   as continuous state.
+
+The two baselines share one recursion, :func:`posterior_update` (posterior proportional to
+``likelihood * P^T p``), with the likelihoods of :func:`bayes_likelihood` and
+:func:`memory_log_likelihood`.
 """
 
 from __future__ import annotations
@@ -41,6 +48,9 @@ TINY = np.finfo(float).tiny
 BAYES_SIGMA = np.pi / 2.0
 """Standard deviation (rad) of the Gaussian angle likelihood of the recursive Bayes baseline."""
 
+BAYES_COS_DECIMALS = 5
+"""The authors round the cosine to this many decimals before ``arccos``."""
+
 
 @dataclass(frozen=True)
 class DFTParams:
@@ -55,8 +65,22 @@ class DFTParams:
             command and of goal i's autonomy command; 0 when either is zero).
         proximity: Include the proximity term ``max(0, 1 - |x_g - x_r| / R)``.
         R: Proximity radius (m).
-        transition: Goal-transition matrix ``P`` (row-stochastic, ``n x n``); ``None`` means I.
+        transition: Goal-transition matrix ``P`` (row-stochastic, ``n x n``, or a batch
+            ``(..., n, n)`` for a vectorised replay); ``None`` means I.
         rest: Rest state (task prior, a probability vector); ``None`` means uniform.
+        zero_command_excitation: What a zero (or non-finite) command does. True (the paper and
+            the authors' code): the directedness of a zero command is 0.5 for every goal, a
+            uniform excitation ``lambda sigma(0.5)`` that pulls ``p`` toward *uniform* whatever
+            the rest state. False: a zero command adds nothing to ``xi`` (only the proximity term,
+            which needs no command, remains), so with the proximity term off ``p`` relaxes to
+            the rest state (the task prior) while the user gives no input.
+        euler_equivalent_step: ``None`` (default): :func:`dft_mass_conserving_rhs` is the paper's
+            continuous flow. A step ``h`` (s): the flow's rate is scaled by
+            ``log(1 + h S) / (h S)`` with ``S = sum(f(p))`` (which does not depend on ``p``), so
+            that integrating it over ``h`` with the inputs held reproduces the authors'
+            "Euler step of ``h``, then renormalise" (exactly for ``P = I``, up to
+            ``O(h^2 / tau1^2)`` otherwise). Use it to compare a continuous-time system with a
+            replay at the data's ``delta_t``; the fixed points are unchanged.
     """
 
     tau1: float = 10.0
@@ -68,54 +92,127 @@ class DFTParams:
     R: float = 0.2
     transition: NDArray[np.float64] | None = field(default=None, compare=False)
     rest: NDArray[np.float64] | None = field(default=None, compare=False)
+    zero_command_excitation: bool = True
+    euler_equivalent_step: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("tau1", "tau2", "R"):
             value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
+            if not (isinstance(value, int | float | np.floating | np.integer) and np.isfinite(value)):
                 raise ValueError(f"DFTParams.{name} must be a finite positive number, got {value!r}")
+            if not value > 0:
+                raise ValueError(f"DFTParams.{name} must be a finite positive number, got {value!r}")
+        h = self.euler_equivalent_step
+        if h is not None and not (isinstance(h, int | float | np.floating) and np.isfinite(h) and h > 0):
+            raise ValueError(
+                f"DFTParams.euler_equivalent_step must be None or a finite positive step, got {h!r}"
+            )
         lam = np.asarray(self.lam, dtype=float)
         if not np.all(np.isfinite(lam)):
             raise ValueError(f"DFTParams.lam must be finite, got {self.lam!r}")
+        if lam.ndim not in (0, 2) or (lam.ndim == 2 and lam.shape[0] != lam.shape[1]):
+            raise ValueError(f"DFTParams.lam must be a scalar or a square matrix, got shape {lam.shape}")
+        if self.transition is not None:
+            check_transition(self.transition, "DFTParams.transition")
+        if self.rest is not None:
+            check_probability_vector(self.rest, "DFTParams.rest")
 
 
 # ----------------------------------------------------------------------------------------------
-# Helpers
+# Validation and helpers
 # ----------------------------------------------------------------------------------------------
+
+
+def check_probability_vector(p: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``p`` as a float array whose last axis is a probability vector, else ``ValueError``."""
+    a = np.asarray(p, dtype=float)
+    if a.ndim == 0 or a.shape[-1] < 1:
+        raise ValueError(f"{name}: expected a probability vector, got {p!r}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0) or not np.allclose(a.sum(axis=-1), 1.0, atol=1e-9):
+        raise ValueError(f"{name}: expected non-negative entries summing to 1, got {a.tolist()!r}")
+    return a
+
+
+def check_transition(P: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``P`` as a float array of square row-stochastic matrices (last two axes), else ``ValueError``."""
+    a = np.asarray(P, dtype=float)
+    if a.ndim < 2 or a.shape[-1] != a.shape[-2]:
+        raise ValueError(f"{name}: expected a square (n, n) matrix, got shape {a.shape}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0):
+        raise ValueError(f"{name}: expected finite non-negative entries, got {a.tolist()!r}")
+    if not np.allclose(a.sum(axis=-1), 1.0, atol=1e-6):
+        raise ValueError(f"{name}: rows must sum to 1 (row-stochastic), got row sums {a.sum(axis=-1)!r}")
+    return a
 
 
 def _safe_unit(v: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
-    """Unit vectors along ``axis``; zero (and non-finite) vectors map to zero."""
-    v = np.where(np.isfinite(v), v, 0.0)
-    norm = np.linalg.norm(v, axis=axis, keepdims=True)
-    return np.divide(v, norm, out=np.zeros_like(v), where=norm > 0)
+    """Unit vectors along ``axis``; zero (and non-finite) vectors map to zero.
+
+    Non-finite entries are read as 0, and huge (but finite) vectors are first divided by their
+    largest absolute entry so that the norm does not overflow (only when the plain norm is not
+    finite, so the common case costs one norm and one division).
+    """
+    v = np.asarray(v, dtype=float)
+    norm = _norm(v, axis)
+    if not np.isfinite(norm.sum()):
+        v = np.where(np.isfinite(v), v, 0.0)
+        scale = np.max(np.abs(v), axis=axis, keepdims=True)
+        v = np.divide(v, scale, out=np.zeros_like(v), where=scale > 0)
+        norm = _norm(v, axis)
+    return v / np.where(norm > 0, norm, np.inf)  # zero vectors: 0 / inf = 0
+
+
+def _sqnorm(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Squared Euclidean norm over the last axis (axis dropped)."""
+    return np.einsum("...k,...k->...", v, v)
+
+
+def _norm(v: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
+    """Euclidean norm along ``axis`` with the axis kept (einsum: much faster on short axes)."""
+    v = np.moveaxis(v, axis, -1)
+    return np.moveaxis(np.sqrt(np.einsum("...k,...k->...", v, v))[..., None], -1, axis)
 
 
 def sanitize_command(u_h: ArrayLike) -> NDArray[np.float64]:
-    """Return ``u_h`` as floats with every non-finite entry replaced by 0.
+    """Return ``u_h`` as floats, with every command that has a non-finite entry replaced by 0.
 
-    The belief must stay a probability vector whatever the input: a NaN or infinite command
-    carries no usable direction, so it is read as "no input" along that entry.
+    The belief must stay a probability vector whatever the input: a command with a NaN or an
+    infinite entry carries no usable direction, so the whole command (last axis) is read as
+    "no input" (CONTRIBUTING: such commands are treated as zero).
     """
     u = np.asarray(u_h, dtype=float)
-    return np.where(np.isfinite(u), u, 0.0)
+    if np.isfinite(u).all():
+        return u
+    return np.where(np.all(np.isfinite(u), axis=-1, keepdims=True), u, 0.0)
 
 
 def transition_prior(p: NDArray[np.float64], transition: ArrayLike | None) -> NDArray[np.float64]:
-    """``P^T p`` over the last axis (``P`` row-stochastic); identity when ``transition`` is None."""
+    """``P^T p`` over the last axis (``P`` row-stochastic); identity when ``transition`` is None.
+
+    ``transition`` may be one ``(n, n)`` matrix or a batch ``(..., n, n)`` broadcasting with the
+    batch shape of ``p``.
+    """
     if transition is None:
         return p
-    P = np.asarray(transition, dtype=float)
-    return p @ P  # (p @ P)_j = sum_i p_i P_ij = (P^T p)_j
+    # (P^T p)_j = sum_i p_i P_ij
+    return np.einsum("...i,...ij->...j", p, np.asarray(transition, dtype=float))
 
 
 def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Clip entries <= 0 (and non-finite ones) to :data:`TINY` and divide by the sum.
+    """Clip entries <= 0 (and NaN ones) to :data:`TINY` and divide by the sum.
 
-    This is the authors' projection back onto the simplex after each step.
+    This is the authors' projection back onto the simplex after each step. Should an entry be
+    ``+inf`` (or the sum overflow), the mass goes uniformly to the infinite entries (or the vector
+    is first scaled by its maximum), so the result is always a probability vector.
     """
-    p = np.where(np.isfinite(p) & (p > 0), p, TINY)
-    return p / p.sum(axis=-1, keepdims=True)
+    p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well
+    total = p.sum(axis=-1, keepdims=True)
+    if not np.isfinite(total.sum()):  # totals are positive: their sum is finite iff all are
+        inf = np.isinf(p)
+        scaled = p / np.max(p, axis=-1, keepdims=True)
+        p = np.where(np.any(inf, axis=-1, keepdims=True), np.where(inf, 1.0, TINY), np.fmax(scaled, TINY))
+        total = p.sum(axis=-1, keepdims=True)
+    return p / total
 
 
 def uniform_belief(n_goals: int, batch_shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
@@ -123,6 +220,21 @@ def uniform_belief(n_goals: int, batch_shape: tuple[int, ...] = ()) -> NDArray[n
     if n_goals < 1:
         raise ValueError(f"n_goals must be at least 1, got {n_goals}")
     return np.full((*batch_shape, n_goals), 1.0 / n_goals)
+
+
+def rest_state(n_goals: int, rest: ArrayLike | None = None) -> NDArray[np.float64]:
+    """The rest state: ``rest`` validated as a probability vector of ``n_goals`` entries, or uniform."""
+    if rest is None:
+        return uniform_belief(n_goals)
+    r = check_probability_vector(rest, "rest")
+    if r.shape[-1] != n_goals:
+        raise ValueError(f"rest: expected {n_goals} entries (one per goal), got {r.shape[-1]}")
+    return r
+
+
+def _has_command(u_h: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """True where the (sanitised) command is non-zero, shape ``(..., 1)``."""
+    return np.any(u_h != 0.0, axis=-1, keepdims=True)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -152,16 +264,19 @@ def agreement(u_h: ArrayLike, u_a: ArrayLike) -> NDArray[np.float64]:
     u = sanitize_command(u_h)
     ua = np.asarray(u_a, dtype=float)
     if u.shape[-1] < 6:
-        return np.zeros(ua.shape[:-1])
+        return np.zeros(np.broadcast_shapes(u.shape[:-1], ua.shape[:-2]) + ua.shape[-2:-1])
     uh_rot = _safe_unit(u[..., 3:6])
     ua_rot = _safe_unit(ua[..., 3:6])
     return np.einsum("...k,...nk->...n", uh_rot, ua_rot)
 
 
 def proximity(x_r: ArrayLike, x_g: ArrayLike, R: float) -> NDArray[np.float64]:
-    """``max(0, 1 - |x_g_i - x_r| / R)`` (positions only). Returns shape ``(..., n)``."""
-    dist = np.linalg.norm(np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :], axis=-1)
-    return np.maximum(0.0, 1.0 - dist / R)
+    """``max(0, 1 - |x_g_i - x_r| / R)`` (positions only). Returns shape ``(..., n)``.
+
+    Non-finite positions give 0 (no evidence).
+    """
+    dist = _norm(np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :])[..., 0]
+    return np.where(np.isfinite(dist), np.maximum(0.0, 1.0 - dist / R), 0.0)
 
 
 def dft_xi(
@@ -173,14 +288,17 @@ def dft_xi(
 ) -> NDArray[np.float64]:
     """The input nonlinearity ``xi`` of equation (dft_ii), shape ``(..., n)``."""
     x_g = np.asarray(x_g, dtype=float)
-    batch = np.broadcast_shapes(np.shape(x_r)[:-1], x_g.shape[:-2])
+    u = sanitize_command(u_h)
+    batch = np.broadcast_shapes(np.shape(x_r)[:-1], x_g.shape[:-2], u.shape[:-1])
     xi = np.zeros((*batch, x_g.shape[-2]))
     if params.directedness:
-        xi = xi + directedness(u_h, x_r, x_g)
+        xi = xi + directedness(u, x_r, x_g)
     if params.agreement:
         if u_a is None:
             raise ValueError("DFTParams.agreement is on but no per-goal autonomy commands u_a given")
-        xi = xi + agreement(u_h, u_a)
+        xi = xi + agreement(u, u_a)
+    if not params.zero_command_excitation:
+        xi = np.where(_has_command(u), xi, 0.0)
     if params.proximity:
         xi = xi + proximity(x_r, x_g, params.R)
     return xi
@@ -189,6 +307,33 @@ def dft_xi(
 def biased_sigmoid(xi: ArrayLike) -> NDArray[np.float64]:
     """``sigma(xi) = 1 / (1 + exp(-xi)) - 0.5``."""
     return 1.0 / (1.0 + np.exp(-np.asarray(xi, dtype=float))) - 0.5
+
+
+def dft_drive(
+    u_h: ArrayLike,
+    x_r: ArrayLike,
+    x_g: ArrayLike,
+    params: DFTParams,
+    u_a: ArrayLike | None = None,
+) -> NDArray[np.float64]:
+    """The part of the DFT right-hand side that does not depend on ``p`` (1/s), shape ``(..., n)``.
+
+    ``drive = rest / tau2 + lambda @ sigma(xi)``.
+    """
+    s = biased_sigmoid(dft_xi(u_h, x_r, x_g, params, u_a))
+    n = s.shape[-1]
+    rest = rest_state(n, params.rest)
+    lam = np.asarray(params.lam, dtype=float)
+    if lam.ndim == 2 and lam.shape != (n, n):
+        raise ValueError(f"DFTParams.lam: expected a scalar or a ({n}, {n}) matrix, got shape {lam.shape}")
+    excitation = lam * s if lam.ndim == 0 else s @ lam.T
+    return rest / params.tau2 + excitation
+
+
+def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDArray[np.float64]:
+    """``f(p) = -(1/tau1) P^T p + drive`` (1/s), with ``drive`` from :func:`dft_drive`."""
+    p = np.asarray(p, dtype=float)
+    return drive - transition_prior(p, params.transition) / params.tau1
 
 
 def dft_rhs(
@@ -200,13 +345,7 @@ def dft_rhs(
     u_a: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Right-hand side ``f(p)`` of the DFT ODE (1/s), shape ``(..., n)``."""
-    p = np.asarray(p, dtype=float)
-    n = p.shape[-1]
-    rest = np.full(n, 1.0 / n) if params.rest is None else np.asarray(params.rest, dtype=float)
-    s = biased_sigmoid(dft_xi(u_h, x_r, x_g, params, u_a))
-    lam = np.asarray(params.lam, dtype=float)
-    excitation = lam * s if lam.ndim == 0 else s @ lam.T
-    return -transition_prior(p, params.transition) / params.tau1 + rest / params.tau2 + excitation
+    return dft_rhs_from_drive(p, dft_drive(u_h, x_r, x_g, params, u_a), params)
 
 
 def dft_mass_conserving_rhs(
@@ -225,7 +364,13 @@ def dft_mass_conserving_rhs(
     """
     p = np.asarray(p, dtype=float)
     f = dft_rhs(p, u_h, x_r, x_g, params, u_a)
-    g = f - p * f.sum(axis=-1, keepdims=True)
+    total = f.sum(axis=-1, keepdims=True)
+    g = f - p * total
+    if params.euler_equivalent_step is not None:
+        # Per step h the Euler map contracts by 1/(1 + hS), the flow by exp(-rate h): match them.
+        x = np.maximum(params.euler_equivalent_step * total, -0.9)
+        small = np.abs(x) < 1e-8
+        g = g * np.where(small, 1.0 - 0.5 * x, np.log1p(x) / np.where(small, 1.0, x))
     # Positivity guard: an entry at (or below) zero may not decrease further.
     blocked = (p <= 0.0) & (g < 0.0)
     if np.any(blocked):
@@ -235,6 +380,15 @@ def dft_mass_conserving_rhs(
         share = np.divide(np.maximum(p, 0.0), free_mass, out=np.zeros_like(p), where=free_mass > 0)
         g = g + np.where(blocked, 0.0, share * excess)
     return g
+
+
+def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike) -> NDArray[np.float64]:
+    """The authors' step from a precomputed drive: ``normalize(p + dt * (-(1/tau1) P^T p + drive))``.
+
+    ``dt`` (s) is a scalar or broadcasts against ``p`` (e.g. shape ``(batch, 1)``).
+    """
+    p = np.asarray(p, dtype=float)
+    return normalize_belief(p + np.asarray(dt, dtype=float) * dft_rhs_from_drive(p, drive, params))
 
 
 def dft_euler_step(
@@ -247,8 +401,20 @@ def dft_euler_step(
     u_a: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """One step of the authors' discretisation: ``normalize(p + dt * f(p))``."""
+    return dft_euler_update(p, dft_drive(u_h, x_r, x_g, params, u_a), params, dt)
+
+
+# ----------------------------------------------------------------------------------------------
+# Shared recursion of the two baselines
+# ----------------------------------------------------------------------------------------------
+
+
+def posterior_update(
+    p: ArrayLike, likelihood: ArrayLike, transition: ArrayLike | None = None
+) -> NDArray[np.float64]:
+    """Posterior proportional to ``likelihood * (P^T p)``, renormalised (clip as the DFT)."""
     p = np.asarray(p, dtype=float)
-    return normalize_belief(p + dt * dft_rhs(p, u_h, x_r, x_g, params, u_a))
+    return normalize_belief(np.asarray(likelihood, dtype=float) * transition_prior(p, transition))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -256,23 +422,29 @@ def dft_euler_step(
 # ----------------------------------------------------------------------------------------------
 
 
+def _round_half_away(x: NDArray[np.float64], decimals: int) -> NDArray[np.float64]:
+    """MATLAB's ``round(x, decimals)``: ties go away from zero (numpy's round goes to even)."""
+    scale = 10.0**decimals
+    return np.sign(x) * np.floor(np.abs(x) * scale + 0.5) / scale
+
+
 def bayes_likelihood(
     u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike, sigma: float = BAYES_SIGMA
 ) -> NDArray[np.float64]:
     """Gaussian density (mean 0, std ``sigma``) of the angle between ``u_h[:3]`` and each goal.
 
-    The cosine is rounded to 5 decimals before ``arccos`` (authors' code). A zero command gives a
-    uniform likelihood. A goal at the robot's position has no direction: its angle is taken as
-    pi/2 (neither towards nor away). Returns shape ``(..., n)``.
+    The cosine is rounded to 5 decimals (ties away from zero, as MATLAB) before ``arccos``
+    (authors' code). A zero command gives a uniform likelihood. A goal at the robot's position
+    has no direction: its angle is taken as pi/2 (neither towards nor away).
+    Returns shape ``(..., n)``.
     """
     u_raw = sanitize_command(u_h)[..., :3]
     u = _safe_unit(u_raw)
     d = _safe_unit(np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :])
-    cos = np.round(np.einsum("...k,...nk->...n", u, d), 5)
+    cos = _round_half_away(np.einsum("...k,...nk->...n", u, d), BAYES_COS_DECIMALS)
     angle = np.arccos(np.clip(cos, -1.0, 1.0))
     lik = np.exp(-0.5 * (angle / sigma) ** 2) / (sigma * np.sqrt(2.0 * np.pi))
-    no_input = np.linalg.norm(u_raw, axis=-1, keepdims=True) == 0
-    return np.where(no_input, 1.0, lik)
+    return np.where(_has_command(u_raw), lik, 1.0)
 
 
 def bayes_step(
@@ -284,13 +456,42 @@ def bayes_step(
     sigma: float = BAYES_SIGMA,
 ) -> NDArray[np.float64]:
     """Posterior proportional to ``likelihood(u_h | g) * (P^T p)``, renormalised."""
-    p = np.asarray(p, dtype=float)
-    return normalize_belief(bayes_likelihood(u_h, x_r, x_g, sigma) * transition_prior(p, transition))
+    return posterior_update(p, bayes_likelihood(u_h, x_r, x_g, sigma), transition)
 
 
 # ----------------------------------------------------------------------------------------------
 # Memory-based prediction (Dragan & Srinivasa 2013, as in the authors' code)
 # ----------------------------------------------------------------------------------------------
+
+
+def memory_log_likelihood(
+    cost: ArrayLike, x_cur: ArrayLike, x_start: ArrayLike, x_g: ArrayLike
+) -> NDArray[np.float64]:
+    """``log`` of the memory-based likelihood ``exp(-C - |x_cur - g|^2) / exp(-|x_start - g|^2)``.
+
+    ``cost`` ``(...)`` is the running path cost C, ``x_cur`` ``(..., 3)`` the position the
+    cost-to-go is measured from, ``x_start`` ``(..., 3)`` the trial's start. Shape ``(..., n)``.
+    Non-finite positions are read as "no evidence" (log-likelihood 0 for every goal).
+    """
+    x_g = np.asarray(x_g, dtype=float)
+    to_go = _sqnorm(x_g - np.asarray(x_cur, dtype=float)[..., None, :])
+    start = _sqnorm(x_g - np.asarray(x_start, dtype=float)[..., None, :])
+    log_lik = start - to_go - np.asarray(cost, dtype=float)[..., None]
+    if np.isfinite(log_lik).all():
+        return log_lik
+    return np.where(np.all(np.isfinite(log_lik), axis=-1, keepdims=True), log_lik, 0.0)
+
+
+def likelihood_from_log(log_lik: ArrayLike) -> NDArray[np.float64]:
+    """``exp(log_lik)`` scaled by ``exp(-max)`` per row (same posterior, no overflow)."""
+    log_lik = np.asarray(log_lik, dtype=float)
+    return np.exp(log_lik - np.max(log_lik, axis=-1, keepdims=True))
+
+
+def path_cost_increment(x_prev: ArrayLike, x_next: ArrayLike) -> NDArray[np.float64]:
+    """``|x_next - x_prev|^2``, the memory-based running cost of one move (0 if non-finite)."""
+    step = _sqnorm(np.asarray(x_next, dtype=float) - np.asarray(x_prev, dtype=float))
+    return np.where(np.isfinite(step), step, 0.0)
 
 
 def memory_step(
@@ -304,20 +505,14 @@ def memory_step(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """One memory-based update after the robot moved from ``x_prev`` to ``x_next``.
 
-    ``cost`` (shape ``(...)``) is the running path cost ``C = sum |x_{t+1} - x_t|^2`` so far. The
-    likelihood of goal g is ``exp(-C - |x_next - g|^2) / exp(-|x_start - g|^2)``, applied
-    recursively: posterior proportional to ``likelihood * (P^T p)``.
+    ``cost`` (shape ``(...)``) is the running path cost ``C = sum |x_{t+1} - x_t|^2`` so far; it
+    is first increased by ``|x_next - x_prev|^2``. As in the authors' code the cost-to-go is
+    measured from ``x_prev`` (the position the step started from): the likelihood of goal g is
+    ``exp(-C - |x_prev - g|^2) / exp(-|x_start - g|^2)``, applied recursively: posterior
+    proportional to ``likelihood * (P^T p)``. A non-finite step adds no cost.
 
     Returns ``(p_new, cost_new)``.
     """
-    p = np.asarray(p, dtype=float)
-    x_prev = np.asarray(x_prev, dtype=float)
-    x_next = np.asarray(x_next, dtype=float)
-    x_g = np.asarray(x_g, dtype=float)
-    cost_new = np.asarray(cost, dtype=float) + np.sum((x_next - x_prev) ** 2, axis=-1)
-    to_go = np.sum((x_g - x_next[..., None, :]) ** 2, axis=-1)
-    start = np.sum((x_g - np.asarray(x_start, dtype=float)[..., None, :]) ** 2, axis=-1)
-    log_lik = -cost_new[..., None] - to_go + start
-    # Subtracting the per-row max leaves the normalised posterior unchanged and avoids overflow.
-    lik = np.exp(log_lik - np.max(log_lik, axis=-1, keepdims=True))
-    return normalize_belief(lik * transition_prior(p, transition)), cost_new
+    cost_new = np.asarray(cost, dtype=float) + path_cost_increment(x_prev, x_next)
+    lik = likelihood_from_log(memory_log_likelihood(cost_new, x_prev, x_start, x_g))
+    return posterior_update(p, lik, transition), cost_new
