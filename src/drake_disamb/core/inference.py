@@ -206,12 +206,13 @@ def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
     is first scaled by its maximum), so the result is always a probability vector.
     """
     p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well
-    total = p.sum(axis=-1, keepdims=True)
-    if not np.isfinite(total.sum()):  # totals are positive: their sum is finite iff all are
-        inf = np.isinf(p)
-        scaled = p / np.max(p, axis=-1, keepdims=True)
-        p = np.where(np.any(inf, axis=-1, keepdims=True), np.where(inf, 1.0, TINY), np.fmax(scaled, TINY))
+    with np.errstate(over="ignore", invalid="ignore"):
         total = p.sum(axis=-1, keepdims=True)
+        if not np.isfinite(total.sum()):  # totals are positive: their sum is finite iff all are
+            inf = np.isinf(p)
+            scaled = p / np.max(p, axis=-1, keepdims=True)
+            p = np.where(np.any(inf, axis=-1, keepdims=True), np.where(inf, 1.0, TINY), np.fmax(scaled, TINY))
+            total = p.sum(axis=-1, keepdims=True)
     return p / total
 
 
@@ -348,6 +349,22 @@ def dft_rhs(
     return dft_rhs_from_drive(p, dft_drive(u_h, x_r, x_g, params, u_a), params)
 
 
+def _euler_rate_factor(total: NDArray[np.float64], tau1: float, h: float) -> NDArray[np.float64]:
+    """Rate factor that makes the mass-conserving flow over ``h`` equal the Euler map.
+
+    With ``P = I`` the flow ``dp/dt = f - p S`` (``S = sum f``, constant in ``p``) relaxes to its
+    fixed point at rate ``D = S + 1/tau1``, i.e. by ``exp(-D h)`` per step, while the Euler map
+    ``(p + h f) / (1 + h S)`` contracts by ``(1 - h/tau1) / (1 + h S)``. Scaling the flow by
+    ``log((1 + h S) / (1 - h / tau1)) / (h D)`` makes the two equal (same fixed point).
+    """
+    a = min(h / tau1, 0.9)
+    hS = np.maximum(h * total, -0.9)
+    x = hS + a  # h D
+    small = np.abs(x) < 1e-12
+    num = np.log1p(hS) - np.log1p(-a)
+    return np.where(small, 1.0 / (1.0 - a), num / np.where(small, 1.0, x))
+
+
 def dft_mass_conserving_rhs(
     p: ArrayLike,
     u_h: ArrayLike,
@@ -367,10 +384,7 @@ def dft_mass_conserving_rhs(
     total = f.sum(axis=-1, keepdims=True)
     g = f - p * total
     if params.euler_equivalent_step is not None:
-        # Per step h the Euler map contracts by 1/(1 + hS), the flow by exp(-rate h): match them.
-        x = np.maximum(params.euler_equivalent_step * total, -0.9)
-        small = np.abs(x) < 1e-8
-        g = g * np.where(small, 1.0 - 0.5 * x, np.log1p(x) / np.where(small, 1.0, x))
+        g = g * _euler_rate_factor(total, params.tau1, params.euler_equivalent_step)
     # Positivity guard: an entry at (or below) zero may not decrease further.
     blocked = (p <= 0.0) & (g < 0.0)
     if np.any(blocked):
