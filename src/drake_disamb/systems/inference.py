@@ -1,0 +1,401 @@
+"""Drake systems for intent inference: field-theoretic (DFT), recursive Bayes and memory-based.
+
+All three share the same ports, so they can replace each other in a diagram:
+
+Input ports (vector-valued):
+
+- ``u_h`` (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world frame W, at the
+  end-effector origin. This is the paper's order, *not* Drake's ``[w; v]`` spatial-velocity order.
+  A command with a NaN or infinite entry is read as zero (with a warning, once per system).
+- ``ee_pose`` (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m; unit quaternion).
+  Only the position enters the inference.
+- ``goal_poses`` (7 n): the n goal poses, each ``[x, y, z, qw, qx, qy, qz]``, flattened.
+- ``u_a`` (6 n): per-goal autonomy commands ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, W),
+  flattened. Only evaluated by the DFT system with the agreement term on; may stay unconnected
+  otherwise.
+
+Output ports (vector-valued, computed from state only: no direct feedthrough):
+
+- ``belief`` (n): the goal probabilities, a probability vector at every instant.
+- ``g_star`` (1): 0-based index of the most probable goal (first one on ties).
+- ``p_star`` (1): its probability.
+
+When ``goal_poses`` differs from the goal set the system last saw (by more than
+``goal_change_tolerance`` in any entry), the next periodic update resets the belief to the rest
+state over the new set (the multi-step task). The algorithms are the numpy core's
+(:mod:`drake_disamb.core.inference`); these systems only hold state and move data.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem, State
+
+from drake_disamb.core.inference import (
+    BAYES_SIGMA,
+    DFTParams,
+    bayes_step,
+    check_transition,
+    dft_mass_conserving_rhs,
+    memory_step,
+    normalize_belief,
+    rest_state,
+    sanitize_command,
+)
+
+
+def _check_common(n_goals: object, control_period: object, goal_change_tolerance: object) -> None:
+    if not isinstance(n_goals, int | np.integer) or isinstance(n_goals, bool) or n_goals < 1:
+        raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
+    for name, value in (("control_period", control_period), ("goal_change_tolerance", goal_change_tolerance)):
+        ok = isinstance(value, int | float | np.floating) and np.isfinite(value)
+        if not ok or value < 0 or (name == "control_period" and value == 0):
+            raise ValueError(f"{name}: expected a finite positive number, got {value!r}")
+
+
+def _check_square(matrix: ArrayLike | None, n: int, name: str) -> NDArray[np.float64] | None:
+    if matrix is None:
+        return None
+    P = check_transition(matrix, name)
+    if P.shape != (n, n):
+        raise ValueError(f"{name}: expected shape ({n}, {n}), got {P.shape}")
+    return P
+
+
+def _goals_changed(new: NDArray[np.float64], old: NDArray[np.float64], tol: float) -> bool:
+    """True if any entry moved by more than ``tol`` or changed between finite and NaN."""
+    nan_new, nan_old = np.isnan(new), np.isnan(old)
+    diff = np.abs(np.where(nan_new | nan_old, 0.0, new - old))
+    return bool(np.any(diff > tol) or np.any(nan_new != nan_old))
+
+
+class _IntentInferenceBase(LeafSystem):
+    """Ports, input reading and outputs shared by the three inference systems."""
+
+    def __init__(self, n_goals: int, rest: ArrayLike | None, control_period: float, tol: float) -> None:
+        super().__init__()
+        _check_common(n_goals, control_period, tol)
+        self._n = int(n_goals)
+        self._rest = rest_state(self._n, rest).astype(float)
+        self._period = float(control_period)
+        self._tol = float(tol)
+        self._warned = False
+        self._u_h = self.DeclareVectorInputPort("u_h", 6)
+        self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
+        self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
+        self._u_a = self.DeclareVectorInputPort("u_a", 6 * self._n)
+
+    @property
+    def n_goals(self) -> int:
+        """Number of goals n."""
+        return self._n
+
+    @property
+    def control_period(self) -> float:
+        """Period (s) of the state update events."""
+        return self._period
+
+    def _declare_outputs(self, ticket) -> None:  # noqa: ANN001 (DependencyTicket)
+        self.DeclareVectorOutputPort("belief", BasicVector(self._n), self._calc_belief, {ticket})
+        self.DeclareVectorOutputPort("g_star", BasicVector(1), self._calc_g_star, {ticket})
+        self.DeclareVectorOutputPort("p_star", BasicVector(1), self._calc_p_star, {ticket})
+
+    # -- inputs ---------------------------------------------------------------------------------
+
+    def _command(self, context: Context) -> NDArray[np.float64]:
+        u = np.asarray(self._u_h.Eval(context), dtype=float)
+        if not np.all(np.isfinite(u)):
+            if not self._warned:
+                warnings.warn(
+                    f"{self.get_name() or type(self).__name__}: non-finite human command u_h={u.tolist()} read as zero",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                self._warned = True
+            u = sanitize_command(u)
+        return u
+
+    def _position(self, context: Context) -> NDArray[np.float64]:
+        return np.asarray(self._ee_pose.Eval(context), dtype=float)[:3]
+
+    def _goal_poses_now(self, context: Context) -> NDArray[np.float64]:
+        return np.asarray(self._goal_poses.Eval(context), dtype=float).copy()
+
+    def _goal_positions(self, goal_poses: NDArray[np.float64]) -> NDArray[np.float64]:
+        return goal_poses.reshape(self._n, 7)[:, :3]
+
+    # -- outputs --------------------------------------------------------------------------------
+
+    def _raw_belief(self, context: Context) -> NDArray[np.float64]:
+        raise NotImplementedError
+
+    def _belief(self, context: Context) -> NDArray[np.float64]:
+        # A copy projected onto the simplex: the stored state may carry integrator error.
+        return normalize_belief(np.array(self._raw_belief(context), dtype=float))
+
+    def _calc_belief(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._belief(context))
+
+    def _calc_g_star(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector([float(np.argmax(self._belief(context)))])
+
+    def _calc_p_star(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector([float(np.max(self._belief(context)))])
+
+
+class FieldTheoreticIntentInference(_IntentInferenceBase):
+    """Field-theoretic intent inference: the belief is continuous state following the DFT ODE.
+
+    .. pydrake_system::
+
+        name: FieldTheoreticIntentInference
+        input_ports:
+        - u_h
+        - ee_pose
+        - goal_poses
+        - u_a
+        output_ports:
+        - belief
+        - g_star
+        - p_star
+
+    Ports are described in the module docstring: ``u_h`` (6; m/s, rad/s; ``[v; w]`` order),
+    ``ee_pose`` (7; m, ``[x, y, z, qw, qx, qy, qz]``), ``goal_poses`` (7 n), ``u_a`` (6 n; only
+    evaluated with ``params.agreement``) in; ``belief`` (n), ``g_star`` (1, 0-based index),
+    ``p_star`` (1) out.
+
+    State: continuous ``p`` (n) with time derivative
+    :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
+    projected so that ``sum(p)`` stays 1, with a positivity guard), integrated by the simulator's
+    integrator; discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
+    ``control_period`` an unrestricted update re-projects ``p`` onto the simplex (guard against
+    integrator error) or, if ``goal_poses`` changed, resets ``p`` to the rest state. At
+    initialization ``p`` is the rest state.
+
+    Args:
+        n_goals: Number of goals n.
+        params: DFT parameters (:class:`~drake_disamb.core.inference.DFTParams`); its
+            ``transition`` and ``lam`` (if a matrix) must be n x n.
+        control_period: Period (s) of the projection / goal-change check.
+        rest: Rest state (task prior, a probability vector of n entries); overrides
+            ``params.rest``; None keeps ``params.rest`` (uniform if that is None too).
+        goal_change_tolerance: Largest change (m or quaternion units) of any ``goal_poses`` entry
+            still read as "the same goal set".
+    """
+
+    def __init__(
+        self,
+        n_goals: int,
+        params: DFTParams | None = None,
+        control_period: float = 0.01,
+        rest: ArrayLike | None = None,
+        goal_change_tolerance: float = 1e-9,
+    ) -> None:
+        params = DFTParams() if params is None else params
+        if not isinstance(params, DFTParams):
+            raise ValueError(f"params: expected DFTParams, got {params!r}")
+        _check_common(n_goals, control_period, goal_change_tolerance)
+        rest = params.rest if rest is None else rest
+        super().__init__(n_goals, rest, control_period, goal_change_tolerance)
+        _check_square(params.transition, self._n, "params.transition")
+        lam = np.asarray(params.lam, dtype=float)
+        if lam.ndim == 2 and lam.shape != (self._n, self._n):
+            raise ValueError(
+                f"params.lam: expected a scalar or a ({self._n}, {self._n}) matrix, got {lam.shape}"
+            )
+        self._params = replace(params, rest=self._rest)
+        self.DeclareContinuousState(self._n)
+        self._goals_index = self.DeclareDiscreteState(np.full(7 * self._n, np.nan))
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._reset_update)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._periodic_update)
+        self._declare_outputs(self.xc_ticket())
+
+    @property
+    def params(self) -> DFTParams:
+        """The DFT parameters in use (``rest`` filled in)."""
+        return self._params
+
+    def _raw_belief(self, context: Context) -> NDArray[np.float64]:
+        return context.get_continuous_state_vector().CopyToVector()
+
+    def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
+        p = context.get_continuous_state_vector().CopyToVector()
+        x_g = self._goal_positions(self._goal_poses_now(context))
+        u_a = None
+        if self._params.agreement:
+            u_a = np.asarray(self._u_a.Eval(context), dtype=float).reshape(self._n, 6)
+        dp = dft_mass_conserving_rhs(
+            p, self._command(context), self._position(context), x_g, self._params, u_a
+        )
+        derivatives.get_mutable_vector().SetFromVector(dp)
+
+    def _reset_update(self, context: Context, state: State) -> None:
+        state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(self._rest)
+        state.get_mutable_discrete_state(self._goals_index).SetFromVector(self._goal_poses_now(context))
+
+    def _periodic_update(self, context: Context, state: State) -> None:
+        goals = self._goal_poses_now(context)
+        old = context.get_discrete_state(self._goals_index).CopyToVector()
+        if _goals_changed(goals, old, self._tol):
+            self._reset_update(context, state)
+            return
+        p = normalize_belief(context.get_continuous_state_vector().CopyToVector())
+        state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(p)
+
+
+class _DiscreteInference(_IntentInferenceBase):
+    """Discrete-state belief updated every ``control_period``; layout ``[belief (n), extra, goals]``."""
+
+    def __init__(self, n_goals: int, rest, control_period: float, tol: float, n_extra: int) -> None:  # noqa: ANN001
+        super().__init__(n_goals, rest, control_period, tol)
+        self._n_extra = n_extra
+        self._state_index = self.DeclareDiscreteState(np.full(self._n + n_extra + 7 * self._n, np.nan))
+        self.DeclareInitializationDiscreteUpdateEvent(self._reset_update)
+        self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._periodic_update)
+        self._declare_outputs(self.xd_ticket())
+
+    def _raw_belief(self, context: Context) -> NDArray[np.float64]:
+        return context.get_discrete_state(self._state_index).CopyToVector()[: self._n]
+
+    def _reset_extra(self, context: Context) -> NDArray[np.float64]:
+        return np.zeros(self._n_extra)
+
+    def _step(
+        self,
+        context: Context,
+        belief: NDArray[np.float64],
+        extra: NDArray[np.float64],
+        x_g: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        raise NotImplementedError
+
+    def _reset_update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        value = np.concatenate([self._rest, self._reset_extra(context), self._goal_poses_now(context)])
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(value)
+
+    def _periodic_update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        goals = self._goal_poses_now(context)
+        x = context.get_discrete_state(self._state_index).CopyToVector()
+        n, k = self._n, self._n_extra
+        if _goals_changed(goals, x[n + k :], self._tol):
+            self._reset_update(context, discrete_state)
+            return
+        belief, extra = self._step(context, x[:n], x[n : n + k], self._goal_positions(goals))
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(
+            np.concatenate([normalize_belief(belief), extra, goals])
+        )
+
+
+class RecursiveBayesIntentInference(_DiscreteInference):
+    """Recursive Bayesian intent inference (the paper's baseline), discrete state.
+
+    .. pydrake_system::
+
+        name: RecursiveBayesIntentInference
+        input_ports:
+        - u_h
+        - ee_pose
+        - goal_poses
+        - u_a
+        output_ports:
+        - belief
+        - g_star
+        - p_star
+
+    Ports as in the module docstring (``u_a`` is declared for interchangeability and never read).
+    Every ``control_period``: ``p <- normalize(likelihood(u_h | g) * P^T p)``
+    (:func:`~drake_disamb.core.inference.bayes_step`), or a reset to the rest state when
+    ``goal_poses`` changed. Discrete state ``[belief (n), goal_poses (7 n)]``.
+
+    Args:
+        n_goals: Number of goals n.
+        transition: Goal-transition matrix P (n x n, row-stochastic); None means I.
+        sigma: Standard deviation (rad) of the Gaussian angle likelihood.
+        control_period: Update period (s).
+        rest: Initial / reset belief (probability vector); None means uniform.
+        goal_change_tolerance: As for :class:`FieldTheoreticIntentInference`.
+    """
+
+    def __init__(
+        self,
+        n_goals: int,
+        transition: ArrayLike | None = None,
+        sigma: float = BAYES_SIGMA,
+        control_period: float = 0.01,
+        rest: ArrayLike | None = None,
+        goal_change_tolerance: float = 1e-9,
+    ) -> None:
+        _check_common(n_goals, control_period, goal_change_tolerance)
+        self._P = _check_square(transition, int(n_goals), "transition")
+        if not (isinstance(sigma, int | float | np.floating) and np.isfinite(sigma) and sigma > 0):
+            raise ValueError(f"sigma: expected a finite positive angle (rad), got {sigma!r}")
+        self._sigma = float(sigma)
+        super().__init__(n_goals, rest, control_period, goal_change_tolerance, n_extra=0)
+
+    def _step(self, context, belief, extra, x_g):  # noqa: ANN001, ANN202
+        p = bayes_step(belief, self._command(context), self._position(context), x_g, self._P, self._sigma)
+        return p, extra
+
+
+class MemoryBasedIntentInference(_DiscreteInference):
+    """Memory-based intent prediction (Dragan & Srinivasa, the paper's baseline), discrete state.
+
+    .. pydrake_system::
+
+        name: MemoryBasedIntentInference
+        input_ports:
+        - u_h
+        - ee_pose
+        - goal_poses
+        - u_a
+        output_ports:
+        - belief
+        - g_star
+        - p_star
+
+    Ports as in the module docstring (``u_h`` and ``u_a`` are declared for interchangeability and
+    never read: the method only looks at the end-effector path). Every ``control_period`` the
+    move from the previous to the current end-effector position updates the running path cost and
+    the belief (:func:`~drake_disamb.core.inference.memory_step`), or the state resets when
+    ``goal_poses`` changed (the trial start becomes the current position).
+    Discrete state ``[belief (n), cost (1), x_start (3), x_prev (3), goal_poses (7 n)]`` (m^2, m).
+
+    Args:
+        n_goals: Number of goals n.
+        transition: Goal-transition matrix P (n x n, row-stochastic); None means I.
+        control_period: Update period (s).
+        rest: Initial / reset belief (probability vector); None means uniform.
+        goal_change_tolerance: As for :class:`FieldTheoreticIntentInference`.
+    """
+
+    def __init__(
+        self,
+        n_goals: int,
+        transition: ArrayLike | None = None,
+        control_period: float = 0.01,
+        rest: ArrayLike | None = None,
+        goal_change_tolerance: float = 1e-9,
+    ) -> None:
+        _check_common(n_goals, control_period, goal_change_tolerance)
+        self._P = _check_square(transition, int(n_goals), "transition")
+        super().__init__(n_goals, rest, control_period, goal_change_tolerance, n_extra=7)
+
+    def _reset_extra(self, context: Context) -> NDArray[np.float64]:
+        x = self._position(context)
+        return np.concatenate([[0.0], x, x])
+
+    def _step(self, context, belief, extra, x_g):  # noqa: ANN001, ANN202
+        cost, x_start, x_prev = extra[0], extra[1:4], extra[4:7]
+        x_now = self._position(context)
+        if not np.all(np.isfinite(x_now)):
+            x_now = x_prev  # no usable position: no move, no evidence
+        if not np.all(np.isfinite(x_start)):
+            x_start = x_now
+        if not np.all(np.isfinite(x_prev)):
+            x_prev = x_now
+        p, cost = memory_step(belief, cost, x_prev, x_now, x_start, x_g, self._P)
+        return p, np.concatenate([[float(cost)], x_start, x_now])

@@ -1,0 +1,255 @@
+"""Drake inference systems: ports, fixed-input contexts, simplex invariants, resets, Euler agreement."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
+from pydrake.trajectories import PiecewisePolynomial
+
+from drake_disamb.core.inference import DFTParams, bayes_step, dft_mass_conserving_rhs, memory_step
+from drake_disamb.core.trials import authors_dft_params, load_trial_mat, replay_trials
+from drake_disamb.systems.inference import (
+    FieldTheoreticIntentInference,
+    MemoryBasedIntentInference,
+    RecursiveBayesIntentInference,
+)
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
+
+SYSTEMS = {
+    "dft": lambda n, **kw: FieldTheoreticIntentInference(n, DFTParams(**kw.pop("params", {})), **kw),
+    "bayes": lambda n, **kw: RecursiveBayesIntentInference(n, **kw),
+    "memory": lambda n, **kw: MemoryBasedIntentInference(n, **kw),
+}
+
+
+def poses(positions: np.ndarray) -> np.ndarray:
+    """Flat ``[x, y, z, 1, 0, 0, 0]`` poses of an ``(n, 3)`` array."""
+    out = np.zeros((len(positions), 7))
+    out[:, :3] = positions
+    out[:, 3] = 1.0
+    return out.ravel()
+
+
+def fix_inputs(system, context, u_h, ee, goals, u_a=None) -> None:  # noqa: ANN001
+    system.GetInputPort("u_h").FixValue(context, np.asarray(u_h, dtype=float))
+    system.GetInputPort("ee_pose").FixValue(context, poses(np.asarray(ee, dtype=float)[None])[:7])
+    system.GetInputPort("goal_poses").FixValue(context, poses(np.asarray(goals, dtype=float)))
+    if u_a is not None:
+        system.GetInputPort("u_a").FixValue(context, np.asarray(u_a, dtype=float).ravel())
+
+
+def outputs(system, context) -> tuple[np.ndarray, int, float]:  # noqa: ANN001
+    b = system.GetOutputPort("belief").Eval(context)
+    return (
+        b,
+        int(system.GetOutputPort("g_star").Eval(context)[0]),
+        float(system.GetOutputPort("p_star").Eval(context)[0]),
+    )
+
+
+@pytest.mark.parametrize("kind", list(SYSTEMS))
+def test_ports_and_no_direct_feedthrough(kind: str) -> None:
+    system = SYSTEMS[kind](3)
+    sizes = {"u_h": 6, "ee_pose": 7, "goal_poses": 21, "u_a": 18}
+    for name, size in sizes.items():
+        assert system.GetInputPort(name).size() == size
+    for name, size in {"belief": 3, "g_star": 1, "p_star": 1}.items():
+        assert system.GetOutputPort(name).size() == size
+    assert not system.HasAnyDirectFeedthrough()
+
+
+@pytest.mark.parametrize("kind", list(SYSTEMS))
+def test_initial_belief_is_the_rest_state(kind: str) -> None:
+    rest = np.array([0.2, 0.5, 0.3])
+    system = SYSTEMS[kind](3, rest=rest)
+    simulator = Simulator(system)
+    fix_inputs(system, simulator.get_mutable_context(), np.zeros(6), np.zeros(3), np.eye(3))
+    simulator.Initialize()
+    b, g, p = outputs(system, simulator.get_context())
+    np.testing.assert_allclose(b, rest)
+    assert (g, p) == (1, pytest.approx(0.5))
+
+
+def test_dft_derivative_is_the_core_flow() -> None:
+    rng = np.random.default_rng(0)
+    n = 4
+    P = np.eye(n) + rng.uniform(0, 0.01, (n, n))
+    P /= P.sum(axis=1, keepdims=True)
+    params = DFTParams(transition=P, agreement=True, proximity=True, R=0.5)
+    system = FieldTheoreticIntentInference(n, params)
+    context = system.CreateDefaultContext()
+    goals, x, u, u_a = (
+        rng.uniform(-0.5, 0.5, (n, 3)),
+        rng.uniform(-0.5, 0.5, 3),
+        rng.normal(size=6),
+        rng.normal(size=(n, 6)),
+    )
+    fix_inputs(system, context, u, x, goals, u_a)
+    p = rng.dirichlet(np.ones(n))
+    context.SetContinuousState(p)
+    derivatives = system.EvalTimeDerivatives(context).CopyToVector()
+    np.testing.assert_allclose(derivatives, dft_mass_conserving_rhs(p, u, x, goals, params, u_a), rtol=1e-12)
+    assert abs(derivatives.sum()) < 1e-12
+
+
+def _advance_one_period(system, u, x0, x1, goals, P, rest=None):  # noqa: ANN001, ANN202
+    """Initialise at x0, then move the end effector to x1 and run one periodic update."""
+    simulator = Simulator(system)
+    context = simulator.get_mutable_context()
+    fix_inputs(system, context, u, x0, goals)
+    simulator.Initialize()
+    simulator.AdvanceTo(0.5 * system.control_period)  # the periodic update at t = 0 sees x0
+    fix_inputs(system, context, u, x1, goals)
+    simulator.AdvanceTo(1.5 * system.control_period)  # the one at t = period sees x1
+    return outputs(system, simulator.get_context())[0]
+
+
+def test_discrete_updates_are_the_core_steps() -> None:
+    rng = np.random.default_rng(1)
+    n = 3
+    P = np.eye(n) * 0.97 + 0.01
+    goals, x0, u = rng.uniform(-0.5, 0.5, (n, 3)), rng.uniform(-0.5, 0.5, 3), rng.normal(size=6)
+    x1 = x0 + 0.01
+    uniform = np.full(n, 1 / n)
+    # Bayes: the update at t = 0 uses x0, the one at t = period x1.
+    got = _advance_one_period(RecursiveBayesIntentInference(n, transition=P), u, x0, x1, goals, P)
+    want = bayes_step(bayes_step(uniform, u, x0, goals, P), u, x1, goals, P)
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    # Memory: at t = 0 no move from the start; at t = period the move x0 -> x1.
+    got = _advance_one_period(MemoryBasedIntentInference(n, transition=P), u, x0, x1, goals, P)
+    p, cost = memory_step(uniform, 0.0, x0, x0, x0, goals, P)
+    want, _ = memory_step(p, cost, x0, x1, x0, goals, P)
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+
+
+@pytest.mark.parametrize("kind", list(SYSTEMS))
+def test_goal_change_resets_the_belief(kind: str) -> None:
+    goals = np.array([[0.5, 0.0, 0.0], [0.0, 0.5, 0.0]])
+    system = SYSTEMS[kind](2, control_period=0.01)
+    simulator = Simulator(system)
+    context = simulator.get_mutable_context()
+    fix_inputs(system, context, [1, 0, 0, 0, 0, 0], [0.0, 0, 0], goals)
+    simulator.Initialize()
+    for k in range(1, 20):  # move toward goal 0 so the memory-based method has a path too
+        fix_inputs(system, context, [1, 0, 0, 0, 0, 0], [0.01 * k, 0, 0], goals)
+        simulator.AdvanceTo(0.01 * k)
+    b, g, _ = outputs(system, context)
+    assert g == 0 and b[0] > 0.6
+    new_goals = goals[::-1] + 0.1  # the next stage of a multi-step task
+    fix_inputs(system, context, [1, 0, 0, 0, 0, 0], [0.19, 0, 0], new_goals)
+    simulator.AdvanceTo(0.19 + 1e-7)  # just past the periodic update at t = 0.19
+    np.testing.assert_allclose(outputs(system, context)[0], [0.5, 0.5], atol=1e-12 if kind != "dft" else 1e-4)
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    kind=st.sampled_from(list(SYSTEMS)),
+    n=st.integers(1, 5),
+    seed=st.integers(0, 2**31),
+    special=st.sampled_from([None, np.nan, np.inf, 0.0, 1e200]),
+    on_top=st.booleans(),
+)
+def test_belief_stays_on_the_simplex_in_simulation(kind, n, seed, special, on_top) -> None:  # noqa: ANN001
+    rng = np.random.default_rng(seed)
+    goals = rng.uniform(-0.5, 0.5, (n, 3))
+    x = rng.uniform(-0.5, 0.5, 3)
+    if on_top:
+        goals[0] = x
+    P = np.eye(n) + rng.uniform(0, 0.01, (n, n))
+    P /= P.sum(axis=1, keepdims=True)
+    if kind == "dft":
+        params = {"transition": P, "agreement": True, "proximity": True, "lam": 500.0}
+        system = SYSTEMS[kind](n, params=params, control_period=0.02)
+    else:
+        system = SYSTEMS[kind](n, transition=P, control_period=0.02)
+    simulator = Simulator(system)
+    context = simulator.get_mutable_context()
+    u = rng.normal(size=6) * 3
+    if special is not None:
+        u[rng.integers(6)] = special
+    fix_inputs(system, context, u, x, goals, rng.normal(size=(n, 6)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        simulator.Initialize()
+        for t in np.linspace(0.013, 0.2, 6):
+            x = x + rng.normal(size=3) * 0.02
+            fix_inputs(system, context, u, x, goals, rng.normal(size=(n, 6)))
+            simulator.AdvanceTo(t)
+            b, g, p = outputs(system, context)
+            assert np.all(np.isfinite(b)) and np.all(b >= 0)
+            assert abs(b.sum() - 1.0) < 1e-9
+            assert b[g] == p == b.max()
+
+
+def test_non_finite_command_warns_once() -> None:
+    system = RecursiveBayesIntentInference(2)
+    simulator = Simulator(system)
+    fix_inputs(system, simulator.get_mutable_context(), [np.nan, 0, 0, 0, 0, 0], np.zeros(3), np.eye(2, 3))
+    with pytest.warns(RuntimeWarning, match="non-finite human command"):
+        simulator.Initialize()
+        simulator.AdvanceTo(0.05)
+    np.testing.assert_allclose(outputs(system, simulator.get_context())[0], [0.5, 0.5])
+
+
+def test_bad_constructor_arguments() -> None:
+    with pytest.raises(ValueError, match="n_goals"):
+        FieldTheoreticIntentInference(0)
+    with pytest.raises(ValueError, match="control_period"):
+        RecursiveBayesIntentInference(2, control_period=0.0)
+    with pytest.raises(ValueError, match="transition"):
+        MemoryBasedIntentInference(3, transition=np.eye(2))
+    with pytest.raises(ValueError, match="rest"):
+        FieldTheoreticIntentInference(2, rest=[0.2, 0.2])
+    with pytest.raises(ValueError, match="params.transition"):
+        FieldTheoreticIntentInference(3, DFTParams(transition=np.eye(2)))
+    with pytest.raises(ValueError, match="sigma"):
+        RecursiveBayesIntentInference(2, sigma=-1.0)
+
+
+def test_simulated_published_trial_agrees_with_the_euler_replay() -> None:
+    """Trial 1 played through the continuous-state system vs the core's Euler replay."""
+    path = DATA / "trajectory_1.mat"
+    if not path.is_file():
+        pytest.skip(f"published trajectories not found at {DATA} (the shared data folder beside the repo)")
+    tr = load_trial_mat(path)
+    L, n, dt = tr.n_steps, tr.n_goals, tr.dt
+    reference = replay_trials([tr], methods=("dft",))["dft"][0]
+
+    builder = DiagramBuilder()
+    params = authors_dft_params(transition=tr.transition, euler_equivalent_step=dt)
+    system = builder.AddSystem(FieldTheoreticIntentInference(n, params, control_period=dt))
+    times = np.arange(L + 1) * dt
+    u = np.zeros((6, L + 1))
+    u[:3, :L] = tr.u_h.T  # command j holds over [j dt, (j + 1) dt)
+    pose = np.zeros((7, L + 1))
+    pose[:3] = tr.traj.T
+    pose[3] = 1.0
+    u_src = builder.AddSystem(TrajectorySource(PiecewisePolynomial.ZeroOrderHold(times, u)))
+    pose_src = builder.AddSystem(TrajectorySource(PiecewisePolynomial.ZeroOrderHold(times, pose)))
+    goal_src = builder.AddSystem(ConstantVectorSource(poses(tr.goals)))
+    builder.Connect(u_src.get_output_port(), system.GetInputPort("u_h"))
+    builder.Connect(pose_src.get_output_port(), system.GetInputPort("ee_pose"))
+    builder.Connect(goal_src.get_output_port(), system.GetInputPort("goal_poses"))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    ResetIntegratorFromFlags(simulator, "runge_kutta3", dt)
+    context = system.GetMyContextFromRoot(simulator.get_mutable_context())
+    simulator.Initialize()
+    beliefs = np.empty((L + 1, n))
+    beliefs[0] = system.GetOutputPort("belief").Eval(context)
+    for j in range(1, L + 1):
+        simulator.AdvanceTo(j * dt)
+        beliefs[j] = system.GetOutputPort("belief").Eval(context)
+    np.testing.assert_allclose(beliefs.sum(axis=1), 1.0, atol=1e-12)
+    agreement = np.mean(np.argmax(beliefs, axis=1) == np.argmax(reference, axis=1))
+    assert agreement >= 0.99
+    assert np.abs(beliefs - reference).max() < 0.01
