@@ -39,11 +39,10 @@ def time_pipeline(folder: Path, repeats: int) -> tuple[list[float], dict, int, i
     for _ in range(repeats):
         w, c = time.perf_counter(), time.process_time()
         trials = load_trials(folder)
-        t_load = time.perf_counter() - w
+        loads = time.perf_counter() - w
         scores = score_trials(trials, replay_trials(trials))
         walls.append(time.perf_counter() - w)
         cpus.append(time.process_time() - c)
-        loads = t_load
     steps = sum(t.n_steps for t in trials)
     return walls, {"cpu": cpus, "load": loads, "scores": scores}, len(trials), steps
 
@@ -74,9 +73,8 @@ def main() -> None:
 
     t = time.perf_counter()
     trials = generate_trials(args.trials, seed=args.seed)
-    print(
-        f"generated {args.trials} trials (seed {args.seed}) in {time.perf_counter() - t:.2f} s (not timed below)"
-    )
+    took = time.perf_counter() - t
+    print(f"generated {args.trials} trials (seed {args.seed}) in {took:.2f} s (not timed below)")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         for i, tr in enumerate(trials):

@@ -111,7 +111,8 @@ class _IntentInferenceBase(LeafSystem):
         if not np.all(np.isfinite(u)):
             if not self._warned:
                 warnings.warn(
-                    f"{self.get_name() or type(self).__name__}: non-finite human command u_h={u.tolist()} read as zero",
+                    f"{self.get_name() or type(self).__name__}: non-finite human command "
+                    f"u_h={u.tolist()} read as zero",
                     RuntimeWarning,
                     stacklevel=2,
                 )
