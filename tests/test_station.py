@@ -1,0 +1,462 @@
+"""Tests of the MICO station (drake_disamb.station). No Meshcat."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.math import SpatialVelocity
+from pydrake.multibody.tree import JacobianWrtVariable
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource
+
+from drake_disamb.station import (
+    FINGER_MAX_OPENING,
+    MICO_HOME_Q,
+    STATION_INPUTS,
+    STATION_OUTPUTS,
+    DifferentialIKIntegrator,
+    EndEffectorState,
+    GripperOpeningIntegrator,
+    IkStatus,
+    SceneObject,
+    StationConfig,
+    build_station,
+)
+
+
+def _R(pose: np.ndarray) -> RotationMatrix:
+    return RotationMatrix(Quaternion(pose[3:] / np.linalg.norm(pose[3:])))
+
+
+def _rotation_vector(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Rotation from pose p0 to pose p1 as a world-frame rotation vector (rad)."""
+    aa = _R(p1).multiply(_R(p0).inverse()).ToAngleAxis()
+    return aa.axis() * aa.angle()
+
+
+class Rig:
+    """One station + simulator, reset to the home state for each test."""
+
+    def __init__(self, config: StationConfig | None = None, objects=()) -> None:
+        self.station = build_station(config, objects)
+        self.sim = Simulator(self.station.diagram)
+        self.ctx = self.sim.get_mutable_context()
+        self.command(np.zeros(6))
+        self.gripper(0.0)
+        self.sim.Initialize()
+        self.home = self.ctx.Clone()
+
+    def reset(self) -> None:
+        self.ctx.SetTimeStateAndParametersFrom(self.home)
+        self.command(np.zeros(6))
+        self.gripper(0.0)
+        self.sim.Initialize()
+
+    def command(self, V) -> None:
+        self.station.input_port("ee_velocity_command").FixValue(self.ctx, np.asarray(V, dtype=float))
+
+    def gripper(self, speed: float) -> None:
+        self.station.input_port("gripper_command").FixValue(self.ctx, [speed])
+
+    def advance(self, dt: float) -> None:
+        self.sim.AdvanceTo(self.ctx.get_time() + dt)
+
+    def out(self, name: str) -> np.ndarray:
+        return np.array(self.station.output_port(name).Eval(self.ctx), copy=True)
+
+    def status(self) -> IkStatus:
+        return IkStatus(int(self.out("ik_status")[0]))
+
+
+@pytest.fixture(scope="module")
+def rig() -> Rig:
+    return Rig()
+
+
+@pytest.fixture
+def home(rig: Rig) -> Rig:
+    rig.reset()
+    return rig
+
+
+def test_ports_and_home(home: Rig) -> None:
+    d = home.station.diagram
+    assert sorted(d.GetInputPort(n).get_name() for n in STATION_INPUTS) == sorted(STATION_INPUTS)
+    sizes = {n: d.GetOutputPort(n).size() for n in STATION_OUTPUTS if n != "query_object"}
+    assert sizes == {
+        "ee_pose": 7,
+        "ee_velocity": 6,
+        "arm_joint_state": 12,
+        "gripper_opening": 1,
+        "ik_status": 1,
+    }
+    pose = home.out("ee_pose")
+    assert np.allclose(pose[:3], [0.0, -0.35, 0.30], atol=2e-3)
+    assert np.allclose(_R(pose).matrix()[:, 2], [0, 0, -1], atol=1e-3)  # gripper points down
+    assert np.allclose(home.out("arm_joint_state")[:6], MICO_HOME_Q, atol=1e-12)
+    assert home.out("gripper_opening")[0] == pytest.approx(home.station.config.home_gripper_opening)
+    # Gravity compensation + PD hold the arm still with a zero command.
+    home.advance(0.5)
+    assert np.linalg.norm(home.out("ee_pose")[:3] - pose[:3]) < 5e-4
+    assert np.linalg.norm(home.out("ee_velocity")) < 1e-3
+    assert home.status() == IkStatus.OK
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_translation(home: Rig, axis: int, sign: float) -> None:
+    p0 = home.out("ee_pose")
+    V = np.zeros(6)
+    V[axis] = 0.05 * sign
+    home.command(V)
+    home.advance(0.5)
+    assert np.allclose(home.out("ee_velocity"), V, atol=5e-3)  # measured velocity, paper order
+    home.advance(0.5)
+    home.command(np.zeros(6))
+    home.advance(0.3)  # settle
+    p1 = home.out("ee_pose")
+    expected = np.zeros(3)
+    expected[axis] = 0.05 * sign
+    assert np.all(np.abs(p1[:3] - p0[:3] - expected) < 3e-3), p1[:3] - p0[:3]
+    assert np.linalg.norm(_rotation_vector(p0, p1)) < 0.02
+
+
+@pytest.mark.parametrize("axis", [3, 4, 5])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_rotation(home: Rig, axis: int, sign: float) -> None:
+    p0 = home.out("ee_pose")
+    V = np.zeros(6)
+    V[axis] = 0.2 * sign
+    home.command(V)
+    home.advance(1.0)
+    home.command(np.zeros(6))
+    home.advance(0.3)
+    p1 = home.out("ee_pose")
+    expected = np.zeros(3)
+    expected[axis - 3] = 0.2 * sign
+    assert np.all(np.abs(_rotation_vector(p0, p1) - expected) < 0.02), _rotation_vector(p0, p1)
+    assert np.linalg.norm(p1[:3] - p0[:3]) < 5e-3
+
+
+def test_gripper_opens_and_closes(home: Rig) -> None:
+    o0 = home.out("gripper_opening")[0]
+    p0 = home.out("ee_pose")
+    home.gripper(0.04)
+    home.advance(0.5)
+    home.gripper(0.0)
+    home.advance(0.2)
+    o1 = home.out("gripper_opening")[0]
+    assert o1 - o0 == pytest.approx(0.02, abs=2e-3)
+    home.gripper(-0.1)
+    home.advance(1.5)
+    home.gripper(0.0)
+    home.advance(0.2)
+    assert home.out("gripper_opening")[0] < 2e-3  # fully closed
+    home.gripper(1.0)  # far faster than the fingers can go: the set point saturates at the limit
+    home.advance(1.0)
+    home.gripper(0.0)
+    home.advance(0.5)
+    assert home.out("gripper_opening")[0] == pytest.approx(FINGER_MAX_OPENING, abs=3e-3)
+    assert np.linalg.norm(home.out("ee_pose")[:3] - p0[:3]) < 1e-3  # the arm did not move
+
+
+def _limits(rig: Rig) -> tuple[np.ndarray, np.ndarray]:
+    return rig.station.diff_ik.joint_position_limits
+
+
+def test_drive_through_singularity(home: Rig) -> None:
+    """Straight up at fixed orientation runs into the wrist singularity (theta_5 -> 0)."""
+    lo, hi = _limits(home)
+    home.command([0, 0, 0.1, 0, 0, 0])
+    seen = set()
+    for _ in range(50):
+        home.advance(0.1)
+        x = home.out("arm_joint_state")
+        assert np.all(np.isfinite(x))
+        assert np.all(x[:6] >= lo - 1e-3) and np.all(x[:6] <= hi + 1e-3)
+        seen.add(home.status())
+    assert home.status() in (IkStatus.STOPPED, IkStatus.LIMITED)
+    assert IkStatus.STOPPED in seen
+    assert abs(x[4]) < 0.2  # stopped next to theta_5 = 0
+    assert np.linalg.norm(home.out("ee_velocity")) < 1e-2  # and it stays stopped
+    assert np.all(np.isfinite(home.out("ee_pose")))
+
+
+def test_drive_into_joint_limit() -> None:
+    """Command the Cartesian velocity that closes the elbow (joint 3) until it reaches its limit."""
+    start = np.array(MICO_HOME_Q)
+    start[2] = math.radians(109.0) + 0.2  # 0.2 rad above the lower limit of joint 3 (DH 109 deg)
+    rig = Rig(StationConfig(home_q=tuple(start)))
+    lo, hi = _limits(rig)
+    cp = rig.station.control_plant
+    cc = cp.CreateDefaultContext()
+    q = cp.GetPositions(cc)
+    q[:6] = start
+    cp.SetPositions(cc, q)
+    J = cp.CalcJacobianSpatialVelocity(
+        cc,
+        JacobianWrtVariable.kV,
+        cp.GetFrameByName("mico_end_effector"),
+        np.zeros(3),
+        cp.world_frame(),
+        cp.world_frame(),
+    )[:, :6]
+    V_drake = J @ np.array([0, 0, -0.5, 0, 0, 0])  # what joint 3 alone moving at -0.5 rad/s does
+    rig.command(np.concatenate([V_drake[3:], V_drake[:3]]))
+    statuses = []
+    for _ in range(50):
+        rig.advance(0.1)
+        x = rig.out("arm_joint_state")
+        assert np.all(np.isfinite(x))
+        assert np.all(x[:6] >= lo - 1e-3) and np.all(x[:6] <= hi + 1e-3), x[:6] - lo
+        statuses.append(rig.status())
+    assert rig.status() in (IkStatus.STOPPED, IkStatus.LIMITED)
+    x = rig.out("arm_joint_state")
+    assert x[2] - lo[2] < 0.02, x[2] - lo[2]  # joint 3 sits at its lower limit
+    assert IkStatus.STOPPED in statuses
+    assert np.linalg.norm(x[6:]) < 0.05
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_command_is_zero(home: Rig, bad: float) -> None:
+    x0 = home.out("arm_joint_state")
+    home.command([0.05, bad, 0, 0, 0, 0])
+    with pytest.warns(RuntimeWarning, match="non-finite") as record:
+        home.advance(2.05)  # 206 bad control steps, warnings at most once per simulated second
+    assert len(record) == 3  # t = 0, 1 and 2 s
+    assert home.status() == IkStatus.INVALID_COMMAND
+    x1 = home.out("arm_joint_state")
+    assert np.all(np.isfinite(x1))
+    assert np.allclose(x1[:6], x0[:6], atol=1e-3)  # treated as zero: the arm held still
+    # A valid command afterwards works as usual.
+    home.command([0.05, 0, 0, 0, 0, 0])
+    home.advance(0.3)
+    assert home.status() == IkStatus.OK
+    assert home.out("ee_velocity")[0] > 0.04
+
+
+def test_warnings_are_rate_limited(home: Rig) -> None:
+    home.command([np.nan] * 6)
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        home.advance(2.5)
+    messages = [str(w.message) for w in record if issubclass(w.category, RuntimeWarning)]
+    assert len(messages) == 3, messages  # t = 0, 1, 2 s (warn_interval = 1 s), not 250
+    assert "suppressed" in messages[-1]
+
+
+def test_wrong_length_command_is_rejected(home: Rig) -> None:
+    x0 = home.out("arm_joint_state")
+    with pytest.raises(RuntimeError, match="size=6"):
+        home.command(np.zeros(5))
+    with pytest.raises(RuntimeError, match="size=1"):
+        home.station.input_port("gripper_command").FixValue(home.ctx, [0.0, 0.0])
+    home.advance(0.2)  # the previous (zero) commands are still in place
+    assert np.allclose(home.out("arm_joint_state"), x0, atol=1e-4)
+    assert home.status() == IkStatus.OK
+
+
+def test_non_finite_gripper_command(home: Rig) -> None:
+    o0 = home.out("gripper_opening")[0]
+    home.gripper(float("nan"))
+    with pytest.warns(RuntimeWarning, match="gripper_command"):
+        home.advance(0.3)
+    assert home.out("gripper_opening")[0] == pytest.approx(o0, abs=1e-4)
+
+
+def test_tracking_error_reseeds() -> None:
+    """If the plant is moved away from the set point (e.g. blocked), the set point follows it."""
+    rig = Rig()
+    pc = rig.station.plant_context(rig.ctx)
+    q = rig.station.plant.GetPositions(pc, rig.station.arm)
+    q[0] += 0.5
+    rig.station.plant.SetPositions(pc, rig.station.arm, q)
+    rig.advance(0.005)  # one control step (at t = 0)
+    assert rig.status() == IkStatus.RESEEDED
+    rig.advance(0.5)
+    assert rig.status() == IkStatus.OK
+    assert rig.out("arm_joint_state")[0] == pytest.approx(q[0], abs=0.02)
+
+
+def test_scene_objects_and_attached_cup() -> None:
+    box = SceneObject("shelf", "box", (0.1, 0.2, 0.05), (0.3, -0.5, 0.025, 1, 0, 0, 0))
+    cup = SceneObject(
+        "cup", "cylinder", (0.035, 0.1), (0, 0, -0.01, 1, 0, 0, 0), attached_to_gripper=True, mass=0.3
+    )
+    ball = SceneObject("ball", "sphere", (0.03,), (-0.3, -0.4, 0.03, 1, 0, 0, 0), rgba=(0, 0, 1, 1))
+    rig = Rig(StationConfig(scene_objects=(box,)), objects=(cup, ball))
+    st = rig.station
+    assert [o.name for o in st.scene_objects] == ["shelf", "cup", "ball"]
+    pc = st.plant_context(rig.ctx)
+    inspector = rig.out  # noqa: F841  (outputs still evaluate with objects present)
+    X_WB = st.plant.GetBodyByName("shelf").EvalPoseInWorld(pc)
+    assert np.allclose(X_WB.translation(), [0.3, -0.5, 0.025])
+    # The cup moves with the end effector and its weight is compensated: the arm holds still.
+    p0 = rig.out("ee_pose")
+    rig.advance(0.5)
+    assert np.linalg.norm(rig.out("ee_pose")[:3] - p0[:3]) < 1e-3
+    rig.command([0.05, 0, 0, 0, 0, 0])
+    rig.advance(1.0)
+    rig.command(np.zeros(6))
+    rig.advance(0.3)
+    X_WE = st.plant.GetFrameByName("mico_end_effector").CalcPoseInWorld(pc)
+    X_WC = st.plant.GetBodyByName("cup").EvalPoseInWorld(pc)
+    assert np.allclose((X_WE.inverse() @ X_WC).translation(), [0, 0, -0.01], atol=1e-9)
+    assert rig.out("ee_pose")[0] - p0[0] == pytest.approx(0.05, abs=3e-3)
+    query = st.output_port("query_object").Eval(rig.ctx)
+    names = {query.inspector().GetName(g) for g in query.inspector().GetAllGeometryIds()}
+    assert any("cup" in n for n in names) and any("shelf" in n for n in names)
+
+
+def test_embedded_in_a_bigger_diagram() -> None:
+    builder = DiagramBuilder()
+    st = build_station(builder=builder)
+    assert st.diagram is None
+    src = builder.AddSystem(ConstantVectorSource([0.0, 0.0, 0.05, 0.0, 0.0, 0.0]))
+    grip = builder.AddSystem(ConstantVectorSource([0.0]))
+    builder.Connect(src.get_output_port(), st.input_port("ee_velocity_command"))
+    builder.Connect(grip.get_output_port(), st.input_port("gripper_command"))
+    builder.ExportOutput(st.output_port("ee_pose"), "pose")
+    diagram = builder.Build()
+    sim = Simulator(diagram)
+    sim.Initialize()
+    p0 = diagram.GetOutputPort("pose").Eval(sim.get_context()).copy()
+    sim.AdvanceTo(0.4)
+    p1 = diagram.GetOutputPort("pose").Eval(sim.get_context())
+    assert p1[2] - p0[2] == pytest.approx(0.05 * 0.4, abs=3e-3)
+
+
+# ----------------------------------------------------------------------------------------------
+# The leaf systems in isolation, with fixed inputs.
+# ----------------------------------------------------------------------------------------------
+def test_diff_ik_integrator_alone(rig: Rig) -> None:
+    config = StationConfig()
+    sys = DifferentialIKIntegrator(rig.station.control_plant, config)
+    ctx = sys.CreateDefaultContext()
+    sys.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
+    # Small enough that the first step from rest meets the acceleration limits at full speed.
+    sys.GetInputPort("ee_velocity_command").FixValue(ctx, [0.0, 0.0, 0.0, 0.0, 0.0, 0.02])
+    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    q1, v1, status = x[:6], x[6:12], x[12]
+    assert status == IkStatus.OK
+    assert np.allclose(q1, MICO_HOME_Q + v1 * config.control_period)
+    # The joint velocity produces the commanded spatial velocity (paper order -> Drake order).
+    cp = rig.station.control_plant
+    cc = cp.CreateDefaultContext()
+    q = cp.GetPositions(cc)
+    q[:6] = MICO_HOME_Q
+    cp.SetPositions(cc, q)
+    J = cp.CalcJacobianSpatialVelocity(
+        cc,
+        JacobianWrtVariable.kV,
+        cp.GetFrameByName("mico_end_effector"),
+        np.zeros(3),
+        cp.world_frame(),
+        cp.world_frame(),
+    )[:, :6]
+    assert np.allclose(J @ v1, [0, 0, 0.02, 0, 0, 0], atol=1e-6)  # Drake order [w; v]
+    # The output ports expose the state.
+    ctx.SetDiscreteState(x)
+    assert np.allclose(sys.GetOutputPort("desired_state").Eval(ctx), x[:12])
+    assert sys.GetOutputPort("ik_status").Eval(ctx)[0] == 0
+    # Invalid command: zero velocity, status 2.
+    sys.GetInputPort("ee_velocity_command").FixValue(ctx, [np.inf, 0, 0, 0, 0, 0])
+    with pytest.warns(RuntimeWarning):
+        x2 = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    assert np.allclose(x2[:6], x[:6]) and np.all(x2[6:12] == 0) and x2[12] == IkStatus.INVALID_COMMAND
+
+
+def test_gripper_integrator_alone() -> None:
+    sys = GripperOpeningIntegrator(0.01, 0.12, 0.05)
+    ctx = sys.CreateDefaultContext()
+    sys.GetInputPort("finger_state").FixValue(ctx, [0.025, 0.025, 0, 0])
+    sys.GetInputPort("gripper_command").FixValue(ctx, [0.1])
+    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    assert np.allclose(x, [0.051, 0.1])
+    ctx.SetDiscreteState([0.1195, 0.0])
+    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    assert np.allclose(x, [0.12, 0.05])  # clamped at the limit, speed is what was achieved
+    ctx.SetDiscreteState(x)
+    assert np.allclose(sys.GetOutputPort("finger_desired_state").Eval(ctx), [0.06, 0.06, 0.025, 0.025])
+    assert sys.GetOutputPort("desired_opening").Eval(ctx)[0] == pytest.approx(0.12)
+    with pytest.raises(ValueError, match="initial_opening"):
+        GripperOpeningIntegrator(0.01, 0.12, 0.2)
+
+
+def test_end_effector_state_alone() -> None:
+    sys = EndEffectorState(1)
+    ctx = sys.CreateDefaultContext()
+    X = RigidTransform(RotationMatrix.MakeZRotation(0.3), [0.1, 0.2, 0.3])
+    sys.GetInputPort("body_poses").FixValue(ctx, [RigidTransform(), X])
+    V = SpatialVelocity(w=[0.4, 0.5, 0.6], v=[1.0, 2.0, 3.0])
+    sys.GetInputPort("body_spatial_velocities").FixValue(ctx, [SpatialVelocity.Zero(), V])
+    pose = sys.GetOutputPort("ee_pose").Eval(ctx)
+    assert np.allclose(pose, [0.1, 0.2, 0.3, math.cos(0.15), 0, 0, math.sin(0.15)])
+    assert np.allclose(sys.GetOutputPort("ee_velocity").Eval(ctx), [1, 2, 3, 0.4, 0.5, 0.6])
+
+
+# ----------------------------------------------------------------------------------------------
+# Validation.
+# ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"time_step": 0.0}, "time_step"),
+        ({"time_step": float("nan")}, "time_step"),
+        ({"control_period": 0.0005}, "control_period"),
+        ({"home_q": (0.0,) * 5}, "home_q"),
+        ({"home_q": (0.0, 1.0, float("nan"), 0, 0, 0)}, "home_q"),
+        ({"home_gripper_opening": 0.5}, "home_gripper_opening"),
+        ({"joint_velocity_limits": (0.5,) * 5 + (-1.0,)}, "joint_velocity_limits"),
+        ({"joint_acceleration_limits": (1.0,) * 3}, "joint_acceleration_limits"),
+        ({"kp": (0.0,) * 6}, "kp"),
+        ({"finger_kd": -1.0}, "finger_kd"),
+        ({"nominal_posture_gain": -0.1}, "nominal_posture_gain"),
+        ({"limited_alpha": 1.5}, "limited_alpha"),
+        ({"contact_model": "magic"}, "contact_model"),
+        ({"scene_objects": ("cup",)}, "scene_objects"),
+    ],
+)
+def test_config_validation(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=f"StationConfig.{field}"):
+        StationConfig(**kwargs)
+
+
+def test_home_outside_limits_is_rejected() -> None:
+    with pytest.raises(ValueError, match="home_q"):
+        build_station(StationConfig(home_q=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)))  # joint 3 below 109 deg
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"name": "a b", "shape": "box", "size": (1, 1, 1)}, "name"),
+        ({"name": "a", "shape": "cone", "size": (1, 1, 1)}, "shape"),
+        ({"name": "a", "shape": "box", "size": (1, 1)}, "size"),
+        ({"name": "a", "shape": "sphere", "size": (-1,)}, "size"),
+        ({"name": "a", "shape": "sphere", "size": (1,), "pose": (0, 0, 0, 0, 0, 0, 0)}, "pose"),
+        ({"name": "a", "shape": "sphere", "size": (1,), "rgba": (2, 0, 0, 1)}, "rgba"),
+        ({"name": "a", "shape": "sphere", "size": (1,), "welded": False}, "welded"),
+        ({"name": "a", "shape": "sphere", "size": (1,), "mass": 0.0}, "mass"),
+    ],
+)
+def test_scene_object_validation(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=field):
+        SceneObject(**kwargs)
+
+
+def test_duplicate_object_names() -> None:
+    a = SceneObject("a", "sphere", (0.02,), (0.3, -0.3, 0.02, 1, 0, 0, 0))
+    with pytest.raises(ValueError, match="duplicate"):
+        build_station(scene_objects=(a, a))
+
+
+def test_scene_object_normalises_quaternion() -> None:
+    o = SceneObject("a", "box", (0.1, 0.1, 0.1), (0, 0, 0, 2, 0, 0, 0))
+    assert o.pose[3:] == (1.0, 0.0, 0.0, 0.0)
