@@ -460,3 +460,31 @@ def test_duplicate_object_names() -> None:
 def test_scene_object_normalises_quaternion() -> None:
     o = SceneObject("a", "box", (0.1, 0.1, 0.1), (0, 0, 0, 2, 0, 0, 0))
     assert o.pose[3:] == (1.0, 0.0, 0.0, 0.0)
+
+
+# ----------------------------------------------------------------------------------------------
+# The station-demo command.
+# ----------------------------------------------------------------------------------------------
+def test_station_demo_command(tmp_path, capsys: pytest.CaptureFixture[str]) -> None:
+    from drake_disamb.cli import main
+
+    assert main(["station-demo", "--no-meshcat", "--duration", "0.6", "--out", str(tmp_path / "pics")]) == 0
+    out = capsys.readouterr().out
+    assert (tmp_path / "pics" / "station.dot").read_text().startswith("digraph")
+    assert "real-time rate" in out and "final EE displacement" in out
+    # 0.6 s of the first leg (+x at 0.05 m/s): about 3 cm along x.
+    line = next(ln for ln in out.splitlines() if ln.startswith("final EE displacement"))
+    dx = float(line.split("[")[1].split()[0])
+    assert dx == pytest.approx(0.03, abs=3e-3)
+
+
+def test_station_demo_pattern_validation() -> None:
+    from drake_disamb.commands.station_demo import pattern
+
+    legs = pattern(0.05)
+    assert sum(s.duration for s in legs) == pytest.approx(13.0)
+    assert np.allclose(sum(np.asarray(s.velocity) * s.duration for s in legs[:4]), 0.0)  # a closed square
+    with pytest.raises(ValueError, match="speed"):
+        pattern(float("nan"))
+    with pytest.raises(ValueError, match="roll_rate"):
+        pattern(0.05, roll_rate=5.0)

@@ -113,8 +113,11 @@ EE_FRAME = "mico_end_effector"
 
 MICO_HOME_Q: NDArray[np.float64] = np.array([-1.3837, 1.0972, 5.7374, 2.4721, -1.1269, -0.8566])
 """Home joint angles (rad, DH). The gripper points straight down (z_E = -z_W, fingers opening along
-x_W) with the end effector at about (0.000, -0.350, 0.300) m in W; the elbow is up and the arm is
-far from singularities and joint limits. Found with a numerical IK on the DH model."""
+x_W) with the end effector at (0.000, -0.350, 0.300) m in W, elbow up; found with a numerical IK on
+the DH model (best smallest singular value of J among gripper-down solutions there, 0.07). Joint
+limits are far, but with the orientation held fixed the curved wrist reaches its theta_5 = 0
+singularity after about 7 cm straight up or 9 cm along -y; the study's goals (FACTS section 8) are
+reachable with the gripper pointing forward (-y), not straight down."""
 MICO_HOME_Q.setflags(write=False)
 
 FINGER_MAX_OPENING = 0.12
