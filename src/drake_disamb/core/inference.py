@@ -45,6 +45,9 @@ from numpy.typing import ArrayLike, NDArray
 TINY = np.finfo(float).tiny
 """Smallest positive normal double: what the authors' code clips non-positive entries to."""
 
+_FAST_SUM_BOUND = 0.5 * np.finfo(float).max
+"""Row sums of entries below ``_FAST_SUM_BOUND / n`` cannot overflow (see normalize_belief)."""
+
 BAYES_SIGMA = np.pi / 2.0
 """Standard deviation (rad) of the Gaussian angle likelihood of the recursive Bayes baseline."""
 
@@ -145,16 +148,20 @@ def check_transition(P: ArrayLike, name: str) -> NDArray[np.float64]:
     return a
 
 
-def _safe_unit(v: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
+def _safe_unit(
+    v: NDArray[np.float64], axis: int = -1, norm: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
     """Unit vectors along ``axis``; zero (and non-finite) vectors map to zero.
 
     Non-finite entries are read as 0, and huge (but finite) vectors are first divided by their
     largest absolute entry so that the norm does not overflow (only when the plain norm is not
-    finite, so the common case costs one norm and one division).
+    finite, so the common case costs one norm and one division). ``norm``, when given, must be
+    ``_norm(v, axis)`` (a caller that already has it saves computing it again).
     """
     v = np.asarray(v, dtype=float)
-    norm = _norm(v, axis)
-    if not np.isfinite(norm.sum()):
+    if norm is None:
+        norm = _norm(v, axis)
+    if not np.isfinite(np.add.reduce(norm, axis=None)):
         v = np.where(np.isfinite(v), v, 0.0)
         scale = np.max(np.abs(v), axis=axis, keepdims=True)
         v = np.divide(v, scale, out=np.zeros_like(v), where=scale > 0)
@@ -169,6 +176,8 @@ def _sqnorm(v: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _norm(v: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
     """Euclidean norm along ``axis`` with the axis kept (einsum: much faster on short axes)."""
+    if axis == -1 or axis == v.ndim - 1:  # the common case: no axis moves (they cost more than the sum)
+        return np.sqrt(np.einsum("...k,...k->...", v, v))[..., None]
     v = np.moveaxis(v, axis, -1)
     return np.moveaxis(np.sqrt(np.einsum("...k,...k->...", v, v))[..., None], -1, axis)
 
@@ -206,9 +215,14 @@ def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
     is first scaled by its maximum), so the result is always a probability vector.
     """
     p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well
+    # Fast path (the same sum, without the cost of an errstate context): when no entry exceeds
+    # DBL_MAX / (2 n), every entry is finite and no row sum can overflow.
+    if p.size and np.maximum.reduce(p, axis=None) < _FAST_SUM_BOUND / p.shape[-1]:
+        return p / np.add.reduce(p, axis=-1, keepdims=True)
     with np.errstate(over="ignore", invalid="ignore"):
-        total = p.sum(axis=-1, keepdims=True)
-        if not np.isfinite(total.sum()):  # totals are positive: their sum is finite iff all are
+        total = np.add.reduce(p, axis=-1, keepdims=True)  # = p.sum(...), without its Python wrapper
+        # The totals are positive: their sum is finite iff all of them are.
+        if not np.isfinite(np.add.reduce(total, axis=None)):
             inf = np.isinf(p)
             scaled = p / np.max(p, axis=-1, keepdims=True)
             p = np.where(np.any(inf, axis=-1, keepdims=True), np.where(inf, 1.0, TINY), np.fmax(scaled, TINY))
@@ -250,9 +264,21 @@ def directedness(u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike) -> NDArray[np.f
     convention: the normalised zero vector is zero), i.e. a directedness of 0.5.
     Returns shape ``(..., n)``.
     """
-    u = _safe_unit(sanitize_command(u_h)[..., :3])
-    d = _safe_unit(np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :])
-    eta = np.einsum("...k,...nk->...n", u, d)
+    diff = _goal_offsets(x_r, x_g)
+    return _directedness(sanitize_command(u_h), diff, _norm(diff))
+
+
+def _goal_offsets(x_r: ArrayLike, x_g: ArrayLike) -> NDArray[np.float64]:
+    """``x_g_i - x_r``, shape ``(..., n, 3)``: shared by directedness and proximity."""
+    return np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :]
+
+
+def _directedness(
+    u: NDArray[np.float64], diff: NDArray[np.float64], dist: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`directedness` from the sanitised command, ``diff = x_g - x_r`` and ``_norm(diff)``."""
+    d = _safe_unit(diff, norm=dist)
+    eta = np.einsum("...k,...nk->...n", _safe_unit(u[..., :3]), d)
     return 0.5 * (1.0 + eta)
 
 
@@ -276,7 +302,12 @@ def proximity(x_r: ArrayLike, x_g: ArrayLike, R: float) -> NDArray[np.float64]:
 
     Non-finite positions give 0 (no evidence).
     """
-    dist = _norm(np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :])[..., 0]
+    return _proximity(_norm(_goal_offsets(x_r, x_g)), R)
+
+
+def _proximity(dist: NDArray[np.float64], R: float) -> NDArray[np.float64]:
+    """:func:`proximity` from the distances ``_norm(x_g - x_r)`` (shape ``(..., n, 1)``)."""
+    dist = dist[..., 0]
     return np.where(np.isfinite(dist), np.maximum(0.0, 1.0 - dist / R), 0.0)
 
 
@@ -292,8 +323,11 @@ def dft_xi(
     u = sanitize_command(u_h)
     batch = np.broadcast_shapes(np.shape(x_r)[:-1], x_g.shape[:-2], u.shape[:-1])
     xi = np.zeros((*batch, x_g.shape[-2]))
+    if params.directedness or params.proximity:  # both need x_g - x_r and its norm: once
+        diff = _goal_offsets(x_r, x_g)
+        dist = _norm(diff)
     if params.directedness:
-        xi = xi + directedness(u, x_r, x_g)
+        xi = xi + _directedness(u, diff, dist)
     if params.agreement:
         if u_a is None:
             raise ValueError("DFTParams.agreement is on but no per-goal autonomy commands u_a given")
@@ -301,7 +335,7 @@ def dft_xi(
     if not params.zero_command_excitation:
         xi = np.where(_has_command(u), xi, 0.0)
     if params.proximity:
-        xi = xi + proximity(x_r, x_g, params.R)
+        xi = xi + _proximity(dist, params.R)
     return xi
 
 
@@ -402,7 +436,9 @@ def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: Arra
     ``dt`` (s) is a scalar or broadcasts against ``p`` (e.g. shape ``(batch, 1)``).
     """
     p = np.asarray(p, dtype=float)
-    return normalize_belief(p + np.asarray(dt, dtype=float) * dft_rhs_from_drive(p, drive, params))
+    if type(dt) is not float:  # a Python float multiplies exactly like its 0-d array
+        dt = np.asarray(dt, dtype=float)
+    return normalize_belief(p + dt * dft_rhs_from_drive(p, drive, params))
 
 
 def dft_euler_step(
