@@ -122,3 +122,30 @@ def test_shape_validation() -> None:
         potential_field_commands([0, 0, 0], IDENTITY, [[1, 0]], [IDENTITY], None)
     with pytest.raises(ValueError, match="quat"):
         potential_field_commands([0, 0, 0], [0, 0, 0, 0], [[1, 0, 0]], [IDENTITY], None)
+
+
+def test_rotational_part_needs_neither_positions_nor_repellers() -> None:
+    """The disambiguation's agreement term uses only u_a[..., 3:6], computed by the rotation kernel."""
+    from drake_disamb.core.autonomy import _potential_field_rotation
+
+    rng = np.random.default_rng(3)
+    cfg = PotentialFieldConfig(repeller_gain=0.01, repeller_radius=0.5, max_angular_speed=0.3)
+    _, _, goals, goal_quats = _random_scene(rng, 4)
+    quats = quat_from_rotvec(rng.normal(scale=1.5, size=(7, 3)))
+    w = _potential_field_rotation(quats, goal_quats, cfg)
+    assert w.shape == (7, 4, 3)
+    for b in range(7):
+        for position in (goals[0], rng.uniform(-1, 1, 3)):  # on a goal (repellers) or anywhere
+            full = potential_field_commands(position, quats[b], goals, goal_quats, cfg)
+            np.testing.assert_allclose(w[b], full[:, 3:], rtol=0, atol=1e-15)  # up to re-normalising
+    assert np.all(np.linalg.norm(w, axis=-1) <= cfg.max_angular_speed + 1e-15)
+
+
+def test_position_and_orientation_batches_broadcast() -> None:
+    rng = np.random.default_rng(4)
+    position, _, goals, goal_quats = _random_scene(rng, 3)
+    quats = quat_from_rotvec(rng.normal(size=(5, 3)))
+    u = potential_field_commands(position, quats, goals, goal_quats)  # (3,) with (5, 4)
+    assert u.shape == (5, 3, 6) and u.flags.c_contiguous
+    for b in range(5):
+        np.testing.assert_array_equal(u[b], potential_field_commands(position, quats[b], goals, goal_quats))

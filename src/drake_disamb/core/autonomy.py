@@ -26,7 +26,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.geometry import _check_last, _check_quat, _norm3, _orientation_error
+from drake_disamb.core.geometry import (
+    _check_last,
+    _check_quat,
+    _component_major,
+    _norm3,
+    _orientation_error,
+)
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
@@ -84,6 +90,24 @@ def _saturate(v: NDArray[np.float64], max_norm: float) -> NDArray[np.float64]:
     return v * np.minimum(1.0, max_norm / np.maximum(norm, 1e-300))
 
 
+def _potential_field_rotation(
+    quat: NDArray[np.float64], goal_quats: NDArray[np.float64], config: PotentialFieldConfig
+) -> NDArray[np.float64]:
+    """Rotational part ``w_i`` of the per-goal commands, ``(..., n, 3)`` (rad/s, saturated).
+
+    Unchecked (unit quaternions assumed). It depends on the orientations only: repellers act on
+    the translational part alone, so callers that need just ``u_a[..., 3:6]`` (the agreement
+    term) need neither the positions nor the repellers.
+    """
+    # Every (pose, goal) pair, laid out component-major so the quaternion arithmetic runs on
+    # long contiguous arrays (a batch of poses times a few goals is otherwise slow in numpy).
+    batch = np.broadcast_shapes((*quat.shape[:-1], 1), goal_quats.shape[:-1])
+    q = _component_major(quat[..., None, :], batch)
+    g = _component_major(goal_quats, batch)
+    w = config.attractor_gain_rotation * _orientation_error(q, g)
+    return _saturate(w, config.max_angular_speed)
+
+
 def _potential_field_commands(
     position: NDArray[np.float64],
     quat: NDArray[np.float64],
@@ -103,10 +127,9 @@ def _potential_field_commands(
         rep = np.where(active, -diff / safe * speed, 0.0)  # goal j pushes the robot away from it
         # Goal i feels every repeller except its own: an exact masked sum (no cancellation).
         v = v + (1.0 - np.eye(n)) @ rep
-    w = config.attractor_gain_rotation * _orientation_error(quat[..., None, :], goal_quats)
-    return np.concatenate(
-        (_saturate(v, config.max_linear_speed), _saturate(w, config.max_angular_speed)), axis=-1
-    )
+    w = _potential_field_rotation(quat, goal_quats, config)
+    v = _saturate(v, config.max_linear_speed)
+    return np.concatenate(np.broadcast_arrays(v, w), axis=-1)
 
 
 def potential_field_commands(
@@ -145,4 +168,4 @@ def potential_field_commands(
         )
     if gp.shape[-2] < 1:
         raise ValueError("goal_positions: expected at least one goal, got 0")
-    return _potential_field_commands(p, q, gp, gq, cfg)
+    return np.ascontiguousarray(_potential_field_commands(p, q, gp, gq, cfg))

@@ -37,7 +37,7 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
         raise ValueError(f"{name}: expected an array of numbers, got {x!r}") from exc
     if a.ndim == 0 or a.shape[-1] != size:
         raise ValueError(f"{name}: expected shape (..., {size}), got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise ValueError(f"{name}: expected finite numbers, got {a.tolist()!r}")
     return a
 
@@ -45,7 +45,7 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
 def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
     """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised."""
     a = _check_last(q, 4, name)
-    norm = np.linalg.norm(a, axis=-1, keepdims=True)
+    norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
     if np.any(norm < 1e-12):
         raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
     return a / norm
@@ -63,18 +63,33 @@ def _norm3(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.sqrt(x * x + y * y + z * z)
 
 
+def _component_major(a: NDArray[np.float64], batch: tuple[int, ...]) -> NDArray[np.float64]:
+    """``a`` (``(..., k)``) broadcast to ``(*batch, k)`` and copied component-major.
+
+    The result has shape ``(*batch, k)`` but is a view of a C-ordered ``(k, *batch)`` array, so
+    each component ``a[..., i]`` is one contiguous block. Element-wise numpy on such components
+    runs one long inner loop; on broadcast or interleaved components (a short last axis) it runs
+    many short ones, several times slower.
+    """
+    a = a.reshape((1,) * (len(batch) + 1 - a.ndim) + a.shape)
+    out = np.empty((a.shape[-1], *batch))
+    out[...] = a.transpose((a.ndim - 1, *range(a.ndim - 1)))
+    return out.transpose((*range(1, out.ndim), 0))
+
+
 def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Hamilton product; the result is component-major (see :func:`_component_major`)."""
     w1, x1, y1, z1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
     w2, x2, y2, z2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
-    return np.stack(
+    out = np.stack(
         (
             w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
             w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
             w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
             w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-        ),
-        axis=-1,
+        )
     )
+    return out.transpose((*range(1, out.ndim), 0))
 
 
 def _quat_conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -123,7 +138,7 @@ def quat_multiply(q1: ArrayLike, q2: ArrayLike) -> NDArray[np.float64]:
     """Hamilton product ``q1 (x) q2`` (apply ``q2`` first, then ``q1``), broadcasting."""
     a = _check_last(q1, 4, "q1")
     b = _check_last(q2, 4, "q2")
-    return _quat_multiply(a, b)
+    return np.ascontiguousarray(_quat_multiply(a, b))
 
 
 def quat_conjugate(q: ArrayLike) -> NDArray[np.float64]:
@@ -141,7 +156,7 @@ def quat_to_rotvec(q: ArrayLike) -> NDArray[np.float64]:
 
     ``q`` and ``-q`` give the same result (the shortest rotation); ``q`` need not be unit.
     """
-    return _quat_to_rotvec(_check_quat(q, "q"))
+    return np.ascontiguousarray(_quat_to_rotvec(_check_quat(q, "q")))
 
 
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
@@ -162,7 +177,7 @@ def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]
     The shortest rotation: ``|r| <= pi``, and ``q_to`` and ``-q_to`` give the same ``r``. Driving
     an orientation with angular velocity ``k * r`` (world frame) moves it towards ``q_to``.
     """
-    return _orientation_error(_check_quat(q_from, "q_from"), _check_quat(q_to, "q_to"))
+    return np.ascontiguousarray(_orientation_error(_check_quat(q_from, "q_from"), _check_quat(q_to, "q_to")))
 
 
 def _integrate_pose(
@@ -194,4 +209,5 @@ def integrate_pose(
     p = _check_last(position, 3, "position")
     q = _check_quat(quat, "quat")
     t = _check_last(twist_vw, 6, "twist_vw")
-    return _integrate_pose(p, q, t, float(dt))
+    new_position, new_quat = _integrate_pose(p, q, t, float(dt))
+    return new_position, np.ascontiguousarray(new_quat)
