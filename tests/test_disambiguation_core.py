@@ -337,3 +337,70 @@ def test_presets() -> None:
         mico_config(inference="bayes").with_transition([[0.5, 0.5], [0.0, 0.9]])
     with pytest.raises(ValueError, match="preset"):
         preset("nope")
+
+
+# ----------------------------------------------------------------------------------------------
+# Caches and the scene-independent probe plan
+# ----------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["mico", "authors-r3"])
+def test_probe_plan_displacement_matches_integrated_poses(name: str) -> None:
+    """The cached displacements equal those of poses integrated step by step from any start pose."""
+    from drake_disamb.core.disambiguation import forward_projection
+
+    cfg = preset(name)
+    rng = np.random.default_rng(11)
+    belief, position, orientation, goals, goal_quats = _random_scene(rng, 3)
+    proj = forward_projection(belief, position, orientation, goals, goal_quats, cfg)
+    assert proj.displacement.shape == (2, len(cfg.dimensions))
+    for col, k in enumerate(cfg.dimensions):
+        for row, sign in enumerate((1.0, -1.0)):
+            u = np.zeros(6)
+            u[k] = sign * (cfg.probe_speed_translation if k < 3 else cfg.probe_speed_rotation)
+            x, q = position, orientation
+            poses = []
+            for _ in range(cfg.steps_c):
+                x, q = integrate_pose(x, q, u, cfg.delta_t)
+                poses.append((x, q))
+            (x_b, q_b), (x_c, q_c) = poses[cfg.steps_b - 1], poses[cfg.steps_c - 1]
+            expected = x_c[k] - x_b[k] if k < 3 else orientation_error(q_b, q_c)[k - 3]
+            assert proj.displacement[row, col] == pytest.approx(expected, rel=1e-12, abs=1e-15)
+    proj.displacement[:] = 0.0  # a copy: the cached plan is untouched
+    again = forward_projection(belief, position, orientation, goals, goal_quats, cfg)
+    assert np.all(np.abs(again.displacement) > 0)
+
+
+def test_cached_mode_validation_still_rejects_bad_modes() -> None:
+    from drake_disamb.core.disambiguation import validate_modes
+
+    assert validate_modes([[0, 1], (2,)]) == ((0, 1), (2,))
+    assert validate_modes([[np.int64(3)], [4]]) == ((3,), (4,))  # numpy ints: the general path
+    for bad, match in (
+        ([[True]], r"modes\[0\]"),
+        ([[0], [0, 0]], r"modes\[1\]: repeated"),
+        ([[6]], r"modes\[0\]"),
+        ([[0], "ab"], r"modes\[1\]"),
+        ([], "modes"),
+        ("01", "modes"),
+    ):
+        for _ in range(2):  # a failed validation is never cached
+            with pytest.raises(ValueError, match=match):
+                validate_modes(bad)
+    assert validate_modes([[1]]) == ((1,),)
+    with pytest.raises(ValueError, match=r"modes\[0\]"):
+        validate_modes([[1.0]])  # a float that equals a cached int key must not pass
+
+
+def test_repeated_requests_give_identical_results() -> None:
+    """Caches (plan, modes, membership) make no difference to the result."""
+    rng = np.random.default_rng(12)
+    belief, position, orientation, goals, goal_quats = _random_scene(rng, 4)
+    kw = {"orientation": orientation, "goal_orientations": goal_quats, "current_mode": 1}
+    first = disambiguate(belief, position, goals, JOYSTICK_MODES, preset("mico"), **kw)
+    first.mode_scores[:] = -1.0  # results are the caller's to change
+    for modes in (JOYSTICK_MODES, tuple(tuple(m) for m in JOYSTICK_MODES)):
+        again = disambiguate(belief, position, goals, modes, mico_config(), **kw)
+        ref = _reference(belief, position, orientation, goals, goal_quats, JOYSTICK_MODES, mico_config(), 1)
+        np.testing.assert_allclose(again.mode_scores, ref[2], rtol=1e-9, atol=1e-9)
+        assert again.modes == tuple(tuple(m) for m in JOYSTICK_MODES)

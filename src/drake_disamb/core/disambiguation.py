@@ -36,6 +36,7 @@ finite results: every division is guarded.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -44,7 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.autonomy import PotentialFieldConfig, _potential_field_commands
+from drake_disamb.core.autonomy import PotentialFieldConfig, _potential_field_rotation
 from drake_disamb.core.geometry import (
     _check_last,
     _check_quat,
@@ -418,6 +419,20 @@ class DisambiguationResult:
 
 def validate_modes(modes: Sequence[Sequence[int]]) -> tuple[tuple[int, ...], ...]:
     """``modes`` as tuples of dimension indices; ``ValueError`` naming the bad entry."""
+    # Fast path for the usual lists/tuples of plain ints: validated once per distinct value.
+    if modes and type(modes) in (list, tuple) and all(type(m) in (list, tuple) for m in modes):
+        key = tuple(tuple(m) for m in modes)
+        if all(type(k) is int for m in key for k in m):
+            return _validate_int_modes(key)
+    return _validate_modes(modes)
+
+
+@functools.lru_cache(maxsize=256)
+def _validate_int_modes(modes: tuple[tuple[int, ...], ...]) -> tuple[tuple[int, ...], ...]:
+    return _validate_modes(modes)
+
+
+def _validate_modes(modes: Sequence[Sequence[int]]) -> tuple[tuple[int, ...], ...]:
     if isinstance(modes, str | bytes) or not isinstance(modes, Sequence) or len(modes) == 0:
         raise ValueError(f"modes: expected a non-empty list of lists of dimension indices, got {modes!r}")
     out = []
@@ -435,13 +450,26 @@ def validate_modes(modes: Sequence[Sequence[int]]) -> tuple[tuple[int, ...], ...
     return tuple(out)
 
 
+@functools.lru_cache(maxsize=256)
+def _membership(modes: tuple[tuple[int, ...], ...], dimensions: tuple[int, ...]) -> NDArray[np.float64]:
+    """``(n_modes, n_k)`` matrix: 1 where the mode contains the probed dimension (read-only)."""
+    index = {k: i for i, k in enumerate(dimensions)}
+    member = np.zeros((len(modes), len(dimensions)))
+    for m, dims in enumerate(modes):
+        for k in dims:
+            if k in index:
+                member[m, index[k]] = 1.0
+    return _frozen(member)
+
+
 def _validate_belief(belief: ArrayLike, n: int) -> NDArray[np.float64]:
     p = _check_last(belief, n, "belief")
     if p.ndim != 1:
         raise ValueError(f"belief: expected a vector of {n} probabilities, got shape {p.shape}")
-    if np.any(p < 0) or abs(p.sum() - 1.0) > 1e-6:
+    total = p.sum()
+    if (p < 0).any() or abs(total - 1.0) > 1e-6:
         raise ValueError(f"belief: expected non-negative entries summing to 1, got {p.tolist()!r}")
-    return p / p.sum()
+    return p / total
 
 
 def _check_transition_size(P: ArrayLike | None, n: int) -> None:
@@ -455,13 +483,93 @@ def _check_transition_size(P: ArrayLike | None, n: int) -> None:
 # ----------------------------------------------------------------------------------------------
 
 
-def probe_commands(config: DisambiguationConfig) -> NDArray[np.float64]:
-    """The ``2 n_k`` probe twists, shape ``(2, n_k, 6)``: row 0 ``+s e_k``, row 1 ``-s e_k``."""
-    dims = np.asarray(config.dimensions)
-    speed = np.where(dims < 3, config.probe_speed_translation, config.probe_speed_rotation)
+def _probe_commands(
+    dimensions: tuple[int, ...], speed_translation: float, speed_rotation: float
+) -> NDArray[np.float64]:
+    dims = np.asarray(dimensions)
+    speed = np.where(dims < 3, speed_translation, speed_rotation)
     plus = np.zeros((dims.size, 6))
     plus[np.arange(dims.size), dims] = speed
     return np.stack((plus, -plus))
+
+
+def probe_commands(config: DisambiguationConfig) -> NDArray[np.float64]:
+    """The ``2 n_k`` probe twists, shape ``(2, n_k, 6)``: row 0 ``+s e_k``, row 1 ``-s e_k``."""
+    return _probe_commands(config.dimensions, config.probe_speed_translation, config.probe_speed_rotation)
+
+
+def _frozen(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class _ProbePlan:
+    """The scene-independent part of a forward projection (cached per probe configuration).
+
+    Every probe is ``+/- s e_k`` along one dimension, so a translational probe (``k < 3``) keeps
+    the orientation and a rotational one keeps the position. Arrays are read-only.
+
+    Attributes:
+        commands: ``(2 n_k, 6)`` probe twists, probe order ``(2, n_k)`` flattened.
+        n_rot: Number of rotational probes (``k >= 3``): the last ``n_rot / 2`` columns of the
+            probe grid ``(2, n_k)``, since ``dimensions`` is ascending.
+        offsets: ``(steps_c + 1, 2 n_k, 3)`` position change after ``s`` steps, ``s v dt`` (m).
+        rot_quats: ``(steps_c + 1, n_rot, 4)`` rotation of each rotational probe after ``s``
+            steps, ``exp(s w dt)``: the orientation is ``rot_quats (x) q``.
+        displacement: ``(2, n_k)`` displacement along ``k`` between ``t_b`` and ``t_c``: the
+            position component ``(s_c - s_b) v_k dt`` (m), or the angle about axis ``k`` of
+            ``exp(s_c w dt) (x) exp(s_b w dt)^-1`` (rad). Neither depends on the start pose (the
+            start orientation cancels: ``(R_c q) (R_b q)^-1 = R_c R_b^-1``).
+    """
+
+    commands: NDArray[np.float64]
+    n_rot: int
+    offsets: NDArray[np.float64]
+    rot_quats: NDArray[np.float64]
+    displacement: NDArray[np.float64]
+
+
+@functools.lru_cache(maxsize=64)
+def _probe_plan(
+    dimensions: tuple[int, ...],
+    speed_translation: float,
+    speed_rotation: float,
+    delta_t: float,
+    steps_b: int,
+    steps_c: int,
+) -> _ProbePlan:
+    U = _probe_commands(dimensions, speed_translation, speed_rotation).reshape(-1, 6)  # (P, 6)
+    n_probe = U.shape[0]
+    steps = np.arange(steps_c + 1, dtype=float)[:, None, None]
+    # Pose after s steps of a constant world-frame twist: x + s v dt, exp(s w dt) (x) q.
+    offsets = steps * (U[:, :3] * delta_t)  # (nc + 1, P, 3)
+    rotational = np.flatnonzero(np.any(U[:, 3:] != 0.0, axis=1))
+    rot_quats = _quat_from_rotvec(steps * (U[rotational, 3:] * delta_t))  # (nc + 1, n_rot, 4)
+    dims = np.tile(np.asarray(dimensions), 2)
+    disp = np.empty(n_probe)
+    trans = dims < 3
+    disp[trans] = (offsets[steps_c] - offsets[steps_b])[trans, dims[trans]]
+    rot_err = _orientation_error(rot_quats[steps_b], rot_quats[steps_c])  # (n_rot, 3)
+    disp[rotational] = rot_err[np.arange(rotational.size), dims[rotational] - 3]
+    return _ProbePlan(
+        commands=_frozen(U),
+        n_rot=int(rotational.size),
+        offsets=_frozen(offsets),
+        rot_quats=_frozen(np.ascontiguousarray(rot_quats)),
+        displacement=_frozen(disp.reshape(2, -1)),
+    )
+
+
+def _plan_for(config: DisambiguationConfig) -> _ProbePlan:
+    return _probe_plan(
+        config.dimensions,
+        float(config.probe_speed_translation),
+        float(config.probe_speed_rotation),
+        float(config.delta_t),
+        config.steps_b,
+        config.steps_c,
+    )
 
 
 @dataclass(frozen=True)
@@ -496,55 +604,67 @@ def forward_projection(
     recursion of the update runs step by step, over the whole probe batch. This is exactly
     :func:`~drake_disamb.core.inference.dft_euler_step` /
     :func:`~drake_disamb.core.inference.bayes_step`, which are these two halves composed.
+
+    The scene-independent parts (probe twists, pose offsets, displacements) are cached per probe
+    configuration (:class:`_ProbePlan`). Only the rotational probes need autonomy commands, and
+    only their rotational part (see the comment in the body).
     """
-    U = probe_commands(config).reshape(-1, 6)  # (P, 6)
+    plan = _plan_for(config)
+    n = belief.size
+    U = plan.commands
     n_probe = U.shape[0]
+    n_k = n_probe // 2
     dt = config.delta_t
     nb, nc = config.steps_b, config.steps_c
-    steps = np.arange(nc + 1, dtype=float)[:, None, None]  # (nc + 1, 1, 1)
-    # Pose after s steps of a constant world-frame twist: x + s v dt, exp(s w dt) (x) q.
-    X = position + steps * (U[:, :3] * dt)  # (nc + 1, P, 3)
-    Q = _quat_multiply(_quat_from_rotvec(steps * (U[:, 3:] * dt)), orientation)  # (nc + 1, P, 4)
-    p = np.broadcast_to(belief, (n_probe, belief.size))
-    # The inference update, split as in inference.py: the p-independent part (DFT drive or Bayes
-    # likelihood) for every step and probe in one call, then the recursion over the probe batch.
+    X = position + plan.offsets[:nc]  # (nc, P, 3): the positions at which each step updates
+    # The p-independent half of the inference update (DFT drive or Bayes likelihood) for every
+    # step and probe in one call; then the recursion over the probe batch.
     # dft_euler_step = dft_euler_update o dft_drive; bayes_step = posterior_update o bayes_likelihood.
     if config.inference == "dft":
         UA = None
         if config.dft.agreement:
-            UA = _potential_field_commands(
-                X[:nc], Q[:nc], goal_positions, goal_orientations, config.potential_field
-            )  # (nc, P, n, 6)
-        drive = dft_drive(U, X[:nc], goal_positions, config.dft, UA)  # (nc, P, n)
-
-        def update(p: NDArray[np.float64], s: int) -> NDArray[np.float64]:
-            return dft_euler_update(p, drive[s], config.dft, dt)
-
+            # Agreement term: cos(u_h[3:6], u_a_i[3:6]) with u_h the probe. For a probe without
+            # rotation u_h[3:6] = 0, so the term is 0 whatever u_a is: its u_a stay zero (no
+            # potential field there). For a rotational probe only u_a[3:6] enters (dft_drive
+            # reads nothing else), and that rotational part depends on the orientation alone
+            # (repellers act on the translational part): it is computed at each step's
+            # orientation, u_a[..., :3] left zero.
+            UA = np.zeros((nc, 2, n_k, n, 6))
+            n_t = n_k - plan.n_rot // 2  # rotational dimensions come last (ascending order)
+            if plan.n_rot:
+                Q = _quat_multiply(plan.rot_quats[:nc], orientation)  # (nc, n_rot, 4)
+                W = _potential_field_rotation(Q, goal_orientations, config.potential_field)
+                UA[:, :, n_t:, :, 3:] = W.reshape(nc, 2, -1, n, 3)
+            UA = UA.reshape(nc, n_probe, n, 6)
+        drive = dft_drive(U, X, goal_positions, config.dft, UA)  # (nc, P, n)
     else:
-        lik = bayes_likelihood(U, X[:nc], goal_positions, config.bayes_sigma)  # (nc, P, n)
+        lik = bayes_likelihood(U, X, goal_positions, config.bayes_sigma)  # (nc, P, n)
 
-        def update(p: NDArray[np.float64], s: int) -> NDArray[np.float64]:
-            return posterior_update(p, lik[s], config.bayes_transition)
-
-    p_b = p
-    for s in range(nc):
-        p = update(p, s)
-        if s + 1 == nb:
-            p_b = p
-    # Displacement along k between t_b and t_c: position component, or rotation angle about axis k.
-    dims = np.asarray(config.dimensions)
-    trans = (X[nc] - X[nb])[np.arange(n_probe), np.tile(np.minimum(dims, 2), 2)]
-    rot = _orientation_error(Q[nb], Q[nc])[np.arange(n_probe), np.tile(np.maximum(dims - 3, 0), 2)]
-    disp = np.where(np.tile(dims < 3, 2), trans, rot)
-    n_k = dims.size
+    # The recursion: one update per step over the whole probe batch, nothing else per step.
+    p = np.broadcast_to(belief, (n_probe, n))
+    if config.inference == "dft":
+        params = config.dft
+        p_b = p
+        for s in range(nc):
+            p = dft_euler_update(p, drive[s], params, dt)
+            if s + 1 == nb:
+                p_b = p
+    else:
+        transition = config.bayes_transition
+        p_b = p
+        for s in range(nc):
+            p = posterior_update(p, lik[s], transition)
+            if s + 1 == nb:
+                p_b = p
     return Projection(
-        p_b=p_b.reshape(2, n_k, -1), p_c=p.reshape(2, n_k, -1), displacement=disp.reshape(2, n_k)
+        p_b=p_b.reshape(2, -1, n), p_c=p.reshape(2, -1, n), displacement=plan.displacement.copy()
     )
 
 
 def _pairwise_abs_sum(a: NDArray[np.float64]) -> NDArray[np.float64]:
     """``sum_{i<j} |a_i - a_j|`` over the last axis."""
-    return 0.5 * np.sum(np.abs(a[..., :, None] - a[..., None, :]), axis=(-2, -1))
+    pairs = np.abs(a[..., :, None] - a[..., None, :])
+    return 0.5 * np.add.reduce(pairs.reshape(*a.shape[:-1], -1), axis=-1)
 
 
 def belief_features(
@@ -563,24 +683,22 @@ def belief_features(
         d = np.abs(displacement)[..., None]
         ok = d > _MIN_DISPLACEMENT
         diff = np.where(ok, diff / np.where(ok, d, 1.0), 0.0)
-    return {
-        "gamma": gamma,
-        "omega": gamma - second,
-        "lambda": _pairwise_abs_sum(p_b),
-        "upsilon": _pairwise_abs_sum(diff),
-    }
+    lam, ups = _pairwise_abs_sum(np.stack((p_b, diff)))  # both spreads in one pass
+    return {"gamma": gamma, "omega": gamma - second, "lambda": lam, "upsilon": ups}
 
 
 def select_mode(
     mode_scores: NDArray[np.float64], current_mode: int | None, tie_tolerance: float
 ) -> tuple[int | None, int]:
     """Apply the tie rule. Returns ``(mode or None when the current mode is kept, argmax)``."""
-    best = int(np.argmax(mode_scores))
-    top = float(mode_scores[best])
-    tied = mode_scores >= top - tie_tolerance * abs(top)
-    if np.all(tied):
+    scores = np.asarray(mode_scores, dtype=float).tolist()  # a few numbers: plain Python is faster
+    best = max(range(len(scores)), key=scores.__getitem__)  # first of equal maxima, like argmax
+    top = scores[best]
+    threshold = top - tie_tolerance * abs(top)
+    tied = [v >= threshold for v in scores]
+    if all(tied):
         return None, best
-    if current_mode is not None and 0 <= current_mode < mode_scores.size and tied[current_mode]:
+    if current_mode is not None and 0 <= current_mode < len(scores) and tied[current_mode]:
         return None, best
     return best, best
 
@@ -658,13 +776,7 @@ def disambiguate(
         cfg.w * feats["gamma"] * feats["lambda"] * feats["omega"] + (1.0 - cfg.w) * feats["upsilon"]
     )  # (2, n_k)
     D_k = D[0] + D[1]
-    index = {k: i for i, k in enumerate(cfg.dimensions)}
-    member = np.zeros((len(mode_dims), len(cfg.dimensions)))
-    for m, dims in enumerate(mode_dims):
-        for k in dims:
-            if k in index:
-                member[m, index[k]] = 1.0
-    D_m = member @ D_k
+    D_m = _membership(mode_dims, cfg.dimensions) @ D_k
     mode, best = select_mode(D_m, None if current_mode is None else int(current_mode), cfg.tie_tolerance)
     return DisambiguationResult(
         mode=mode,
