@@ -34,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point. With no sub-command, runs the main job (``demo``) with its defaults."""
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
-    if not argv or argv[0].startswith("-") and argv[0] not in ("-h", "--help"):
+    if not argv or (argv[0].startswith("-") and argv[0] not in ("-h", "--help")):
         argv = ["demo", *argv]
     args = parser.parse_args(argv)
     return int(args._run(args) or 0)
