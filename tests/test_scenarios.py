@@ -55,13 +55,13 @@ def test_reaching_has_the_study_goals_and_defaults() -> None:
     np.testing.assert_allclose([g.position for g in s.goals], FACTS_REACHING)
     poses = s.stage_goal_poses(0)
     np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0)
-    # Documented orientation: approach axis (EE z) radial at the object's azimuth, 30 deg down.
+    # Documented orientation: home (pointing down) leaned toward the object's azimuth.
     from drake_disamb.core.geometry import quat_to_matrix
 
-    for pose in poses:
+    for pose, lean in zip(poses, [30, 35, 60, 25, 15], strict=True):
         z_axis = quat_to_matrix(pose[3:])[:, 2]
         azimuth = math.atan2(pose[1], pose[0])
-        assert math.degrees(math.asin(-z_axis[2])) == pytest.approx(30.0, abs=0.1)
+        assert math.degrees(math.acos(-z_axis[2])) == pytest.approx(lean, abs=0.1)
         assert math.atan2(z_axis[1], z_axis[0]) == pytest.approx(azimuth, abs=math.radians(0.6))
 
 
@@ -79,9 +79,10 @@ def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
     from drake_disamb.core.geometry import quat_to_matrix
 
     for pose in s.stage_goal_poses(1):
-        assert quat_to_matrix(pose[3:])[2, 0] == pytest.approx(-1.0, abs=1e-3)  # cup axis (EE x) vertical
+        assert quat_to_matrix(pose[3:])[2, 2] == pytest.approx(-1.0, abs=1e-3)  # cup axis (EE z) vertical
     for pose in s.stage_goal_poses(0):
-        assert abs(quat_to_matrix(pose[3:])[2, 0]) < 0.5  # tipped by 70 degrees
+        tilt = math.degrees(math.acos(-quat_to_matrix(pose[3:])[2, 2]))
+        assert tilt == pytest.approx(60.0, abs=0.1)  # the cup tipped by 60 degrees
     angle = np.linalg.norm(orientation_error(s.stage_goal_poses(0)[0, 3:], s.stage_goal_poses(0)[1, 3:]))
     assert angle > 0.5
 
