@@ -1,0 +1,559 @@
+"""One function that assembles every shared-control diagram from a :class:`~drake_disamb.scenarios.Scenario`.
+
+:func:`build_shared_control_diagram` wires (paper Figure "exp_block_diagram")::
+
+    user.raw ------------------------------> interface.raw
+    interface.u_h -------------------------> blender.u_h, inference.u_h
+    autonomy.u_a --------------------------> blender.u_a, inference.u_a
+    inference.belief ----------------------> blender, disambiguation, user, visualizer
+    disambiguation.disambiguation_mode ----> interface.disambiguation_mode   (disambiguation paradigm)
+    interface.mode / request_count --------> disambiguation.current_mode / request_count
+    blender.u -----------------------------> station.ee_velocity_command
+    interface.gripper_command -------------> station.gripper_command
+    station.ee_pose -----------------------> everyone
+    task.goal_poses -----------------------> everyone (the goal set switches between stages)
+
+The interface, user, autonomy, blender, disambiguation and task manager tick every
+``scenario.control_period`` (100 Hz by default, the MICO's Cartesian velocity interface); the DFT
+belief is continuous state, integrated between ticks; the arm is the station's discrete plant.
+:func:`run_trial` simulates one trial until the task is done or the time limit, and returns a
+:class:`TrialResult` with the metrics of the paper (success, time, mode switches, requests,
+button presses) and the logs.
+
+Belief slot ``i`` in stage ``k`` is goal ``i`` of :meth:`Scenario.stage_goals(k)
+<drake_disamb.scenarios.Scenario.stage_goals>`; the simulated user gets one intended goal per
+stage and the task manager's ``stage``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from pydrake.geometry import Meshcat
+from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder, EventStatus, System
+from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
+
+from drake_disamb.core.disambiguation import preset as disambiguation_preset
+from drake_disamb.core.interfaces import InterfaceConfig
+from drake_disamb.scenarios import Scenario, check_start_clearance, validate_scenario
+from drake_disamb.systems.autonomy import PotentialFieldAutonomy
+from drake_disamb.systems.blending import SharedControlBlender
+from drake_disamb.systems.disambiguation import DisambiguationSystem
+from drake_disamb.systems.interfaces import make_interface
+from drake_disamb.systems.task import TaskManager
+from drake_disamb.systems.user import SimulatedUser
+
+LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
+    ("belief", "inference", "belief"),
+    ("alpha", "blender", "alpha"),
+    ("u_h", "interface", "u_h"),
+    ("u", "blender", "u"),
+    ("ee_pose", "station", "ee_pose"),
+    ("mode", "interface", "mode"),
+    ("stage", "task", "stage"),
+)
+"""``(log name, subsystem, output port)`` of every VectorLogSink the builder adds."""
+
+
+@dataclass
+class SharedControlDiagram:
+    """Handles on a built shared-control diagram.
+
+    Attributes:
+        diagram: The built Diagram.
+        scenario: The scenario it was built from.
+        plant: The station's MultibodyPlant.
+        station: The :class:`drake_disamb.station.Station` handle (embedded build).
+        systems: Named subsystems: ``user`` (or the given input source), ``interface``,
+            ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation paradigm
+            only), ``task``, ``ee_pose_sampler``, ``diff_ik`` (the station's), ``visualizer``
+            (with Meshcat only).
+        loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS`).
+        modes: The interface's control modes (dimension lists; gripper mode last).
+        meshcat: The Meshcat instance, or ``None``.
+    """
+
+    diagram: Diagram
+    scenario: Scenario
+    plant: Any
+    station: Any
+    systems: dict[str, System]
+    loggers: dict[str, VectorLogSink]
+    modes: list[list[int]]
+    meshcat: Meshcat | None = None
+
+    def initialize(self, root_context: Context) -> None:
+        """Latch the start end-effector pose into the pose sampler (call before simulating).
+
+        The sampler (a ZeroOrderHold) would otherwise output zeros until its first tick.
+        """
+        port = self.station.output_port("ee_pose")
+        station_pose = port.Eval(port.get_system().GetMyContextFromRoot(root_context))
+        sampler = self.systems["ee_pose_sampler"]
+        sampler.GetMyMutableContextFromRoot(root_context).SetDiscreteState(np.asarray(station_pose))
+
+    def goal_names(self, stage: int) -> list[str]:
+        """Goal names in belief-slot order for ``stage``."""
+        return [g.name for g in self.scenario.stage_goals(stage)]
+
+
+@dataclass
+class TrialResult:
+    """Outcome and logs of one trial.
+
+    Attributes:
+        scenario: The scenario run.
+        success: Every stage completed at the user's intended goal within the time limit.
+        done: Every stage completed (at some goal).
+        time: Simulated time (s) at the end (completion time when ``done``).
+        stage_times: Completion time (s) of each stage (NaN if not completed).
+        reached_goals: Per stage, the scenario goal index (within the stage) reached, or -1.
+        intended_goals: Per stage, the user's intended goal index (within the stage).
+        intended_goal_names, reached_goal_names: The same as names.
+        mode_switches: Manual mode switches (mode-button presses).
+        requests: Disambiguation requests.
+        button_presses: ``mode_switches + requests`` (the paper's metric).
+        request_times, mode_switch_times: Event times (s).
+        disambiguation_switch_times: Times (s) a request changed the mode.
+        events: The interface's event log.
+        mean_alpha: Mean alpha over the samples where the user commanded the arm.
+        wall_time: Wall-clock seconds of the simulation.
+        realtime_rate: ``time / wall_time``.
+        logs: ``{name: (times (T,), values (T, size))}`` for every logged signal.
+        rho1: The assistance threshold used.
+    """
+
+    scenario: Scenario
+    success: bool
+    done: bool
+    time: float
+    stage_times: list[float]
+    reached_goals: list[int]
+    intended_goals: list[int]
+    intended_goal_names: list[str]
+    reached_goal_names: list[str]
+    mode_switches: int
+    requests: int
+    button_presses: int
+    request_times: list[float]
+    mode_switch_times: list[float]
+    disambiguation_switch_times: list[float]
+    events: tuple
+    mean_alpha: float
+    wall_time: float
+    realtime_rate: float
+    rho1: float
+    logs: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = field(repr=False)
+
+
+def _make_inference(scenario: Scenario, n: int) -> System:
+    from drake_disamb.systems import inference as inf
+
+    method = scenario.inference.method
+    if method == "dft":
+        return inf.FieldTheoreticIntentInference(n, scenario.inference.dft, scenario.control_period)
+    if method == "bayes":
+        return inf.BayesIntentInference(n, control_period=scenario.control_period)
+    return inf.MemoryIntentInference(n, control_period=scenario.control_period)
+
+
+def build_shared_control_diagram(
+    scenario: Scenario,
+    meshcat: Meshcat | None = None,
+    input_source: System | None = None,
+) -> SharedControlDiagram:
+    """Assemble the full shared-control diagram of ``scenario``.
+
+    Args:
+        scenario: A validated scenario (it is validated again here).
+        meshcat: If given, the arm, table and objects are drawn, plus the goal probabilities, the
+            active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
+        input_source: A system with one 4-vector output port ``raw`` to drive the interface
+            instead of the simulated user (a recorded log, a live device, a fault injector).
+
+    Raises:
+        ValueError: an invalid scenario, or a goal on top of the gripper's start position.
+    """
+    from drake_disamb.station import build_station
+
+    validate_scenario(scenario)
+    n = scenario.n_goals
+    builder = DiagramBuilder()
+
+    station = build_station(
+        _station_config(scenario), scene_objects(scenario), meshcat=meshcat, builder=builder
+    )
+    plant = station.plant
+    check_start_clearance(scenario, start_ee_pose(station)[:3])
+
+    interface_config = InterfaceConfig(
+        kind=scenario.interface, control_period=scenario.control_period, initial_mode=scenario.initial_mode
+    )
+    interface = builder.AddSystem(make_interface(interface_config))
+    modes = [list(m) for m in interface.modes]
+    rho1, _, _ = scenario.blending.rhos(n)
+    user_config = dataclasses.replace(scenario.user.config, seed=scenario.seed, rho1=rho1)
+    if scenario.paradigm == "manual":
+        user_config = dataclasses.replace(user_config, request_at_start=False, request_when_unhelped_for=None)
+
+    task = builder.AddSystem(
+        TaskManager(
+            [scenario.stage_goal_poses(k) for k in range(scenario.n_stages)],
+            position_tolerance=scenario.success.position_tolerance,
+            orientation_tolerance=scenario.success.orientation_tolerance,
+            hold_times=[scenario.hold_time(k) for k in range(scenario.n_stages)],
+            period=scenario.control_period,
+        )
+    )
+    task.set_name("task")
+    autonomy = builder.AddSystem(PotentialFieldAutonomy(n, scenario.autonomy))
+    autonomy.set_name("autonomy")
+    inference = builder.AddSystem(_make_inference(scenario, n))
+    inference.set_name("inference")
+    blender = builder.AddSystem(SharedControlBlender(n, scenario.blending))
+    blender.set_name("blender")
+
+    if input_source is None:
+        user = builder.AddSystem(SimulatedUser(interface_config, list(scenario.user.goals), n, user_config))
+        user.set_name("user")
+        builder.Connect(interface.GetOutputPort("mode"), user.GetInputPort("mode"))
+    else:
+        user = builder.AddSystem(input_source)
+        if not user.get_name():
+            user.set_name("input_source")
+    builder.Connect(user.GetOutputPort("raw"), interface.GetInputPort("raw"))
+
+    # The 100 Hz control loop sees the end-effector pose sampled at its ticks (as the MICO's
+    # Cartesian interface reports it); this also keeps the 1 ms plant steps from re-evaluating
+    # the autonomy and the belief's inputs between ticks.
+    sampler = builder.AddSystem(ZeroOrderHold(scenario.control_period, 7))
+    sampler.set_name("ee_pose_sampler")
+    builder.Connect(station.output_port("ee_pose"), sampler.get_input_port())
+    ee_pose = sampler.get_output_port()
+    goal_poses = task.GetOutputPort("goal_poses")
+    builder.Connect(ee_pose, task.GetInputPort("ee_pose"))
+    if input_source is None:
+        builder.Connect(ee_pose, user.GetInputPort("ee_pose"))
+        builder.Connect(goal_poses, user.GetInputPort("goal_poses"))
+        builder.Connect(inference.GetOutputPort("belief"), user.GetInputPort("belief"))
+        builder.Connect(task.GetOutputPort("stage"), user.GetInputPort("stage"))
+    builder.Connect(ee_pose, autonomy.GetInputPort("ee_pose"))
+    builder.Connect(goal_poses, autonomy.GetInputPort("goal_poses"))
+    for port in ("u_h",):
+        builder.Connect(interface.GetOutputPort(port), inference.GetInputPort(port))
+        builder.Connect(interface.GetOutputPort(port), blender.GetInputPort(port))
+    builder.Connect(ee_pose, inference.GetInputPort("ee_pose"))
+    builder.Connect(goal_poses, inference.GetInputPort("goal_poses"))
+    builder.Connect(autonomy.GetOutputPort("u_a"), inference.GetInputPort("u_a"))
+    builder.Connect(autonomy.GetOutputPort("u_a"), blender.GetInputPort("u_a"))
+    builder.Connect(inference.GetOutputPort("belief"), blender.GetInputPort("belief"))
+    builder.Connect(blender.GetOutputPort("u"), station.input_port("ee_velocity_command"))
+    builder.Connect(interface.GetOutputPort("gripper_command"), station.input_port("gripper_command"))
+
+    systems: dict[str, System] = {
+        "user": user,
+        "interface": interface,
+        "autonomy": autonomy,
+        "inference": inference,
+        "blender": blender,
+        "task": task,
+        "diff_ik": station.diff_ik,
+        "ee_pose_sampler": sampler,
+    }
+    if scenario.paradigm == "disambiguation":
+        config = disambiguation_preset(scenario.disambiguation.preset)
+        if scenario.disambiguation.preset == "mico":
+            # The forward projection must run the live inference's update and autonomy.
+            config = dataclasses.replace(
+                config, dft=scenario.inference.dft, potential_field=scenario.autonomy
+            )
+        disamb = builder.AddSystem(
+            DisambiguationSystem(n, interface.arm_modes, config, control_period=scenario.control_period)
+        )
+        disamb.set_name("disambiguation")
+        builder.Connect(inference.GetOutputPort("belief"), disamb.GetInputPort("belief"))
+        builder.Connect(ee_pose, disamb.GetInputPort("ee_pose"))
+        builder.Connect(goal_poses, disamb.GetInputPort("goal_poses"))
+        builder.Connect(interface.GetOutputPort("mode"), disamb.GetInputPort("current_mode"))
+        builder.Connect(interface.GetOutputPort("request_count"), disamb.GetInputPort("request_count"))
+        builder.Connect(
+            disamb.GetOutputPort("disambiguation_mode"), interface.GetInputPort("disambiguation_mode")
+        )
+        systems["disambiguation"] = disamb
+
+    if meshcat is not None:
+        from drake_disamb.systems.visualization import SharedControlVisualizer
+
+        vis = builder.AddSystem(SharedControlVisualizer(meshcat, n, modes))
+        vis.set_name("visualizer")
+        builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
+        builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
+        builder.Connect(station.output_port("ee_pose"), vis.GetInputPort("ee_pose"))
+        builder.Connect(interface.GetOutputPort("mode"), vis.GetInputPort("mode"))
+        builder.Connect(blender.GetOutputPort("alpha"), vis.GetInputPort("alpha"))
+        systems["visualizer"] = vis
+
+    loggers: dict[str, VectorLogSink] = {}
+    for name, sys_name, port in LOGGED_SIGNALS:
+        source = station.output_port(port) if sys_name == "station" else systems[sys_name].GetOutputPort(port)
+        logger = LogVectorOutput(source, builder, scenario.control_period)
+        logger.set_name(f"log_{name}")
+        loggers[name] = logger
+
+    diagram = builder.Build()
+    diagram.set_name(f"shared_control_{scenario.task}")
+    return SharedControlDiagram(
+        diagram=diagram,
+        scenario=scenario,
+        plant=plant,
+        station=station,
+        systems=systems,
+        loggers=loggers,
+        modes=modes,
+        meshcat=meshcat,
+    )
+
+
+def _station_config(scenario: Scenario) -> Any:
+    from drake_disamb.station import StationConfig
+
+    kwargs: dict[str, Any] = {
+        "control_period": scenario.control_period,
+        "time_step": scenario.plant_time_step,
+    }
+    if scenario.start_joint_positions is not None:
+        kwargs["home_q"] = tuple(scenario.start_joint_positions)
+    return StationConfig(**kwargs)
+
+
+def start_ee_pose(station: Any) -> NDArray[np.float64]:
+    """``[x, y, z, qw, qx, qy, qz]`` of the end effector in the station's default (start) state."""
+    from drake_disamb.station import EE_FRAME
+
+    plant = station.plant
+    X = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(plant.CreateDefaultContext())
+    return np.concatenate((X.translation(), X.rotation().ToQuaternion().wxyz()))
+
+
+def scene_objects(scenario: Scenario) -> list[Any]:
+    """The station's scene objects: one per goal (at the goal plus its offset) and the carried one."""
+    from drake_disamb.station import SceneObject
+
+    objects = []
+    for g in scenario.goals:
+        o = g.object
+        centre = np.asarray(g.position) + np.asarray(o.offset)
+        objects.append(
+            SceneObject(
+                name=g.name,
+                shape=o.shape,
+                size=tuple(o.size),
+                pose=(*centre.tolist(), 1.0, 0.0, 0.0, 0.0),
+                rgba=tuple(o.color),
+            )
+        )
+    if scenario.carried_object is not None:
+        c = scenario.carried_object
+        objects.append(
+            SceneObject(
+                name="carried_object",
+                shape=c.shape,
+                size=tuple(c.size),
+                pose=(*c.offset, *c.orientation),
+                rgba=tuple(c.color),
+                attached_to_gripper=True,
+            )
+        )
+    return objects
+
+
+# ----------------------------------------------------------------------------------------------
+# Running a trial
+# ----------------------------------------------------------------------------------------------
+
+
+def _log(
+    handles: SharedControlDiagram, context, name: str
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    logger = handles.loggers[name]
+    log = logger.FindLog(context)
+    return np.asarray(log.sample_times()).copy(), np.asarray(log.data()).T.copy()
+
+
+def run_trial(
+    scenario: Scenario | SharedControlDiagram,
+    meshcat: Meshcat | None = None,
+    progress: bool = True,
+    realtime_rate: float = 0.0,
+    stop_at_success: bool = True,
+    recording: bool | None = None,
+    integrator: str = "runge_kutta2",
+) -> TrialResult:
+    """Simulate one trial until the task is done (or ``scenario.duration``).
+
+    Args:
+        scenario: A scenario (a diagram is built for it) or a built :class:`SharedControlDiagram`.
+        meshcat: Meshcat for a scenario argument (ignored for a built diagram, which has its own).
+        progress: Show a tqdm progress bar of simulated time.
+        realtime_rate: Target real-time rate (0 = as fast as possible).
+        stop_at_success: Stop once every stage is done (else run to ``scenario.duration``).
+        recording: Record the Meshcat animation (default: whenever there is Meshcat). The
+            recording is published at the end (:func:`save_recording` writes it to HTML).
+        integrator: Drake integrator scheme for the continuous belief (``ResetIntegratorFromFlags``),
+            with its maximum step set to the control period.
+    """
+    handles = (
+        scenario
+        if isinstance(scenario, SharedControlDiagram)
+        else build_shared_control_diagram(scenario, meshcat)
+    )
+    sc = handles.scenario
+    meshcat = handles.meshcat
+    record = (meshcat is not None) if recording is None else (recording and meshcat is not None)
+    simulator = Simulator(handles.diagram)
+    # The belief's inputs are held between control ticks (ee_pose sampled, u_h from interface
+    # state), so its ODE is smooth between ticks: a fixed-step RK2 at the control period is
+    # accurate (the inference re-projects p onto the simplex every tick anyway).
+    ResetIntegratorFromFlags(simulator, integrator, sc.control_period)
+    simulator.set_target_realtime_rate(realtime_rate)
+    root = simulator.get_mutable_context()
+    handles.initialize(root)
+    task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
+    task_context = task.GetMyContextFromRoot(root)
+
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(
+            total=round(sc.duration, 2),
+            unit="sim s",
+            leave=False,
+            bar_format="{l_bar}{bar}| {n:.1f}/{total} s",
+        )
+    last = [0.0]
+
+    def monitor(context) -> EventStatus:
+        t = context.get_time()
+        if bar is not None and t - last[0] >= 0.25:
+            bar.update(t - last[0])
+            last[0] = t
+        if stop_at_success and task.is_done(task.GetMyContextFromRoot(context)):
+            return EventStatus.ReachedTermination(task, "task done")
+        return EventStatus.DidNothing()
+
+    simulator.set_monitor(monitor)
+    if record:
+        meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
+    start = _time.perf_counter()
+    simulator.Initialize()
+    simulator.AdvanceTo(sc.duration)
+    wall = _time.perf_counter() - start
+    if bar is not None:
+        bar.close()
+    if record:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+
+    t_end = root.get_time()
+    interface = handles.systems["interface"]
+    events = tuple(interface.get_event_log(interface.GetMyContextFromRoot(root)))
+    switches = [e.time for e in events if e.kind == "mode_switch"]
+    requests = [e.time for e in events if e.kind == "disambiguation_request"]
+    disamb_switches = [e.time for e in events if e.kind == "disambiguation_switch"]
+    reached = task.reached_goals(task_context)
+    done = task.is_done(task_context)
+    intended = list(sc.user.goals)
+    success = done and reached == intended
+    logs = {name: _log(handles, root, name) for name, _, _ in LOGGED_SIGNALS}
+    _, uh = logs["u_h"]
+    _, alpha = logs["alpha"]
+    commanding = np.any(np.abs(uh) > 1e-9, axis=1)
+    mean_alpha = float(np.mean(alpha[commanding, 0])) if np.any(commanding) else 0.0
+    rho1 = sc.blending.rhos(sc.n_goals)[0]
+    return TrialResult(
+        scenario=sc,
+        success=bool(success),
+        done=bool(done),
+        time=float(t_end),
+        stage_times=task.stage_end_times(task_context),
+        reached_goals=reached,
+        intended_goals=intended,
+        intended_goal_names=[sc.stage_goals(k)[i].name for k, i in enumerate(intended)],
+        reached_goal_names=[sc.stage_goals(k)[i].name for k, i in enumerate(reached) if i >= 0],
+        mode_switches=len(switches),
+        requests=len(requests),
+        button_presses=len(switches) + len(requests),
+        request_times=requests,
+        mode_switch_times=switches,
+        disambiguation_switch_times=disamb_switches,
+        events=events,
+        mean_alpha=mean_alpha,
+        wall_time=wall,
+        realtime_rate=float(t_end / wall) if wall > 0 else float("inf"),
+        rho1=rho1,
+        logs=logs,
+    )
+
+
+def save_recording(meshcat: Meshcat, path: str | Path) -> Path:
+    """Write Meshcat's current scene and published recording as a self-contained HTML file."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(meshcat.StaticHtml(), encoding="utf-8")
+    return out
+
+
+def write_trial_figures(
+    result: TrialResult, handles: SharedControlDiagram, out_dir: str | Path
+) -> list[Path]:
+    """Write the goal-probability figure, the Meshcat recording (if any) and the diagram picture."""
+    from drake_disamb.diagram_io import write_diagram_graph
+    from drake_disamb.plotting import plot_goal_probabilities
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    sc = result.scenario
+    t, belief = result.logs["belief"]
+    names = handles.goal_names(0)
+    if sc.n_stages > 1:
+        names = [" / ".join(handles.goal_names(k)[j] for k in range(sc.n_stages)) for j in range(sc.n_goals)]
+    _, uh = result.logs["u_h"]
+    written = [
+        plot_goal_probabilities(
+            t,
+            belief,
+            out / "goal_probabilities.png",
+            rho1=result.rho1,
+            goal_names=names,
+            request_times=result.request_times,
+            mode_switch_times=result.mode_switch_times,
+            command_times=t,
+            commands=uh,
+            stage_times=result.stage_times if sc.n_stages > 1 else (),
+            intended_goal=sc.user.goals[0] if sc.n_stages == 1 else None,
+            title=(
+                f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm: "
+                f"{'success' if result.success else 'failure'} in {result.time:.1f} s"
+            ),
+        )
+    ]
+    if handles.meshcat is not None:
+        written.append(save_recording(handles.meshcat, out / "recording.html"))
+    written.extend(Path(p) for p in _as_list(write_diagram_graph(handles.diagram, out / "diagram")))
+    return written
+
+
+def _as_list(value: Any) -> list[Any]:
+    if value is None:
+        return []
+    if isinstance(value, list | tuple):
+        return list(value)
+    return [value]

@@ -1,0 +1,121 @@
+"""The full shared-control loop on the simulated MICO: both interfaces, every reaching goal, pouring.
+
+Each trial stops at success, so a passing run costs only the simulated time it needs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import numpy as np
+import pytest
+from pydrake.systems.framework import LeafSystem
+
+from drake_disamb.builder import TrialResult, build_shared_control_diagram, run_trial
+from drake_disamb.scenarios import load_scenario, with_overrides
+
+
+@functools.cache
+def _reaching(interface: str, goal: int) -> TrialResult:
+    scenario = with_overrides(load_scenario("reaching"), interface=interface, goal=goal)
+    return run_trial(scenario, progress=False)
+
+
+@pytest.mark.parametrize("interface", ["head_array", "joystick"])
+@pytest.mark.parametrize("goal", [0, 1, 2, 3, 4])
+def test_reaching_every_goal(interface: str, goal: int) -> None:
+    r = _reaching(interface, goal)
+    assert r.success, f"{interface} goal {goal}: reached {r.reached_goals} at t={r.time:.1f}"
+    assert r.time <= 60.0
+    assert r.reached_goals == [goal]
+    t, belief = r.logs["belief"]
+    np.testing.assert_allclose(belief.sum(axis=1), 1.0, atol=1e-6)
+    # The belief's argmax settles on the intended goal before arrival (arrival = end - hold time).
+    arrival = r.stage_times[0] - r.scenario.hold_time(0)
+    settled = t >= arrival - 0.5
+    assert np.all(np.argmax(belief[settled], axis=1) == goal)
+    # The autonomy helped on the way.
+    _, alpha = r.logs["alpha"]
+    assert np.max(alpha) > 0.0
+    assert r.requests >= 1  # disambiguation paradigm: the simulated user asks at the start
+    assert r.button_presses == r.requests + r.mode_switches
+
+
+def test_request_switches_to_m_star_within_one_control_period() -> None:
+    r = _reaching("head_array", 0)
+    period = r.scenario.control_period
+    requests = [e for e in r.events if e.kind == "disambiguation_request"]
+    switches = [e for e in r.events if e.kind == "disambiguation_switch"]
+    assert requests and switches
+    first = switches[0]
+    assert any(abs(first.time - q.time) <= period + 1e-9 for q in requests)
+    t, mode = r.logs["mode"]
+    after = np.flatnonzero(t >= first.time + period - 1e-9)[0]
+    assert int(mode[after, 0]) == first.to_mode != first.from_mode
+
+
+def test_manual_paradigm_has_no_requests() -> None:
+    scenario = with_overrides(load_scenario("reaching"), interface="joystick", paradigm="manual", goal=3)
+    r = run_trial(scenario, progress=False)
+    assert r.success and r.requests == 0 and r.button_presses == r.mode_switches
+    assert "disambiguation" not in build_shared_control_diagram(scenario).systems
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the station's differential IK stops (ik_status STOPPED) near the MICO's wrist "
+    "singularity when leaving the pour pose; see the shared-control report",
+)
+def test_pouring_completes_both_stages() -> None:
+    scenario = with_overrides(load_scenario("pouring"), interface="joystick", goal=0)
+    r = run_trial(dataclasses.replace(scenario, duration=15.0), progress=False)
+    assert np.isfinite(r.stage_times[0]), "stage one (pour) not completed"
+    assert r.success and r.reached_goals == [0, 0]
+
+
+def test_pouring_switches_goal_set_after_the_pour() -> None:
+    scenario = with_overrides(load_scenario("pouring"), interface="joystick", goal=0)
+    r = run_trial(dataclasses.replace(scenario, duration=9.0), progress=False)
+    assert r.reached_goals[0] == 0 and np.isfinite(r.stage_times[0])
+    t, stage = r.logs["stage"]
+    assert stage[0, 0] == 0 and stage[-1, 0] == 1
+    # The inference resets to uniform over the placing goals when the goal set changes.
+    _, belief = r.logs["belief"]
+    k = np.flatnonzero(t > r.stage_times[0] + 2 * scenario.control_period)[0]
+    np.testing.assert_allclose(belief[k], [0.5, 0.5], atol=0.05)
+
+
+class _NaNSource(LeafSystem):
+    """A raw-signal source (output ``raw``, 4) that presses ``left`` but sends NaN every other tick."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.DeclareVectorOutputPort("raw", 4, self._calc)
+
+    def _calc(self, context, output) -> None:  # noqa: ANN001
+        k = int(round(context.get_time() / 0.01))
+        output.SetFromVector([np.nan, np.inf, 0.0, 0.0] if k % 2 else [1.0, 0.0, 0.0, 0.0])
+
+
+def test_nan_input_never_reaches_the_arm() -> None:
+    scenario = dataclasses.replace(load_scenario("reaching"), duration=1.0)
+    handles = build_shared_control_diagram(scenario, input_source=_NaNSource())
+    with pytest.warns(RuntimeWarning):
+        r = run_trial(handles, progress=False, stop_at_success=False)
+    for name in ("u_h", "u", "ee_pose", "belief"):
+        assert np.all(np.isfinite(r.logs[name][1])), name
+    _, ee = r.logs["ee_pose"]
+    assert np.linalg.norm(ee[-1, :3] - ee[0, :3]) > 0.01  # the valid presses moved the arm
+
+
+def test_unknown_names_and_bad_scenarios() -> None:
+    with pytest.raises(ValueError, match="interface"):
+        with_overrides(load_scenario("reaching"), interface="sip_and_puff")
+    with pytest.raises(ValueError, match="task"):
+        load_scenario("knitting")
+    s = load_scenario("reaching")
+    goals = list(s.goals)
+    goals[0] = dataclasses.replace(goals[0], position=[0.0, -0.35, 0.3])  # the gripper's start
+    with pytest.raises(ValueError, match=r"scenario\.goals\[0\]\.position: goal 'red_box' is on top of"):
+        build_shared_control_diagram(dataclasses.replace(s, goals=goals))
