@@ -1,0 +1,64 @@
+"""Real-time rate of the full shared-control reaching loop (simulated head-array user, no Meshcat).
+
+Usage: ``python benchmarks/bench_loop.py [--seconds 8] [--time-step 0.01 0.001] [--interface
+head_array] [--profile]``. For each MultibodyPlant time step it builds the reaching diagram (the
+default scenario: disambiguation paradigm, goal 0), simulates ``--seconds`` of simulated time
+without stopping at success, and prints simulated seconds per wall second and per CPU second
+(the machine may be shared). ``--profile`` adds a cProfile table of the components that dominate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import dataclasses
+import io
+import pstats
+import time
+
+from drake_disamb.builder import build_shared_control_diagram, run_trial
+from drake_disamb.scenarios import load_scenario, with_overrides
+
+
+def measure(seconds: float, time_step: float, interface: str, profile: bool) -> tuple[float, float, str]:
+    """``(wall rate, cpu rate, profile table)`` of ``seconds`` of the reaching loop."""
+    scenario = with_overrides(load_scenario("reaching"), interface=interface)
+    scenario = dataclasses.replace(scenario, duration=seconds, plant_time_step=time_step)
+    handles = build_shared_control_diagram(scenario)
+    profiler = cProfile.Profile() if profile else None
+    cpu = time.process_time()
+    if profiler is not None:
+        profiler.enable()
+    result = run_trial(handles, progress=False, stop_at_success=False)
+    if profiler is not None:
+        profiler.disable()
+    cpu = time.process_time() - cpu
+    table = ""
+    if profiler is not None:
+        out = io.StringIO()
+        pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(r"drake_disamb", 25)
+        table = out.getvalue()
+    return result.realtime_rate, result.time / cpu, table
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=8.0, help="simulated seconds per run")
+    parser.add_argument(
+        "--time-step", type=float, nargs="+", default=[0.01, 0.001], help="plant time steps (s)"
+    )
+    parser.add_argument("--interface", default="head_array", help="head_array or joystick")
+    parser.add_argument("--profile", action="store_true", help="print a cProfile table per run")
+    args = parser.parse_args()
+    print(
+        f"reaching loop, {args.interface}, disambiguation paradigm, no Meshcat, {args.seconds:g} s simulated"
+    )
+    for ts in args.time_step:
+        wall_rate, cpu_rate, table = measure(args.seconds, ts, args.interface, args.profile)
+        print(f"plant time step {ts:g} s: {wall_rate:6.2f}x real time (wall), {cpu_rate:6.2f}x (CPU)")
+        if table:
+            print(table)
+
+
+if __name__ == "__main__":
+    main()

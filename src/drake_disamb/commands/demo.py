@@ -1,0 +1,149 @@
+"""``drake-disamb demo``: one shared-control trial, shown in Meshcat, with its metrics and figures.
+
+With no arguments: the reaching task, a simulated head-array user, the disambiguation paradigm.
+Prints the Meshcat URL (unless ``--no-meshcat``), runs the trial, prints its metrics (success,
+time, mode switches, disambiguation requests, button presses) and writes into ``--out``:
+
+- ``goal_probabilities.png``: the goal probabilities over time in the style of the paper's figure
+  (threshold rho1 dashed, requests and mode switches marked, non-zero command segments below);
+- ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat);
+- ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
+
+
+def _goal_arg(text: str) -> int | list[int]:
+    """``--goal``: one index (every stage) or comma-separated indices, one per stage."""
+    try:
+        parts = [int(p) for p in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer or comma-separated integers, got {text!r}"
+        ) from None
+    return parts[0] if len(parts) == 1 else parts
+
+
+def _nonnegative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Register the ``demo`` options."""
+    parser.add_argument(
+        "--task",
+        default="reaching",
+        help="embedded task name (reaching, pouring) or a scenario YAML path (default: reaching)",
+    )
+    parser.add_argument("--interface", default=None, help="head_array or joystick (default: the scenario's)")
+    parser.add_argument("--paradigm", default=None, help="disambiguation or manual (default: the scenario's)")
+    parser.add_argument(
+        "--goal",
+        type=_goal_arg,
+        default=None,
+        help="intended goal index (every stage) or one per stage, e.g. 1,0 (default: the scenario's)",
+    )
+    parser.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
+    parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (no recording)")
+    parser.add_argument(
+        "--out", type=Path, default=Path("out/demo"), help="output folder (default: out/demo)"
+    )
+    parser.add_argument(
+        "--hold",
+        type=_nonnegative_float,
+        default=None,
+        help="seconds to keep Meshcat serving after the trial (default: 5 with Meshcat, 0 without)",
+    )
+    parser.add_argument(
+        "--realtime-rate",
+        type=_nonnegative_float,
+        default=None,
+        help="target real-time rate with Meshcat (default 1.0; 0 = as fast as possible)",
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def format_metrics(result) -> str:  # noqa: ANN001 (TrialResult, imported lazily)
+    """The trial's metrics as an aligned two-column table."""
+    rows = [
+        ("task", result.scenario.task),
+        ("interface", result.scenario.interface),
+        ("paradigm", result.scenario.paradigm),
+        ("intended goal(s)", ", ".join(result.intended_goal_names)),
+        ("reached goal(s)", ", ".join(result.reached_goal_names) or "-"),
+        ("success", "yes" if result.success else "no"),
+        ("completion time (s)", f"{result.time:.2f}" if result.done else f"- (stopped at {result.time:.2f})"),
+    ]
+    if result.scenario.n_stages > 1:
+        for k, t in enumerate(result.stage_times):
+            rows.append(
+                (f"  stage {k} ({result.scenario.stages[k].name}) done at (s)", f"{t:.2f}" if t == t else "-")
+            )
+    rows += [
+        ("mode switches", str(result.mode_switches)),
+        ("disambiguation requests", str(result.requests)),
+        ("button presses", str(result.button_presses)),
+        ("mean alpha while commanding", f"{result.mean_alpha:.3f}"),
+        ("simulated / wall time (s)", f"{result.time:.2f} / {result.wall_time:.2f}"),
+        ("real-time rate", f"{result.realtime_rate:.1f}x"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"  {k.ljust(width)}  {v}" for k, v in rows)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the demo; 0 on a successful trial, 1 on an unsuccessful one, 2 on bad arguments."""
+    from drake_disamb.scenarios import load_scenario, with_overrides
+
+    try:
+        scenario = load_scenario(args.task)
+        scenario = with_overrides(
+            scenario, interface=args.interface, paradigm=args.paradigm, goal=args.goal, seed=args.seed
+        )
+    except ValueError as exc:
+        print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
+        return 2
+
+    from pydrake.geometry import Meshcat, MeshcatParams
+
+    from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    meshcat = None
+    if not args.no_meshcat:
+        meshcat = Meshcat(MeshcatParams(host="localhost"))
+        print(f"Meshcat: {meshcat.web_url()}", flush=True)
+    realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
+    try:
+        handles = build_shared_control_diagram(scenario, meshcat=meshcat)
+    except ValueError as exc:
+        print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
+        return 2
+    progress = not args.quiet and sys.stderr.isatty()
+    result = run_trial(handles, progress=progress, realtime_rate=realtime)
+    print(format_metrics(result))
+    written = write_trial_figures(result, handles, out)
+    for path in written:
+        print(f"wrote {path}")
+    hold = args.hold if args.hold is not None else (5.0 if meshcat is not None else 0.0)
+    if meshcat is not None and hold > 0:
+        print(f"Meshcat stays up for {hold:g} s at {meshcat.web_url()} (Ctrl-C to quit)", flush=True)
+        try:
+            time.sleep(hold)
+        except KeyboardInterrupt:
+            pass
+    return 0 if result.success else 1
