@@ -109,6 +109,16 @@ def test_nan_input_never_reaches_the_arm() -> None:
     assert np.linalg.norm(ee[-1, :3] - ee[0, :3]) > 0.01  # the valid presses moved the arm
 
 
+@pytest.mark.parametrize("method", ["bayes", "memory"])
+def test_baseline_inference_methods_build_and_run(method: str) -> None:
+    s = load_scenario("reaching")
+    s = dataclasses.replace(s, inference=dataclasses.replace(s.inference, method=method), duration=0.5)
+    r = run_trial(s, progress=False)
+    _, belief = r.logs["belief"]
+    assert type(build_shared_control_diagram(s).systems["inference"]).__name__.lower().find(method) >= 0
+    np.testing.assert_allclose(belief.sum(axis=1), 1.0, atol=1e-9)
+
+
 def test_unknown_names_and_bad_scenarios() -> None:
     with pytest.raises(ValueError, match="interface"):
         with_overrides(load_scenario("reaching"), interface="sip_and_puff")

@@ -160,8 +160,8 @@ def _make_inference(scenario: Scenario, n: int) -> System:
     if method == "dft":
         return inf.FieldTheoreticIntentInference(n, scenario.inference.dft, scenario.control_period)
     if method == "bayes":
-        return inf.BayesIntentInference(n, control_period=scenario.control_period)
-    return inf.MemoryIntentInference(n, control_period=scenario.control_period)
+        return inf.RecursiveBayesIntentInference(n, control_period=scenario.control_period)
+    return inf.MemoryBasedIntentInference(n, control_period=scenario.control_period)
 
 
 def build_shared_control_diagram(
