@@ -86,7 +86,16 @@ def _is_real(value: object) -> bool:
 # Configuration
 # ----------------------------------------------------------------------------------------------
 
-MICO_DFT = DFTParams(tau1=4.0, tau2=4.0, lam=3.0, directedness=True, agreement=True, proximity=True, R=0.2)
+MICO_DFT = DFTParams(
+    tau1=4.0,
+    tau2=4.0,
+    lam=3.0,
+    directedness=True,
+    agreement=True,
+    proximity=True,
+    R=0.2,
+    zero_command_excitation=False,
+)
 """DFT parameters of the ``mico`` preset (see :func:`mico_config`)."""
 
 
@@ -228,7 +237,11 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
       ``Upsilon`` divided by the displacement (paper), rotations measured as the angle about ``k``.
     - DFT with directedness, agreement and proximity (paper equation dft_ii) and
       ``tau1 = tau2 = 4 s``: with no input the study logs show the belief relaxing to uniform over a
-      few seconds. ``lambda = 3 I`` (1/s): the differential excitation between a goal the command
+      few seconds. That needs ``zero_command_excitation=False``: with the authors' convention a zero
+      command excites every goal equally (directedness 0.5), which through the mass-conserving
+      flow pulls the belief to uniform at ``1/tau1 + n lambda sigma(0.5)`` (about 2 /s for five
+      goals), i.e. the belief would collapse in half a second whenever the user pauses to switch
+      modes. The probes always carry a command, so the projection is unaffected. ``lambda = 3 I`` (1/s): the differential excitation between a goal the command
       points at and one it points away from is about ``3 * 0.23 = 0.7 /s``, so one second of probe
       motion (10 cm) moves the projected belief clearly while a single 10 ms control step moves
       the live belief by under 1 %; the authors' ``lambda = 200`` suits their 2 mm, 2 ms steps
