@@ -242,7 +242,12 @@ class StationConfig:
     """Settings of the station (SI units).
 
     Attributes:
-        time_step: MultibodyPlant discrete step (s).
+        time_step: MultibodyPlant discrete step (s). The default, 0.01 s, equals the default
+            ``control_period``: the arm receives new joint set points only once per control tick,
+            and SAP integrates the joint-actuator PD implicitly (stable at large steps), so one
+            physics step per tick tracks the set points as well as finer steps do (the station's
+            tests pass unchanged at 2, 5 and 10 ms) while costing a fifth of a 2 ms plant. Choose
+            a smaller step (e.g. 0.001) to resolve contact with the table or objects more finely.
         control_period: Period of the differential IK and gripper integrators (s), 0.01 = 100 Hz.
         home_q: Initial arm joint angles (rad, DH); must be inside the joint limits.
         home_gripper_opening: Initial distance between the fingertips (m).
@@ -265,7 +270,7 @@ class StationConfig:
         scene_objects: Objects to add (in addition to those passed to :func:`build_station`).
     """
 
-    time_step: float = 0.002
+    time_step: float = 0.01
     control_period: float = 0.01
     home_q: tuple[float, ...] = tuple(MICO_HOME_Q.tolist())
     home_gripper_opening: float = 0.08
