@@ -169,3 +169,29 @@ def potential_field_commands(
     if gp.shape[-2] < 1:
         raise ValueError("goal_positions: expected at least one goal, got 0")
     return np.ascontiguousarray(_potential_field_commands(p, q, gp, gq, cfg))
+
+
+def potential_field_commands_from_poses(
+    ee_pose: NDArray[np.float64], goal_poses: NDArray[np.float64], config: PotentialFieldConfig
+) -> NDArray[np.float64]:
+    """:func:`potential_field_commands` for one pose ``[x, y, z, qw, qx, qy, qz]`` and ``(n, 7)`` goal
+    poses, with the lean validation of a control loop's hot path; returns ``(n, 6)``.
+
+    The same numbers as :func:`potential_field_commands` (the same normalisation and kernel);
+    shapes are the caller's business (a Drake port fixes them). A non-finite entry or a (near) zero
+    quaternion is a ``ValueError`` naming the argument, as there.
+    """
+    # One reduction decides the common all-finite case.
+    if not np.isfinite(np.add.reduce(ee_pose) + np.add.reduce(goal_poses, axis=None)):
+        name = "quat" if not np.isfinite(ee_pose).all() else "goal_quats"
+        bad = ee_pose if name == "quat" else goal_poses
+        raise ValueError(f"{name}: expected finite poses, got {bad.tolist()!r}")
+    q = ee_pose[3:]
+    gq = goal_poses[:, 3:]
+    qn = np.sqrt(np.add.reduce(q * q, axis=-1, keepdims=True))  # as _check_quat
+    gn = np.sqrt(np.add.reduce(gq * gq, axis=-1, keepdims=True))
+    if qn[0] < 1e-12:
+        raise ValueError(f"quat: a quaternion has (near) zero norm, got {q.tolist()!r}")
+    if np.any(gn < 1e-12):
+        raise ValueError(f"goal_quats: a quaternion has (near) zero norm, got {gq.tolist()!r}")
+    return _potential_field_commands(ee_pose[:3], q / qn, goal_poses[:, :3], gq / gn, config)

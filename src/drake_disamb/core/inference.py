@@ -357,7 +357,14 @@ def dft_drive(
     """
     s = biased_sigmoid(dft_xi(u_h, x_r, x_g, params, u_a))
     n = s.shape[-1]
-    rest = rest_state(n, params.rest)
+    # DFTParams validated ``rest`` as a probability vector when it was built: only its length is
+    # checked here (this runs on every evaluation of the ODE's right-hand side).
+    if params.rest is None:
+        rest = uniform_belief(n)
+    else:
+        rest = np.asarray(params.rest, dtype=float)
+        if rest.shape[-1] != n:
+            raise ValueError(f"rest: expected {n} entries (one per goal), got {rest.shape[-1]}")
     lam = np.asarray(params.lam, dtype=float)
     if lam.ndim == 2 and lam.shape != (n, n):
         raise ValueError(f"DFTParams.lam: expected a scalar or a ({n}, {n}) matrix, got shape {lam.shape}")
@@ -413,8 +420,19 @@ def dft_mass_conserving_rhs(
     that have reached zero are not driven further negative (positivity guard), and the removed
     mass is taken proportionally from the others so the sum is still conserved.
     """
+    return dft_mass_conserving_rhs_from_drive(p, dft_drive(u_h, x_r, x_g, params, u_a), params)
+
+
+def dft_mass_conserving_rhs_from_drive(
+    p: ArrayLike, drive: ArrayLike, params: DFTParams
+) -> NDArray[np.float64]:
+    """:func:`dft_mass_conserving_rhs` from a precomputed ``drive`` (:func:`dft_drive`).
+
+    The drive does not depend on ``p``: an integrator that evaluates the right-hand side several
+    times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
+    """
     p = np.asarray(p, dtype=float)
-    f = dft_rhs(p, u_h, x_r, x_g, params, u_a)
+    f = dft_rhs_from_drive(p, drive, params)
     total = f.sum(axis=-1, keepdims=True)
     g = f - p * total
     if params.euler_equivalent_step is not None:

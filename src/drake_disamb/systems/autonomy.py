@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
-from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
+from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
 
 __all__ = ["PotentialFieldAutonomy"]
 
@@ -50,14 +50,20 @@ class PotentialFieldAutonomy(LeafSystem):
         self.config = PotentialFieldConfig() if config is None else config
         self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
-        self.DeclareVectorOutputPort("u_a", 6 * self.n_goals, self._calc_u_a)
+        # Depends on the two inputs only (not on time or state): computed once per input change.
+        self.DeclareVectorOutputPort(
+            "u_a",
+            6 * self.n_goals,
+            self._calc_u_a,
+            prerequisites_of_calc={self._ee_port.ticket(), self._goal_port.ticket()},
+        )
         self._warned = False
 
     def _calc_u_a(self, context: Context, output: BasicVector) -> None:
-        ee = np.asarray(self._ee_port.Eval(context), dtype=float)
-        goals = np.asarray(self._goal_port.Eval(context), dtype=float).reshape(self.n_goals, 7)
+        ee = self._ee_port.Eval(context)
+        goals = self._goal_port.Eval(context).reshape(self.n_goals, 7)
         try:
-            u_a = potential_field_commands(ee[:3], ee[3:], goals[:, :3], goals[:, 3:], self.config)
+            u_a = potential_field_commands_from_poses(ee, goals, self.config)
         except ValueError as exc:
             if not self._warned:
                 warnings.warn(f"{self.get_name()}: {exc}; u_a set to zero", RuntimeWarning, stacklevel=2)

@@ -33,14 +33,16 @@ from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem, State
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem, State, ValueProducer
 
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
     DFTParams,
     bayes_step,
     check_transition,
-    dft_mass_conserving_rhs,
+    dft_drive,
+    dft_mass_conserving_rhs_from_drive,
     memory_step,
     normalize_belief,
     rest_state,
@@ -210,6 +212,15 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
             )
         self._params = replace(params, rest=self._rest)
         self.DeclareContinuousState(self._n)
+        # The drive (the part of the right-hand side that does not depend on p) changes only with
+        # the inputs, which are held between control ticks: a cache entry computes it once per
+        # change instead of at every integrator stage.
+        inputs = [self._u_h, self._ee_pose, self._goal_poses] + ([self._u_a] if params.agreement else [])
+        self._drive = self.DeclareCacheEntry(
+            "DFT drive rest/tau2 + lambda sigma(xi) (1/s)",
+            ValueProducer(allocate=lambda: AbstractValue.Make(np.zeros(self._n)), calc=self._calc_drive),
+            prerequisites_of_calc={port.ticket() for port in inputs},
+        )
         self._goals_index = self.DeclareDiscreteState(np.full(7 * self._n, np.nan))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._reset_update)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._periodic_update)
@@ -223,15 +234,16 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     def _raw_belief(self, context: Context) -> NDArray[np.float64]:
         return context.get_continuous_state_vector().CopyToVector()
 
-    def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
-        p = context.get_continuous_state_vector().CopyToVector()
+    def _calc_drive(self, context: Context, value: AbstractValue) -> None:
         x_g = self._goal_positions(self._goal_poses_now(context))
         u_a = None
         if self._params.agreement:
             u_a = np.asarray(self._u_a.Eval(context), dtype=float).reshape(self._n, 6)
-        dp = dft_mass_conserving_rhs(
-            p, self._command(context), self._position(context), x_g, self._params, u_a
-        )
+        value.set_value(dft_drive(self._command(context), self._position(context), x_g, self._params, u_a))
+
+    def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
+        p = context.get_continuous_state_vector().CopyToVector()
+        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context), self._params)
         derivatives.get_mutable_vector().SetFromVector(dp)
 
     def _reset_update(self, context: Context, state: State) -> None:
