@@ -6,11 +6,15 @@ import warnings
 from dataclasses import replace
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, Context, LeafSystem
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
 
 from drake_disamb.core.blending import BlendingConfig, shared_control
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
+
+_NO_STEP = (np.zeros(6), np.zeros(1), np.zeros(1))
+"""Placeholder value of the blending-step cache entry before its first computation."""
 
 
 class SharedControlBlender(LeafSystem):
@@ -76,16 +80,29 @@ class SharedControlBlender(LeafSystem):
         self._u_h_port = self.DeclareVectorInputPort("u_h", 6)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_a_port = self.DeclareVectorInputPort("u_a", 6 * self.n_goals)
-        self.DeclareVectorOutputPort("u", 6, self._calc_u)
-        self.DeclareVectorOutputPort("alpha", 1, self._calc_alpha)
-        self.DeclareVectorOutputPort("g_star", 1, self._calc_g_star)
+        # One blending step per change of the inputs, shared by the three outputs (a cache entry
+        # that depends on the inputs alone, not on time or on any state).
+        inputs = {port.ticket() for port in (self._u_h_port, self._belief_port, self._u_a_port)}
+        self._step = self.DeclareCacheEntry(
+            "shared_control step (u, alpha, g_star)",
+            ValueProducer(allocate=lambda: AbstractValue.Make(_NO_STEP), calc=self._calc_step),
+            prerequisites_of_calc=inputs,
+        )
+        step = {self._step.ticket()}
+        self.DeclareVectorOutputPort("u", 6, self._calc_u, prerequisites_of_calc=step)
+        self.DeclareVectorOutputPort("alpha", 1, self._calc_alpha, prerequisites_of_calc=step)
+        self.DeclareVectorOutputPort("g_star", 1, self._calc_g_star, prerequisites_of_calc=step)
         self._warned = False
 
     def _compute(self, context: Context) -> tuple[np.ndarray, float, int]:
         u_h = np.asarray(self._u_h_port.Eval(context), dtype=float)
         p = np.asarray(self._belief_port.Eval(context), dtype=float)
         u_a = np.asarray(self._u_a_port.Eval(context), dtype=float).reshape(self.n_goals, 6)
-        finite = np.isfinite(u_h).all() and np.isfinite(p).all() and np.isfinite(u_a).all()
+        # One reduction for the common all-finite case (a huge finite sum that overflows only
+        # sends us to the exact per-entry check below).
+        finite = np.isfinite(np.add.reduce(u_h) + np.add.reduce(p) + np.add.reduce(u_a, axis=None))
+        if not finite:
+            finite = np.isfinite(u_h).all() and np.isfinite(p).all() and np.isfinite(u_a).all()
         if not finite:
             if not self._warned:
                 warnings.warn(
@@ -102,11 +119,15 @@ class SharedControlBlender(LeafSystem):
         u, alpha, g_star = shared_control(u_h, p, u_a, self.config)
         return u, float(alpha), int(g_star)
 
+    def _calc_step(self, context: Context, value: AbstractValue) -> None:
+        u, alpha, g_star = self._compute(context)
+        value.set_value((u, np.array([alpha]), np.array([float(g_star)])))
+
     def _calc_u(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._compute(context)[0])
+        output.SetFromVector(self._step.Eval(context)[0])
 
     def _calc_alpha(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector([self._compute(context)[1]])
+        output.SetFromVector(self._step.Eval(context)[1])
 
     def _calc_g_star(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector([self._compute(context)[2]])
+        output.SetFromVector(self._step.Eval(context)[2])

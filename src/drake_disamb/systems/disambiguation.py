@@ -38,15 +38,6 @@ class _Request:
     current_mode: float
 
 
-@dataclass(frozen=True)
-class _Memory:
-    """Abstract state: the request count seen last, the inputs at that tick, the last result."""
-
-    request_count: float
-    previous: _Request | None
-    result: DisambiguationResult | None
-
-
 class DisambiguationSystem(LeafSystem):
     """Chooses the disambiguating control mode ``m*`` (paper Algorithm 1) on request.
 
@@ -81,13 +72,19 @@ class DisambiguationSystem(LeafSystem):
             in which it sees the request button, and switches mode in that same control period.
         last_result (abstract): the :class:`~drake_disamb.core.disambiguation.DisambiguationResult`
             of the last request (scores per dimension and mode, features, the chosen mode), or
-            ``None`` before any request. From state.
+            ``None`` before any request. Computed from state (the inputs of the served request),
+            on demand; treat it as read-only.
 
-    State: one abstract value updated by a periodic unrestricted update every ``control_period``
-    seconds (first at t = 0). Each tick stores the inputs it saw; when ``request_count`` has grown
-    since the previous tick, the request was served by the interface in the previous tick, so the
-    result is recomputed from the inputs stored then -- exactly what the interface used --
-    and ``last_result`` shows it one control period after the request.
+    State: numeric only, two discrete groups updated by a periodic *unrestricted* update every
+    ``control_period`` seconds (first at t = 0; unrestricted so that it runs together with the
+    interface's update, from the same pre-update context): the *tick* group ``[request_count seen, has
+    snapshot, snapshot]`` and the *served* group ``[has request, request]``, where a snapshot /
+    request is ``[belief (n), ee_pose (7), goal_poses (7 n), current_mode (1)]``. Each tick stores
+    the inputs it saw; when ``request_count`` has grown since the previous tick, the request was
+    served by the interface in the previous tick, so that tick's snapshot -- exactly what the
+    interface used -- becomes the served request, and ``last_result`` (Algorithm 1 on it) shows it
+    one control period after the request. (No abstract state: Drake copies the whole state at
+    every unrestricted update in the diagram, and numbers copy cheaply.)
 
     Attributes:
         n_goals: Number of goals.
@@ -121,7 +118,12 @@ class DisambiguationSystem(LeafSystem):
         self._current_mode = self.DeclareVectorInputPort("current_mode", 1)
         self._request_count = self.DeclareVectorInputPort("request_count", 1)
 
-        self._memory_index = self.DeclareAbstractState(AbstractValue.Make(_Memory(0.0, None, None)))
+        self._snapshot_size = n + POSE_SIZE + n * POSE_SIZE + 1
+        # Tick group: [request_count seen, has snapshot (0/1), snapshot]; served group: [has
+        # request (0/1), request]. Snapshot and request layouts are those of _pack.
+        self._tick_index = self.DeclareDiscreteState(np.zeros(2 + self._snapshot_size))
+        self._served_index = self.DeclareDiscreteState(np.zeros(1 + self._snapshot_size))
+        self._memo: tuple[bytes, DisambiguationResult | None] | None = None
         feedthrough = {
             port.ticket() for port in (self._belief, self._ee_pose, self._goal_poses, self._current_mode)
         }
@@ -132,7 +134,7 @@ class DisambiguationSystem(LeafSystem):
             "last_result",
             lambda: AbstractValue.Make(None),
             self._calc_last_result,
-            prerequisites_of_calc={self.abstract_state_ticket(self._memory_index)},
+            prerequisites_of_calc={self.discrete_state_ticket(self._served_index)},
         )
         self.DeclarePeriodicUnrestrictedUpdateEvent(control_period, 0.0, self._update)
 
@@ -144,6 +146,26 @@ class DisambiguationSystem(LeafSystem):
             ee_pose=np.array(self._ee_pose.Eval(context), dtype=float),
             goal_poses=np.array(self._goal_poses.Eval(context), dtype=float),
             current_mode=float(self._current_mode.Eval(context)[0]),
+        )
+
+    def _pack(self, context: Context) -> NDArray[np.float64]:
+        """The inputs now as one snapshot vector ``[belief, ee_pose, goal_poses, current_mode]``."""
+        return np.concatenate(
+            (
+                self._belief.Eval(context),
+                self._ee_pose.Eval(context),
+                self._goal_poses.Eval(context),
+                self._current_mode.Eval(context),
+            )
+        )
+
+    def _unpack(self, snapshot: NDArray[np.float64]) -> _Request:
+        n = self.n_goals
+        return _Request(
+            belief=snapshot[:n].copy(),
+            ee_pose=snapshot[n : n + POSE_SIZE].copy(),
+            goal_poses=snapshot[n + POSE_SIZE : n + POSE_SIZE + n * POSE_SIZE].copy(),
+            current_mode=float(snapshot[-1]),
         )
 
     def _solve(self, request: _Request) -> DisambiguationResult | None:
@@ -179,14 +201,26 @@ class DisambiguationSystem(LeafSystem):
         output.SetAtIndex(0, -1.0 if result is None or result.mode is None else float(result.mode))
 
     def _calc_last_result(self, context: Context, output: AbstractValue) -> None:
-        output.set_value(context.get_abstract_state(self._memory_index).get_value().result)
+        served = context.get_discrete_state(self._served_index).get_value()
+        if served[0] < 0.5:
+            output.set_value(None)
+            return
+        # Algorithm 1 is a pure function of the served request: a one-entry memo keeps a result
+        # from being recomputed when the state is rewritten with the same request every tick.
+        key = served.tobytes()
+        if self._memo is None or self._memo[0] != key:
+            self._memo = (key, self._solve(self._unpack(served[1:])))
+        output.set_value(self._memo[1])
 
     def _update(self, context: Context, state: State) -> EventStatus:
-        memory: _Memory = context.get_abstract_state(self._memory_index).get_value()
+        tick = context.get_discrete_state(self._tick_index).get_value()
         count = float(self._request_count.Eval(context)[0])
-        result = memory.result
-        if np.isfinite(count) and count > memory.request_count and memory.previous is not None:
-            result = self._solve(memory.previous)
-        new = _Memory(count if np.isfinite(count) else memory.request_count, self._read(context), result)
-        state.get_mutable_abstract_state(self._memory_index).set_value(new)
+        if np.isfinite(count) and count > tick[0] and tick[1] > 0.5:
+            state.get_mutable_discrete_state(self._served_index).SetFromVector(
+                np.concatenate(([1.0], tick[2:]))
+            )
+        seen = count if np.isfinite(count) else tick[0]
+        state.get_mutable_discrete_state(self._tick_index).SetFromVector(
+            np.concatenate(([seen, 1.0], self._pack(context)))
+        )
         return EventStatus.Succeeded()

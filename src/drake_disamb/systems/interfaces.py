@@ -26,7 +26,32 @@ from drake_disamb.core.interfaces import (
     interface_update,
 )
 
-__all__ = ["HeadArrayInterface", "InterfaceEvent", "InterfaceSystem", "JoystickInterface", "make_interface"]
+__all__ = [
+    "EventLog",
+    "HeadArrayInterface",
+    "InterfaceEvent",
+    "InterfaceSystem",
+    "JoystickInterface",
+    "make_interface",
+]
+
+
+class EventLog(tuple):
+    """The interface's event log: an immutable tuple of frozen :class:`InterfaceEvent`.
+
+    Drake copies every abstract state value whenever an unrestricted update runs anywhere in the
+    diagram (every control tick), and a Python value is copied with ``copy.deepcopy``. The log is
+    truly immutable (a tuple of frozen dataclasses of floats, ints and strings), so a copy may
+    share it: ``deepcopy`` and ``copy`` return the log itself, whatever its length.
+    """
+
+    __slots__ = ()
+
+    def __copy__(self) -> EventLog:
+        return self
+
+    def __deepcopy__(self, memo: dict) -> EventLog:
+        return self
 
 
 class InterfaceSystem(LeafSystem):
@@ -68,8 +93,8 @@ class InterfaceSystem(LeafSystem):
         request_count (1): disambiguation requests so far.
         mode_switch_count (1): manual mode switches so far (disambiguation switches not counted).
         nonfinite_count (1): updates whose raw signal held NaN/inf.
-        event_log (abstract): ``tuple[InterfaceEvent, ...]``, every mode switch and request with
-            its time, in order.
+        event_log (abstract): :class:`EventLog` (a ``tuple[InterfaceEvent, ...]``), every mode
+            switch and request with its time, in order.
 
     State: discrete ``[mode, previous mode-button level, previous request-button level, mode-switch
     count, request count, non-finite count, held raw (4)]`` and the abstract event log; both are
@@ -94,12 +119,12 @@ class InterfaceSystem(LeafSystem):
         self.raw_layout: tuple[str, ...] = RAW_LAYOUTS[config.kind]
 
         self._state_index = self.DeclareDiscreteState(initial_state(config).to_vector())
-        self._log_index = self.DeclareAbstractState(AbstractValue.Make(()))
+        self._log_index = self.DeclareAbstractState(AbstractValue.Make(EventLog()))
 
         self._raw_port = self.DeclareVectorInputPort("raw", RAW_SIZE)
         self._disamb_port = self.DeclareVectorInputPort("disambiguation_mode", 1)
 
-        from_state = {self.all_state_ticket()}
+        from_state = {self.discrete_state_ticket(self._state_index)}
         self.DeclareVectorOutputPort("u_h", 6, self._calc_u_h, prerequisites_of_calc=from_state)
         self.DeclareVectorOutputPort(
             "gripper_command", 1, self._calc_gripper, prerequisites_of_calc=from_state
@@ -111,9 +136,9 @@ class InterfaceSystem(LeafSystem):
             )
         self.DeclareAbstractOutputPort(
             "event_log",
-            lambda: AbstractValue.Make(()),
+            lambda: AbstractValue.Make(EventLog()),
             self._calc_event_log,
-            prerequisites_of_calc=from_state,
+            prerequisites_of_calc={self.abstract_state_ticket(self._log_index)},
         )
         self.DeclarePeriodicUnrestrictedUpdateEvent(config.control_period, 0.0, self._update)
 
@@ -133,8 +158,8 @@ class InterfaceSystem(LeafSystem):
         state = replace(self._read_state(context), mode=int(mode))
         context.get_mutable_discrete_state(self._state_index).set_value(state.to_vector())
 
-    def get_event_log(self, context: Context) -> tuple[InterfaceEvent, ...]:
-        """The events logged so far in ``context``."""
+    def get_event_log(self, context: Context) -> EventLog:
+        """The events logged so far in ``context`` (an immutable tuple)."""
         return context.get_abstract_state(self._log_index).get_value()
 
     # -- update and outputs ------------------------------------------------------------------------
@@ -157,7 +182,7 @@ class InterfaceSystem(LeafSystem):
         state.get_mutable_discrete_state(self._state_index).set_value(after.to_vector())
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
-            state.get_mutable_abstract_state(self._log_index).set_value(tuple(log) + tuple(events))
+            state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
         return EventStatus.Succeeded()
 
     def _calc_u_h(self, context: Context, output: BasicVector) -> None:
