@@ -51,7 +51,6 @@ import re
 import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from enum import IntEnum
 from typing import Any
 
 import numpy as np
@@ -68,11 +67,6 @@ from pydrake.geometry import (
     Sphere,
 )
 from pydrake.math import RigidTransform
-from pydrake.multibody.inverse_kinematics import (
-    DifferentialInverseKinematicsParameters,
-    DifferentialInverseKinematicsStatus,
-    DoDifferentialInverseKinematics,
-)
 from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
@@ -101,6 +95,7 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.primitives import MatrixGain, Multiplexer
 
+from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
 from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
 
 ARM_JOINTS: tuple[str, ...] = tuple(f"mico_joint_{i}" for i in range(1, 7))
@@ -122,22 +117,6 @@ MICO_HOME_Q.setflags(write=False)
 
 FINGER_MAX_OPENING = 0.12
 """Largest distance between the fingertip pads (m): each finger travels 0 .. 0.06 m."""
-
-
-class IkStatus(IntEnum):
-    """Codes on the station's ``ik_status`` port (the last control step's outcome)."""
-
-    OK = 0
-    """The command was tracked at full speed (a zero command holds the arm still)."""
-    STOPPED = 1
-    """No usable solution (singularity, joint limit, unreachable direction): the arm was stopped."""
-    INVALID_COMMAND = 2
-    """The command had a NaN or infinite entry and was replaced by zero."""
-    LIMITED = 3
-    """A solution in the commanded direction was found but slower than commanded (limits near)."""
-    RESEEDED = 4
-    """The integrated set point had drifted from the measured joints (e.g. blocked by contact) and
-    was reset to the measured position; the arm held still for this step."""
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -253,9 +232,9 @@ class StationConfig:
         home_gripper_opening: Initial distance between the fingertips (m).
         joint_velocity_limits: Per-joint speed limits for the IK (rad/s); ``None`` takes the
             model's limits (36 deg/s for joints 1-3, 48 deg/s for 4-6).
-        joint_acceleration_limits: Per-joint acceleration limits for the IK (rad/s^2). A step that
-            cannot meet them (a sharp change of command) is re-solved without them; a zero command
-            always stops at once.
+        joint_acceleration_limits: Per-joint acceleration limits for the IK (rad/s^2). They give
+            way only to the position limits (a joint about to hit one stops in time); a sharp
+            change of command ramps each joint at its limit; a zero command always stops at once.
         nominal_posture: Posture (rad) the IK pulls towards in the null space of the task; ``None``
             uses ``home_q``.
         nominal_posture_gain: Gain (1/s) of that pull.
@@ -263,8 +242,8 @@ class StationConfig:
         finger_kp, finger_kd: Finger PD gains (N/m, N s/m).
         reseed_tolerance: When the integrated set point is farther than this (rad, any joint) from the
             measured joint angles, it is reset to them (status ``RESEEDED``).
-        limited_alpha: Report ``LIMITED`` when the IK achieves less than this fraction of the
-            commanded speed.
+        limited_alpha: Report ``LIMITED`` (or ``SINGULAR``) when the IK achieves less than this
+            fraction of the command along it, or misses it by more than ``1 - limited_alpha``.
         contact_model: MultibodyPlant contact model (``"point"`` is the fast choice).
         warn_interval: Minimum simulated time (s) between two warnings about bad commands.
         scene_objects: Objects to add (in addition to those passed to :func:`build_station`).
@@ -394,12 +373,18 @@ def _read_command(port: InputPort, context: Context, size: int) -> tuple[NDArray
 class DifferentialIKIntegrator(LeafSystem):
     """Turns a commanded end-effector spatial velocity into arm joint set points, at a fixed rate.
 
-    Every ``control_period`` it (1) reads ``ee_velocity_command`` (paper order, converted to Drake's
-    ``[w; v]``), (2) solves Drake's ``DoDifferentialInverseKinematics`` at the integrated set point
-    q_d with joint position, velocity and acceleration limits and a nominal-posture pull, (3) sets
-    ``v_d`` to the solution (zero when there is none) and integrates ``q_d += v_d * period``
-    (clamped to the joint limits). It is initialised from ``arm_joint_state`` when the simulator
-    initialises and re-seeded from it when the set point drifts more than ``reseed_tolerance`` away.
+    Every ``control_period`` it (1) reads ``ee_velocity_command`` (paper order), (2) computes the
+    Jacobian of ``mico_end_effector`` at the integrated set point q_d (rows in the paper's order)
+    and solves :func:`drake_disamb.ik.solve_velocity_ik` there, with the joint position, velocity
+    and acceleration limits and a nominal-posture pull: the exact ``J^-1 V`` when it meets every
+    limit, else singular-value-filtered damped least squares that tracks the achievable part of the
+    command (near a singularity or with joints held at a limit the arm keeps moving in the
+    directions it can, never NaN), (3) sets ``v_d`` to the solution and integrates
+    ``q_d += v_d * period`` (inside the joint limits by construction; clamped against rounding). The
+    status says whether the command was tracked (``OK``), damped near a singularity (``SINGULAR``),
+    slowed or bent by joint limits (``LIMITED``) or not achieved at all (``STOPPED``). It is
+    initialised from ``arm_joint_state`` when the simulator initialises and re-seeded from it when
+    the set point drifts more than ``reseed_tolerance`` away.
 
     @system
     name: DifferentialIKIntegrator
@@ -456,19 +441,12 @@ class DifferentialIKIntegrator(LeafSystem):
             )
         nominal = np.array(config.nominal_posture) if config.nominal_posture is not None else home
 
-        def make_params(with_accel: bool) -> DifferentialInverseKinematicsParameters:
-            p = DifferentialInverseKinematicsParameters(6, 6)
-            p.set_time_step(self._period)
-            p.set_joint_position_limits((lower, upper))
-            p.set_joint_velocity_limits((-vmax, vmax))
-            if with_accel:
-                p.set_joint_acceleration_limits((-amax, amax))
-            p.set_nominal_joint_position(nominal)
-            p.set_joint_centering_gain(config.nominal_posture_gain * np.eye(6))
-            return p
-
-        self._params = make_params(True)
-        self._params_no_accel = make_params(False)
+        self._ik = VelocityIkSolver(
+            JointLimits(lower, upper, vmax, amax),
+            self._period,
+            IkParams(nominal_gain=config.nominal_posture_gain, limited_alpha=self._limited_alpha),
+            nominal,
+        )
 
         x0 = np.concatenate([home, np.zeros(6), [float(IkStatus.OK)]])
         self._state = self.DeclareDiscreteState(x0)
@@ -508,34 +486,8 @@ class DifferentialIKIntegrator(LeafSystem):
         J = plant.CalcJacobianSpatialVelocity(
             ctx, JacobianWrtVariable.kV, self._frame_E, np.zeros(3), self._world, self._world
         )[:, self._v_idx]
-        V_drake = np.concatenate([V[3:], V[:3]])
-        # Exact shortcut: for an invertible square J the task has no null space, so the QP below
-        # maximises alpha alone and returns v = J^-1 V (alpha = 1) whenever that is feasible. Near a
-        # singularity J^-1 V is large and breaks the velocity limits, so the QP takes over.
-        try:
-            v = np.linalg.solve(J, V_drake)
-        except np.linalg.LinAlgError:
-            v = None
-        if v is not None:
-            q_next = q + v * self._period
-            if (
-                (np.abs(v) <= self._vmax).all()
-                and (np.abs(v - v_prev) <= self._amax * self._period).all()
-                and (q_next >= self._lower).all()
-                and (q_next <= self._upper).all()
-            ):
-                return v, IkStatus.OK
-        for params in (self._params, self._params_no_accel):
-            result = DoDifferentialInverseKinematics(q, v_prev, V_drake, J, params)
-            if result.status == DifferentialInverseKinematicsStatus.kSolutionFound:
-                v = np.asarray(result.joint_velocities, dtype=float).reshape(-1)
-                if v.size == 6 and np.all(np.isfinite(v)):
-                    alpha = float(np.dot(J @ v, V_drake) / np.dot(V_drake, V_drake))
-                    return v, (IkStatus.OK if alpha >= self._limited_alpha else IkStatus.LIMITED)
-                break
-            if result.status == DifferentialInverseKinematicsStatus.kStuck:
-                break
-        return np.zeros(6), IkStatus.STOPPED
+        solution = self._ik.solve(J[[3, 4, 5, 0, 1, 2]], V, q, v_prev)  # rows in paper order [v; w]
+        return solution.v, solution.status
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         x = context.get_discrete_state(self._state).get_value()
