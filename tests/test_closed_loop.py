@@ -62,11 +62,6 @@ def test_manual_paradigm_has_no_requests() -> None:
     assert "disambiguation" not in build_shared_control_diagram(scenario).systems
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the station's differential IK stops (ik_status STOPPED) near the MICO's wrist "
-    "singularity when leaving the pour pose; see the shared-control report",
-)
 def test_pouring_completes_both_stages() -> None:
     scenario = with_overrides(load_scenario("pouring"), interface="joystick", goal=0)
     r = run_trial(dataclasses.replace(scenario, duration=15.0), progress=False)
