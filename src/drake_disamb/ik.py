@@ -251,16 +251,17 @@ def _largest_scale(
     base: NDArray[np.float64], d: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]
 ) -> float | None:
     """Largest s in [0, 1] with lo <= base + s d <= hi, or None when no s in [0, 1] fits."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = (lo - base) / d
-        b = (hi - base) / d
-    up, down = d > 0, d < 0
-    s_lo = np.where(up, a, np.where(down, b, -np.inf)).max()
-    s_hi = np.where(up, b, np.where(down, a, np.inf)).min()
-    still = ~(up | down)
-    if still.any() and ((base[still] < lo[still]).any() or (base[still] > hi[still]).any()):
-        return None
-    s_lo, s_hi = max(float(s_lo), 0.0), min(float(s_hi), 1.0)
+    s_lo, s_hi = 0.0, 1.0
+    # A plain loop: for a handful of joints it is several times faster than numpy's ufuncs.
+    for b_j, d_j, lo_j, hi_j in zip(base.tolist(), d.tolist(), lo.tolist(), hi.tolist(), strict=True):
+        if d_j > 0.0:
+            s_lo = max(s_lo, (lo_j - b_j) / d_j)
+            s_hi = min(s_hi, (hi_j - b_j) / d_j)
+        elif d_j < 0.0:
+            s_lo = max(s_lo, (hi_j - b_j) / d_j)
+            s_hi = min(s_hi, (lo_j - b_j) / d_j)
+        elif b_j < lo_j or b_j > hi_j:
+            return None
     if s_hi < s_lo - 1e-12:
         return None
     return max(s_hi, s_lo)
