@@ -20,6 +20,7 @@ is capped at :data:`REPELLER_SPEED_CAP_FACTOR` times the maximum linear speed be
 
 from __future__ import annotations
 
+import functools
 import numbers
 from dataclasses import dataclass
 
@@ -27,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.geometry import (
+    _SMALL_BATCH,
     _check_last,
     _check_quat,
     _component_major,
@@ -84,6 +86,14 @@ class PotentialFieldConfig:
                 raise ValueError(f"PotentialFieldConfig.{name}: expected a finite number > 0, got {value!r}")
 
 
+@functools.lru_cache(maxsize=32)
+def _others(n: int) -> NDArray[np.float64]:
+    """``1 - I`` (n x n, read-only): row i sums every goal's repeller but goal i's own."""
+    m = 1.0 - np.eye(n)
+    m.setflags(write=False)
+    return m
+
+
 def _saturate(v: NDArray[np.float64], max_norm: float) -> NDArray[np.float64]:
     """Scale each vector along the last axis down to at most ``max_norm``."""
     norm = _norm3(v)
@@ -102,6 +112,9 @@ def _potential_field_rotation(
     # Every (pose, goal) pair, laid out component-major so the quaternion arithmetic runs on
     # long contiguous arrays (a batch of poses times a few goals is otherwise slow in numpy).
     batch = np.broadcast_shapes((*quat.shape[:-1], 1), goal_quats.shape[:-1])
+    if quat.size + goal_quats.size <= _SMALL_BATCH:  # a few quaternions: broadcasting is cheaper
+        w = config.attractor_gain_rotation * _orientation_error(quat[..., None, :], goal_quats)
+        return _saturate(w, config.max_angular_speed)
     q = _component_major(quat[..., None, :], batch)
     g = _component_major(goal_quats, batch)
     w = config.attractor_gain_rotation * _orientation_error(q, g)
@@ -122,13 +135,20 @@ def _potential_field_commands(
     if n > 1 and config.repeller_gain > 0:
         dist = _norm3(diff)  # (..., n, 1)
         active = (dist < config.repeller_radius) & (dist > 0.0)
-        safe = np.where(active, dist, 1.0)
-        speed = np.minimum(config.repeller_gain / safe, REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed)
-        rep = np.where(active, -diff / safe * speed, 0.0)  # goal j pushes the robot away from it
-        # Goal i feels every repeller except its own: an exact masked sum (no cancellation).
-        v = v + (1.0 - np.eye(n)) @ rep
+        if active.any():
+            safe = np.where(active, dist, 1.0)
+            speed = np.minimum(
+                config.repeller_gain / safe, REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed
+            )
+            rep = np.where(active, -diff / safe * speed, 0.0)  # goal j pushes the robot away from it
+            # Goal i feels every repeller except its own: an exact masked sum (no cancellation).
+            v = v + _others(n) @ rep
+        else:
+            v = v + 0.0  # what adding the all-zero repellers gives (a -0.0 becomes 0.0)
     w = _potential_field_rotation(quat, goal_quats, config)
     v = _saturate(v, config.max_linear_speed)
+    if v.shape == w.shape:
+        return np.concatenate((v, w), axis=-1)
     return np.concatenate(np.broadcast_arrays(v, w), axis=-1)
 
 

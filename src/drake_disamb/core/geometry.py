@@ -17,6 +17,8 @@ vectorised loops (the disambiguation forward projection) whose inputs were valid
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -37,7 +39,9 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
         raise ValueError(f"{name}: expected an array of numbers, got {x!r}") from exc
     if a.ndim == 0 or a.shape[-1] != size:
         raise ValueError(f"{name}: expected shape (..., {size}), got shape {a.shape}")
-    if not np.isfinite(a).all():
+    # One reduction decides the common all-finite case (an overflowing sum of finite numbers only
+    # sends us to the exact per-entry check).
+    if not math.isfinite(np.add.reduce(a, axis=None)) and not np.isfinite(a).all():
         raise ValueError(f"{name}: expected finite numbers, got {a.tolist()!r}")
     return a
 
@@ -45,6 +49,12 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
 def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
     """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised."""
     a = _check_last(q, 4, name)
+    if a.ndim == 1:  # one quaternion: the same operations on Python floats (fewer numpy calls)
+        w, x, y, z = a.tolist()
+        norm = math.sqrt(w * w + x * x + y * y + z * z)  # numpy sums 4 entries left to right too
+        if norm < 1e-12:
+            raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
+        return np.array((w / norm, x / norm, y / norm, z / norm))
     norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
     if np.any(norm < 1e-12):
         raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
@@ -77,8 +87,26 @@ def _component_major(a: NDArray[np.float64], batch: tuple[int, ...]) -> NDArray[
     return out.transpose((*range(1, out.ndim), 0))
 
 
+# The Hamilton product as index tables: component c of q1 (x) q2 is the sum over k, in this order,
+# of _HAMILTON_SIGN[c, k] * q1[k] * q2[_HAMILTON_RIGHT[c, k]] (the textbook formula term by term).
+_HAMILTON_RIGHT = np.array([[0, 1, 2, 3], [1, 0, 3, 2], [2, 3, 0, 1], [3, 2, 1, 0]])
+_HAMILTON_SIGN = np.array(
+    [[1.0, -1.0, -1.0, -1.0], [1.0, 1.0, 1.0, -1.0], [1.0, -1.0, 1.0, 1.0], [1.0, 1.0, -1.0, 1.0]]
+)
+_SMALL_BATCH = 256
+"""Inputs with at most this many entries take the few-numpy-calls paths (a control loop's one pose
+and a handful of goals, where numpy's per-call overhead dominates); larger batches take the
+component-major paths. Both evaluate the same floating-point operations in the same order, so they
+return identical numbers."""
+_QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
+
+
 def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Hamilton product; the result is component-major (see :func:`_component_major`)."""
+    """Hamilton product; for large batches the result is component-major (see :func:`_component_major`)."""
+    if q1.size + q2.size <= _SMALL_BATCH:
+        # All 16 products in one call; negating a product and adding it is exactly subtracting it.
+        t = q1[..., None, :] * q2[..., _HAMILTON_RIGHT] * _HAMILTON_SIGN
+        return t[..., 0] + t[..., 1] + t[..., 2] + t[..., 3]
     w1, x1, y1, z1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
     w2, x2, y2, z2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
     out = np.stack(
@@ -93,7 +121,7 @@ def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[
 
 
 def _quat_conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    return q * np.array([1.0, -1.0, -1.0, -1.0])
+    return q * _QUAT_CONJUGATE_SIGNS
 
 
 def _quat_from_rotvec(rv: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -114,6 +142,8 @@ def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
     s = _norm3(v)
     angle = 2.0 * np.arctan2(s, w)
     small = s < 0.5 * _SMALL_ANGLE
+    if s.size <= _SMALL_BATCH and not small.any():
+        return v * (angle / s)  # what the general expression below gives without tiny rotations
     # angle / s, with its series 2/w (w ~ 1 here) for tiny rotations.
     safe_s = np.where(small, 1.0, s)
     scale = np.where(small, 2.0 / np.where(small, w, 1.0), angle / safe_s)
@@ -121,7 +151,56 @@ def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _orientation_error(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> NDArray[np.float64]:
+    if q_from.size + q_to.size <= _FEW_QUATERNIONS:
+        return _orientation_error_few(q_from, q_to)
     return _quat_to_rotvec(_quat_multiply(q_to, _quat_conjugate(q_from)))
+
+
+_FEW_QUATERNIONS = 64
+"""Up to this many entries (16 quaternions) :func:`_orientation_error` runs on Python floats."""
+
+
+def _orientation_error_few(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`_orientation_error` for a few quaternions, on Python floats.
+
+    A control loop compares one pose with a handful of goals every tick, where numpy's per-call
+    overhead dominates. The operations are those of the array path, in the same order (IEEE-754
+    ``+ - * /`` and ``sqrt`` round the same on Python floats), and the one transcendental function
+    is numpy's ``arctan2`` on all pairs at once, so the result is bit-for-bit the array path's
+    (``tests/test_geometry.py`` checks it).
+    """
+    if q_from.shape == q_to.shape:
+        shape, froms, tos = q_from.shape, q_from.reshape(-1, 4).tolist(), q_to.reshape(-1, 4).tolist()
+    elif q_from.ndim == 1 or q_to.ndim == 1:  # one quaternion against several
+        shape = q_to.shape if q_from.ndim == 1 else q_from.shape
+        froms = q_from.reshape(-1, 4).tolist()
+        tos = q_to.reshape(-1, 4).tolist()
+        if len(froms) == 1:
+            froms = froms * len(tos)
+        else:
+            tos = tos * len(froms)
+    else:
+        a, b = np.broadcast_arrays(q_from, q_to)
+        shape, froms, tos = a.shape, a.reshape(-1, 4).tolist(), b.reshape(-1, 4).tolist()
+    vectors, norms, ws = [], [], []
+    for (w1, x1, y1, z1), (w2, x2, y2, z2) in zip(tos, froms, strict=True):
+        x2, y2, z2 = x2 * -1.0, y2 * -1.0, z2 * -1.0  # conjugate of q_from (keeps the sign of 0)
+        w = w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2  # q_to (x) conj(q_from)
+        x = w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2
+        y = w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2
+        z = w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2
+        if w < 0.0:  # shortest path
+            w, x, y, z = -w, -x, -y, -z
+        vectors.append((x, y, z))
+        norms.append(math.sqrt(x * x + y * y + z * z))
+        ws.append(w)
+    angles = (2.0 * np.arctan2(norms, ws)).tolist()
+    out = []
+    for (x, y, z), s, w, angle in zip(vectors, norms, ws, angles, strict=True):
+        # angle / s, with its series 2/w (w ~ 1 here) for tiny rotations
+        scale = 2.0 / w if s < 0.5 * _SMALL_ANGLE else angle / s
+        out.append((x * scale, y * scale, z * scale))
+    return np.array(out).reshape(*shape[:-1], 3)
 
 
 # ----------------------------------------------------------------------------------------------
