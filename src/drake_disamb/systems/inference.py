@@ -28,6 +28,7 @@ state over the new set (the multi-step task). The algorithms are the numpy core'
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import replace
 
@@ -70,6 +71,8 @@ def _check_square(matrix: ArrayLike | None, n: int, name: str) -> NDArray[np.flo
 
 def _goals_changed(new: NDArray[np.float64], old: NDArray[np.float64], tol: float) -> bool:
     """True if any entry moved by more than ``tol`` or changed between finite and NaN."""
+    if np.array_equal(new, old):  # the common case, every tick (equal arrays hold no NaN)
+        return False
     nan_new, nan_old = np.isnan(new), np.isnan(old)
     diff = np.abs(np.where(nan_new | nan_old, 0.0, new - old))
     return bool(np.any(diff > tol) or np.any(nan_new != nan_old))
@@ -110,7 +113,9 @@ class _IntentInferenceBase(LeafSystem):
 
     def _command(self, context: Context) -> NDArray[np.float64]:
         u = np.asarray(self._u_h.Eval(context), dtype=float)
-        if not np.all(np.isfinite(u)):
+        # One reduction decides the common all-finite case (an overflowing sum of finite entries
+        # only takes the exact check).
+        if not math.isfinite(np.add.reduce(u)) and not np.all(np.isfinite(u)):
             if not self._warned:
                 warnings.warn(
                     f"{self.get_name() or type(self).__name__}: non-finite human command "
