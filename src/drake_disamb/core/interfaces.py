@@ -32,10 +32,11 @@ the request's rising edge), holds the sanitised raw signal, and returns the even
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -220,7 +221,7 @@ class InterfaceState:
             self.request_count,
             self.nonfinite_count,
         ]
-        return np.concatenate((np.asarray(head, dtype=float), np.asarray(self.held_raw, dtype=float)))
+        return np.array([*head, *np.asarray(self.held_raw, dtype=float).tolist()])
 
     @classmethod
     def from_vector(cls, x: ArrayLike) -> InterfaceState:
@@ -228,13 +229,14 @@ class InterfaceState:
         v = np.asarray(x, dtype=float)
         if v.shape != (cls.VECTOR_SIZE,):
             raise ValueError(f"InterfaceState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
+        mode, prev_mode, prev_request, switches, requests, nonfinite = v[:6].tolist()
         return cls(
-            mode=int(round(v[0])),
-            prev_mode_button=float(v[1]),
-            prev_request_button=float(v[2]),
-            mode_switch_count=int(round(v[3])),
-            request_count=int(round(v[4])),
-            nonfinite_count=int(round(v[5])),
+            mode=int(round(mode)),
+            prev_mode_button=prev_mode,
+            prev_request_button=prev_request,
+            mode_switch_count=int(round(switches)),
+            request_count=int(round(requests)),
+            nonfinite_count=int(round(nonfinite)),
             held_raw=v[6:].copy(),
         )
 
@@ -255,15 +257,17 @@ def sanitize_raw(raw: ArrayLike, config: InterfaceConfig) -> tuple[NDArray[np.fl
             f"raw ({config.kind} {list(RAW_LAYOUTS[config.kind])}): "
             f"expected {RAW_SIZE} numbers, got {r.tolist()}"
         )
-    finite = np.isfinite(r)
-    r = np.where(finite, r, 0.0)
-    clean = np.empty(RAW_SIZE)
+    # Four numbers: Python floats are cheaper than numpy calls here.
+    values = r.tolist()
+    finite = [math.isfinite(v) for v in values]
+    a, b, c, d = (v if ok else 0.0 for v, ok in zip(values, finite, strict=True))
+    threshold = config.button_threshold
     if config.kind == "joystick":
-        clean[:2] = np.clip(r[:2], -1.0, 1.0)
+        axes = [min(max(a, -1.0), 1.0), min(max(b, -1.0), 1.0)]
     else:
-        clean[:2] = (r[:2] >= config.button_threshold).astype(float)
-    clean[2:] = (r[2:] >= config.button_threshold).astype(float)
-    return clean, not bool(np.all(finite))
+        axes = [1.0 if a >= threshold else 0.0, 1.0 if b >= threshold else 0.0]
+    clean = np.array([*axes, 1.0 if c >= threshold else 0.0, 1.0 if d >= threshold else 0.0])
+    return clean, not all(finite)
 
 
 def command_from_raw(
@@ -274,17 +278,23 @@ def command_from_raw(
     Returns ``(u_h, gripper)``: ``u_h`` is ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s; zero in the
     gripper mode), ``gripper`` the finger opening speed (m/s; nonzero only in the gripper mode).
     """
-    r = np.asarray(clean_raw, dtype=float)
+    r = np.asarray(clean_raw, dtype=float).tolist()
     dims = config.modes[mode]
     if config.kind == "joystick":
         drives = r[: len(dims)]
     else:
-        drives = np.full(len(dims), r[0] - r[1])
-    speeds = config.dim_speeds()
-    u7 = np.zeros(7)
+        drives = [r[0] - r[1]] * len(dims)
+    speeds = _dim_speeds(config)
+    u7 = [0.0] * 7
     for dim, drive in zip(dims, drives, strict=True):
         u7[dim] = drive * speeds[dim]
-    return u7[:6], float(u7[GRIPPER_DIM])
+    return np.array(u7[:6]), u7[GRIPPER_DIM]
+
+
+@functools.lru_cache(maxsize=64)
+def _dim_speeds(config: InterfaceConfig) -> tuple[float, ...]:
+    """``config.dim_speeds()`` as a tuple, once per (frozen) configuration."""
+    return tuple(config.dim_speeds().tolist())
 
 
 def next_mode(mode: int, n_modes: int) -> int:
@@ -375,8 +385,7 @@ def interface_update(
             events.append(InterfaceEvent(float(time), "disambiguation_switch", mode, choice))
             mode = choice
 
-    new_state = replace(
-        state,
+    new_state = InterfaceState(
         mode=mode,
         prev_mode_button=float(mode_level),
         prev_request_button=float(request_level),

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
+from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
 
 from drake_disamb.core.interfaces import (
     RAW_LAYOUTS,
@@ -97,9 +97,10 @@ class InterfaceSystem(LeafSystem):
             switch and request with its time, in order.
 
     State: discrete ``[mode, previous mode-button level, previous request-button level, mode-switch
-    count, request count, non-finite count, held raw (4)]`` and the abstract event log; both are
-    updated together by a periodic unrestricted update every ``config.control_period`` seconds
-    (first update at t = 0).
+    count, request count, non-finite count, held raw (4)]``, one more discrete group per vector
+    output holding its value (so the outputs are state output ports, evaluated without calling
+    Python), and the abstract event log; all are updated together by a periodic unrestricted update
+    every ``config.control_period`` seconds (first update at t = 0).
 
     Attributes:
         config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
@@ -118,28 +119,21 @@ class InterfaceSystem(LeafSystem):
         self.arm_modes: list[list[int]] = [list(m) for m in config.arm_modes]
         self.raw_layout: tuple[str, ...] = RAW_LAYOUTS[config.kind]
 
-        self._state_index = self.DeclareDiscreteState(initial_state(config).to_vector())
+        initial = initial_state(config)
+        self._state_index = self.DeclareDiscreteState(initial.to_vector())
         self._log_index = self.DeclareAbstractState(AbstractValue.Make(EventLog()))
+        # Every vector output is a copy of state, so each gets its own discrete group, written by
+        # the same update as the main group, and a state output port (no Python on evaluation).
+        self._output_groups = {
+            name: self.DeclareDiscreteState(value) for name, value in self._output_values(initial).items()
+        }
 
         self._raw_port = self.DeclareVectorInputPort("raw", RAW_SIZE)
         self._disamb_port = self.DeclareVectorInputPort("disambiguation_mode", 1)
 
-        from_state = {self.discrete_state_ticket(self._state_index)}
-        self.DeclareVectorOutputPort("u_h", 6, self._calc_u_h, prerequisites_of_calc=from_state)
-        self.DeclareVectorOutputPort(
-            "gripper_command", 1, self._calc_gripper, prerequisites_of_calc=from_state
-        )
-        counters = (("mode", 0), ("mode_switch_count", 3), ("request_count", 4), ("nonfinite_count", 5))
-        for name, slot in counters:
-            self.DeclareVectorOutputPort(
-                name, 1, self._make_copy_calc(slot), prerequisites_of_calc=from_state
-            )
-        self.DeclareAbstractOutputPort(
-            "event_log",
-            lambda: AbstractValue.Make(EventLog()),
-            self._calc_event_log,
-            prerequisites_of_calc={self.abstract_state_ticket(self._log_index)},
-        )
+        for name, group in self._output_groups.items():
+            self.DeclareStateOutputPort(name, group)
+        self.DeclareStateOutputPort("event_log", self._log_index)
         self.DeclarePeriodicUnrestrictedUpdateEvent(config.control_period, 0.0, self._update)
 
     # -- helpers ---------------------------------------------------------------------------------
@@ -156,7 +150,7 @@ class InterfaceSystem(LeafSystem):
         if not (isinstance(mode, int | np.integer) and 0 <= mode < len(self.modes)):
             raise ValueError(f"mode: expected an integer in [0, {len(self.modes) - 1}], got {mode!r}")
         state = replace(self._read_state(context), mode=int(mode))
-        context.get_mutable_discrete_state(self._state_index).set_value(state.to_vector())
+        self._write(state, context.get_mutable_discrete_state())
 
     def get_event_log(self, context: Context) -> EventLog:
         """The events logged so far in ``context`` (an immutable tuple)."""
@@ -179,30 +173,28 @@ class InterfaceSystem(LeafSystem):
         after, events = interface_update(
             before, raw, context.get_time(), self.config, read_disambiguation_mode, warn
         )
-        state.get_mutable_discrete_state(self._state_index).set_value(after.to_vector())
+        self._write(after, state.get_mutable_discrete_state())
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
         return EventStatus.Succeeded()
 
-    def _calc_u_h(self, context: Context, output: BasicVector) -> None:
-        s = self._read_state(context)
-        u_h, _ = command_from_raw(s.held_raw, s.mode, self.config)
-        output.SetFromVector(u_h)
+    def _output_values(self, state: InterfaceState) -> dict[str, list[float]]:
+        """The value of every vector output port for ``state`` (port name -> vector)."""
+        u_h, gripper = command_from_raw(state.held_raw, state.mode, self.config)
+        return {
+            "u_h": u_h.tolist(),
+            "gripper_command": [gripper],
+            "mode": [float(state.mode)],
+            "mode_switch_count": [float(state.mode_switch_count)],
+            "request_count": [float(state.request_count)],
+            "nonfinite_count": [float(state.nonfinite_count)],
+        }
 
-    def _calc_gripper(self, context: Context, output: BasicVector) -> None:
-        s = self._read_state(context)
-        _, gripper = command_from_raw(s.held_raw, s.mode, self.config)
-        output.SetFromVector([gripper])
-
-    def _make_copy_calc(self, slot: int):
-        def calc(context: Context, output: BasicVector) -> None:
-            output.SetFromVector([context.get_discrete_state(self._state_index).get_value()[slot]])
-
-        return calc
-
-    def _calc_event_log(self, context: Context, output: AbstractValue) -> None:
-        output.set_value(context.get_abstract_state(self._log_index).get_value())
+    def _write(self, state: InterfaceState, discrete_state) -> None:  # noqa: ANN001 (DiscreteValues)
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(state.to_vector())
+        for name, value in self._output_values(state).items():
+            discrete_state.get_mutable_vector(self._output_groups[name]).SetFromVector(value)
 
 
 class JoystickInterface(InterfaceSystem):
