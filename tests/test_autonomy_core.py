@@ -149,3 +149,29 @@ def test_position_and_orientation_batches_broadcast() -> None:
     assert u.shape == (5, 3, 6) and u.flags.c_contiguous
     for b in range(5):
         np.testing.assert_array_equal(u[b], potential_field_commands(position, quats[b], goals, goal_quats))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_from_poses_matches_the_array_kernel_bit_for_bit(seed: int) -> None:
+    """potential_field_commands_from_poses (the Drake system's path: Python floats when no repeller
+    acts) gives exactly the numbers of potential_field_commands; bad poses raise ValueError."""
+    from drake_disamb.core.autonomy import potential_field_commands_from_poses
+
+    rng = np.random.default_rng(seed)
+    config = PotentialFieldConfig()
+    for n in (1, 2, 5, 7):
+        for case in ("far", "near", "at"):
+            ee = np.r_[rng.normal(scale=0.3, size=3), rng.normal(size=4) * rng.choice([0.1, 1.0, 5.0])]
+            goals = np.c_[rng.normal(scale=0.3, size=(n, 3)), rng.normal(size=(n, 4))]
+            if case == "near":  # a repeller acts (the array kernel runs)
+                goals[0, :3] = ee[:3] + rng.normal(scale=0.02, size=3)
+            elif case == "at":
+                goals[0, :3] = ee[:3]
+            expected = potential_field_commands(ee[:3], ee[3:], goals[:, :3], goals[:, 3:], config)
+            got = potential_field_commands_from_poses(ee, goals, config)
+            np.testing.assert_array_equal(got, expected)
+            assert not np.any(np.signbit(got) != np.signbit(expected))
+    with pytest.raises(ValueError, match="quat"):
+        potential_field_commands_from_poses(np.r_[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], goals, config)
+    with pytest.raises(ValueError, match="finite"):
+        potential_field_commands_from_poses(np.r_[np.nan, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0], goals, config)

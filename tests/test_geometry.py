@@ -187,8 +187,13 @@ def test_few_quaternion_paths_are_bit_identical_to_the_array_paths(seed: int) ->
             array = g._quat_to_rotvec(g._quat_multiply(b, g._quat_conjugate(a)))
             np.testing.assert_array_equal(few, array)
             assert few.shape == np.broadcast_shapes(a.shape, b.shape)[:-1] + (3,)
-        # One quaternion validated on Python floats == the same row validated as an array.
-        np.testing.assert_array_equal(g._check_quat(q_from, "q"), g._check_quat(q_from[None], "q")[0])
+        # A few quaternions validated on Python floats == the same rows validated as an array.
+        np.testing.assert_array_equal(
+            g._check_quat(q_from, "q"), g._check_quat(np.tile(q_from, (40, 1)), "q")[0]
+        )
+        np.testing.assert_array_equal(
+            g._check_quat(q_to, "q"), g._check_quat(np.tile(q_to, (20, 1)), "q")[:n]
+        )
     with pytest.raises(ValueError, match="zero norm"):
         g._check_quat(np.zeros(4), "q")
     with pytest.raises(ValueError, match="finite"):

@@ -21,6 +21,7 @@ is capped at :data:`REPELLER_SPEED_CAP_FACTOR` times the maximum linear speed be
 from __future__ import annotations
 
 import functools
+import math
 import numbers
 from dataclasses import dataclass
 
@@ -34,6 +35,8 @@ from drake_disamb.core.geometry import (
     _component_major,
     _norm3,
     _orientation_error,
+    _orientation_error_pairs,
+    _unit_quat_floats,
 )
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
@@ -206,6 +209,9 @@ def potential_field_commands_from_poses(
         name = "quat" if not np.isfinite(ee_pose).all() else "goal_quats"
         bad = ee_pose if name == "quat" else goal_poses
         raise ValueError(f"{name}: expected finite poses, got {bad.tolist()!r}")
+    one = _potential_field_one(ee_pose.tolist(), goal_poses.tolist(), config)
+    if one is not None:
+        return np.array(one)
     q = ee_pose[3:]
     gq = goal_poses[:, 3:]
     qn = np.sqrt(np.add.reduce(q * q, axis=-1, keepdims=True))  # as _check_quat
@@ -215,3 +221,42 @@ def potential_field_commands_from_poses(
     if np.any(gn < 1e-12):
         raise ValueError(f"goal_quats: a quaternion has (near) zero norm, got {gq.tolist()!r}")
     return _potential_field_commands(ee_pose[:3], q / qn, goal_poses[:, :3], gq / gn, config)
+
+
+def _saturate_floats(x: float, y: float, z: float, max_norm: float) -> tuple[float, float, float]:
+    """:func:`_saturate` of one 3-vector on Python floats (same operations, same order)."""
+    scale = min(1.0, max_norm / max(math.sqrt(x * x + y * y + z * z), 1e-300))
+    return x * scale, y * scale, z * scale
+
+
+def _potential_field_one(
+    ee_pose: list[float], goal_poses: list[list[float]], config: PotentialFieldConfig
+) -> list[list[float]] | None:
+    """The commands of :func:`potential_field_commands_from_poses` on Python floats, for one pose
+    with no repeller in range (the usual case: a control loop's tick). The operations are the array
+    kernel's, in the same order, so the numbers are bit for bit the same
+    (``tests/test_autonomy_core.py`` checks it). ``None`` when a repeller acts or a quaternion is
+    (near) zero: the array kernel then runs (and raises)."""
+    q = _unit_quat_floats(ee_pose[3:])
+    goal_quats = [_unit_quat_floats(g[3:]) for g in goal_poses]
+    if q is None or None in goal_quats:
+        return None
+    x0, x1, x2 = ee_pose[:3]
+    diffs = [(g[0] - x0, g[1] - x1, g[2] - x2) for g in goal_poses]
+    kt = config.attractor_gain_translation
+    linear = [(kt * d0, kt * d1, kt * d2) for d0, d1, d2 in diffs]
+    if len(goal_poses) > 1 and config.repeller_gain > 0:
+        radius = config.repeller_radius
+        for d0, d1, d2 in diffs:
+            dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            if dist < radius and dist > 0.0:
+                return None  # a repeller acts: the array kernel sums them
+        linear = [(a + 0.0, b + 0.0, c + 0.0) for a, b, c in linear]  # + the all-zero repellers
+    kr = config.attractor_gain_rotation
+    angular = _orientation_error_pairs([q] * len(goal_quats), goal_quats)
+    out = []
+    for (a, b, c), (d, e, f) in zip(linear, angular, strict=True):
+        v = _saturate_floats(a, b, c, config.max_linear_speed)
+        w = _saturate_floats(kr * d, kr * e, kr * f, config.max_angular_speed)
+        out.append([*v, *w])
+    return out
