@@ -40,9 +40,10 @@ counter kept in the state, so a run is a pure function of the seed.
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -195,7 +196,7 @@ class UserState:
             self.presses,
             self.target_mode,
         ]
-        return np.concatenate((np.asarray(head, dtype=float), np.asarray(self.raw, dtype=float)))
+        return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 
     @classmethod
     def from_vector(cls, x: ArrayLike) -> UserState:
@@ -203,15 +204,34 @@ class UserState:
         v = np.asarray(x, dtype=float)
         if v.shape != (cls.VECTOR_SIZE,):
             raise ValueError(f"UserState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
+        busy_until, requested, unhelped_since, draws, presses, target = v[:6].tolist()
         return cls(
-            busy_until=float(v[0]),
-            requested_at_start=bool(v[1] > 0.5),
-            unhelped_since=float(v[2]),
-            draws=int(round(v[3])),
-            presses=int(round(v[4])),
-            target_mode=int(round(v[5])),
+            busy_until=busy_until,
+            requested_at_start=requested > 0.5,
+            unhelped_since=unhelped_since,
+            draws=int(round(draws)),
+            presses=int(round(presses)),
+            target_mode=int(round(target)),
             raw=v[6:].copy(),
         )
+
+
+def _evolve(state: UserState, **changes: object) -> UserState:
+    """``dataclasses.replace(state, **changes)`` without its per-call field inspection (the user
+    steps every control tick). ``UserState`` has no ``__post_init__`` and no slots, so a copy of
+    the instance dictionary with the changes is exactly what ``replace`` builds."""
+    new = object.__new__(UserState)
+    new.__dict__.update(state.__dict__)
+    new.__dict__.update(changes)
+    return new
+
+
+@functools.lru_cache(maxsize=64)
+def _dim_tolerances(config: UserConfig) -> NDArray[np.float64]:
+    """``config.dim_tolerances()``, once per (frozen) configuration (read-only)."""
+    t = config.dim_tolerances()
+    t.setflags(write=False)
+    return t
 
 
 def goal_error(ee_pose: ArrayLike, goal_pose: ArrayLike, use_orientation: bool = True) -> NDArray[np.float64]:
@@ -243,15 +263,16 @@ def mode_remaining(
     error: ArrayLike, modes: tuple[tuple[int, ...], ...] | list[list[int]], config: UserConfig
 ) -> NDArray[np.float64]:
     """Remaining error of every mode: ``max_{d in mode} |error_d| / tolerance_d`` (gripper dims 0)."""
-    ratio = np.abs(np.asarray(error, dtype=float)) / config.dim_tolerances()
-    ratio7 = np.concatenate((ratio, [0.0]))
+    ratio = np.abs(np.asarray(error, dtype=float)) / _dim_tolerances(config)
+    ratio7 = [*ratio.tolist(), 0.0]
     return np.array([max(ratio7[d] for d in mode) for mode in modes])
 
 
 def helped(belief: ArrayLike, goal_index: int, rho1: float) -> bool:
     """True when the autonomy assists toward the user's goal: argmax is it and ``p(g*) > rho1``."""
     p = np.asarray(belief, dtype=float)
-    if not np.all(np.isfinite(p)):
+    # One reduction decides the common all-finite case (an overflowing sum takes the exact check).
+    if not math.isfinite(np.add.reduce(p)) and not np.isfinite(p).all():
         return False
     g = int(np.argmax(p))
     return g == goal_index and p[g] > rho1
@@ -299,7 +320,7 @@ def user_step(
     err = goal_error(ee_pose, goals[goal_index], config.use_orientation)
 
     if goal_reached(err, config):
-        return replace(state, raw=zero, unhelped_since=NOT_COUNTING, target_mode=-1)
+        return _evolve(state, raw=zero, unhelped_since=NOT_COUNTING, target_mode=-1)
 
     # The "unhelped" timer runs whenever the belief is known, also while reacting.
     unhelped_since = NOT_COUNTING
@@ -307,10 +328,10 @@ def user_step(
         rho1 = RHO1_TIMES_N / n if config.rho1 is None else config.rho1
         if not helped(belief, goal_index, rho1):
             unhelped_since = time if state.unhelped_since == NOT_COUNTING else state.unhelped_since
-    state = replace(state, unhelped_since=unhelped_since)
+    state = _evolve(state, unhelped_since=unhelped_since)
 
     if time < state.busy_until - 1e-9:
-        return replace(state, raw=zero)
+        return _evolve(state, raw=zero)
 
     def press(button: int, **changes: object) -> UserState:
         wait = config.reaction_time
@@ -320,7 +341,7 @@ def user_step(
             draws += 1
         raw = zero.copy()
         raw[button] = 1.0
-        return replace(
+        return _evolve(
             state, raw=raw, busy_until=time + wait, draws=draws, presses=state.presses + 1, **changes
         )
 
@@ -342,13 +363,13 @@ def user_step(
     if target < 0 and remaining[mode] <= 1.0:
         target = int(np.argmax(remaining[: len(modes) - 1]))
         if target == mode:  # unreachable with validated tolerances: nothing left anywhere
-            return replace(state, raw=zero, target_mode=-1)
+            return _evolve(state, raw=zero, target_mode=-1)
     if target >= 0:
         return press(MODE_BUTTON, target_mode=target)
-    state = replace(state, target_mode=-1)
+    state = _evolve(state, target_mode=-1)
 
     dims = modes[mode]
-    tol = config.dim_tolerances()
+    tol = _dim_tolerances(config)
     speeds = interface.dim_speeds()
     raw = zero.copy()
     draws = state.draws
@@ -370,4 +391,4 @@ def user_step(
                 raw[0] = 1.0
             elif err[d] < -tol[d]:
                 raw[1] = 1.0
-    return replace(state, raw=raw, draws=draws)
+    return _evolve(state, raw=raw, draws=draws)

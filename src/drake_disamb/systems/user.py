@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.core.interfaces import RAW_LAYOUTS, RAW_SIZE, InterfaceConfig
 from drake_disamb.core.user import UserConfig, UserState, user_step
@@ -48,7 +49,7 @@ class SimulatedUser(LeafSystem):
             seconds with everything released.
 
     State: discrete ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
-    raw (4)]``,
+    raw (4)]`` and ``raw`` again in a group of its own (the state output port ``raw``),
     updated every ``interface.control_period`` seconds from t = 0 (give it the interface's period
     so each press is seen as exactly one rising edge). At run time a non-finite pose or an invalid
     mode makes the user let go (raw zeros) with one warning.
@@ -98,14 +99,15 @@ class SimulatedUser(LeafSystem):
         self.raw_layout = RAW_LAYOUTS[self.interface.kind]
 
         self._state_index = self.DeclareDiscreteState(UserState().to_vector())
+        # The raw signal again, in a group of its own: the output is a state output port (its
+        # evaluation calls no Python).
+        self._raw_index = self.DeclareDiscreteState(np.zeros(RAW_SIZE))
         self._mode_port = self.DeclareVectorInputPort("mode", 1)
         self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._stage_port = self.DeclareVectorInputPort("stage", 1)
-        self.DeclareVectorOutputPort(
-            "raw", RAW_SIZE, self._calc_raw, prerequisites_of_calc={self.xd_ticket()}
-        )
+        self.DeclareStateOutputPort("raw", self._raw_index)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self._warned = False
 
@@ -129,20 +131,24 @@ class SimulatedUser(LeafSystem):
         stage = 0.0
         if self._stage_port.HasValue(context):
             stage = float(self._stage_port.Eval(context)[0])
-        if np.isfinite(stage) and stage >= len(self.goal_indices):  # the task is done: let go
+        if math.isfinite(stage) and stage >= len(self.goal_indices):  # the task is done: let go
             new = replace(state, raw=np.zeros(RAW_SIZE), target_mode=-1)
-            discrete_state.get_mutable_vector(self._state_index).SetFromVector(new.to_vector())
+            self._write(new, discrete_state, state)
             return EventStatus.Succeeded()
         n_modes = len(self.interface.modes)
+        qw, qx, qy, qz = ee[3:].tolist()
         usable = (
-            np.isfinite(stage)
+            math.isfinite(stage)
             and stage >= 0
-            and np.isfinite(mode_value)
+            and math.isfinite(mode_value)
             and mode_value == round(mode_value)
             and 0 <= mode_value < n_modes
-            and np.all(np.isfinite(ee))
-            and np.all(np.isfinite(goals))
-            and np.linalg.norm(ee[3:]) > 1e-12
+            # one reduction for the common all-finite case, the exact check otherwise
+            and (
+                math.isfinite(np.add.reduce(ee) + np.add.reduce(goals))
+                or bool(np.isfinite(ee).all() and np.isfinite(goals).all())
+            )
+            and math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz) > 1e-12
         )
         if usable:
             try:
@@ -171,8 +177,13 @@ class SimulatedUser(LeafSystem):
                 )
                 self._warned = True
             new = replace(state, raw=np.zeros(RAW_SIZE))
-        discrete_state.get_mutable_vector(self._state_index).SetFromVector(new.to_vector())
+        self._write(new, discrete_state, state)
         return EventStatus.Succeeded()
 
-    def _calc_raw(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(context.get_discrete_state(self._state_index).get_value()[-RAW_SIZE:])
+    def _write(self, state: UserState, discrete_state: DiscreteValues, before: UserState) -> None:
+        # ``discrete_state`` starts as a copy of the current state: only changes are written.
+        vector = state.to_vector()
+        if not np.array_equal(vector, before.to_vector()):
+            discrete_state.get_mutable_vector(self._state_index).SetFromVector(vector)
+            if not np.array_equal(state.raw, before.raw):
+                discrete_state.get_mutable_vector(self._raw_index).SetFromVector(state.raw)
