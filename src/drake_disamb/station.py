@@ -362,7 +362,9 @@ class _RateLimitedWarner:
 def _read_command(port: InputPort, context: Context, size: int) -> tuple[NDArray[np.float64], bool]:
     """The command on ``port`` and whether it is valid (finite, right size); invalid -> zeros."""
     value = np.asarray(port.Eval(context), dtype=float).reshape(-1)
-    if value.size != size or not np.all(np.isfinite(value)):
+    # One reduction decides the common all-finite case (an overflowing sum of finite entries only
+    # takes the exact check).
+    if value.size != size or (not math.isfinite(np.add.reduce(value)) and not np.isfinite(value).all()):
         return np.zeros(size), False
     return value, True
 
@@ -500,7 +502,9 @@ class DifferentialIKIntegrator(LeafSystem):
                 context.get_time(), "non-finite command treated as zero (ik_status = INVALID_COMMAND)"
             )
         meas = np.asarray(self._measured_port.Eval(context), dtype=float)[:6]
-        if np.all(np.isfinite(meas)) and np.max(np.abs(q - meas)) > self._reseed_tol:
+        # The largest drift; NaN or inf when the measurement is not finite (then no reseed).
+        drift = float(np.max(np.abs(q - meas)))
+        if self._reseed_tol < drift < math.inf:
             q = np.clip(meas, self._lower, self._upper)
             v = np.zeros(6)
             if status == IkStatus.OK:
@@ -576,11 +580,12 @@ class GripperOpeningIntegrator(LeafSystem):
         return EventStatus.Succeeded()
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        opening = float(context.get_discrete_state(self._state).get_value()[0])
-        cmd, valid = _read_command(self._command_port, context, 1)
-        if not valid:
+        opening = context.get_discrete_state(self._state).get_value()[0].item()
+        cmd = self._command_port.Eval(context)[0].item()
+        if not math.isfinite(cmd):
+            cmd = 0.0
             self._warner.warn(context.get_time(), "non-finite command treated as zero")
-        new = float(np.clip(opening + cmd[0] * self._period, 0.0, self._max))
+        new = min(max(opening + cmd * self._period, 0.0), self._max)  # np.clip of a finite number
         discrete_state.get_mutable_vector(self._state).SetFromVector([new, (new - opening) / self._period])
         return EventStatus.Succeeded()
 

@@ -182,7 +182,7 @@ def shared_control(
         and ua.shape == (p.shape[0], 6)
         and math.isfinite(np.add.reduce(uh) + np.add.reduce(p) + np.add.reduce(ua, axis=None))
     ):
-        return _shared_control_one(uh, p, ua, config)
+        return shared_control_one(uh, p, ua, config)
     n = p.shape[-1]
     g_star = np.argmax(p, axis=-1)
     p_star = np.take_along_axis(p, g_star[..., None], axis=-1)[..., 0]
@@ -201,16 +201,17 @@ _RHOS: dict[tuple[BlendingConfig, int], tuple[float, float, float]] = {}
 """``config.rhos(n)`` per (frozen, hashable) config and ``n``, validated once."""
 
 
-def _shared_control_one(
+def shared_control_one(
     uh: NDArray[np.float64], p: NDArray[np.float64], ua: NDArray[np.float64], config: BlendingConfig
 ) -> tuple[NDArray[np.float64], float, int]:
-    """:func:`shared_control` for one sample (``u_h (6,)``, ``belief (n,)``, ``u_a (n, 6)``).
+    """:func:`shared_control` for one sample (``u_h (6,)``, ``belief (n,)``, ``u_a (n, 6)`` arrays).
 
     A control loop blends one command per tick, where numpy's per-call overhead would dominate:
     this evaluates the same floating-point operations, in the same order, on Python floats
     (IEEE-754 ``+ - * /`` and ``sqrt`` round the same way), so it returns the very numbers of the
-    batch path (``tests/test_blending.py`` checks that bit for bit). Finite inputs only (the caller
-    sends anything else down the batch path).
+    batch path (``tests/test_blending.py`` checks that bit for bit). Finite inputs of these shapes
+    only, unchecked (:func:`shared_control` checks them and sends anything else down the batch
+    path); returns ``(u (6,), alpha, g_star)``.
     """
     n = p.shape[0]
     key = (config, n)

@@ -159,7 +159,8 @@ class InterfaceSystem(LeafSystem):
     # -- update and outputs ------------------------------------------------------------------------
 
     def _update(self, context: Context, state: State) -> EventStatus:
-        before = self._read_state(context)
+        vector = context.get_discrete_state(self._state_index).get_value()
+        before = InterfaceState.from_vector(vector)
         raw = self._raw_port.Eval(context)
 
         def read_disambiguation_mode() -> float | None:
@@ -173,7 +174,11 @@ class InterfaceSystem(LeafSystem):
         after, events = interface_update(
             before, raw, context.get_time(), self.config, read_disambiguation_mode, warn
         )
-        self._write(after, state.get_mutable_discrete_state())
+        # ``state`` starts as a copy of the current state: an unchanged state needs no writing (the
+        # common case: the same raw signal, mode and counts as in the previous period).
+        after_vector = after.to_vector()
+        if not np.array_equal(after_vector, vector):
+            self._write(after, state.get_mutable_discrete_state(), after_vector)
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
@@ -191,8 +196,10 @@ class InterfaceSystem(LeafSystem):
             "nonfinite_count": [float(state.nonfinite_count)],
         }
 
-    def _write(self, state: InterfaceState, discrete_state) -> None:  # noqa: ANN001 (DiscreteValues)
-        discrete_state.get_mutable_vector(self._state_index).SetFromVector(state.to_vector())
+    def _write(self, state: InterfaceState, discrete_state, vector=None) -> None:  # noqa: ANN001
+        """Write ``state`` (and its ``vector``, if already computed) and every output group."""
+        vector = state.to_vector() if vector is None else vector
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(vector)
         for name, value in self._output_values(state).items():
             discrete_state.get_mutable_vector(self._output_groups[name]).SetFromVector(value)
 
