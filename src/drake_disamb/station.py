@@ -509,11 +509,12 @@ class DifferentialIKIntegrator(LeafSystem):
             v = np.zeros(6)
             if status == IkStatus.OK:
                 status = IkStatus.RESEEDED
-        elif not np.any(V):
+        elif not V.any():
             v = np.zeros(6)
         else:
             v, status = self._solve(q, v_prev, V)
-        q_next = np.clip(q + v * self._period, self._lower, self._upper)
+        # np.clip without its Python-level dispatch (the same values, NaN propagating alike).
+        q_next = np.minimum(np.maximum(q + v * self._period, self._lower), self._upper)
         discrete_state.get_mutable_vector(self._state).SetFromVector(
             np.concatenate([q_next, v, [float(status)]])
         )
@@ -620,8 +621,7 @@ class EndEffectorState(LeafSystem):
 
     def _calc_pose(self, context: Context, output: BasicVector) -> None:
         X = self._poses.Eval(context)[self._index]
-        q = X.rotation().ToQuaternion()
-        output.SetFromVector(np.concatenate([X.translation(), [q.w(), q.x(), q.y(), q.z()]]))
+        output.SetFromVector(np.concatenate([X.translation(), X.rotation().ToQuaternion().wxyz()]))
 
     def _calc_velocity(self, context: Context, output: BasicVector) -> None:
         V = self._vels.Eval(context)[self._index]

@@ -49,6 +49,9 @@ class SharedControlBlender(LeafSystem):
         alpha (1): the autonomy's share actually applied, in ``[0, rho3]``.
         g_star (1): index of the most likely goal.
 
+    The three outputs share one blending step, a cache entry that depends on the three inputs only
+    (computed once per change of the inputs, not per output or per integrator stage).
+
     **No user input.** The paper blends "always", so with ``assist_without_input=True`` a user who
     lets go is still driven toward ``g*`` at up to ``rho3 |u_a|`` (0.14 m/s with the default
     autonomy) until the belief relaxes below ``rho1`` -- a few seconds with the DFT's time

@@ -179,7 +179,9 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     State: continuous ``p`` (n) with time derivative
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
     projected so that ``sum(p)`` stays 1, with a positivity guard), integrated by the simulator's
-    integrator; discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
+    integrator (the drive, the part of the right-hand side that does not depend on ``p``, is a cache
+    entry on the inputs: computed once per control tick, not at every integrator stage);
+    discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex (guard against
     integrator error) or, if ``goal_poses`` changed, resets ``p`` to the rest state. At
     initialization ``p`` is the rest state.

@@ -1,0 +1,163 @@
+"""The control loop's systems compute each value once per change of what it depends on.
+
+Each system is driven in isolation with a fixed-input context; a counting wrapper on its Python
+calculation shows whether an evaluation recomputed or hit Drake's cache.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from drake_disamb.core.autonomy import PotentialFieldConfig
+from drake_disamb.core.inference import DFTParams
+from drake_disamb.core.interfaces import InterfaceConfig, InterfaceEvent
+from drake_disamb.systems.autonomy import PotentialFieldAutonomy
+from drake_disamb.systems.blending import SharedControlBlender
+from drake_disamb.systems.disambiguation import DisambiguationSystem
+from drake_disamb.systems.inference import FieldTheoreticIntentInference
+from drake_disamb.systems.interfaces import EventLog, HeadArrayInterface
+
+IDENTITY = [1.0, 0.0, 0.0, 0.0]
+GOALS = np.array([[0.3, -0.4, 0.1, *IDENTITY], [-0.2, -0.5, 0.2, 0.0, 1.0, 0.0, 0.0]])
+EE_POSE = np.array([0.0, -0.35, 0.3, 0.0, 1.0, 0.0, 0.0])
+
+
+def _count(obj: object, name: str) -> list[int]:
+    """Wrap ``obj.name`` (an instance attribute shadowing the method) to count its calls."""
+    calls = [0]
+    method = getattr(obj, name)
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        calls[0] += 1
+        return method(*args, **kwargs)
+
+    setattr(obj, name, counted)
+    return calls
+
+
+def test_blender_computes_one_step_for_all_outputs() -> None:
+    blender = SharedControlBlender(2)
+    calls = _count(blender, "_compute")
+    ctx = blender.CreateDefaultContext()
+    blender.GetInputPort("u_h").FixValue(ctx, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
+    blender.GetInputPort("belief").FixValue(ctx, [0.9, 0.1])
+    blender.GetInputPort("u_a").FixValue(ctx, np.arange(12.0) / 100)
+    u = blender.GetOutputPort("u").Eval(ctx).copy()
+    alpha = blender.GetOutputPort("alpha").Eval(ctx)[0]
+    assert blender.GetOutputPort("g_star").Eval(ctx)[0] == 0.0
+    assert calls[0] == 1  # one step serves u, alpha and g_star
+    assert alpha == pytest.approx(0.7) and np.all(np.isfinite(u))
+    ctx.SetTime(1.0)  # time is no prerequisite
+    blender.GetOutputPort("u").Eval(ctx)
+    assert calls[0] == 1
+    blender.GetInputPort("belief").FixValue(ctx, [0.5, 0.5])  # an input is
+    assert blender.GetOutputPort("alpha").Eval(ctx)[0] == 0.0
+    assert calls[0] == 2
+
+
+def _counting(monkeypatch: pytest.MonkeyPatch, module: object, name: str) -> list[int]:
+    """Replace ``module.name`` (a function the system calls) by a counting wrapper."""
+    calls = [0]
+    function = getattr(module, name)
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        calls[0] += 1
+        return function(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, counted)
+    return calls
+
+
+def test_autonomy_depends_on_its_inputs_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    from drake_disamb.systems import autonomy as module
+
+    calls = _counting(monkeypatch, module, "potential_field_commands_from_poses")
+    autonomy = PotentialFieldAutonomy(2, PotentialFieldConfig())
+    ctx = autonomy.CreateDefaultContext()
+    autonomy.GetInputPort("ee_pose").FixValue(ctx, EE_POSE)
+    autonomy.GetInputPort("goal_poses").FixValue(ctx, GOALS.ravel())
+    port = autonomy.GetOutputPort("u_a")
+    first = port.Eval(ctx).copy()
+    ctx.SetTime(3.0)  # neither time nor anything else but the two inputs is a prerequisite
+    np.testing.assert_array_equal(port.Eval(ctx), first)
+    assert calls[0] == 1
+    moved = EE_POSE.copy()
+    moved[0] += 0.05
+    autonomy.GetInputPort("ee_pose").FixValue(ctx, moved)
+    assert not np.array_equal(port.Eval(ctx), first)
+    assert calls[0] == 2
+
+
+def test_dft_drive_is_computed_once_per_input_change(monkeypatch: pytest.MonkeyPatch) -> None:
+    from drake_disamb.systems import inference as module
+
+    calls = _counting(monkeypatch, module, "dft_drive")
+    system = FieldTheoreticIntentInference(2, DFTParams(agreement=True), 0.01)
+    ctx = system.CreateDefaultContext()
+    system.GetInputPort("u_h").FixValue(ctx, [0.1, 0.0, 0.0, 0.0, 0.0, 0.05])
+    system.GetInputPort("ee_pose").FixValue(ctx, EE_POSE)
+    system.GetInputPort("goal_poses").FixValue(ctx, GOALS.ravel())
+    system.GetInputPort("u_a").FixValue(ctx, np.linspace(-0.1, 0.1, 12))
+    derivatives = system.AllocateTimeDerivatives()
+    rates = []
+    for p in ([0.5, 0.5], [0.7, 0.3]):  # two integrator stages: new time and state, same inputs
+        ctx.SetContinuousState(p)
+        ctx.SetTime(ctx.get_time() + 0.005)
+        system.CalcTimeDerivatives(ctx, derivatives)
+        rates.append(derivatives.CopyToVector())
+    assert calls[0] == 1
+    assert abs(sum(rates[0])) < 1e-12 and not np.allclose(rates[0], rates[1])
+    system.GetInputPort("u_h").FixValue(ctx, [0.0, 0.1, 0.0, 0.0, 0.0, 0.0])  # an input changes
+    system.CalcTimeDerivatives(ctx, derivatives)
+    assert calls[0] == 2
+
+
+def test_interface_outputs_are_state_and_follow_set_mode() -> None:
+    interface = HeadArrayInterface(InterfaceConfig(kind="head_array", initial_mode=0))
+    ctx = interface.CreateDefaultContext()
+    interface.GetInputPort("raw").FixValue(ctx, [1.0, 0.0, 0.0, 0.0])  # "left": + along the mode
+    interface.GetInputPort("disambiguation_mode").FixValue(ctx, [-1.0])
+    simulator = Simulator(interface, ctx)
+    simulator.AdvanceTo(0.005)  # the update at t = 0
+    np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0.1, 0, 0, 0, 0, 0])
+    interface.set_mode(ctx, 4)  # wy: the outputs follow at once (they are copies of state)
+    np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0, 0, 0, 0, 0.2, 0])
+    assert interface.GetOutputPort("mode").Eval(ctx)[0] == 4.0
+    # Periods with the same raw signal leave the state as it was (the update writes only changes).
+    before = ctx.get_discrete_state().get_vector(0).CopyToVector()
+    simulator.AdvanceTo(0.035)
+    np.testing.assert_array_equal(ctx.get_discrete_state().get_vector(0).CopyToVector(), before)
+    np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0, 0, 0, 0, 0.2, 0])
+
+
+def test_event_log_is_shared_by_copies() -> None:
+    log = EventLog((InterfaceEvent(0.5, "mode_switch", 0, 1),))
+    assert copy.deepcopy(log) is log and copy.copy(log) is log
+    assert log == (InterfaceEvent(0.5, "mode_switch", 0, 1),) and isinstance(log, tuple)
+
+
+def test_disambiguation_state_is_numeric_and_last_result_memoised() -> None:
+    system = DisambiguationSystem(2, [[0], [1], [2], [3], [4], [5]], control_period=0.01)
+    ctx = system.CreateDefaultContext()
+    assert ctx.num_abstract_states() == 0  # nothing to deep-copy at unrestricted updates
+    for name, value in (
+        ("belief", [0.5, 0.5]),
+        ("ee_pose", EE_POSE),
+        ("goal_poses", GOALS.ravel()),
+        ("current_mode", [0.0]),
+        ("request_count", [0.0]),
+    ):
+        system.GetInputPort(name).FixValue(ctx, np.asarray(value, dtype=float))
+    simulator = Simulator(system, ctx)
+    simulator.AdvanceTo(0.015)
+    system.GetInputPort("request_count").FixValue(ctx, [1.0])
+    simulator.AdvanceTo(0.025)
+    calls = _count(system, "_solve")
+    first = system.GetOutputPort("last_result").Eval(ctx)
+    simulator.AdvanceTo(0.055)  # the state is rewritten every tick with the same served request
+    assert system.GetOutputPort("last_result").Eval(ctx) is first
+    assert calls[0] == 1
