@@ -153,18 +153,20 @@ def test_position_and_orientation_batches_broadcast() -> None:
 
 @pytest.mark.parametrize("seed", range(8))
 def test_from_poses_matches_the_array_kernel_bit_for_bit(seed: int) -> None:
-    """potential_field_commands_from_poses (the Drake system's path: Python floats when no repeller
-    acts) gives exactly the numbers of potential_field_commands; bad poses raise ValueError."""
+    """potential_field_commands_from_poses (the Drake system's path, on Python floats) gives exactly
+    the numbers of potential_field_commands, repellers acting or not; bad poses raise ValueError."""
     from drake_disamb.core.autonomy import potential_field_commands_from_poses
 
     rng = np.random.default_rng(seed)
     config = PotentialFieldConfig()
     for n in (1, 2, 5, 7):
-        for case in ("far", "near", "at"):
+        for case in ("far", "near", "two near", "at"):
             ee = np.r_[rng.normal(scale=0.3, size=3), rng.normal(size=4) * rng.choice([0.1, 1.0, 5.0])]
             goals = np.c_[rng.normal(scale=0.3, size=(n, 3)), rng.normal(size=(n, 4))]
             if case == "near":  # a repeller acts (the array kernel runs)
                 goals[0, :3] = ee[:3] + rng.normal(scale=0.02, size=3)
+            elif case == "two near" and n > 2:  # two repellers act on every other goal
+                goals[:2, :3] = ee[:3] + rng.normal(scale=0.04, size=(2, 3))
             elif case == "at":
                 goals[0, :3] = ee[:3]
             expected = potential_field_commands(ee[:3], ee[3:], goals[:, :3], goals[:, 3:], config)

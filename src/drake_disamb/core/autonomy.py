@@ -229,14 +229,20 @@ def _saturate_floats(x: float, y: float, z: float, max_norm: float) -> tuple[flo
     return x * scale, y * scale, z * scale
 
 
+def _sum_products(products: list[float]) -> float:
+    total = products[0]
+    for x in products[1:]:
+        total += x
+    return total
+
+
 def _potential_field_one(
     ee_pose: list[float], goal_poses: list[list[float]], config: PotentialFieldConfig
 ) -> list[list[float]] | None:
     """The commands of :func:`potential_field_commands_from_poses` on Python floats, for one pose
-    with no repeller in range (the usual case: a control loop's tick). The operations are the array
-    kernel's, in the same order, so the numbers are bit for bit the same
-    (``tests/test_autonomy_core.py`` checks it). ``None`` when a repeller acts or a quaternion is
-    (near) zero: the array kernel then runs (and raises)."""
+    (a control loop's tick). The operations are the array kernel's, in the same order, so the
+    numbers are bit for bit the same (``tests/test_autonomy_core.py`` checks it). ``None`` when a
+    quaternion is (near) zero: the array kernel then runs (and raises)."""
     q = _unit_quat_floats(ee_pose[3:])
     goal_quats = [_unit_quat_floats(g[3:]) for g in goal_poses]
     if q is None or None in goal_quats:
@@ -245,13 +251,30 @@ def _potential_field_one(
     diffs = [(g[0] - x0, g[1] - x1, g[2] - x2) for g in goal_poses]
     kt = config.attractor_gain_translation
     linear = [(kt * d0, kt * d1, kt * d2) for d0, d1, d2 in diffs]
-    if len(goal_poses) > 1 and config.repeller_gain > 0:
-        radius = config.repeller_radius
+    n = len(goal_poses)
+    if n > 1 and config.repeller_gain > 0:
+        radius, gain = config.repeller_radius, config.repeller_gain
+        cap = REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed
+        reps = []
         for d0, d1, d2 in diffs:
             dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
             if dist < radius and dist > 0.0:
-                return None  # a repeller acts: the array kernel sums them
-        linear = [(a + 0.0, b + 0.0, c + 0.0) for a, b, c in linear]  # + the all-zero repellers
+                speed = min(gain / dist, cap)
+                reps.append((-d0 / dist * speed, -d1 / dist * speed, -d2 / dist * speed))
+            else:
+                reps.append((0.0, 0.0, 0.0))
+        if any(r != (0.0, 0.0, 0.0) for r in reps):
+            # (1 - I) @ reps as numpy's matmul sums it here: every product, left to right
+            # (tests/test_autonomy_core.py checks the result bit for bit).
+            others = [[0.0 if i == j else 1.0 for j in range(n)] for i in range(n)]
+            linear = [
+                tuple(
+                    v[k] + _sum_products([m * r[k] for m, r in zip(row, reps, strict=True)]) for k in range(3)
+                )
+                for v, row in zip(linear, others, strict=True)
+            ]
+        else:
+            linear = [(a + 0.0, b + 0.0, c + 0.0) for a, b, c in linear]  # + the all-zero repellers
     kr = config.attractor_gain_rotation
     angular = _orientation_error_pairs([q] * len(goal_quats), goal_quats)
     out = []
