@@ -17,7 +17,6 @@ from drake_disamb.core.inference import (
     dft_euler_step,
     dft_euler_update,
     dft_mass_conserving_rhs,
-    dft_mass_conserving_rhs_from_drive,
     dft_rhs,
     directedness,
     memory_step,
@@ -295,53 +294,3 @@ def test_bad_params_name_the_field(kwargs: dict, match: str) -> None:
 def test_rest_of_wrong_size_is_rejected() -> None:
     with pytest.raises(ValueError, match="rest"):
         dft_drive(np.zeros(3), np.zeros(3), np.ones((3, 3)), DFTParams(rest=np.array([0.5, 0.5])))
-
-
-@settings(max_examples=300, deadline=None)
-@given(
-    n=st.integers(1, 9),
-    seed=st.integers(0, 2**32 - 1),
-    agreement=st.booleans(),
-    zero_command_excitation=st.booleans(),
-    with_rest=st.booleans(),
-    command=st.sampled_from(["random", "zero", "translation", "huge"]),
-)
-def test_single_sample_paths_match_the_array_paths_bit_for_bit(
-    n: int,
-    seed: int,
-    agreement: bool,
-    zero_command_excitation: bool,
-    with_rest: bool,
-    command: str,
-) -> None:
-    """One belief (what the Drake system integrates) takes the Python-float paths of dft_drive,
-    dft_mass_conserving_rhs_from_drive and normalize_belief; a batch of one takes the array
-    paths. They must return the same numbers, bit for bit (9 goals and huge commands exercise
-    the fall-backs to the array path)."""
-    rng = np.random.default_rng(seed)
-    u_h = {
-        "random": rng.normal(scale=0.2, size=6),
-        "zero": np.zeros(6),
-        "translation": np.r_[rng.normal(scale=0.1, size=3), 0.0, 0.0, 0.0],
-        "huge": rng.normal(scale=1e300, size=6),
-    }[command]
-    x_r = rng.normal(scale=0.3, size=3)
-    x_g = rng.normal(scale=0.3, size=(n, 3))
-    x_g[0] = x_r if seed % 5 == 0 else x_g[0]  # a goal exactly at the robot
-    u_a = rng.normal(scale=0.2, size=(n, 6))
-    u_a[-1, 3:] = 0.0  # a goal without rotation
-    params = DFTParams(
-        agreement=agreement,
-        zero_command_excitation=zero_command_excitation,
-        rest=rng.dirichlet(np.ones(n)) if with_rest else None,
-    )
-    drive = dft_drive(u_h, x_r, x_g, params, u_a)
-    batch = dft_drive(u_h[None], x_r[None], x_g[None], params, u_a[None])[0]
-    np.testing.assert_array_equal(drive, batch)
-    p = rng.dirichlet(np.ones(n))
-    if seed % 3 == 0:
-        p[0] = 0.0  # the positivity guard may act
-    rhs = dft_mass_conserving_rhs_from_drive(p, drive, params)
-    np.testing.assert_array_equal(rhs, dft_mass_conserving_rhs_from_drive(p[None], batch[None], params)[0])
-    noisy = p + rng.normal(scale=0.05, size=n)
-    np.testing.assert_array_equal(normalize_belief(noisy), normalize_belief(noisy[None])[0])

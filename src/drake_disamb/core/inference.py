@@ -37,7 +37,6 @@ The two baselines share one recursion, :func:`posterior_update` (posterior propo
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -215,10 +214,6 @@ def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
     ``+inf`` (or the sum overflow), the mass goes uniformly to the infinite entries (or the vector
     is first scaled by its maximum), so the result is always a probability vector.
     """
-    if p.ndim == 1 and 0 < p.shape[0] < _FEW:
-        out = _normalize_one(p.tolist())
-        if out is not None:
-            return np.array(out)
     p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well
     # Fast path (the same sum, without the cost of an errstate context): when no entry exceeds
     # DBL_MAX / (2 n), every entry is finite and no row sum can overflow.
@@ -360,9 +355,6 @@ def dft_drive(
 
     ``drive = rest / tau2 + lambda @ sigma(xi)``.
     """
-    one = _dft_drive_one(u_h, x_r, x_g, params, u_a)
-    if one is not None:
-        return one
     s = biased_sigmoid(dft_xi(u_h, x_r, x_g, params, u_a))
     n = s.shape[-1]
     # DFTParams validated ``rest`` as a probability vector when it was built: only its length is
@@ -440,15 +432,6 @@ def dft_mass_conserving_rhs_from_drive(
     times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
     """
     p = np.asarray(p, dtype=float)
-    if (
-        p.ndim == 1
-        and 0 < p.shape[0] < _FEW
-        and params.transition is None
-        and params.euler_equivalent_step is None
-    ):
-        g = _mass_conserving_one(p.tolist(), np.asarray(drive, dtype=float).tolist(), params.tau1)
-        if g is not None:
-            return np.array(g)
     f = dft_rhs_from_drive(p, drive, params)
     total = f.sum(axis=-1, keepdims=True)
     g = f - p * total
@@ -462,141 +445,6 @@ def dft_mass_conserving_rhs_from_drive(
         free_mass = np.where(blocked, 0.0, np.maximum(p, 0.0)).sum(axis=-1, keepdims=True)
         share = np.divide(np.maximum(p, 0.0), free_mass, out=np.zeros_like(p), where=free_mass > 0)
         g = g + np.where(blocked, 0.0, share * excess)
-    return g
-
-
-# ----------------------------------------------------------------------------------------------
-# One sample on Python floats (the Drake systems' hot path)
-# ----------------------------------------------------------------------------------------------
-#
-# A control loop updates one belief over a handful of goals per tick, where numpy's per-call
-# overhead (a microsecond or more per operation) dwarfs the arithmetic. The functions below
-# evaluate the array paths' floating-point operations in the same order on Python floats; IEEE-754
-# ``+ - * /`` and ``sqrt`` round identically there, the one transcendental function (``exp``) is
-# still numpy's, and numpy's order of summation is mirrored: small reductions (fewer than 8
-# entries) add left to right, and ``einsum`` over 3 components adds ``(p0 + p2) + p1``. Inputs
-# outside that scope (batches, 8 or more goals, non-finite values, a transition or lambda matrix,
-# the Euler-equivalent flow, the positivity guard acting) return ``None`` and take the array path.
-# ``tests/test_core_inference.py`` checks both paths agree.
-
-_FEW = 8
-"""Fewer goals than this take the single-sample paths (numpy sums them left to right)."""
-
-
-def _dot3(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
-    """``einsum('...k,...k->...')`` of two 3-vectors, in numpy's order of summation."""
-    return (a0 * b0 + a2 * b2) + a1 * b1
-
-
-class _ArrayPath(Exception):
-    """Raised inside a single-sample path when only the array path handles the input."""
-
-
-def _unit3(x: float, y: float, z: float) -> tuple[float, float, float]:
-    """``_safe_unit`` of one finite 3-vector: ``v / |v|``, zero for a zero vector."""
-    norm = math.sqrt(_dot3(x, y, z, x, y, z))
-    if norm == math.inf:  # the array path rescales vectors whose norm overflows
-        raise _ArrayPath
-    d = norm if norm > 0 else math.inf
-    return x / d, y / d, z / d
-
-
-def _normalize_one(p: list[float]) -> list[float] | None:
-    """:func:`normalize_belief` of one vector of fewer than 8 entries, or None (array path)."""
-    q = [v if v >= TINY else TINY for v in p]  # fmax(p, TINY): NaN -> TINY as well
-    if not max(q) < _FAST_SUM_BOUND / len(q):
-        return None
-    total = q[0]
-    for v in q[1:]:
-        total += v
-    return [v / total for v in q]
-
-
-def _dft_drive_one(
-    u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike, params: DFTParams, u_a: ArrayLike | None
-) -> NDArray[np.float64] | None:
-    """:func:`dft_drive` of one sample on Python floats, or None when the array path must run."""
-    u = np.asarray(u_h, dtype=float)
-    xr = np.asarray(x_r, dtype=float)
-    xg = np.asarray(x_g, dtype=float)
-    if u.shape != (6,) or xr.shape != (3,) or xg.ndim != 2 or xg.shape[1] != 3 or not 0 < xg.shape[0] < _FEW:
-        return None
-    n = xg.shape[0]
-    lam = params.lam
-    if np.ndim(lam) != 0:
-        return None
-    ua = None
-    if params.agreement:
-        if u_a is None:
-            return None  # the array path raises the error
-        ua = np.asarray(u_a, dtype=float)
-        if ua.shape != (n, 6):
-            return None
-    uh = u.tolist()
-    x0, x1, x2 = xr.tolist()
-    goals = xg.tolist()
-    rows = ua.tolist() if ua is not None else []
-    if not math.isfinite(sum(uh) + x0 + x1 + x2 + sum(map(sum, goals)) + sum(map(sum, rows))):
-        return None  # NaN/inf anywhere: the array path sanitises
-    try:
-        return _dft_drive_floats(uh, (x0, x1, x2), goals, rows, params)
-    except _ArrayPath:
-        return None
-
-
-def _dft_drive_floats(
-    uh: list[float],
-    xr: tuple[float, float, float],
-    goals: list[list[float]],
-    rows: list[list[float]],
-    params: DFTParams,
-) -> NDArray[np.float64]:
-    n = len(goals)
-    x0, x1, x2 = xr
-    diffs = [(g0 - x0, g1 - x1, g2 - x2) for g0, g1, g2 in goals]
-    dists = [math.sqrt(_dot3(*d, *d)) for d in diffs]
-    if math.inf in dists:
-        raise _ArrayPath
-    xi = [0.0] * n
-    if params.directedness:
-        h0, h1, h2 = _unit3(uh[0], uh[1], uh[2])
-        for i, ((d0, d1, d2), dist) in enumerate(zip(diffs, dists, strict=True)):
-            den = dist if dist > 0 else math.inf
-            eta = _dot3(h0, h1, h2, d0 / den, d1 / den, d2 / den)
-            xi[i] = xi[i] + 0.5 * (1.0 + eta)
-    if params.agreement:
-        r0, r1, r2 = _unit3(uh[3], uh[4], uh[5])
-        for i, row in enumerate(rows):
-            a0, a1, a2 = _unit3(row[3], row[4], row[5])
-            xi[i] = xi[i] + _dot3(r0, r1, r2, a0, a1, a2)
-    if not params.zero_command_excitation and not any(v != 0.0 for v in uh):
-        xi = [0.0] * n
-    if params.proximity:
-        R = params.R
-        xi = [x + max(0.0, 1.0 - dist / R) for x, dist in zip(xi, dists, strict=True)]
-    e = np.exp(-np.array(xi)).tolist()
-    sig = [1.0 / (1.0 + v) - 0.5 for v in e]
-    if params.rest is None:
-        rest = [1.0 / n] * n
-    else:
-        rest = np.asarray(params.rest, dtype=float).tolist()
-        if len(rest) != n:
-            raise _ArrayPath  # which raises the error
-    lam_f = float(params.lam)
-    tau2 = params.tau2
-    return np.array([r / tau2 + lam_f * v for r, v in zip(rest, sig, strict=True)])
-
-
-def _mass_conserving_one(p: list[float], drive: list[float], tau1: float) -> list[float] | None:
-    """:func:`dft_mass_conserving_rhs_from_drive` of one belief (no transition matrix, no
-    Euler-equivalent flow), or None when the positivity guard acts (array path)."""
-    f = [d - v / tau1 for d, v in zip(drive, p, strict=True)]
-    total = f[0]
-    for v in f[1:]:
-        total += v
-    g = [fi - v * total for fi, v in zip(f, p, strict=True)]
-    if any(v <= 0.0 and gi < 0.0 for v, gi in zip(p, g, strict=True)):
-        return None
     return g
 
 
