@@ -152,9 +152,10 @@ def test_position_and_orientation_batches_broadcast() -> None:
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_from_poses_matches_the_array_kernel_bit_for_bit(seed: int) -> None:
-    """potential_field_commands_from_poses (the Drake system's path, on Python floats) gives exactly
-    the numbers of potential_field_commands, repellers acting or not; bad poses raise ValueError."""
+def test_from_poses_matches_potential_field_commands(seed: int) -> None:
+    """potential_field_commands_from_poses (the Drake system's lean-validation wrapper) gives the
+    numbers of potential_field_commands (same normalisation, same kernel), repellers acting or not,
+    unnormalised quaternions included; bad poses raise ValueError."""
     from drake_disamb.core.autonomy import potential_field_commands_from_poses
 
     rng = np.random.default_rng(seed)
@@ -163,7 +164,7 @@ def test_from_poses_matches_the_array_kernel_bit_for_bit(seed: int) -> None:
         for case in ("far", "near", "two near", "at"):
             ee = np.r_[rng.normal(scale=0.3, size=3), rng.normal(size=4) * rng.choice([0.1, 1.0, 5.0])]
             goals = np.c_[rng.normal(scale=0.3, size=(n, 3)), rng.normal(size=(n, 4))]
-            if case == "near":  # a repeller acts (the array kernel runs)
+            if case == "near":  # a repeller acts
                 goals[0, :3] = ee[:3] + rng.normal(scale=0.02, size=3)
             elif case == "two near" and n > 2:  # two repellers act on every other goal
                 goals[:2, :3] = ee[:3] + rng.normal(scale=0.04, size=(2, 3))

@@ -167,34 +167,3 @@ def test_public_results_are_c_contiguous_and_kernel_layout_is_component_major() 
     cm = _component_major(q2, (3, 6))
     assert cm.shape == (3, 6, 4) and cm[..., 2].flags.c_contiguous
     np.testing.assert_array_equal(cm, np.broadcast_to(q2, (3, 6, 4)))
-
-
-@pytest.mark.parametrize("seed", range(6))
-def test_few_quaternion_paths_are_bit_identical_to_the_array_paths(seed: int) -> None:
-    """The Python-float paths for a handful of quaternions (a control loop's one pose against a
-    few goals) return exactly the numbers of the vectorised paths, tiny rotations included."""
-    from drake_disamb.core import geometry as g
-
-    rng = np.random.default_rng(seed)
-    for n in (1, 2, 5, 15):
-        q_from = rng.normal(size=4) * rng.choice([1e-3, 1.0, 7.0])
-        q_to = rng.normal(size=(n, 4))
-        q_to[0] = q_from * rng.choice([1.0, -1.0]) + rng.normal(scale=1e-11, size=4)  # ~identity
-        if n > 1:
-            q_to[1] = q_from  # exactly the identity
-        for a, b in ((q_from, q_to), (q_to, q_from), (q_to, q_to[::-1].copy())):
-            few = g._orientation_error_few(a, b)
-            array = g._quat_to_rotvec(g._quat_multiply(b, g._quat_conjugate(a)))
-            np.testing.assert_array_equal(few, array)
-            assert few.shape == np.broadcast_shapes(a.shape, b.shape)[:-1] + (3,)
-        # A few quaternions validated on Python floats == the same rows validated as an array.
-        np.testing.assert_array_equal(
-            g._check_quat(q_from, "q"), g._check_quat(np.tile(q_from, (40, 1)), "q")[0]
-        )
-        np.testing.assert_array_equal(
-            g._check_quat(q_to, "q"), g._check_quat(np.tile(q_to, (20, 1)), "q")[:n]
-        )
-    with pytest.raises(ValueError, match="zero norm"):
-        g._check_quat(np.zeros(4), "q")
-    with pytest.raises(ValueError, match="finite"):
-        g._check_quat([1.0, np.nan, 0.0, 0.0], "q")

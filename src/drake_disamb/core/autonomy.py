@@ -21,7 +21,6 @@ is capped at :data:`REPELLER_SPEED_CAP_FACTOR` times the maximum linear speed be
 from __future__ import annotations
 
 import functools
-import math
 import numbers
 from dataclasses import dataclass
 
@@ -35,8 +34,6 @@ from drake_disamb.core.geometry import (
     _component_major,
     _norm3,
     _orientation_error,
-    _orientation_error_pairs,
-    _unit_quat_floats,
 )
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
@@ -209,77 +206,6 @@ def potential_field_commands_from_poses(
         name = "quat" if not np.isfinite(ee_pose).all() else "goal_quats"
         bad = ee_pose if name == "quat" else goal_poses
         raise ValueError(f"{name}: expected finite poses, got {bad.tolist()!r}")
-    one = _potential_field_one(ee_pose.tolist(), goal_poses.tolist(), config)
-    if one is not None:
-        return np.array(one)
-    q = ee_pose[3:]
-    gq = goal_poses[:, 3:]
-    qn = np.sqrt(np.add.reduce(q * q, axis=-1, keepdims=True))  # as _check_quat
-    gn = np.sqrt(np.add.reduce(gq * gq, axis=-1, keepdims=True))
-    if qn[0] < 1e-12:
-        raise ValueError(f"quat: a quaternion has (near) zero norm, got {q.tolist()!r}")
-    if np.any(gn < 1e-12):
-        raise ValueError(f"goal_quats: a quaternion has (near) zero norm, got {gq.tolist()!r}")
-    return _potential_field_commands(ee_pose[:3], q / qn, goal_poses[:, :3], gq / gn, config)
-
-
-def _saturate_floats(x: float, y: float, z: float, max_norm: float) -> tuple[float, float, float]:
-    """:func:`_saturate` of one 3-vector on Python floats (same operations, same order)."""
-    scale = min(1.0, max_norm / max(math.sqrt(x * x + y * y + z * z), 1e-300))
-    return x * scale, y * scale, z * scale
-
-
-def _sum_products(products: list[float]) -> float:
-    total = products[0]
-    for x in products[1:]:
-        total += x
-    return total
-
-
-def _potential_field_one(
-    ee_pose: list[float], goal_poses: list[list[float]], config: PotentialFieldConfig
-) -> list[list[float]] | None:
-    """The commands of :func:`potential_field_commands_from_poses` on Python floats, for one pose
-    (a control loop's tick). The operations are the array kernel's, in the same order, so the
-    numbers are bit for bit the same (``tests/test_autonomy_core.py`` checks it). ``None`` when a
-    quaternion is (near) zero: the array kernel then runs (and raises)."""
-    q = _unit_quat_floats(ee_pose[3:])
-    goal_quats = [_unit_quat_floats(g[3:]) for g in goal_poses]
-    if q is None or None in goal_quats:
-        return None
-    x0, x1, x2 = ee_pose[:3]
-    diffs = [(g[0] - x0, g[1] - x1, g[2] - x2) for g in goal_poses]
-    kt = config.attractor_gain_translation
-    linear = [(kt * d0, kt * d1, kt * d2) for d0, d1, d2 in diffs]
-    n = len(goal_poses)
-    if n > 1 and config.repeller_gain > 0:
-        radius, gain = config.repeller_radius, config.repeller_gain
-        cap = REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed
-        reps = []
-        for d0, d1, d2 in diffs:
-            dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            if dist < radius and dist > 0.0:
-                speed = min(gain / dist, cap)
-                reps.append((-d0 / dist * speed, -d1 / dist * speed, -d2 / dist * speed))
-            else:
-                reps.append((0.0, 0.0, 0.0))
-        if any(r != (0.0, 0.0, 0.0) for r in reps):
-            # (1 - I) @ reps as numpy's matmul sums it here: every product, left to right
-            # (tests/test_autonomy_core.py checks the result bit for bit).
-            others = [[0.0 if i == j else 1.0 for j in range(n)] for i in range(n)]
-            linear = [
-                tuple(
-                    v[k] + _sum_products([m * r[k] for m, r in zip(row, reps, strict=True)]) for k in range(3)
-                )
-                for v, row in zip(linear, others, strict=True)
-            ]
-        else:
-            linear = [(a + 0.0, b + 0.0, c + 0.0) for a, b, c in linear]  # + the all-zero repellers
-    kr = config.attractor_gain_rotation
-    angular = _orientation_error_pairs([q] * len(goal_quats), goal_quats)
-    out = []
-    for (a, b, c), (d, e, f) in zip(linear, angular, strict=True):
-        v = _saturate_floats(a, b, c, config.max_linear_speed)
-        w = _saturate_floats(kr * d, kr * e, kr * f, config.max_angular_speed)
-        out.append([*v, *w])
-    return out
+    q = _check_quat(ee_pose[3:], "quat")
+    gq = _check_quat(goal_poses[:, 3:], "goal_quats")
+    return _potential_field_commands(ee_pose[:3], q, goal_poses[:, :3], gq, config)

@@ -49,11 +49,6 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
 def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
     """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised."""
     a = _check_last(q, 4, name)
-    if a.size <= _FEW_QUATERNIONS:  # a few: the same operations on Python floats (fewer numpy calls)
-        units = [_unit_quat_floats(q) for q in a.reshape(-1, 4).tolist()]  # numpy sums 4 entries
-        if None in units:  # left to right too
-            raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
-        return np.array(units).reshape(a.shape)
     norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
     if np.any(norm < 1e-12):
         raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
@@ -150,73 +145,7 @@ def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _orientation_error(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> NDArray[np.float64]:
-    if q_from.size + q_to.size <= _FEW_QUATERNIONS:
-        return _orientation_error_few(q_from, q_to)
     return _quat_to_rotvec(_quat_multiply(q_to, _quat_conjugate(q_from)))
-
-
-_FEW_QUATERNIONS = 64
-"""Up to this many entries (16 quaternions) :func:`_orientation_error` runs on Python floats."""
-
-
-def _orientation_error_few(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> NDArray[np.float64]:
-    """:func:`_orientation_error` for a few quaternions, on Python floats (see
-    :func:`_orientation_error_pairs`)."""
-    if q_from.shape == q_to.shape:
-        shape, froms, tos = q_from.shape, q_from.reshape(-1, 4).tolist(), q_to.reshape(-1, 4).tolist()
-    elif q_from.size == 4 or q_to.size == 4:  # one quaternion against several
-        shape = np.broadcast_shapes(q_from.shape, q_to.shape)
-        froms = q_from.reshape(-1, 4).tolist()
-        tos = q_to.reshape(-1, 4).tolist()
-        if len(froms) == 1:
-            froms = froms * len(tos)
-        else:
-            tos = tos * len(froms)
-    else:
-        a, b = np.broadcast_arrays(q_from, q_to)
-        shape, froms, tos = a.shape, a.reshape(-1, 4).tolist(), b.reshape(-1, 4).tolist()
-    return np.array(_orientation_error_pairs(froms, tos)).reshape(*shape[:-1], 3)
-
-
-def _orientation_error_pairs(
-    froms: list[list[float]], tos: list[list[float]]
-) -> list[tuple[float, float, float]]:
-    """Orientation errors ``froms[i] -> tos[i]`` of unit quaternions given as Python floats.
-
-    A control loop compares one pose with a handful of goals every tick, where numpy's per-call
-    overhead dominates. The operations are those of the array path, in the same order (IEEE-754
-    ``+ - * /`` and ``sqrt`` round the same on Python floats), and the one transcendental function
-    is numpy's ``arctan2`` on all pairs at once, so the result is bit-for-bit the array path's
-    (``tests/test_geometry.py`` checks it).
-    """
-    vectors, norms, ws = [], [], []
-    for (w1, x1, y1, z1), (w2, x2, y2, z2) in zip(tos, froms, strict=True):
-        x2, y2, z2 = x2 * -1.0, y2 * -1.0, z2 * -1.0  # conjugate of q_from (keeps the sign of 0)
-        w = w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2  # q_to (x) conj(q_from)
-        x = w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2
-        y = w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2
-        z = w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2
-        if w < 0.0:  # shortest path
-            w, x, y, z = -w, -x, -y, -z
-        vectors.append((x, y, z))
-        norms.append(math.sqrt(x * x + y * y + z * z))
-        ws.append(w)
-    angles = (2.0 * np.arctan2(norms, ws)).tolist()
-    out = []
-    for (x, y, z), s, w, angle in zip(vectors, norms, ws, angles, strict=True):
-        # angle / s, with its series 2/w (w ~ 1 here) for tiny rotations
-        scale = 2.0 / w if s < 0.5 * _SMALL_ANGLE else angle / s
-        out.append((x * scale, y * scale, z * scale))
-    return out
-
-
-def _unit_quat_floats(q: list[float]) -> list[float] | None:
-    """``q / |q|`` on Python floats, as :func:`_check_quat` computes it; None for a (near) zero ``q``."""
-    w, x, y, z = q
-    norm = math.sqrt(w * w + x * x + y * y + z * z)
-    if norm < 1e-12:
-        return None
-    return [w / norm, x / norm, y / norm, z / norm]
 
 
 # ----------------------------------------------------------------------------------------------
