@@ -203,32 +203,3 @@ def test_blender_rejects_bad_config() -> None:
         SharedControlBlender(3, rho1=0.5, rho2=0.2)
     with pytest.raises(ValueError, match="n_goals"):
         SharedControlBlender(0)
-
-
-@settings(max_examples=300, deadline=None)
-@given(
-    n=st.integers(1, 7),
-    seed=st.integers(0, 2**32 - 1),
-    assist=st.booleans(),
-    zero_input=st.booleans(),
-)
-def test_single_sample_path_matches_the_batch_path_bit_for_bit(
-    n: int, seed: int, assist: bool, zero_input: bool
-) -> None:
-    """shared_control on one sample (Python floats) returns exactly the batch path's numbers."""
-    rng = np.random.default_rng(seed)
-    u_h = np.zeros(6) if zero_input else rng.normal(scale=rng.choice([0.01, 0.2, 3.0]), size=6)
-    belief = rng.dirichlet(np.ones(n) * rng.choice([0.3, 1.0, 10.0]))
-    u_a = rng.normal(scale=rng.choice([0.01, 0.3, 5.0]), size=(n, 6))
-    config = BlendingConfig(
-        rho1=0.0 if n == 1 else None, rho2=0.5 if n == 1 else None, assist_without_input=assist
-    )
-    u, alpha, g_star = shared_control(u_h, belief, u_a, config)
-    ub, alphab, gb = shared_control(u_h[None], belief[None], u_a[None], config)  # batch of one
-    assert isinstance(alpha, float) and isinstance(g_star, int)
-    np.testing.assert_array_equal(u, ub[0])
-    assert alpha == alphab[0] and g_star == gb[0]
-    # Non-finite entries take the batch path (and give what it gives).
-    u_h[0] = np.nan
-    u2, _, _ = shared_control(u_h, belief, u_a, config)
-    np.testing.assert_array_equal(u2, shared_control(u_h[None], belief[None], u_a[None], config)[0][0])

@@ -176,13 +176,6 @@ def shared_control(
     uh = np.asarray(u_h, dtype=float)
     p = np.asarray(belief, dtype=float)
     ua = np.asarray(u_a, dtype=float)
-    if (
-        uh.shape == (6,)
-        and p.ndim == 1
-        and ua.shape == (p.shape[0], 6)
-        and math.isfinite(np.add.reduce(uh) + np.add.reduce(p) + np.add.reduce(ua, axis=None))
-    ):
-        return shared_control_one(uh, p, ua, config)
     n = p.shape[-1]
     g_star = np.argmax(p, axis=-1)
     p_star = np.take_along_axis(p, g_star[..., None], axis=-1)[..., 0]
@@ -195,46 +188,3 @@ def shared_control(
     if alpha.ndim == 0:
         return u, float(alpha), int(g_star)
     return u, alpha, g_star
-
-
-_RHOS: dict[tuple[BlendingConfig, int], tuple[float, float, float]] = {}
-"""``config.rhos(n)`` per (frozen, hashable) config and ``n``, validated once."""
-
-
-def shared_control_one(
-    uh: NDArray[np.float64], p: NDArray[np.float64], ua: NDArray[np.float64], config: BlendingConfig
-) -> tuple[NDArray[np.float64], float, int]:
-    """:func:`shared_control` for one sample (``u_h (6,)``, ``belief (n,)``, ``u_a (n, 6)`` arrays).
-
-    A control loop blends one command per tick, where numpy's per-call overhead would dominate:
-    this evaluates the same floating-point operations, in the same order, on Python floats
-    (IEEE-754 ``+ - * /`` and ``sqrt`` round the same way), so it returns the very numbers of the
-    batch path (``tests/test_blending.py`` checks that bit for bit). Finite inputs of these shapes
-    only, unchecked (:func:`shared_control` checks them and sends anything else down the batch
-    path); returns ``(u (6,), alpha, g_star)``.
-    """
-    n = p.shape[0]
-    key = (config, n)
-    rhos = _RHOS.get(key)
-    if rhos is None:
-        rhos = _RHOS[key] = config.rhos(n)
-    r1, r2, r3 = rhos
-    g_star = int(np.argmax(p))  # first maximum; a NaN counts as the maximum, as in the batch path
-    p_star = float(p[g_star])
-    if not math.isfinite(p_star) or p_star <= r1:
-        alpha = 0.0
-    elif p_star <= r2:
-        alpha = r3 * (p_star - r1) / (r2 - r1)
-    else:
-        alpha = r3
-    h = uh.tolist()
-    if not config.assist_without_input and not any(abs(x) > NO_INPUT_TOLERANCE for x in h):
-        alpha = 0.0
-    beta = 1.0 - alpha
-    b = [alpha * a + beta * x for a, x in zip(ua[g_star].tolist(), h, strict=True)]
-    out = []
-    for part, limit in ((b[:3], config.max_linear_speed), (b[3:], config.max_angular_speed)):
-        norm = math.sqrt(part[0] * part[0] + part[1] * part[1] + part[2] * part[2])
-        scale = min(1.0, limit / max(norm, 1e-300))
-        out += [x * scale for x in part]
-    return np.array(out), alpha, g_star

@@ -9,7 +9,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
 
-from drake_disamb.core.blending import BlendingConfig, shared_control, shared_control_one
+from drake_disamb.core.blending import BlendingConfig, shared_control
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 
@@ -104,10 +104,8 @@ class SharedControlBlender(LeafSystem):
         # One reduction for the common all-finite case (a huge finite sum that overflows only
         # sends us to the exact per-entry check below).
         finite = np.isfinite(np.add.reduce(u_h) + np.add.reduce(p) + np.add.reduce(u_a, axis=None))
-        if finite:
-            u, alpha, g_star = shared_control_one(u_h, p, u_a, self.config)
-            return u, alpha, g_star
-        finite = np.isfinite(u_h).all() and np.isfinite(p).all() and np.isfinite(u_a).all()
+        if not finite:
+            finite = np.isfinite(u_h).all() and np.isfinite(p).all() and np.isfinite(u_a).all()
         if not finite:
             if not self._warned:
                 warnings.warn(
