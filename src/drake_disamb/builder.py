@@ -28,6 +28,7 @@ stage and the task manager's ``stage``.
 from __future__ import annotations
 
 import dataclasses
+import gc
 import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -230,9 +231,10 @@ def build_shared_control_diagram(
             user.set_name("input_source")
     builder.Connect(user.GetOutputPort("raw"), interface.GetInputPort("raw"))
 
-    # The 100 Hz control loop sees the end-effector pose sampled at its ticks (as the MICO's
-    # Cartesian interface reports it); this also keeps the 1 ms plant steps from re-evaluating
-    # the autonomy and the belief's inputs between ticks.
+    # The control loop (every scenario.control_period, 10 ms by default) sees the end-effector pose
+    # sampled at its ticks (as the MICO's Cartesian interface reports it); this also keeps plant
+    # steps finer than the control period (scenario.plant_time_step, by default equal to it) and the
+    # belief integrator's stages from re-evaluating the autonomy and the belief's inputs between ticks.
     sampler = builder.AddSystem(ZeroOrderHold(scenario.control_period, 7))
     sampler.set_name("ee_pose_sampler")
     builder.Connect(station.output_port("ee_pose"), sampler.get_input_port())
@@ -453,8 +455,15 @@ def run_trial(
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
     start = _time.perf_counter()
-    simulator.Initialize()
-    simulator.AdvanceTo(sc.duration)
+    # Everything that exists before the run (diagram, contexts, Python systems, imported modules)
+    # lives through it: frozen, the cyclic garbage collector stops walking it on every collection.
+    gc.collect()
+    gc.freeze()
+    try:
+        simulator.Initialize()
+        simulator.AdvanceTo(sc.duration)
+    finally:
+        gc.unfreeze()
     wall = _time.perf_counter() - start
     if bar is not None:
         bar.close()
