@@ -48,3 +48,23 @@ def test_console_entry_point_help_is_fast_and_works() -> None:
     )
     assert out.returncode == 0, out.stderr
     assert "inference-benchmark" in out.stdout
+
+
+def test_meshcat_listens_on_localhost_unless_asked() -> None:
+    import argparse
+
+    from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+
+    parser = argparse.ArgumentParser()
+    add_meshcat_arguments(parser)
+    args = parser.parse_args([])
+    assert args.meshcat_host == "localhost"
+    meshcat = start_meshcat(args)
+    assert meshcat.web_url().startswith("http://localhost:")
+    with pytest.raises(ValueError, match="--meshcat-port"):
+        start_meshcat(parser.parse_args(["--meshcat-port", "70000"]))
+
+
+def test_demo_rejects_a_bad_meshcat_port(capsys: pytest.CaptureFixture[str], tmp_path) -> None:  # noqa: ANN001
+    assert cli.main(["demo", "--meshcat-port", "0", "--out", str(tmp_path / "out")]) == 2
+    assert "--meshcat-port" in capsys.readouterr().err

@@ -17,6 +17,8 @@ import sys
 import time
 from pathlib import Path
 
+from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
 
 
@@ -58,6 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (no recording)")
+    add_meshcat_arguments(parser)
     parser.add_argument(
         "--out", type=Path, default=Path("out/demo"), help="output folder (default: out/demo)"
     )
@@ -117,15 +120,17 @@ def run(args: argparse.Namespace) -> int:
         print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
         return 2
 
-    from pydrake.geometry import Meshcat, MeshcatParams
-
     from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     meshcat = None
     if not args.no_meshcat:
-        meshcat = Meshcat(MeshcatParams(host="localhost"))
+        try:
+            meshcat = start_meshcat(args)
+        except (ValueError, RuntimeError) as exc:
+            print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
+            return 2
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
     try:

@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+
 HELP = "Drive the simulated MICO through a scripted Cartesian velocity pattern (square, wrist roll, gripper)."
 
 
@@ -65,6 +67,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--speed", type=float, default=0.05, help="translation speed, m/s (default 0.05)")
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (as fast as possible)")
+    add_meshcat_arguments(parser)
     parser.add_argument(
         "--hold", type=float, default=0.0, help="keep Meshcat serving this many seconds at the end"
     )
@@ -77,7 +80,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from pydrake.geometry import Meshcat, MeshcatParams
     from pydrake.systems.analysis import Simulator
 
     from drake_disamb.diagram_io import write_diagram_graph
@@ -91,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     config = StationConfig() if args.time_step is None else StationConfig(time_step=args.time_step)
     meshcat = None
     if not args.no_meshcat:
-        meshcat = Meshcat(MeshcatParams(host="localhost"))
+        meshcat = start_meshcat(args)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     station = build_station(config, meshcat=meshcat)
     written = write_diagram_graph(station.diagram, Path(args.out) / "station")
