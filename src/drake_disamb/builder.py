@@ -28,7 +28,6 @@ stage and the task manager's ``stage``.
 from __future__ import annotations
 
 import dataclasses
-import gc
 import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -455,15 +454,8 @@ def run_trial(
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
     start = _time.perf_counter()
-    # Everything that exists before the run (diagram, contexts, Python systems, imported modules)
-    # lives through it: frozen, the cyclic garbage collector stops walking it on every collection.
-    gc.collect()
-    gc.freeze()
-    try:
-        simulator.Initialize()
-        simulator.AdvanceTo(sc.duration)
-    finally:
-        gc.unfreeze()
+    simulator.Initialize()
+    simulator.AdvanceTo(sc.duration)
     wall = _time.perf_counter() - start
     if bar is not None:
         bar.close()
