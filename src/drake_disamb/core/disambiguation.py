@@ -241,7 +241,8 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
       command excites every goal equally (directedness 0.5), which through the mass-conserving
       flow pulls the belief to uniform at ``1/tau1 + n lambda sigma(0.5)`` (about 2 /s for five
       goals), i.e. the belief would collapse in half a second whenever the user pauses to switch
-      modes. The probes always carry a command, so the projection is unaffected. ``lambda = 3 I`` (1/s): the differential excitation between a goal the command
+      modes. The probes always carry a command, so the projection is unaffected.
+      ``lambda = 3 I`` (1/s): the differential excitation between a goal the command
       points at and one it points away from is about ``3 * 0.23 = 0.7 /s``, so one second of probe
       motion (10 cm) moves the projected belief clearly while a single 10 ms control step moves
       the live belief by under 1 %; the authors' ``lambda = 200`` suits their 2 mm, 2 ms steps
