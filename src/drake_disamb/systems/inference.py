@@ -79,7 +79,10 @@ def _goals_changed(new: NDArray[np.float64], old: NDArray[np.float64], tol: floa
 
 
 class _IntentInferenceBase(LeafSystem):
-    """Ports, input reading and outputs shared by the three inference systems."""
+    """Ports, input reading and outputs shared by the three inference systems.
+
+    Subclasses define ``_raw_belief(context)``: the stored belief (continuous or discrete state).
+    """
 
     def __init__(self, n_goals: int, rest: ArrayLike | None, control_period: float, tol: float) -> None:
         super().__init__()
@@ -137,9 +140,6 @@ class _IntentInferenceBase(LeafSystem):
         return goal_poses.reshape(self._n, 7)[:, :3]
 
     # -- outputs --------------------------------------------------------------------------------
-
-    def _raw_belief(self, context: Context) -> NDArray[np.float64]:
-        raise NotImplementedError
 
     def _belief(self, context: Context) -> NDArray[np.float64]:
         # A copy projected onto the simplex: the stored state may carry integrator error.
@@ -268,7 +268,11 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
 
 class _DiscreteInference(_IntentInferenceBase):
-    """Discrete-state belief updated every ``control_period``; layout ``[belief (n), extra, goals]``."""
+    """Discrete-state belief updated every ``control_period``; layout ``[belief (n), extra, goals]``.
+
+    Subclasses define ``_step(context, belief, extra, x_g) -> (belief, extra)``: one update of the
+    belief (and of the method's extra state) with the goal positions ``x_g`` (n, 3).
+    """
 
     def __init__(self, n_goals: int, rest, control_period: float, tol: float, n_extra: int) -> None:  # noqa: ANN001
         super().__init__(n_goals, rest, control_period, tol)
@@ -283,15 +287,6 @@ class _DiscreteInference(_IntentInferenceBase):
 
     def _reset_extra(self, context: Context) -> NDArray[np.float64]:
         return np.zeros(self._n_extra)
-
-    def _step(
-        self,
-        context: Context,
-        belief: NDArray[np.float64],
-        extra: NDArray[np.float64],
-        x_g: NDArray[np.float64],
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        raise NotImplementedError
 
     def _reset_update(self, context: Context, discrete_state: DiscreteValues) -> None:
         value = np.concatenate([self._rest, self._reset_extra(context), self._goal_poses_now(context)])
