@@ -247,9 +247,8 @@ def build_shared_control_diagram(
         builder.Connect(task.GetOutputPort("stage"), user.GetInputPort("stage"))
     builder.Connect(ee_pose, autonomy.GetInputPort("ee_pose"))
     builder.Connect(goal_poses, autonomy.GetInputPort("goal_poses"))
-    for port in ("u_h",):
-        builder.Connect(interface.GetOutputPort(port), inference.GetInputPort(port))
-        builder.Connect(interface.GetOutputPort(port), blender.GetInputPort(port))
+    builder.Connect(interface.GetOutputPort("u_h"), inference.GetInputPort("u_h"))
+    builder.Connect(interface.GetOutputPort("u_h"), blender.GetInputPort("u_h"))
     builder.Connect(ee_pose, inference.GetInputPort("ee_pose"))
     builder.Connect(goal_poses, inference.GetInputPort("goal_poses"))
     builder.Connect(autonomy.GetOutputPort("u_a"), inference.GetInputPort("u_a"))
