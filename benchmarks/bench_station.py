@@ -11,20 +11,16 @@ import os
 import time
 
 import numpy as np
-from pydrake.systems.analysis import Simulator
 
-from drake_disamb.commands.station_demo import pattern, run_pattern
+from drake_disamb.commands.station_demo import pattern, run_pattern, start_simulation
 from drake_disamb.station import StationConfig, build_station
 
 
 def measure(seconds: float, time_step: float) -> tuple[float, float, float]:
     """(wall s, cpu s, EE path length m) for ``seconds`` of the station-demo pattern."""
     station = build_station(StationConfig(time_step=time_step))
-    simulator = Simulator(station.diagram)
+    simulator = start_simulation(station)
     ctx = simulator.get_mutable_context()
-    station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
-    station.input_port("gripper_command").FixValue(ctx, [0.0])
-    simulator.Initialize()
     p0 = station.output_port("ee_pose").Eval(ctx).copy()
     wall, cpu = time.perf_counter(), time.process_time()
     run_pattern(station, simulator, seconds, pattern())

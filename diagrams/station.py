@@ -10,9 +10,8 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from pydrake.systems.analysis import Simulator
 
-from drake_disamb.commands.station_demo import pattern, run_pattern
+from drake_disamb.commands.station_demo import pattern, run_pattern, start_simulation
 from drake_disamb.diagram_io import write_diagram_graph
 from drake_disamb.station import build_station
 
@@ -20,11 +19,8 @@ from drake_disamb.station import build_station
 def main(argv: list[str]) -> int:
     stem = Path(argv[0]) if argv else Path("out/diagrams/station")
     station = build_station()
-    simulator = Simulator(station.diagram)
+    simulator = start_simulation(station)
     ctx = simulator.get_mutable_context()
-    station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
-    station.input_port("gripper_command").FixValue(ctx, [0.0])
-    simulator.Initialize()
     p0 = station.output_port("ee_pose").Eval(ctx).copy()
     run_pattern(station, simulator, 2.0, pattern())
     p1 = station.output_port("ee_pose").Eval(ctx)

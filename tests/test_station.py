@@ -170,6 +170,23 @@ def _limits(rig: Rig) -> tuple[np.ndarray, np.ndarray]:
     return rig.station.diff_ik.joint_position_limits
 
 
+def _arm_jacobian(rig: Rig, q_arm) -> np.ndarray:  # noqa: ANN001
+    """Drake's 6 x 6 end-effector Jacobian ([w; v] rows, world frame) at arm positions ``q_arm``."""
+    cp = rig.station.control_plant
+    cc = cp.CreateDefaultContext()
+    q = cp.GetPositions(cc)
+    q[:6] = q_arm
+    cp.SetPositions(cc, q)
+    return cp.CalcJacobianSpatialVelocity(
+        cc,
+        JacobianWrtVariable.kV,
+        cp.GetFrameByName("mico_end_effector"),
+        np.zeros(3),
+        cp.world_frame(),
+        cp.world_frame(),
+    )[:, :6]
+
+
 def test_drive_through_singularity(home: Rig) -> None:
     """Straight up at fixed orientation runs into the wrist singularity (theta_5 -> 0).
 
@@ -206,19 +223,7 @@ def test_drive_into_joint_limit() -> None:
     start[2] = math.radians(109.0) + 0.2  # 0.2 rad above the lower limit of joint 3 (DH 109 deg)
     rig = Rig(StationConfig(home_q=tuple(start)))
     lo, hi = _limits(rig)
-    cp = rig.station.control_plant
-    cc = cp.CreateDefaultContext()
-    q = cp.GetPositions(cc)
-    q[:6] = start
-    cp.SetPositions(cc, q)
-    J = cp.CalcJacobianSpatialVelocity(
-        cc,
-        JacobianWrtVariable.kV,
-        cp.GetFrameByName("mico_end_effector"),
-        np.zeros(3),
-        cp.world_frame(),
-        cp.world_frame(),
-    )[:, :6]
+    J = _arm_jacobian(rig, start)
     V_drake = J @ np.array([0, 0, -0.5, 0, 0, 0])  # what joint 3 alone moving at -0.5 rad/s does
     V = np.concatenate([V_drake[3:], V_drake[:3]])
     rig.command(V)
@@ -361,19 +366,7 @@ def test_diff_ik_integrator_alone(rig: Rig) -> None:
     assert status == IkStatus.OK
     assert np.allclose(q1, MICO_HOME_Q + v1 * config.control_period)
     # The joint velocity produces the commanded spatial velocity (paper order -> Drake order).
-    cp = rig.station.control_plant
-    cc = cp.CreateDefaultContext()
-    q = cp.GetPositions(cc)
-    q[:6] = MICO_HOME_Q
-    cp.SetPositions(cc, q)
-    J = cp.CalcJacobianSpatialVelocity(
-        cc,
-        JacobianWrtVariable.kV,
-        cp.GetFrameByName("mico_end_effector"),
-        np.zeros(3),
-        cp.world_frame(),
-        cp.world_frame(),
-    )[:, :6]
+    J = _arm_jacobian(rig, MICO_HOME_Q)
     assert np.allclose(J @ v1, [0, 0, 0.02, 0, 0, 0], atol=1e-6)  # Drake order [w; v]
     # The output ports expose the state.
     ctx.SetDiscreteState(x)

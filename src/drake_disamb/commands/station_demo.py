@@ -43,6 +43,19 @@ def pattern(speed: float = 0.05, roll_rate: float = 0.3) -> list[Segment]:
     ]
 
 
+def start_simulation(station: Any, realtime_rate: float = 0.0) -> Any:
+    """A Simulator of ``station.diagram``, initialised at rest (zero commands on both inputs)."""
+    from pydrake.systems.analysis import Simulator
+
+    simulator = Simulator(station.diagram)
+    simulator.set_target_realtime_rate(realtime_rate)
+    ctx = simulator.get_mutable_context()
+    station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
+    station.input_port("gripper_command").FixValue(ctx, [0.0])
+    simulator.Initialize()
+    return simulator
+
+
 def run_pattern(station: Any, simulator: Any, duration: float, segments: list[Segment]) -> None:
     """Advance ``simulator`` (whose root system is ``station.diagram``) for ``duration`` s through
     ``segments``, repeating them as needed; the commands are fixed on the station's input ports."""
@@ -80,7 +93,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from pydrake.systems.analysis import Simulator
 
     from drake_disamb.diagram_io import write_diagram_graph
     from drake_disamb.station import StationConfig, build_station
@@ -99,13 +111,8 @@ def run(args: argparse.Namespace) -> int:
     written = write_diagram_graph(station.diagram, Path(args.out) / "station")
     print("diagram: " + ", ".join(str(p) for p in written))
 
-    simulator = Simulator(station.diagram)
-    if meshcat is not None:
-        simulator.set_target_realtime_rate(1.0)
+    simulator = start_simulation(station, realtime_rate=1.0 if meshcat is not None else 0.0)
     ctx = simulator.get_mutable_context()
-    station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
-    station.input_port("gripper_command").FixValue(ctx, [0.0])
-    simulator.Initialize()
     p0 = station.output_port("ee_pose").Eval(ctx).copy()
     wall = time.perf_counter()
     run_pattern(station, simulator, args.duration, segments)
