@@ -108,8 +108,9 @@ def test_non_finite_or_huge_commands() -> None:
         np.testing.assert_allclose(bayes_likelihood(bad, x, goals), 1.0)
     # A huge but finite command keeps its direction.
     np.testing.assert_allclose(directedness([1e300, 0, 0], x, goals), [1.0, 0.5])
-    # One whose norm underflows is no command.
-    np.testing.assert_allclose(directedness([1e-300, 0, 0], x, goals), [0.5, 0.5])
+    # So does a tiny one whose squared norm underflows (the cosine does not depend on the scale).
+    np.testing.assert_allclose(directedness([1e-300, 0, 0], x, goals), [1.0, 0.5])
+    np.testing.assert_allclose(directedness([0, 1e-300, 1e-300], x, goals), [0.5, 0.5 + 0.5 / np.sqrt(2)])
 
 
 def _relax(p: np.ndarray, params: DFTParams, goals: np.ndarray, steps: int, dt: float) -> np.ndarray:

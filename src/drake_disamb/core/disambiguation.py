@@ -531,6 +531,10 @@ class _ProbePlan:
         offsets: ``(steps_c + 1, 2 n_k, 3)`` position change after ``s`` steps, ``s v dt`` (m).
         rot_quats: ``(steps_c + 1, n_rot, 4)`` rotation of each rotational probe after ``s``
             steps, ``exp(s w dt)``: the orientation is ``rot_quats (x) q``.
+        rot_left: ``(4, steps_c, n_rot, 4)`` the same products as a linear map of ``q`` (the
+            Hamilton product is linear in its right factor): ``rot_left @ q`` is
+            ``rot_quats[:steps_c] (x) q`` with the quaternion components first, built with
+            ``_quat_multiply`` on the basis quaternions. One matrix-vector product per request.
         displacement: ``(2, n_k)`` displacement along ``k`` between ``t_b`` and ``t_c``: the
             position component ``(s_c - s_b) v_k dt`` (m), or the angle about axis ``k`` of
             ``exp(s_c w dt) (x) exp(s_b w dt)^-1`` (rad). Neither depends on the start pose (the
@@ -541,6 +545,7 @@ class _ProbePlan:
     n_rot: int
     offsets: NDArray[np.float64]
     rot_quats: NDArray[np.float64]
+    rot_left: NDArray[np.float64]
     displacement: NDArray[np.float64]
 
 
@@ -571,6 +576,12 @@ def _probe_plan(
         n_rot=int(rotational.size),
         offsets=_frozen(offsets),
         rot_quats=_frozen(np.ascontiguousarray(rot_quats)),
+        # [c, s, r, j] = component c of rot_quats[s, r] (x) e_j
+        rot_left=_frozen(
+            np.ascontiguousarray(
+                _quat_multiply(rot_quats[:steps_c, :, None, :], np.eye(4)).transpose(3, 0, 1, 2)
+            )
+        ),
         displacement=_frozen(disp.reshape(2, -1)),
     )
 
@@ -643,13 +654,15 @@ def forward_projection(
             # reads nothing else), and that rotational part depends on the orientation alone
             # (repellers act on the translational part): it is computed at each step's
             # orientation, u_a[..., :3] left zero.
-            UA = np.zeros((nc, 2, n_k, n, 6))
+            # Laid out component- and goal-major in memory, (6, n, nc, P), the order in which
+            # dft_drive reads it (see inference.dft_xi); UA is the (nc, P, n, 6) view.
+            ua_memory = np.zeros((6, n, nc, 2, n_k))
             n_t = n_k - plan.n_rot // 2  # rotational dimensions come last (ascending order)
             if plan.n_rot:
-                Q = _quat_multiply(plan.rot_quats[:nc], orientation)  # (nc, n_rot, 4)
+                Q = (plan.rot_left @ orientation).transpose(1, 2, 0)  # (nc, n_rot, 4), component-major
                 W = _potential_field_rotation(Q, goal_orientations, config.potential_field)
-                UA[:, :, n_t:, :, 3:] = W.reshape(nc, 2, -1, n, 3)
-            UA = UA.reshape(nc, n_probe, n, 6)
+                ua_memory[3:, :, :, :, n_t:] = W.transpose(3, 2, 0, 1).reshape(3, n, nc, 2, -1)
+            UA = ua_memory.reshape(6, n, nc, n_probe).transpose(2, 3, 1, 0)
         drive = dft_drive(U, X, goal_positions, config.dft, UA)  # (nc, P, n)
     else:
         lik = bayes_likelihood(U, X, goal_positions, config.bayes_sigma)  # (nc, P, n)
