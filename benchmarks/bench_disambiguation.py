@@ -30,6 +30,7 @@ import argparse
 import time
 
 import numpy as np
+from _host import HostMeter, host_summary
 
 from drake_disamb.core.disambiguation import DisambiguationConfig, disambiguate, preset
 from drake_disamb.core.geometry import quat_from_rotvec
@@ -112,11 +113,14 @@ def main() -> None:
         ("mico, 50 goals", preset("mico"), 50, HEAD_ARRAY_ARM_MODES),
         ("authors-r3, 5 goals, 3 dims, 3 modes", preset("authors-r3"), 5, [[0], [1], [2]]),
     ]
-    print(f"One disambiguation request, {args.repeats} calls per row (seed {args.seed}):")
-    print(f"{'configuration':<55} {'median ms':>10} {'p95 ms':>10}")
+    print(f"One disambiguation request, {args.repeats} calls per row (seed {args.seed}); {host_summary()}")
+    print(f"{'configuration':<55} {'median ms':>10} {'p95 ms':>10} {'steal':>7}")
     for label, config, n_goals, modes in rows:
-        t = measure(config, n_goals, modes, args.repeats, args.scenes, args.seed) * 1e3
-        print(f"{label:<55} {np.median(t):>10.3f} {np.percentile(t, 95):>10.3f}")
+        with HostMeter() as host:
+            t = measure(config, n_goals, modes, args.repeats, args.scenes, args.seed) * 1e3
+        steal = "n/a" if host.steal is None else f"{100 * host.steal:.0f} %"
+        print(f"{label:<55} {np.median(t):>10.3f} {np.percentile(t, 95):>10.3f} {steal:>7}")
+    print("(steal: share of the CPU the hypervisor gave to other guests during the row; see _host.py)")
 
 
 if __name__ == "__main__":

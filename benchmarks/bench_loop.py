@@ -16,6 +16,8 @@ import io
 import pstats
 import time
 
+from _host import HostMeter
+
 from drake_disamb.builder import build_shared_control_diagram, run_trial
 from drake_disamb.scenarios import load_scenario, with_overrides
 
@@ -54,8 +56,12 @@ def main() -> None:
         f"reaching loop, {args.interface}, disambiguation paradigm, no Meshcat, {args.seconds:g} s simulated"
     )
     for ts in args.time_step:
-        wall_rate, cpu_rate, table = measure(args.seconds, ts, args.interface, args.profile)
-        print(f"plant time step {ts:g} s: {wall_rate:6.2f}x real time (wall), {cpu_rate:6.2f}x (CPU)")
+        with HostMeter() as host:
+            wall_rate, cpu_rate, table = measure(args.seconds, ts, args.interface, args.profile)
+        print(
+            f"plant time step {ts:g} s: {wall_rate:6.2f}x real time (wall), {cpu_rate:6.2f}x (CPU); "
+            f"{host.describe()}"
+        )
         if table:
             print(table)
 

@@ -11,6 +11,7 @@ import os
 import time
 
 import numpy as np
+from _host import HostMeter
 
 from drake_disamb.commands.station_demo import pattern, run_pattern, start_simulation
 from drake_disamb.station import StationConfig, build_station
@@ -39,10 +40,11 @@ def main() -> None:
         f"load average {os.getloadavg()[0]:.2f}"
     )
     for ts in args.time_step:
-        wall, cpu, _ = measure(args.seconds, ts)
+        with HostMeter() as host:
+            wall, cpu, _ = measure(args.seconds, ts)
         print(
             f"time_step {ts * 1000:.1f} ms: real-time rate {args.seconds / wall:6.2f} (wall {wall:.2f} s), "
-            f"{args.seconds / cpu:6.2f} by CPU time"
+            f"{args.seconds / cpu:6.2f} by CPU time; {host.describe()}"
         )
 
 

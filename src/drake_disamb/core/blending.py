@@ -85,7 +85,7 @@ def blend(u_h: ArrayLike, u_a: ArrayLike, alpha: ArrayLike) -> NDArray[np.float6
     ``alpha`` must lie in ``[0, 1]``.
     """
     a = np.asarray(alpha, dtype=float)
-    if not np.all((a >= 0.0) & (a <= 1.0)):
+    if not np.logical_and.reduce((a >= 0.0) & (a <= 1.0), axis=None):  # np.all, minus its wrapper
         raise ValueError(f"alpha: expected numbers in [0, 1], got {a.tolist()!r}")
     uh = np.asarray(u_h, dtype=float)
     ua = np.asarray(u_a, dtype=float)
@@ -112,7 +112,7 @@ def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float)
 def has_input(u_h: ArrayLike, tolerance: float = NO_INPUT_TOLERANCE) -> NDArray[np.bool_] | bool:
     """True where the human command has any entry larger than ``tolerance`` in magnitude."""
     u = np.asarray(u_h, dtype=float)
-    result = np.any(np.abs(u) > tolerance, axis=-1)
+    result = np.logical_or.reduce(np.abs(u) > tolerance, axis=-1)  # np.any, minus its wrapper
     return bool(result) if np.ndim(result) == 0 else result
 
 
@@ -178,12 +178,16 @@ def shared_control(
     ua = np.asarray(u_a, dtype=float)
     n = p.shape[-1]
     g_star = np.argmax(p, axis=-1)
-    p_star = np.take_along_axis(p, g_star[..., None], axis=-1)[..., 0]
+    if p.ndim == 1:  # one belief (a control loop's step): plain indexing
+        p_star = p[g_star]
+        ua_star = ua[..., g_star, :]
+    else:
+        p_star = np.take_along_axis(p, g_star[..., None], axis=-1)[..., 0]
+        ua_star = np.take_along_axis(ua, g_star[..., None, None], axis=-2)[..., 0, :]
     r1, r2, r3 = config.rhos(n)
     alpha = np.asarray(blending_alpha(p_star, n, r1, r2, r3))
     if not config.assist_without_input:
         alpha = np.where(has_input(uh), alpha, 0.0)
-    ua_star = np.take_along_axis(ua, g_star[..., None, None], axis=-2)[..., 0, :]
     u = clamp_speed(blend(uh, ua_star, alpha), config.max_linear_speed, config.max_angular_speed)
     if alpha.ndim == 0:
         return u, float(alpha), int(g_star)

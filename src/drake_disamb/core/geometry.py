@@ -50,7 +50,7 @@ def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
     """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised."""
     a = _check_last(q, 4, name)
     norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
-    if np.any(norm < 1e-12):
+    if norm.size and np.minimum.reduce(norm, axis=None) < 1e-12:  # np.any, minus its wrapper
         raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
     return a / norm
 
