@@ -52,6 +52,10 @@ def test_config_validation() -> None:
         UserConfig(request_when_unhelped_for=-1.0)
     with pytest.raises(ValueError, match="seed"):
         UserConfig(seed=-3)
+    with pytest.raises(ValueError, match="stall_time"):
+        UserConfig(stall_time=0.0)
+    with pytest.raises(ValueError, match="stall_progress"):
+        UserConfig(stall_progress=float("nan"))
 
 
 def test_state_vector_round_trip() -> None:
@@ -62,9 +66,14 @@ def test_state_vector_round_trip() -> None:
         draws=3,
         presses=7,
         target_mode=2,
+        progress_mode=4,
+        progress_since=0.75,
+        progress_best=12.5,
         raw=np.array([0.0, 0.0, 1.0, 0.0]),
     )
-    assert UserState.from_vector(s.to_vector()) == s
+    back = UserState.from_vector(s.to_vector())
+    assert back == s
+    np.testing.assert_array_equal(back.raw, s.raw)
 
 
 def test_error_and_remaining() -> None:
@@ -123,6 +132,45 @@ def test_switches_to_the_mode_with_most_left_and_waits_between_presses() -> None
     assert np.all(np.diff(presses) >= 0.3 - 1e-9)  # one press per reaction time
     assert presses[0] == 0.0
     assert s.raw[0] == 1.0  # now driving +x
+
+
+def _drive_head_array(config: UserConfig, ee_at, until: float, mode: int = 0) -> list[UserState]:
+    """Step a head-array user in a fixed ``mode`` every 10 ms up to ``until`` (s); ``ee_at(t)``."""
+    s, states = UserState(), []
+    for k in range(int(round(until / 0.01)) + 1):
+        t = k * 0.01
+        s = step(s, t, mode, interface=HEAD, config=config, ee=ee_at(t))
+        states.append(s)
+    return states
+
+
+def test_a_stalled_mode_is_left_for_the_other_mode_with_most_left() -> None:
+    # Mode vx, 0.2 m (20 tolerances) to go, but the arm does not move (a joint limit, say): after
+    # stall_time of commanding, the user targets vz (0.05 m left), the other mode with work left.
+    states = _drive_head_array(NO_REQUESTS, lambda t: EE, 2.0)
+    assert NO_REQUESTS.stall_time == 2.0
+    assert all(s.raw[0] == 1.0 for s in states[:-1])  # driving +x up to 1.99 s
+    assert states[-1].raw[2] == 1.0 and states[-1].target_mode == 2  # back pressed toward vz
+    assert states[-1].progress_mode == -1  # the watch restarts after the press
+
+
+def test_progress_keeps_the_mode_and_stall_detection_can_be_disabled() -> None:
+    def moving(t: float) -> np.ndarray:  # 1.2 cm/s along +x: more than stall_progress per window
+        ee = EE.copy()
+        ee[0] += 0.012 * t
+        return ee
+
+    assert all(s.raw[0] == 1.0 for s in _drive_head_array(NO_REQUESTS, moving, 4.0))
+    off = UserConfig(request_at_start=False, request_when_unhelped_for=None, stall_time=None)
+    assert all(s.raw[0] == 1.0 for s in _drive_head_array(off, lambda t: EE, 4.0))
+
+
+def test_a_stalled_user_with_nothing_else_to_do_keeps_trying() -> None:
+    ee = EE.copy()
+    ee[2] = GOALS[0, 2]  # only the x error is left
+    states = _drive_head_array(NO_REQUESTS, lambda t: ee, 5.0)
+    assert all(s.raw[0] == 1.0 for s in states)
+    assert states[-1].presses == 0
 
 
 def test_released_between_presses() -> None:

@@ -21,7 +21,12 @@ signal (:data:`drake_disamb.core.interfaces.RAW_LAYOUTS`):
    would help a little. The target is dropped when it is reached, when it has nothing left to do
    (the autonomy finished it), or after a disambiguation request (the user then re-evaluates the
    mode the disambiguation system chose).
-5. **Command**: otherwise it drives toward its goal along the current mode's dimensions.
+5. **Stall**: when it has been commanding in the current mode for ``stall_time`` seconds and the
+   mode's remaining error has not fallen by ``stall_progress`` (tolerance units) -- the arm is held
+   up by a joint limit, a singularity or the autonomy pulling elsewhere -- the mode no longer helps:
+   the user targets the *other* arm mode with the largest remaining error (if any is above 1) and
+   cycles to it as in 4. Any press restarts the count.
+6. **Command**: otherwise it drives toward its goal along the current mode's dimensions.
    Joystick: axis k for the mode's k-th dimension, proportional to the error
    (``error / approach_time`` as a share of the interface's full-deflection speed), at least
    ``min_axis`` while the error exceeds the tolerance and 0 once within it. Head array: ``left``
@@ -84,6 +89,10 @@ class UserConfig:
         approach_time: Joystick gain: the user asks for ``error / approach_time`` (m/s or rad/s).
         min_axis: Smallest joystick deflection used while a dimension is not done, in (0, 1].
         axis_noise: Standard deviation of Gaussian noise added to joystick axes (0 = none).
+        stall_time: Seconds of commanding in one mode without progress after which the user
+            switches to another mode (rule 5); ``None`` disables.
+        stall_progress: The progress that counts, as a fall of the mode's remaining error in
+            tolerance units (1 = one ``position_tolerance`` or ``orientation_tolerance``).
         request_at_start: Press the disambiguation button once at the start of the trial.
         request_when_unhelped_for: Press it when the autonomy has not been helping for this long
             (s); the timer restarts after every request. ``None`` disables (manual paradigm: set
@@ -103,6 +112,8 @@ class UserConfig:
     approach_time: float = 0.5
     min_axis: float = 0.2
     axis_noise: float = 0.0
+    stall_time: float | None = 2.0
+    stall_progress: float = 1.0
     request_at_start: bool = True
     request_when_unhelped_for: float | None = 3.0
     rho1: float | None = None
@@ -141,6 +152,12 @@ class UserConfig:
                     f"UserConfig.{succ}: expected at least sqrt(3) * {per_dim} = {need:.4g}, "
                     f"got {getattr(self, succ)!r}"
                 )
+        if self.stall_time is not None and not (_is_real(self.stall_time) and self.stall_time > 0):
+            raise ValueError(f"UserConfig.stall_time: expected None or a number > 0, got {self.stall_time!r}")
+        if not (_is_real(self.stall_progress) and self.stall_progress > 0):
+            raise ValueError(
+                f"UserConfig.stall_progress: expected a finite number > 0, got {self.stall_progress!r}"
+            )
         t = self.request_when_unhelped_for
         if t is not None and not (_is_real(t) and t > 0):
             raise ValueError(
@@ -173,6 +190,9 @@ class UserState:
         draws: Counter of random draws (keys the seeded generator).
         presses: Buttons pressed so far (mode + request).
         target_mode: The mode it is cycling toward, or -1.
+        progress_mode: The mode whose progress it is watching (rule 5), or -1.
+        progress_since: When the watch (re)started (s).
+        progress_best: The mode's remaining error then (tolerance units).
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -182,12 +202,16 @@ class UserState:
     draws: int = 0
     presses: int = 0
     target_mode: int = -1
+    progress_mode: int = -1
+    progress_since: float = 0.0
+    progress_best: float = 0.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
-    VECTOR_SIZE = 6 + RAW_SIZE
+    VECTOR_SIZE = 9 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
-        """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode, raw (4)]``."""
+        """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
+        progress_mode, progress_since, progress_best, raw (4)]``."""
         head = [
             self.busy_until,
             float(self.requested_at_start),
@@ -195,6 +219,9 @@ class UserState:
             self.draws,
             self.presses,
             self.target_mode,
+            self.progress_mode,
+            self.progress_since,
+            self.progress_best,
         ]
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 
@@ -204,7 +231,7 @@ class UserState:
         v = np.asarray(x, dtype=float)
         if v.shape != (cls.VECTOR_SIZE,):
             raise ValueError(f"UserState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
-        busy_until, requested, unhelped_since, draws, presses, target = v[:6].tolist()
+        busy_until, requested, unhelped_since, draws, presses, target, watched, since, best = v[:9].tolist()
         return cls(
             busy_until=busy_until,
             requested_at_start=requested > 0.5,
@@ -212,7 +239,10 @@ class UserState:
             draws=int(round(draws)),
             presses=int(round(presses)),
             target_mode=int(round(target)),
-            raw=v[6:].copy(),
+            progress_mode=int(round(watched)),
+            progress_since=since,
+            progress_best=best,
+            raw=v[9:].copy(),
         )
 
 
@@ -342,7 +372,13 @@ def user_step(
         raw = zero.copy()
         raw[button] = 1.0
         return _evolve(
-            state, raw=raw, busy_until=time + wait, draws=draws, presses=state.presses + 1, **changes
+            state,
+            raw=raw,
+            busy_until=time + wait,
+            draws=draws,
+            presses=state.presses + 1,
+            progress_mode=-1,  # every press restarts the stall watch (rule 5)
+            **changes,
         )
 
     # Every request restarts the "unhelped" timer and drops a mode-cycling target.
@@ -367,6 +403,21 @@ def user_step(
     if target >= 0:
         return press(MODE_BUTTON, target_mode=target)
     state = _evolve(state, target_mode=-1)
+
+    # Rule 5: a mode in which commanding has stopped paying off is left for another one.
+    if config.stall_time is not None:
+        now_remaining = float(remaining[mode])
+        if state.progress_mode != mode or now_remaining <= state.progress_best - config.stall_progress:
+            state = _evolve(state, progress_mode=mode, progress_since=time, progress_best=now_remaining)
+        elif time - state.progress_since >= config.stall_time - 1e-9:
+            others = remaining[: len(modes) - 1].copy()  # arm modes (the gripper mode is last)
+            if mode < others.size:
+                others[mode] = -np.inf
+            best = int(np.argmax(others))
+            if others[best] > 1.0:
+                return press(MODE_BUTTON, target_mode=best)
+            # Nothing else to do: keep at it, and watch again from here.
+            state = _evolve(state, progress_since=time, progress_best=now_remaining)
 
     dims = modes[mode]
     tol = _dim_tolerances(config)

@@ -49,10 +49,10 @@ class SimulatedUser(LeafSystem):
             seconds with everything released.
 
     State: discrete ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
-    raw (4)]`` and ``raw`` again in a group of its own (the state output port ``raw``),
-    updated every ``interface.control_period`` seconds from t = 0 (give it the interface's period
-    so each press is seen as exactly one rising edge). At run time a non-finite pose or an invalid
-    mode makes the user let go (raw zeros) with one warning.
+    progress_mode, progress_since, progress_best, raw (4)]`` and ``raw`` again in a group of its own
+    (the state output port ``raw``), updated every ``interface.control_period`` seconds from t = 0
+    (give it the interface's period so each press is seen as exactly one rising edge). At run time
+    a non-finite pose or an invalid mode makes the user let go (raw zeros) with one warning.
 
     Attributes:
         interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
