@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.geometry import (
     _SMALL_BATCH,
+    _batch_shape,
     _check_last,
     _check_quat,
     _component_major,
@@ -111,7 +112,7 @@ def _potential_field_rotation(
     """
     # Every (pose, goal) pair, laid out component-major so the quaternion arithmetic runs on
     # long contiguous arrays (a batch of poses times a few goals is otherwise slow in numpy).
-    batch = np.broadcast_shapes((*quat.shape[:-1], 1), goal_quats.shape[:-1])
+    batch = _batch_shape((*quat.shape[:-1], 1), goal_quats.shape[:-1])
     if quat.size + goal_quats.size <= _SMALL_BATCH:  # a few quaternions: broadcasting is cheaper
         w = config.attractor_gain_rotation * _orientation_error(quat[..., None, :], goal_quats)
         return _saturate(w, config.max_angular_speed)

@@ -663,7 +663,8 @@ def forward_projection(
                 W = _potential_field_rotation(Q, goal_orientations, config.potential_field)
                 ua_memory[3:, :, :, :, n_t:] = W.transpose(3, 2, 0, 1).reshape(3, n, nc, 2, -1)
             UA = ua_memory.reshape(6, n, nc, n_probe).transpose(2, 3, 1, 0)
-        drive = dft_drive(U, X, goal_positions, config.dft, UA)  # (nc, P, n)
+        # C order, so that each step's (P, n) slice is contiguous like the belief it updates.
+        drive = np.ascontiguousarray(dft_drive(U, X, goal_positions, config.dft, UA))  # (nc, P, n)
     else:
         lik = bayes_likelihood(U, X, goal_positions, config.bayes_sigma)  # (nc, P, n)
 

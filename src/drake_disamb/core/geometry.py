@@ -17,6 +17,7 @@ vectorised loops (the disambiguation forward projection) whose inputs were valid
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -58,6 +59,12 @@ def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
 # ----------------------------------------------------------------------------------------------
 # Unchecked kernels (for hot vectorised loops)
 # ----------------------------------------------------------------------------------------------
+
+
+@functools.lru_cache(maxsize=256)
+def _batch_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """``np.broadcast_shapes`` (pure Python, slow next to a small step), memoised on the shapes."""
+    return np.broadcast_shapes(*shapes)
 
 
 def _norm3(v: NDArray[np.float64]) -> NDArray[np.float64]:

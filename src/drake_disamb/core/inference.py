@@ -43,6 +43,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core.geometry import _batch_shape
+
 TINY = np.finfo(float).tiny
 """Smallest positive normal double: what the authors' code clips non-positive entries to."""
 
@@ -308,7 +310,7 @@ def _goal_offsets(x_r: NDArray[np.float64], x_g: NDArray[np.float64], nb: int) -
     """``x_g_i - x_r`` goal-major, ``(3, n, *batch)``, in C order (component-major memory)."""
     g = _per_goal_major(x_g, nb)
     r = _vector_major(x_r, nb)
-    shape = (3, g.shape[1], *np.broadcast_shapes(g.shape[2:], r.shape[2:]))
+    shape = (3, g.shape[1], *_batch_shape(g.shape[2:], r.shape[2:]))
     return np.subtract(g, r, out=np.empty(shape))  # numpy would otherwise follow the inputs' order
 
 
@@ -317,27 +319,41 @@ def _lengths(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.sqrt(np.add.reduce(v * v, axis=0))
 
 
-def _unit_command(w: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Unit vectors over the first (component, length 3) axis of a sanitised (finite) command
-    part; zero vectors stay zero. ``hypot`` does not overflow (cheap on a command's few rows)."""
-    norm = np.hypot(np.hypot(w[0], w[1]), w[2])
+def _command_directions(u: NDArray[np.float64], nb: int) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Directions of a sanitised (finite) command's 3-vector parts, vector-major, and whether it is
+    non-zero.
+
+    Returns ``(units, moving)``: ``units`` ``(k, 3, 1, *ones, *b)`` holds the unit vectors of the
+    ``k`` parts (``[v]`` for a 3-entry command, ``[v, w]`` for a 6-entry one; zero parts stay
+    zero), ``moving`` ``(1, *ones, *b)`` is True where any entry is non-zero. ``hypot`` neither
+    overflows nor underflows (a tiny command keeps its direction); it is cheap on a command's few
+    rows, and both parts take the same few calls.
+    """
+    k = 2 if u.shape[-1] >= 6 else 1
+    parts = _vector_major(u[..., : 3 * k], nb)
+    parts = parts.reshape((k, 3) + parts.shape[1:])
+    norm = np.hypot(np.hypot(parts[:, 0], parts[:, 1]), parts[:, 2])  # (k, 1, *ones, *b)
     if not np.isfinite(np.add.reduce(norm, axis=None)):  # a norm beyond DBL_MAX: rescale first
-        scale = np.maximum.reduce(np.abs(w), axis=0)
-        w = np.divide(w, scale, out=np.zeros_like(w), where=scale > 0)
-        norm = np.hypot(np.hypot(w[0], w[1]), w[2])
-    return w / np.where(norm > 0, norm, np.inf)
+        scale = np.maximum.reduce(np.abs(parts), axis=1)[:, None]
+        parts = np.divide(parts, scale, out=np.zeros_like(parts), where=scale > 0)
+        norm = np.hypot(np.hypot(parts[:, 0], parts[:, 1]), parts[:, 2])
+    units = parts / np.where(norm > 0, norm, np.inf)[:, None]
+    return units, np.logical_or.reduce(norm > 0, axis=0)
 
 
 def _cosine_to_unit(
-    v: NDArray[np.float64], norm: NDArray[np.float64], w: NDArray[np.float64]
+    v: NDArray[np.float64], norm: NDArray[np.float64], w: NDArray[np.float64], finite: bool | None = None
 ) -> NDArray[np.float64]:
     """``(v / |v|) . w`` over the first (component) axis for unit (or zero) ``w``; 0 where ``v = 0``.
 
-    ``norm`` is ``_lengths(v)``. As :func:`_safe_unit`: when a norm is not finite, non-finite
-    components of ``v`` are read as 0 and each vector is first divided by its largest absolute
-    component (so the common case is a few long element-wise loops).
+    ``norm`` is ``_lengths(v)``; ``finite``, when known, whether all of it is finite. As
+    :func:`_safe_unit`: when a norm is not finite, non-finite components of ``v`` are read as 0
+    and each vector is first divided by its largest absolute component (so the common case is a
+    few long element-wise loops).
     """
-    if not np.isfinite(np.add.reduce(norm, axis=None)):
+    if finite is None:
+        finite = bool(np.isfinite(np.add.reduce(norm, axis=None)))
+    if not finite:
         v = np.where(np.isfinite(v), v, 0.0)
         scale = np.max(np.abs(v), axis=0)
         v = np.divide(v, scale, out=np.zeros_like(v), where=scale > 0)
@@ -384,22 +400,24 @@ def dft_xi(
             raise ValueError("DFTParams.agreement is on but no per-goal autonomy commands u_a given")
         u_a = np.asarray(u_a, dtype=float)
         shapes.append(u_a.shape[:-2])
-    batch = np.broadcast_shapes(*shapes)
+    batch = _batch_shape(*shapes)
     nb = len(batch)
     xi = np.zeros((x_g.shape[-2], *batch))  # goal-major (n, *batch)
+    units, moving = _command_directions(u, nb)
     if params.directedness or params.proximity:  # both need x_g - x_r and its length: once
         offsets = _goal_offsets(x_r, x_g, nb)
         dist = _lengths(offsets)  # (n, *batch); may overflow to inf for absurd positions
+        finite = bool(np.isfinite(np.add.reduce(dist, axis=None)))
     if params.directedness:
-        eta = _cosine_to_unit(offsets, dist, _unit_command(_vector_major(u[..., :3], nb)))
-        xi += 0.5 * (1.0 + eta)
-    if params.agreement and u.shape[-1] >= 6:
+        xi += 0.5 * (1.0 + _cosine_to_unit(offsets, dist, units[0], finite))
+    if params.agreement and units.shape[0] > 1:
         rot = _per_goal_major(u_a[..., 3:6], nb)
-        xi += _cosine_to_unit(rot, _lengths(rot), _unit_command(_vector_major(u[..., 3:6], nb)))
+        xi += _cosine_to_unit(rot, _lengths(rot), units[1])
     if not params.zero_command_excitation:
-        xi *= _has_command(u)[..., 0]
+        xi *= moving
     if params.proximity:
-        xi += np.where(np.isfinite(dist), np.maximum(0.0, 1.0 - dist / params.R), 0.0)
+        closeness = np.maximum(1.0 - dist / params.R, 0.0)
+        xi += closeness if finite else np.where(np.isfinite(dist), closeness, 0.0)
     return xi.transpose(_goal_last_axes(xi.ndim))
 
 
