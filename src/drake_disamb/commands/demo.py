@@ -8,11 +8,16 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
   (threshold rho1 dashed, requests and mode switches marked, non-zero command segments below);
 - ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat);
 - ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
+
+``--live`` replaces the simulated user by you: the interface is driven from the Meshcat page
+(:class:`~drake_disamb.systems.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
+gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -20,6 +25,22 @@ from pathlib import Path
 from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
+
+
+LIVE_HELP = {
+    "head_array": (
+        "Live: drive from the Meshcat page (click into it first). Each press of the Left (+) or\n"
+        "Right (-) arrow key drives the mode's dimension for 0.6 s (tap again, or hold where the\n"
+        "browser repeats keys); Down switches to the next mode, Space asks the robot for the\n"
+        "disambiguating mode. The trial ends at the goal given by --goal (default 0) or after --duration."
+    ),
+    "joystick": (
+        "Live: drive from the Meshcat page (click into it first) or plug in a gamepad. A/D and S/W\n"
+        "step the two axes, C centres them, M switches mode, Space asks the robot for the\n"
+        "disambiguating mode. The trial ends at the goal given by --goal (default 0) or after --duration."
+    ),
+}
+"""What ``--live`` prints before the trial, per interface."""
 
 
 def _goal_arg(text: str) -> int | list[int]:
@@ -77,6 +98,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="target real-time rate with Meshcat (default 1.0; 0 = as fast as possible)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--live",
+        action="store_true",
+        help="drive the interface yourself from the Meshcat page (keys, on-page buttons, sliders or a "
+        "gamepad) instead of the simulated user; runs at real time",
+    )
+    parser.add_argument(
+        "--duration",
+        type=_nonnegative_float,
+        default=None,
+        help="simulated-time limit in s (default: the scenario's, 600 with --live)",
+    )
 
 
 def format_metrics(result) -> str:  # noqa: ANN001 (TrialResult, imported lazily)
@@ -119,6 +152,18 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
         return 2
+    if args.live and args.no_meshcat:
+        print("drake-disamb demo: error: --live needs Meshcat (drop --no-meshcat)", file=sys.stderr)
+        return 2
+    duration = args.duration if args.duration is not None else (600.0 if args.live else None)
+    if duration is not None:
+        if not duration > 0:
+            print(
+                f"drake-disamb demo: error: --duration: expected a number > 0, got {duration:g}",
+                file=sys.stderr,
+            )
+            return 2
+        scenario = dataclasses.replace(scenario, duration=duration)
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
 
@@ -133,13 +178,27 @@ def run(args: argparse.Namespace) -> int:
             return 2
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
+    source = None
+    if args.live:
+        from drake_disamb.core.interfaces import InterfaceConfig
+        from drake_disamb.systems.live import MeshcatLiveInput
+
+        interface = InterfaceConfig(kind=scenario.interface, control_period=scenario.control_period)
+        source = MeshcatLiveInput(meshcat, interface)
+        source.set_name("live_input")
+        realtime = args.realtime_rate if args.realtime_rate is not None else 1.0
+        print(LIVE_HELP[scenario.interface], flush=True)
     try:
-        handles = build_shared_control_diagram(scenario, meshcat=meshcat)
+        handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
     except ValueError as exc:
         print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
         return 2
     progress = not args.quiet and sys.stderr.isatty()
-    result = run_trial(handles, progress=progress, realtime_rate=realtime)
+    try:
+        result = run_trial(handles, progress=progress, realtime_rate=realtime)
+    finally:
+        if source is not None:
+            source.remove_controls()
     print(format_metrics(result))
     written = write_trial_figures(result, handles, out)
     for path in written:

@@ -1,0 +1,254 @@
+"""Live input from the Meshcat page: a person drives the interface from a browser.
+
+:class:`MeshcatLiveInput` adds controls to the Meshcat page (on-page buttons with keyboard
+shortcuts, sliders, and the browser's Gamepad API) and turns them into the interface's raw signal
+(:data:`drake_disamb.core.interfaces.RAW_LAYOUTS`), the same port a simulated user or a recorded log
+drives. The mapping from what the page reports to the raw signal is the pure function
+:func:`live_raw_step`, tested without a browser.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
+
+from drake_disamb.core.interfaces import MODE_BUTTON, RAW_SIZE, REQUEST_BUTTON, InterfaceConfig
+
+__all__ = ["LIVE_CONTROLS", "LiveInputConfig", "LiveState", "MeshcatLiveInput", "live_raw_step"]
+
+LIVE_CONTROLS: dict[str, tuple[tuple[str, str], ...]] = {
+    "head_array": (
+        ("Left switch: + [ArrowLeft]", "ArrowLeft"),
+        ("Right switch: - [ArrowRight]", "ArrowRight"),
+        ("Back switch: next mode [ArrowDown]", "ArrowDown"),
+        ("Request disambiguation [Space]", "Space"),
+    ),
+    "joystick": (
+        ("Center the axes [KeyC]", "KeyC"),
+        ("", ""),
+        ("Mode button [KeyM]", "KeyM"),
+        ("Request disambiguation [Space]", "Space"),
+    ),
+}
+"""Meshcat buttons ``(name, keycode)`` per interface, in the raw layout's order (joystick entry 0 re-
+centres the axis sliders, entry 1 is unused). A keycode is a browser ``KeyboardEvent.code``."""
+
+AXIS_SLIDERS: tuple[tuple[str, str, str], ...] = (
+    ("Axis x [KeyA / KeyD]", "KeyA", "KeyD"),
+    ("Axis y [KeyS / KeyW]", "KeyS", "KeyW"),
+)
+"""Joystick axis sliders ``(name, decrement keycode, increment keycode)``, each in ``[-1, 1]``."""
+
+
+@dataclass(frozen=True)
+class LiveInputConfig:
+    """How page events become raw signals.
+
+    Attributes:
+        hold_time: Seconds a click (or key press) on a head-array Left/Right switch keeps it
+            closed; another press extends it. Longer than a keyboard's usual auto-repeat delay
+            (about 0.5 s), so a held key drives continuously where the browser repeats key events.
+            A press on the other direction opens the first at once.
+        slider_step: Step (of the full deflection 1) of the joystick axis sliders and their keys.
+        dead_zone: Gamepad stick deflections below this read as 0.
+    """
+
+    hold_time: float = 0.6
+    slider_step: float = 0.25
+    dead_zone: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name in ("hold_time", "slider_step"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise ValueError(f"LiveInputConfig.{name}: expected a finite number > 0, got {value!r}")
+        if not (isinstance(self.dead_zone, int | float) and 0 <= self.dead_zone < 1):
+            raise ValueError(
+                f"LiveInputConfig.dead_zone: expected a number in [0, 1), got {self.dead_zone!r}"
+            )
+
+
+@dataclass(frozen=True)
+class LiveState:
+    """What the live input remembers between control ticks.
+
+    Attributes:
+        clicks: Button click counts already seen, in :data:`LIVE_CONTROLS` order (4).
+        pending: Presses of the mode and request buttons not yet passed on (2): a press lasts one
+            control period and is followed by a release, so clicks closer than two periods queue.
+        hold_until: Head array: time (s) until which the Left and Right switches stay closed (2).
+        pad_buttons: Gamepad mode and request buttons at the last tick (2; rising edges count).
+        raw: The raw signal of the last tick (4).
+    """
+
+    clicks: NDArray[np.float64] = field(default_factory=lambda: np.zeros(4))
+    pending: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+    hold_until: NDArray[np.float64] = field(default_factory=lambda: np.full(2, -np.inf))
+    pad_buttons: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+    raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE))
+
+    VECTOR_SIZE = 4 + 2 + 2 + 2 + RAW_SIZE
+
+    def to_vector(self) -> NDArray[np.float64]:
+        """Flat ``[clicks (4), pending (2), hold_until (2), pad_buttons (2), raw (4)]``."""
+        return np.concatenate([self.clicks, self.pending, self.hold_until, self.pad_buttons, self.raw])
+
+    @classmethod
+    def from_vector(cls, x: NDArray[np.float64]) -> LiveState:
+        """Inverse of :meth:`to_vector`."""
+        v = np.asarray(x, dtype=float)
+        if v.shape != (cls.VECTOR_SIZE,):
+            raise ValueError(f"LiveState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
+        return cls(v[0:4].copy(), v[4:6].copy(), v[6:8].copy(), v[8:10].copy(), v[10:].copy())
+
+
+def _dead_zone(value: float, dead_zone: float) -> float:
+    if not math.isfinite(value) or abs(value) < dead_zone:
+        return 0.0
+    return max(-1.0, min(1.0, value))
+
+
+def live_raw_step(
+    state: LiveState,
+    time: float,
+    kind: str,
+    clicks: NDArray[np.float64],
+    axes: tuple[float, float] = (0.0, 0.0),
+    pad_buttons: tuple[float, float] = (0.0, 0.0),
+    config: LiveInputConfig | None = None,
+) -> LiveState:
+    """One control tick: the page's click counts (and, for the joystick, the axes and the gamepad's
+    mode/request buttons) to the next state, whose ``raw`` is the interface's raw signal.
+
+    Args:
+        state: The state after the previous tick.
+        time: Current time (s).
+        kind: ``"head_array"`` or ``"joystick"``.
+        clicks: Cumulative click counts of the four :data:`LIVE_CONTROLS` buttons.
+        axes: Joystick ``(axis_x, axis_y)`` in ``[-1, 1]`` (non-finite reads as 0).
+        pad_buttons: Gamepad ``(mode, request)`` button levels (pressed at ``>= 0.5``).
+        config: Timing and dead zone.
+    """
+    cfg = LiveInputConfig() if config is None else config
+    if kind not in LIVE_CONTROLS:
+        raise ValueError(f"kind: expected one of {', '.join(LIVE_CONTROLS)}, got {kind!r}")
+    counts = np.asarray(clicks, dtype=float)
+    new = np.maximum(counts - state.clicks, 0.0)  # a count never decreases; guard anyway
+    pending = state.pending.copy()
+    pending += new[[MODE_BUTTON, REQUEST_BUTTON]]
+    pads = np.array([float(b) >= 0.5 for b in pad_buttons], dtype=float)
+    pending += (pads > state.pad_buttons).astype(float)  # gamepad rising edges
+    hold = state.hold_until.copy()
+    raw = np.zeros(RAW_SIZE)
+    if kind == "head_array":
+        for i, other in ((0, 1), (1, 0)):
+            if new[i] > 0:
+                hold[i] = time + cfg.hold_time
+                hold[other] = -np.inf
+        raw[0] = float(time < hold[0])
+        raw[1] = float(time < hold[1])
+    else:
+        raw[0] = _dead_zone(float(axes[0]), 0.0)
+        raw[1] = _dead_zone(float(axes[1]), 0.0)
+    # Buttons: one period pressed, then at least one released, so each click is one rising edge.
+    for k, button in enumerate((MODE_BUTTON, REQUEST_BUTTON)):
+        if state.raw[button] == 0.0 and pending[k] > 0:
+            raw[button] = 1.0
+            pending[k] -= 1
+    return LiveState(clicks=counts.copy(), pending=pending, hold_until=hold, pad_buttons=pads, raw=raw)
+
+
+class MeshcatLiveInput(LeafSystem):
+    """The interface's raw signal from a person at the Meshcat page (buttons, keys, sliders, gamepad).
+
+    .. pydrake_system::
+
+        name: MeshcatLiveInput
+        output_ports:
+        - raw
+
+    Output ports:
+        raw (4): the interface's raw signal (:data:`~drake_disamb.core.interfaces.RAW_LAYOUTS`),
+            computed at the last update and held (no direct feedthrough).
+
+    Controls it adds to the page (:data:`LIVE_CONTROLS`, :data:`AXIS_SLIDERS`):
+
+    - head array: buttons Left, Right (drive the mode's dimension +/-; each click or key press
+      keeps the switch closed for ``config.hold_time``), Back (next mode) and Request, on the arrow
+      keys and the space bar;
+    - joystick: two axis sliders in ``[-1, 1]`` (keys A/D and S/W step them), a button that
+      re-centres them (C), Mode (M) and Request (space). A browser gamepad, when one is connected,
+      takes over: left stick for the axes (up is +y), buttons 0 and 1 for mode and request.
+
+    State: discrete :class:`LiveState` vector, updated every ``interface.control_period`` from
+    t = 0; the page is read in that update. Run the simulator at real time (rate 1) so the person
+    sees what they drive. :meth:`remove_controls` takes the controls off the page.
+
+    Args:
+        meshcat: The Meshcat instance whose page the person uses.
+        interface: The interface being driven (its kind and control period).
+        config: Timing and dead zone.
+    """
+
+    def __init__(
+        self, meshcat: Any, interface: InterfaceConfig, config: LiveInputConfig | None = None
+    ) -> None:
+        super().__init__()
+        if not isinstance(interface, InterfaceConfig):
+            raise ValueError(f"interface: expected an InterfaceConfig, got {interface!r}")
+        self.meshcat = meshcat
+        self.interface = interface
+        self.config = LiveInputConfig() if config is None else config
+        self._buttons = [name for name, _ in LIVE_CONTROLS[interface.kind]]
+        for name, keycode in LIVE_CONTROLS[interface.kind]:
+            if name:
+                meshcat.AddButton(name, keycode)
+        self._sliders: list[str] = []
+        if interface.kind == "joystick":
+            for name, down, up in AXIS_SLIDERS:
+                meshcat.AddSlider(name, -1.0, 1.0, self.config.slider_step, 0.0, down, up)
+                self._sliders.append(name)
+        self._state_index = self.DeclareDiscreteState(LiveState().to_vector())
+        self._raw_index = self.DeclareDiscreteState(np.zeros(RAW_SIZE))
+        self.DeclarePeriodicDiscreteUpdateEvent(interface.control_period, 0.0, self._update)
+        self.DeclareStateOutputPort("raw", self._raw_index)
+
+    def remove_controls(self) -> None:
+        """Delete the buttons and sliders this system added to the page."""
+        for name in self._buttons:
+            if name:
+                self.meshcat.DeleteButton(name, strict=False)
+        for name in self._sliders:
+            self.meshcat.DeleteSlider(name, strict=False)
+
+    def _read_page(self) -> tuple[NDArray[np.float64], tuple[float, float], tuple[float, float]]:
+        m = self.meshcat
+        clicks = np.array([float(m.GetButtonClicks(name)) if name else 0.0 for name in self._buttons])
+        axes = (0.0, 0.0)
+        pad = (0.0, 0.0)
+        if self.interface.kind == "joystick":
+            gamepad = m.GetGamepad()
+            if gamepad.index is not None and len(gamepad.axes) >= 2:
+                dz = self.config.dead_zone
+                axes = (_dead_zone(gamepad.axes[0], dz), _dead_zone(-gamepad.axes[1], dz))  # up is +y
+                values = list(gamepad.button_values) + [0.0, 0.0]
+                pad = (float(values[0]), float(values[1]))
+            else:
+                axes = (m.GetSliderValue(self._sliders[0]), m.GetSliderValue(self._sliders[1]))
+        return clicks, axes, pad
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        before = LiveState.from_vector(context.get_discrete_state(self._state_index).get_value())
+        clicks, axes, pad = self._read_page()
+        after = live_raw_step(before, context.get_time(), self.interface.kind, clicks, axes, pad, self.config)
+        if self.interface.kind == "joystick" and clicks[0] > before.clicks[0]:  # re-centre the sliders
+            for name in self._sliders:
+                self.meshcat.SetSliderValue(name, 0.0)
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(after.to_vector())
+        discrete_state.get_mutable_vector(self._raw_index).SetFromVector(after.raw)
+        return EventStatus.Succeeded()
