@@ -384,7 +384,13 @@ class DisambiguationResult:
             runner = [int(i) for i in order if int(i) != self.mode]
             label = _mode_label(self.modes[self.mode])
             text = f"Chose mode {self.mode} {label} with D_m = {self.mode_scores[self.mode]:.4g}"
-            if runner:
+            if self.mode != best:
+                text += (
+                    f": it ties with mode {best} {_mode_label(self.modes[best])} (D_m = "
+                    f"{self.mode_scores[best]:.4g}) within {self.tie_tolerance:g} (relative), and the first "
+                    "of the equally best modes wins"
+                )
+            elif runner:
                 r = runner[0]
                 ratio = (
                     self.mode_scores[self.mode] / self.mode_scores[r] if self.mode_scores[r] > 0 else np.inf
@@ -718,7 +724,11 @@ def belief_features(
 def select_mode(
     mode_scores: NDArray[np.float64], current_mode: int | None, tie_tolerance: float
 ) -> tuple[int | None, int]:
-    """Apply the tie rule. Returns ``(mode or None when the current mode is kept, argmax)``."""
+    """Apply the tie rule. Returns ``(mode or None when the current mode is kept, argmax)``.
+
+    Modes within ``tie_tolerance`` (relative) of the best are equally best; the chosen mode is the
+    first of them (lowest index) unless the current mode is one of them or all modes are.
+    """
     scores = np.asarray(mode_scores, dtype=float).tolist()  # a few numbers: plain Python is faster
     best = max(range(len(scores)), key=scores.__getitem__)  # first of equal maxima, like argmax
     top = scores[best]
@@ -728,7 +738,7 @@ def select_mode(
         return None, best
     if current_mode is not None and 0 <= current_mode < len(scores) and tied[current_mode]:
         return None, best
-    return best, best
+    return tied.index(True), best  # the first of the equally best modes
 
 
 # ----------------------------------------------------------------------------------------------

@@ -110,14 +110,11 @@ def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[
         return t[..., 0] + t[..., 1] + t[..., 2] + t[..., 3]
     w1, x1, y1, z1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
     w2, x2, y2, z2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
-    out = np.stack(
-        (
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-        )
-    )
+    out = np.empty((4, *_batch_shape(q1.shape[:-1], q2.shape[:-1])))  # component-major
+    np.subtract(w1 * w2 - x1 * x2 - y1 * y2, z1 * z2, out=out[0])
+    np.subtract(w1 * x2 + x1 * w2 + y1 * z2, z1 * y2, out=out[1])
+    np.add(w1 * y2 - x1 * z2 + y1 * w2, z1 * x2, out=out[2])
+    np.add(w1 * z2 + x1 * y2 - y1 * x2, z1 * w2, out=out[3])
     return out.transpose((*range(1, out.ndim), 0))
 
 
@@ -143,7 +140,7 @@ def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
     s = _norm3(v)
     angle = 2.0 * np.arctan2(s, w)
     small = s < 0.5 * _SMALL_ANGLE
-    if s.size <= _SMALL_BATCH and not small.any():
+    if not np.logical_or.reduce(small, axis=None):
         return v * (angle / s)  # what the general expression below gives without tiny rotations
     # angle / s, with its series 2/w (w ~ 1 here) for tiny rotations.
     safe_s = np.where(small, 1.0, s)

@@ -221,11 +221,12 @@ def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
     ``+inf`` (or the sum overflow), the mass goes uniformly to the infinite entries (or the vector
     is first scaled by its maximum), so the result is always a probability vector.
     """
-    p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well
+    p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well (and a new array)
     # Fast path (the same sum, without the cost of an errstate context): when no entry exceeds
     # DBL_MAX / (2 n), every entry is finite and no row sum can overflow.
     if p.size and np.maximum.reduce(p, axis=None) < _FAST_SUM_BOUND / p.shape[-1]:
-        return p / np.add.reduce(p, axis=-1, keepdims=True)
+        p /= np.add.reduce(p, axis=-1, keepdims=True)  # in place: p is our own copy
+        return p
     with np.errstate(over="ignore", invalid="ignore"):
         total = np.add.reduce(p, axis=-1, keepdims=True)  # = p.sum(...), without its Python wrapper
         # The totals are positive: their sum is finite iff all of them are.
