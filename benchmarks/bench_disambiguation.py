@@ -15,13 +15,15 @@ warm-up. The paper reports 2 to 2.5 s per request on the robot; the target here 
 
 Usage: ``python benchmarks/bench_disambiguation.py [--repeats 300] [--seed 0]``
 
-Measured on the shared 2-core development machine (other jobs running, so figures swing by up to
-2x between runs; compare before/after in the same minute), MICO row, median ms:
+Measured on the shared 2-core development machine, MICO row, median ms (figures swing by up to
+1.5-2x with the machine's state; compare versions in the same minute):
 
 - before the caching/layout work (commit 1ad2845): 2.0 (quiet) to 3.5-3.9 (load ~3);
-- after: 1.2 (quiet) to 2.0-2.1 (load ~3), i.e. about 0.55-0.6x. The 1 ms target is met
-  only when the machine is quiet. What remains is numpy call overhead: the 20-step recursion
-  (about 10 numpy calls per step) and the einsum-bound DFT drive of the 12 probes.
+- after it (commit c154a60): 1.2 (quiet) to 2.0;
+- after the goal-major DFT drive and the leaner kernels (2026-11-22): 0.90-0.93 in five of seven
+  runs, 1.10 and 1.33 in two runs in which the whole machine was about 1.5x slower (the
+  ``authors-r3`` row went from 0.59 to 0.92 as well). What remains is numpy's cost per call on
+  small arrays, mostly in the 20-step recursion of the inference update.
 """
 
 from __future__ import annotations
