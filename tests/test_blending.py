@@ -203,3 +203,11 @@ def test_blender_rejects_bad_config() -> None:
         SharedControlBlender(3, rho1=0.5, rho2=0.2)
     with pytest.raises(ValueError, match="n_goals"):
         SharedControlBlender(0)
+
+
+def test_resolve_rhos_checks_survive_its_cache() -> None:
+    assert resolve_rhos(1, 0.1, 0.2) == (0.1, 0.2, 0.7)  # now cached
+    with pytest.raises(ValueError, match="n_goals"):
+        resolve_rhos(True, 0.1, 0.2)  # equal to 1 as a key, but a bool
+    with pytest.raises(ValueError, match="rho1"):
+        resolve_rhos(5, [0.1], None)  # unhashable: checked without the cache

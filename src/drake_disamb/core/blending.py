@@ -15,6 +15,7 @@ with ``rho_i`` in ``[0, 1]``, ``rho2 > rho1``, and in the paper's implementation
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass
@@ -46,6 +47,16 @@ def resolve_rhos(
     ``rho2 > rho1``. With one goal the paper's defaults (1.2, 1.4) lie outside ``[0, 1]``, so
     ``rho1`` and ``rho2`` must then be given explicitly.
     """
+    try:  # a control loop asks for the same few thresholds every tick: remembered once checked
+        return _resolve_rhos_cached(n_goals, rho1, rho2, rho3)
+    except TypeError:  # an unhashable argument: the checks below name it
+        return _resolve_rhos(n_goals, rho1, rho2, rho3)
+
+
+def _resolve_rhos(
+    n_goals: int, rho1: float | None = None, rho2: float | None = None, rho3: float = RHO3_DEFAULT
+) -> tuple[float, float, float]:
+    """:func:`resolve_rhos` itself (the checks and the defaults)."""
     if not (isinstance(n_goals, numbers.Integral) and not isinstance(n_goals, bool) and n_goals >= 1):
         raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
     r1 = RHO1_TIMES_N / n_goals if rho1 is None else rho1
@@ -57,6 +68,10 @@ def resolve_rhos(
     if not r2 > r1:
         raise ValueError(f"rho2: expected rho2 > rho1 = {r1!r}, got {r2!r}")
     return float(r1), float(r2), float(rho3)
+
+
+# typed: 1 and True (or 0.5 and a numpy 0.5) are different keys, so a bool is still refused.
+_resolve_rhos_cached = functools.lru_cache(maxsize=256, typed=True)(_resolve_rhos)
 
 
 def blending_alpha(
