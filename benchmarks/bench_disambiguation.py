@@ -21,8 +21,8 @@ Measured on the shared 2-core development machine, MICO row, median ms (figures 
 - before the caching/layout work (commit 1ad2845): 2.0 (quiet) to 3.5-3.9 (load ~3);
 - after it (commit c154a60): 1.2 (quiet) to 2.0;
 - after the goal-major DFT drive and the leaner kernels (2026-11-22): 0.90-0.93 in five of ten
-  runs, 1.10-1.48 in the five in which the whole machine was 1.5-1.8x slower (the ``authors-r3``
-  row went from 0.59 to 0.92-1.08 as well). What remains is numpy's cost per call on
+  runs, 1.10-1.48 in five runs during slow spells of the machine (the ``authors-r3`` row, 0.59 at
+  the usual speed, measured 0.92-1.08 in three of them). What remains is numpy's cost per call on
   small arrays, mostly in the 20-step recursion of the inference update.
 """
 
