@@ -29,10 +29,10 @@ HELP = "Run one shared-control trial (default: reaching, head array, disambiguat
 
 LIVE_HELP = {
     "head_array": (
-        "Live: drive from the Meshcat page (click into it first). Each press of the Left (+) or\n"
-        "Right (-) arrow key drives the mode's dimension for 0.6 s (tap again, or hold where the\n"
-        "browser repeats keys); Down switches to the next mode, Space asks the robot for the\n"
-        "disambiguating mode. The trial ends at the goal given by --goal (default 0) or after --duration."
+        "Live: drive from the Meshcat page (click into it first). Hold the Left (+) or Right (-)\n"
+        "arrow key to drive the mode's dimension (a tap drives it for 0.6 s); Down switches to the\n"
+        "next mode, Space asks the robot for the disambiguating mode. The trial ends at the goal\n"
+        "given by --goal (default 0) or after --duration."
     ),
     "joystick": (
         "Live: drive from the Meshcat page (click into it first) or plug in a gamepad. A/D and S/W\n"

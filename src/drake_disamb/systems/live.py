@@ -51,9 +51,10 @@ class LiveInputConfig:
 
     Attributes:
         hold_time: Seconds a click (or key press) on a head-array Left/Right switch keeps it
-            closed; another press extends it. Longer than a keyboard's usual auto-repeat delay
-            (about 0.5 s), so a held key drives continuously where the browser repeats key events.
-            A press on the other direction opens the first at once.
+            closed; another press extends it. The Meshcat page counts every keydown, the
+            browser's auto-repeats of a held key included (checked in Chromium 156), and this is
+            longer than the usual auto-repeat delay (about 0.5 s), so a held key drives
+            continuously. A press on the other direction opens the first at once.
         slider_step: Step (of the full deflection 1) of the joystick axis sliders and their keys.
         dead_zone: Gamepad stick deflections below this read as 0.
     """
@@ -179,8 +180,8 @@ class MeshcatLiveInput(LeafSystem):
     Controls it adds to the page (:data:`LIVE_CONTROLS`, :data:`AXIS_SLIDERS`):
 
     - head array: buttons Left, Right (drive the mode's dimension +/-; each click or key press
-      keeps the switch closed for ``config.hold_time``), Back (next mode) and Request, on the arrow
-      keys and the space bar;
+      keeps the switch closed for ``config.hold_time``, so a held key drives continuously), Back
+      (next mode) and Request, on the arrow keys and the space bar;
     - joystick: two axis sliders in ``[-1, 1]`` (keys A/D and S/W step them), a button that
       re-centres them (C), Mode (M) and Request (space). A browser gamepad, when one is connected,
       takes over: left stick for the axes (up is +y), buttons 0 and 1 for mode and request.
