@@ -1,11 +1,12 @@
 """Build the MICO station, simulate a short scripted pattern and write its Graphviz picture.
 
-Usage: ``python diagrams/station.py [OUT_STEM]`` (default ``out/diagrams/station``); writes
-``OUT_STEM.dot`` and, when Graphviz ``dot`` is installed, ``OUT_STEM.svg``.
+Usage: ``python diagrams/station.py [--out DIR] [--max-depth N]``; writes ``DIR/station.dot``
+(default ``out/diagrams``) and, when Graphviz ``dot`` is installed, ``DIR/station.svg``.
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -17,7 +18,10 @@ from drake_disamb.station import build_station
 
 
 def main(argv: list[str]) -> int:
-    stem = Path(argv[0]) if argv else Path("out/diagrams/station")
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("out/diagrams"), help="output folder")
+    parser.add_argument("--max-depth", type=int, default=1, help="nested diagrams to expand in the picture")
+    args = parser.parse_args(argv)
     station = build_station()
     simulator = start_simulation(station)
     ctx = simulator.get_mutable_context()
@@ -25,7 +29,7 @@ def main(argv: list[str]) -> int:
     run_pattern(station, simulator, 2.0, pattern())
     p1 = station.output_port("ee_pose").Eval(ctx)
     print(f"EE moved {np.round(p1[:3] - p0[:3], 4)} m in 2 s of the pattern")
-    for path in write_diagram_graph(station.diagram, stem, max_depth=1):
+    for path in write_diagram_graph(station.diagram, args.out / "station", max_depth=args.max_depth):
         print(f"wrote {path}")
     return 0
 
