@@ -535,12 +535,11 @@ class _ProbePlan:
         n_rot: Number of rotational probes (``k >= 3``): the last ``n_rot / 2`` columns of the
             probe grid ``(2, n_k)``, since ``dimensions`` is ascending.
         offsets: ``(steps_c + 1, 2 n_k, 3)`` position change after ``s`` steps, ``s v dt`` (m).
-        rot_quats: ``(steps_c + 1, n_rot, 4)`` rotation of each rotational probe after ``s``
-            steps, ``exp(s w dt)``: the orientation is ``rot_quats (x) q``.
-        rot_left: ``(4, steps_c, n_rot, 4)`` the same products as a linear map of ``q`` (the
-            Hamilton product is linear in its right factor): ``rot_left @ q`` is
-            ``rot_quats[:steps_c] (x) q`` with the quaternion components first, built with
-            ``_quat_multiply`` on the basis quaternions. One matrix-vector product per request.
+        rot_left: ``(4, steps_c, n_rot, 4)``: the orientation of each rotational probe after
+            ``s`` steps is ``exp(s w dt) (x) q``; the Hamilton product is linear in its right
+            factor, so ``rot_left @ q`` gives all of them (quaternion components first, for
+            ``s < steps_c``). Built with ``_quat_multiply`` on the basis quaternions; one
+            matrix-vector product per request.
         displacement: ``(2, n_k)`` displacement along ``k`` between ``t_b`` and ``t_c``: the
             position component ``(s_c - s_b) v_k dt`` (m), or the angle about axis ``k`` of
             ``exp(s_c w dt) (x) exp(s_b w dt)^-1`` (rad). Neither depends on the start pose (the
@@ -550,7 +549,6 @@ class _ProbePlan:
     commands: NDArray[np.float64]
     n_rot: int
     offsets: NDArray[np.float64]
-    rot_quats: NDArray[np.float64]
     rot_left: NDArray[np.float64]
     displacement: NDArray[np.float64]
 
@@ -581,7 +579,6 @@ def _probe_plan(
         commands=_frozen(U),
         n_rot=int(rotational.size),
         offsets=_frozen(offsets),
-        rot_quats=_frozen(np.ascontiguousarray(rot_quats)),
         # [c, s, r, j] = component c of rot_quats[s, r] (x) e_j
         rot_left=_frozen(
             np.ascontiguousarray(

@@ -404,7 +404,8 @@ def dft_xi(
     batch = _batch_shape(*shapes)
     nb = len(batch)
     xi = np.zeros((x_g.shape[-2], *batch))  # goal-major (n, *batch)
-    units, moving = _command_directions(u, nb)
+    if params.directedness or params.agreement or not params.zero_command_excitation:
+        units, moving = _command_directions(u, nb)
     if params.directedness or params.proximity:  # both need x_g - x_r and its length: once
         offsets = _goal_offsets(x_r, x_g, nb)
         dist = _lengths(offsets)  # (n, *batch); may overflow to inf for absurd positions
