@@ -21,12 +21,12 @@ is capped at :data:`REPELLER_SPEED_CAP_FACTOR` times the maximum linear speed be
 from __future__ import annotations
 
 import functools
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._validation import is_real as _is_real
 from drake_disamb.core.geometry import (
     _SMALL_BATCH,
     _batch_shape,
@@ -39,11 +39,6 @@ from drake_disamb.core.geometry import (
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
-
-
-def _is_real(value: object) -> bool:
-    """True for a finite real number (not a bool)."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and bool(np.isfinite(value))
 
 
 @dataclass(frozen=True)

@@ -16,12 +16,13 @@ with ``rho_i`` in ``[0, 1]``, ``rho2 > rho1``, and in the paper's implementation
 from __future__ import annotations
 
 import functools
-import math
 import numbers
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core._validation import is_real as _is_real
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -32,10 +33,6 @@ RHO3_DEFAULT = 0.7
 
 NO_INPUT_TOLERANCE = 1e-9
 """A human command whose every entry is at most this (m/s or rad/s) in magnitude counts as no input."""
-
-
-def _is_real(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def resolve_rhos(

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -45,6 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._validation import is_real as _is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, _potential_field_rotation
 from drake_disamb.core.geometry import (
     _check_last,
@@ -76,10 +76,6 @@ FEATURE_NAMES: tuple[str, ...] = ("gamma", "omega", "lambda", "upsilon")
 
 _MIN_DISPLACEMENT = 1e-12
 """Displacements (m or rad) below this are treated as zero: the gradient is then taken as 0."""
-
-
-def _is_real(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and bool(np.isfinite(value))
 
 
 # ----------------------------------------------------------------------------------------------

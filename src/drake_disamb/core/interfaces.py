@@ -42,6 +42,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._validation import is_real as _is_real
+
 GRIPPER_DIM = 6
 """Dimension index of the gripper in a control mode (0..5 are vx, vy, vz, wx, wy, wz)."""
 
@@ -79,10 +81,6 @@ DEFAULT_SPEEDS: dict[str, tuple[float, float]] = {
 """Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs (FACTS 5)."""
 
 EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch"]
-
-
-def _is_real(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def check_kind(kind: str) -> str:

@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._validation import is_real as _is_real
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.geometry import orientation_error
 from drake_disamb.core.interfaces import (
@@ -65,10 +66,6 @@ from drake_disamb.core.interfaces import (
 
 NOT_COUNTING = -1.0
 """``unhelped_since`` value meaning "the autonomy is currently helping" (times are >= 0)."""
-
-
-def _is_real(value: object) -> bool:
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 @dataclass(frozen=True)
