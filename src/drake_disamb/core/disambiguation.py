@@ -668,7 +668,7 @@ def forward_projection(
         lik = bayes_likelihood(U, X, goal_positions, config.bayes_sigma)  # (nc, P, n)
 
     # The recursion: one update per step over the whole probe batch, nothing else per step.
-    p = np.broadcast_to(belief, (n_probe, n))
+    p = belief[None, :].repeat(n_probe, axis=0)  # the start belief of every probe
     if config.inference == "dft":
         params = config.dft
         p_b = p

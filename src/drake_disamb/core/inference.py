@@ -221,7 +221,14 @@ def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
     ``+inf`` (or the sum overflow), the mass goes uniformly to the infinite entries (or the vector
     is first scaled by its maximum), so the result is always a probability vector.
     """
-    p = np.fmax(p, TINY)  # fmax returns TINY for NaN entries as well (and a new array)
+    return _normalize_clipped(np.fmax(p, TINY))  # fmax: TINY for NaN entries too, and a new array
+
+
+def _normalize_clipped(p: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The rest of :func:`normalize_belief` for entries already clipped to ``>= TINY``.
+
+    ``p`` must be an array the caller owns (it is divided in place and returned).
+    """
     # Fast path (the same sum, without the cost of an errstate context): when no entry exceeds
     # DBL_MAX / (2 n), every entry is finite and no row sum can overflow.
     if p.size and np.maximum.reduce(p, axis=None) < _FAST_SUM_BOUND / p.shape[-1]:
@@ -546,7 +553,9 @@ def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: Arra
     p = np.asarray(p, dtype=float)
     if type(dt) is not float:  # a Python float multiplies exactly like its 0-d array
         dt = np.asarray(dt, dtype=float)
-    return normalize_belief(p + dt * dft_rhs_from_drive(p, drive, params))
+    step = dt * dft_rhs_from_drive(p, drive, params)  # a new array, of the broadcast shape
+    step += p
+    return _normalize_clipped(np.fmax(step, TINY, out=step))
 
 
 def dft_euler_step(
