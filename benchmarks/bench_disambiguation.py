@@ -116,13 +116,19 @@ def main() -> None:
         ("authors-r3, 5 goals, 3 dims, 3 modes", preset("authors-r3"), 5, [[0], [1], [2]]),
     ]
     print(f"One disambiguation request, {args.repeats} calls per row (seed {args.seed}); {host_summary()}")
-    print(f"{'configuration':<55} {'median ms':>10} {'p95 ms':>10} {'steal':>7}")
+    print(f"{'configuration':<55} {'median ms':>10} {'p95 ms':>10} {'steal':>7} {'gauge us':>9}")
     for label, config, n_goals, modes in rows:
         with HostMeter() as host:
             t = measure(config, n_goals, modes, args.repeats, args.scenes, args.seed) * 1e3
         steal = "n/a" if host.steal is None else f"{100 * host.steal:.0f} %"
-        print(f"{label:<55} {np.median(t):>10.3f} {np.percentile(t, 95):>10.3f} {steal:>7}")
-    print("(steal: share of the CPU the hypervisor gave to other guests during the row; see _host.py)")
+        print(
+            f"{label:<55} {np.median(t):>10.3f} {np.percentile(t, 95):>10.3f} {steal:>7} {host.gauge:>9.2f}"
+        )
+    print(
+        "(steal: share of the CPU the hypervisor gave to other guests during the row; gauge: us per\n"
+        " small numpy call around the row, the machine's speed: about 0.5 at the development machine's\n"
+        " usual speed, 0.8-1.2 in its slow spells; see _host.py)"
+    )
 
 
 if __name__ == "__main__":

@@ -5,6 +5,12 @@ head_array] [--profile]``. For each MultibodyPlant time step it builds the reach
 default scenario: disambiguation paradigm, goal 0), simulates ``--seconds`` of simulated time
 without stopping at success, and prints simulated seconds per wall second and per CPU second
 (the machine may be shared). ``--profile`` adds a cProfile table of the components that dominate.
+
+Each row also measures the *station floor*: the MICO station alone (the same MultibodyPlant, scene
+objects, differential IK and gripper integrator, at the same time step) replaying the blended
+command ``u`` that the loop logged, through a C++ zero-order-hold source. The full loop cannot run
+faster than its station; the difference is the cost of the shared-control systems (user,
+interface, inference, autonomy, blending, disambiguation, task manager) and their loggers.
 """
 
 from __future__ import annotations
@@ -16,14 +22,39 @@ import io
 import pstats
 import time
 
+import numpy as np
 from _host import HostMeter
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
+from pydrake.trajectories import PiecewisePolynomial
 
-from drake_disamb.builder import build_shared_control_diagram, run_trial
-from drake_disamb.scenarios import load_scenario, with_overrides
+from drake_disamb.builder import build_shared_control_diagram, run_trial, scene_objects, station_config
+from drake_disamb.scenarios import Scenario, load_scenario, with_overrides
+from drake_disamb.station import build_station
 
 
-def measure(seconds: float, time_step: float, interface: str, profile: bool) -> tuple[float, float, str]:
-    """``(wall rate, cpu rate, profile table)`` of ``seconds`` of the reaching loop."""
+def station_floor(scenario: Scenario, times: np.ndarray, u: np.ndarray) -> tuple[float, float]:
+    """``(wall rate, cpu rate)`` of the station alone replaying the command ``u`` (T, 6) at ``times``."""
+    builder = DiagramBuilder()
+    station = build_station(station_config(scenario), scene_objects(scenario), builder=builder)
+    command = PiecewisePolynomial.ZeroOrderHold(times, u.T)
+    source = builder.AddSystem(TrajectorySource(command))
+    builder.Connect(source.get_output_port(), station.input_port("ee_velocity_command"))
+    gripper = builder.AddSystem(ConstantVectorSource([0.0]))
+    builder.Connect(gripper.get_output_port(), station.input_port("gripper_command"))
+    simulator = Simulator(builder.Build())
+    simulator.Initialize()
+    wall, cpu = time.perf_counter(), time.process_time()
+    simulator.AdvanceTo(float(times[-1]))
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    return float(times[-1]) / wall, float(times[-1]) / cpu
+
+
+def measure(
+    seconds: float, time_step: float, interface: str, profile: bool
+) -> tuple[float, float, str, tuple[float, float]]:
+    """``(wall rate, cpu rate, profile table, station floor rates)`` of ``seconds`` of the reaching loop."""
     scenario = with_overrides(load_scenario("reaching"), interface=interface)
     scenario = dataclasses.replace(scenario, duration=seconds, plant_time_step=time_step)
     handles = build_shared_control_diagram(scenario)
@@ -40,7 +71,8 @@ def measure(seconds: float, time_step: float, interface: str, profile: bool) -> 
         out = io.StringIO()
         pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(r"drake_disamb", 25)
         table = out.getvalue()
-    return result.realtime_rate, result.time / cpu, table
+    times, u = result.logs["u"]
+    return result.realtime_rate, result.time / cpu, table, station_floor(scenario, times, u)
 
 
 def main() -> None:
@@ -57,10 +89,10 @@ def main() -> None:
     )
     for ts in args.time_step:
         with HostMeter() as host:
-            wall_rate, cpu_rate, table = measure(args.seconds, ts, args.interface, args.profile)
+            wall_rate, cpu_rate, table, floor = measure(args.seconds, ts, args.interface, args.profile)
         print(
             f"plant time step {ts:g} s: {wall_rate:6.2f}x real time (wall), {cpu_rate:6.2f}x (CPU); "
-            f"{host.describe()}"
+            f"station alone {floor[0]:6.2f}x (wall), {floor[1]:6.2f}x (CPU); {host.describe()}"
         )
         if table:
             print(table)

@@ -188,7 +188,7 @@ def build_shared_control_diagram(
     builder = DiagramBuilder()
 
     station = build_station(
-        _station_config(scenario), scene_objects(scenario), meshcat=meshcat, builder=builder
+        station_config(scenario), scene_objects(scenario), meshcat=meshcat, builder=builder
     )
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])
@@ -321,7 +321,8 @@ def build_shared_control_diagram(
     )
 
 
-def _station_config(scenario: Scenario) -> Any:
+def station_config(scenario: Scenario) -> Any:
+    """The :class:`~drake_disamb.station.StationConfig` of ``scenario`` (periods, start posture)."""
     from drake_disamb.station import StationConfig
 
     kwargs: dict[str, Any] = {
