@@ -1,7 +1,8 @@
 """Live input through a real browser: Chromium (headless) on the Meshcat page sends key presses.
 
-Needs the ``chromium`` and ``chromedriver`` executables and the ``selenium`` package, which the
-project does not install; the tests skip with a message where any of them is missing. They check
+Needs the ``chromium`` and ``chromedriver`` executables (Debian's ``chromium`` and
+``chromium-driver`` packages, which ``.ci/run`` installs where it can) and the ``selenium`` package
+(in the ``test`` extra); the tests skip with a message where any of them is missing. They check
 what the live interfaces rely on: the page turns every keydown, the browser's auto-repeats of a
 held key included, into a button click, and the slider keys step the joystick axes.
 """
@@ -57,7 +58,17 @@ def page() -> Iterator[Callable[[str], tuple[Any, Any, MeshcatLiveInput]]]:
         meshcat = Meshcat(MeshcatParams(host="localhost"))
         system = MeshcatLiveInput(meshcat, InterfaceConfig(kind=kind))
         options = Options()
-        for flag in ("--headless=new", "--no-sandbox"):
+        # No sandbox (CI runs as root); nothing in the background that would reach the network.
+        for flag in (
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+        ):
             options.add_argument(flag)
         options.binary_location = CHROMIUM
         driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
