@@ -161,3 +161,49 @@ def test_disambiguation_state_is_numeric_and_last_result_memoised() -> None:
     simulator.AdvanceTo(0.055)  # the state is rewritten every tick with the same served request
     assert system.GetOutputPort("last_result").Eval(ctx) is first
     assert calls[0] == 1
+
+
+def test_dft_belief_is_computed_once_per_tick(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Read before the tick's updates (a sampler) and after them (a logger): one calculation."""
+    from pydrake.systems.framework import DiagramBuilder
+    from pydrake.systems.primitives import LogVectorOutput, ZeroOrderHold
+
+    from drake_disamb.systems import inference as module
+
+    builder = DiagramBuilder()
+    system = builder.AddSystem(FieldTheoreticIntentInference(2, DFTParams(), 0.01))
+    sampler = builder.AddSystem(ZeroOrderHold(0.01, 2))
+    builder.Connect(system.GetOutputPort("belief"), sampler.get_input_port())
+    LogVectorOutput(system.GetOutputPort("belief"), builder, 0.01)
+    diagram = builder.Build()
+    ctx = diagram.CreateDefaultContext()
+    sub = system.GetMyMutableContextFromRoot(ctx)
+    system.GetInputPort("u_h").FixValue(sub, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
+    system.GetInputPort("ee_pose").FixValue(sub, EE_POSE)
+    system.GetInputPort("goal_poses").FixValue(sub, GOALS.ravel())
+    simulator = Simulator(diagram, ctx)
+    simulator.AdvanceTo(0.0051)
+    calls = _counting(monkeypatch, module, "normalize_belief")
+    simulator.AdvanceTo(0.1051)  # ten ticks
+    assert calls[0] == 10
+    p = sub.get_continuous_state_vector().CopyToVector()
+    assert abs(p.sum() - 1.0) <= module.SIMPLEX_TOLERANCE and p[0] > 0.5  # moving towards goal 0
+
+
+def test_dft_projection_writes_only_when_the_belief_left_the_simplex() -> None:
+    from pydrake.systems.framework import EventStatus
+
+    system = FieldTheoreticIntentInference(2, DFTParams(), 0.01)
+    ctx = system.CreateDefaultContext()
+    system.GetInputPort("goal_poses").FixValue(ctx, GOALS.ravel())
+    state = ctx.get_mutable_state()
+    system.ExecuteInitializationEvents(ctx)
+    for p, writes in (([0.3, 0.7], False), ([0.7, 0.4], True), ([1.0 + 1e-3, -1e-3], True)):
+        ctx.SetContinuousState(p)
+        status = system._periodic_update(ctx, state)
+        assert (status.severity() == EventStatus.Severity.kDidNothing) == (not writes)
+        out = ctx.get_continuous_state_vector().CopyToVector()
+        if writes:
+            assert abs(out.sum() - 1.0) < 1e-15 and np.all(out > 0)
+        else:
+            np.testing.assert_array_equal(out, p)

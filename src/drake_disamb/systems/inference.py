@@ -35,7 +35,15 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem, State, ValueProducer
+from pydrake.systems.framework import (
+    BasicVector,
+    Context,
+    DiscreteValues,
+    EventStatus,
+    LeafSystem,
+    State,
+    ValueProducer,
+)
 
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
@@ -49,6 +57,9 @@ from drake_disamb.core.inference import (
     rest_state,
     sanitize_command,
 )
+
+SIMPLEX_TOLERANCE = 1e-12
+"""Largest ``|sum(p) - 1|`` the DFT system's periodic projection leaves alone (p positive)."""
 
 
 def _check_common(n_goals: object, control_period: object, goal_change_tolerance: object) -> None:
@@ -182,8 +193,10 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     integrator (the drive, the part of the right-hand side that does not depend on ``p``, is a cache
     entry on the inputs: computed once per control tick, not at every integrator stage);
     discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
-    ``control_period`` an unrestricted update re-projects ``p`` onto the simplex (guard against
-    integrator error) or, if ``goal_poses`` changed, resets ``p`` to the rest state. At
+    ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
+    it (an entry at or below zero, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard against
+    integrator error; otherwise it writes nothing) or, if ``goal_poses`` changed, resets ``p`` to
+    the rest state. At
     initialization ``p`` is the rest state.
 
     Args:
@@ -257,14 +270,19 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(self._rest)
         state.get_mutable_discrete_state(self._goals_index).SetFromVector(self._goal_poses_now(context))
 
-    def _periodic_update(self, context: Context, state: State) -> None:
+    def _periodic_update(self, context: Context, state: State) -> EventStatus:
         goals = self._goal_poses_now(context)
         old = context.get_discrete_state(self._goals_index).CopyToVector()
         if _goals_changed(goals, old, self._tol):
             self._reset_update(context, state)
-            return
-        p = normalize_belief(context.get_continuous_state_vector().CopyToVector())
-        state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(p)
+            return EventStatus.Succeeded()
+        p = context.get_continuous_state_vector().CopyToVector()
+        # The usual case: the flow conserves sum(p) up to rounding and keeps p positive. Nothing
+        # is written then, so the belief and what depends on it are not recomputed after the tick.
+        if np.minimum.reduce(p) > 0.0 and abs(math.fsum(p) - 1.0) <= SIMPLEX_TOLERANCE:
+            return EventStatus.DidNothing()
+        state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(normalize_belief(p))
+        return EventStatus.Succeeded()
 
 
 class _DiscreteInference(_IntentInferenceBase):

@@ -177,12 +177,14 @@ class InterfaceSystem(LeafSystem):
         # ``state`` starts as a copy of the current state: an unchanged state needs no writing (the
         # common case: the same raw signal, mode and counts as in the previous period).
         after_vector = after.to_vector()
-        if not np.array_equal(after_vector, vector):
+        changed = not np.array_equal(after_vector, vector)
+        if changed:
             self._write(after, state.get_mutable_discrete_state(), after_vector)
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
-        return EventStatus.Succeeded()
+        # Nothing written: the simulator then leaves the context (and every cached value) alone.
+        return EventStatus.Succeeded() if changed or events else EventStatus.DidNothing()
 
     def _output_values(self, state: InterfaceState) -> dict[str, list[float]]:
         """The value of every vector output port for ``state`` (port name -> vector)."""
