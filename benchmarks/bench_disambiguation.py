@@ -23,7 +23,10 @@ Measured on the shared 2-core development machine, MICO row, median ms (figures 
 - after the goal-major DFT drive and the leaner kernels (2026-11-22): 0.90-0.93 in five of ten
   runs, 1.10-1.48 in five runs during slow spells of the machine (the ``authors-r3`` row, 0.59 at
   the usual speed, measured 0.92-1.08 in three of them). What remains is numpy's cost per call on
-  small arrays, mostly in the 20-step recursion of the inference update.
+  small arrays, mostly in the 20-step recursion of the inference update;
+- with the in-place Euler normalisation (later the same day), alternating with the previous commit
+  in one run: best medians 0.886 vs 0.896. Sixteen runs against the speed gauge of ``_host.py``:
+  0.885-0.917 at a gauge of 0.47-0.49 us (the usual speed), 1.15-1.34 at 0.6-1.2 us.
 """
 
 from __future__ import annotations
