@@ -196,8 +196,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
     it (an entry at or below zero, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard against
     integrator error; otherwise it writes nothing) or, if ``goal_poses`` changed, resets ``p`` to
-    the rest state. At
-    initialization ``p`` is the rest state.
+    the rest state. At initialization ``p`` is the rest state.
 
     Args:
         n_goals: Number of goals n.
