@@ -95,6 +95,7 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.primitives import MatrixGain, Multiplexer
 
+from drake_disamb.core._validation import all_finite
 from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
 from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
 
@@ -362,9 +363,7 @@ class _RateLimitedWarner:
 def _read_command(port: InputPort, context: Context, size: int) -> tuple[NDArray[np.float64], bool]:
     """The command on ``port`` and whether it is valid (finite, right size); invalid -> zeros."""
     value = np.asarray(port.Eval(context), dtype=float).reshape(-1)
-    # One reduction decides the common all-finite case (an overflowing sum of finite entries only
-    # takes the exact check).
-    if value.size != size or (not math.isfinite(np.add.reduce(value)) and not np.isfinite(value).all()):
+    if value.size != size or not all_finite(value):
         return np.zeros(size), False
     return value, True
 

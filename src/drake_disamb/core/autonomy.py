@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import is_real as _is_real
+from drake_disamb.core._validation import all_finite, check_real_fields
 from drake_disamb.core.geometry import (
     _SMALL_BATCH,
     _batch_shape,
@@ -67,19 +67,17 @@ class PotentialFieldConfig:
     max_angular_speed: float = 0.4
 
     def __post_init__(self) -> None:
-        for name in (
-            "attractor_gain_translation",
-            "attractor_gain_rotation",
-            "repeller_gain",
-            "repeller_radius",
-        ):
-            value = getattr(self, name)
-            if not (_is_real(value) and value >= 0):
-                raise ValueError(f"PotentialFieldConfig.{name}: expected a finite number >= 0, got {value!r}")
-        for name in ("max_linear_speed", "max_angular_speed"):
-            value = getattr(self, name)
-            if not (_is_real(value) and value > 0):
-                raise ValueError(f"PotentialFieldConfig.{name}: expected a finite number > 0, got {value!r}")
+        check_real_fields(
+            self,
+            (
+                "attractor_gain_translation",
+                "attractor_gain_rotation",
+                "repeller_gain",
+                "repeller_radius",
+            ),
+            allow_zero=True,
+        )
+        check_real_fields(self, ("max_linear_speed", "max_angular_speed"))
 
 
 @functools.lru_cache(maxsize=32)
@@ -197,9 +195,8 @@ def potential_field_commands_from_poses(
     shapes are the caller's business (a Drake port fixes them). A non-finite entry or a (near) zero
     quaternion is a ``ValueError`` naming the argument, as there.
     """
-    # One reduction decides the common all-finite case.
-    if not np.isfinite(np.add.reduce(ee_pose) + np.add.reduce(goal_poses, axis=None)):
-        name = "quat" if not np.isfinite(ee_pose).all() else "goal_quats"
+    if not all_finite(ee_pose, goal_poses):
+        name = "quat" if not all_finite(ee_pose) else "goal_quats"
         bad = ee_pose if name == "quat" else goal_poses
         raise ValueError(f"{name}: expected finite poses, got {bad.tolist()!r}")
     q = _check_quat(ee_pose[3:], "quat")

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import is_real as _is_real
+from drake_disamb.core._validation import check_real_fields, is_real
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -59,7 +59,7 @@ def _resolve_rhos(
     r1 = RHO1_TIMES_N / n_goals if rho1 is None else rho1
     r2 = RHO2_TIMES_N / n_goals if rho2 is None else rho2
     for name, value, given in (("rho1", r1, rho1), ("rho2", r2, rho2), ("rho3", rho3, rho3)):
-        if not (_is_real(value) and 0.0 <= value <= 1.0):
+        if not (is_real(value) and 0.0 <= value <= 1.0):
             hint = "" if given is not None else f" (paper default for n_goals={n_goals}; pass it explicitly)"
             raise ValueError(f"{name}: expected a number in [0, 1], got {value!r}{hint}")
     if not r2 > r1:
@@ -155,10 +155,7 @@ class BlendingConfig:
     max_angular_speed: float = 0.67
 
     def __post_init__(self) -> None:
-        for name in ("max_linear_speed", "max_angular_speed"):
-            value = getattr(self, name)
-            if not (_is_real(value) and value > 0):
-                raise ValueError(f"BlendingConfig.{name}: expected a finite number > 0, got {value!r}")
+        check_real_fields(self, ("max_linear_speed", "max_angular_speed"))
         if not isinstance(self.assist_without_input, bool):
             raise ValueError(
                 "BlendingConfig.assist_without_input: expected True or False, "

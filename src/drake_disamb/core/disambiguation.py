@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import is_real as _is_real
+from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, _potential_field_rotation
 from drake_disamb.core.geometry import (
     _check_last,
@@ -148,17 +148,17 @@ class DisambiguationConfig:
                 f"got {self.dimensions!r}"
             )
         object.__setattr__(self, "dimensions", tuple(int(k) for k in dims))
-        for name in (
-            "probe_speed_translation",
-            "probe_speed_rotation",
-            "delta_t",
-            "t_b",
-            "t_c",
-            "bayes_sigma",
-        ):
-            value = getattr(self, name)
-            if not (_is_real(value) and value > 0):
-                raise ValueError(f"DisambiguationConfig.{name}: expected a finite number > 0, got {value!r}")
+        check_real_fields(
+            self,
+            (
+                "probe_speed_translation",
+                "probe_speed_rotation",
+                "delta_t",
+                "t_b",
+                "t_c",
+                "bayes_sigma",
+            ),
+        )
         if not self.t_b < self.t_c:
             raise ValueError(f"DisambiguationConfig.t_c: expected > t_b = {self.t_b}, got {self.t_c!r}")
         for name in ("t_b", "t_c"):
@@ -173,9 +173,9 @@ class DisambiguationConfig:
                 "DisambiguationConfig.probe_speed_rotation: the rotation between t_b and t_c must stay "
                 f"below pi rad to be measurable, got {self.probe_speed_rotation!r} rad/s"
             )
-        if not (_is_real(self.w) and 0.0 <= self.w <= 1.0):
+        if not (is_real(self.w) and 0.0 <= self.w <= 1.0):
             raise ValueError(f"DisambiguationConfig.w: expected a number in [0, 1], got {self.w!r}")
-        if not (_is_real(self.tie_tolerance) and self.tie_tolerance >= 0):
+        if not (is_real(self.tie_tolerance) and self.tie_tolerance >= 0):
             raise ValueError(
                 "DisambiguationConfig.tie_tolerance: expected a finite number >= 0, "
                 f"got {self.tie_tolerance!r}"

@@ -18,10 +18,11 @@ vectorised loops (the disambiguation forward projection) whose inputs were valid
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core._validation import all_finite
 
 _SMALL_ANGLE = 1e-8
 """Below this angle (rad) the series expansions of sin(a)/a are used instead of the quotient."""
@@ -40,9 +41,7 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
         raise ValueError(f"{name}: expected an array of numbers, got {x!r}") from exc
     if a.ndim == 0 or a.shape[-1] != size:
         raise ValueError(f"{name}: expected shape (..., {size}), got shape {a.shape}")
-    # One reduction decides the common all-finite case (an overflowing sum of finite numbers only
-    # sends us to the exact per-entry check).
-    if not math.isfinite(np.add.reduce(a, axis=None)) and not np.isfinite(a).all():
+    if not all_finite(a):
         raise ValueError(f"{name}: expected finite numbers, got {a.tolist()!r}")
     return a
 

@@ -42,7 +42,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import is_real as _is_real
+from drake_disamb.core._validation import check_real_fields, is_real
 
 GRIPPER_DIM = 6
 """Dimension index of the gripper in a control mode (0..5 are vx, vy, vz, wx, wy, wz)."""
@@ -131,11 +131,8 @@ class InterfaceConfig:
             object.__setattr__(self, "max_linear_speed", lin)
         if self.max_angular_speed is None:
             object.__setattr__(self, "max_angular_speed", ang)
-        for name in ("max_linear_speed", "max_angular_speed", "gripper_speed", "control_period"):
-            value = getattr(self, name)
-            if not (_is_real(value) and value > 0):
-                raise ValueError(f"InterfaceConfig.{name}: expected a finite number > 0, got {value!r}")
-        if not (_is_real(self.button_threshold) and 0.0 < self.button_threshold <= 1.0):
+        check_real_fields(self, ("max_linear_speed", "max_angular_speed", "gripper_speed", "control_period"))
+        if not (is_real(self.button_threshold) and 0.0 < self.button_threshold <= 1.0):
             raise ValueError(
                 "InterfaceConfig.button_threshold: expected a number in (0, 1], "
                 f"got {self.button_threshold!r}"

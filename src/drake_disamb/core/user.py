@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import is_real as _is_real
+from drake_disamb.core._validation import all_finite, check_real_fields, is_real
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.geometry import orientation_error
 from drake_disamb.core.interfaces import (
@@ -117,27 +117,24 @@ class UserConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in (
-            "position_tolerance",
-            "orientation_tolerance",
-            "success_position_tolerance",
-            "success_orientation_tolerance",
-            "reaction_time",
-            "approach_time",
-        ):
-            value = getattr(self, name)
-            if not (_is_real(value) and value > 0):
-                raise ValueError(f"UserConfig.{name}: expected a finite number > 0, got {value!r}")
-        for name in ("reaction_time_jitter", "axis_noise"):
-            value = getattr(self, name)
-            if not (_is_real(value) and value >= 0):
-                raise ValueError(f"UserConfig.{name}: expected a finite number >= 0, got {value!r}")
+        check_real_fields(
+            self,
+            (
+                "position_tolerance",
+                "orientation_tolerance",
+                "success_position_tolerance",
+                "success_orientation_tolerance",
+                "reaction_time",
+                "approach_time",
+            ),
+        )
+        check_real_fields(self, ("reaction_time_jitter", "axis_noise"), allow_zero=True)
         if self.reaction_time_jitter >= self.reaction_time:
             raise ValueError(
                 f"UserConfig.reaction_time_jitter: expected less than reaction_time={self.reaction_time}, "
                 f"got {self.reaction_time_jitter!r}"
             )
-        if not (_is_real(self.min_axis) and 0 < self.min_axis <= 1):
+        if not (is_real(self.min_axis) and 0 < self.min_axis <= 1):
             raise ValueError(f"UserConfig.min_axis: expected a number in (0, 1], got {self.min_axis!r}")
         for succ, per_dim in (
             ("success_position_tolerance", "position_tolerance"),
@@ -149,18 +146,18 @@ class UserConfig:
                     f"UserConfig.{succ}: expected at least sqrt(3) * {per_dim} = {need:.4g}, "
                     f"got {getattr(self, succ)!r}"
                 )
-        if self.stall_time is not None and not (_is_real(self.stall_time) and self.stall_time > 0):
+        if self.stall_time is not None and not (is_real(self.stall_time) and self.stall_time > 0):
             raise ValueError(f"UserConfig.stall_time: expected None or a number > 0, got {self.stall_time!r}")
-        if not (_is_real(self.stall_progress) and self.stall_progress > 0):
+        if not (is_real(self.stall_progress) and self.stall_progress > 0):
             raise ValueError(
                 f"UserConfig.stall_progress: expected a finite number > 0, got {self.stall_progress!r}"
             )
         t = self.request_when_unhelped_for
-        if t is not None and not (_is_real(t) and t > 0):
+        if t is not None and not (is_real(t) and t > 0):
             raise ValueError(
                 f"UserConfig.request_when_unhelped_for: expected None or a number > 0, got {t!r}"
             )
-        if self.rho1 is not None and not (_is_real(self.rho1) and 0 <= self.rho1 <= 1):
+        if self.rho1 is not None and not (is_real(self.rho1) and 0 <= self.rho1 <= 1):
             raise ValueError(f"UserConfig.rho1: expected None or a number in [0, 1], got {self.rho1!r}")
         if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
             raise ValueError(f"UserConfig.seed: expected an integer >= 0, got {self.seed!r}")
@@ -298,8 +295,7 @@ def mode_remaining(
 def helped(belief: ArrayLike, goal_index: int, rho1: float) -> bool:
     """True when the autonomy assists toward the user's goal: argmax is it and ``p(g*) > rho1``."""
     p = np.asarray(belief, dtype=float)
-    # One reduction decides the common all-finite case (an overflowing sum takes the exact check).
-    if not math.isfinite(np.add.reduce(p)) and not np.isfinite(p).all():
+    if not all_finite(p):
         return False
     g = int(np.argmax(p))
     return g == goal_index and p[g] > rho1

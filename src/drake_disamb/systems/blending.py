@@ -9,6 +9,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
 
+from drake_disamb.core._validation import all_finite
 from drake_disamb.core.blending import BlendingConfig, shared_control
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
@@ -101,12 +102,7 @@ class SharedControlBlender(LeafSystem):
         u_h = np.asarray(self._u_h_port.Eval(context), dtype=float)
         p = np.asarray(self._belief_port.Eval(context), dtype=float)
         u_a = np.asarray(self._u_a_port.Eval(context), dtype=float).reshape(self.n_goals, 6)
-        # One reduction for the common all-finite case (a huge finite sum that overflows only
-        # sends us to the exact per-entry check below).
-        finite = np.isfinite(np.add.reduce(u_h) + np.add.reduce(p) + np.add.reduce(u_a, axis=None))
-        if not finite:
-            finite = np.isfinite(u_h).all() and np.isfinite(p).all() and np.isfinite(u_a).all()
-        if not finite:
+        if not all_finite(u_h, p, u_a):
             if not self._warned:
                 warnings.warn(
                     f"{self.get_name()}: non-finite input (u_h={u_h.tolist()}, belief={p.tolist()}, "

@@ -45,6 +45,7 @@ from pydrake.systems.framework import (
     ValueProducer,
 )
 
+from drake_disamb.core._validation import all_finite
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
     DFTParams,
@@ -127,9 +128,7 @@ class _IntentInferenceBase(LeafSystem):
 
     def _command(self, context: Context) -> NDArray[np.float64]:
         u = np.asarray(self._u_h.Eval(context), dtype=float)
-        # One reduction decides the common all-finite case (an overflowing sum of finite entries
-        # only takes the exact check).
-        if not math.isfinite(np.add.reduce(u)) and not np.all(np.isfinite(u)):
+        if not all_finite(u):
             if not self._warned:
                 warnings.warn(
                     f"{self.get_name() or type(self).__name__}: non-finite human command "

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core._validation import is_real
+from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.interfaces import MODE_BUTTON, RAW_SIZE, REQUEST_BUTTON, InterfaceConfig
 
 __all__ = ["LIVE_CONTROLS", "LiveInputConfig", "LiveState", "MeshcatLiveInput", "live_raw_step"]
@@ -65,10 +65,7 @@ class LiveInputConfig:
     dead_zone: float = 0.1
 
     def __post_init__(self) -> None:
-        for name in ("hold_time", "slider_step"):
-            value = getattr(self, name)
-            if not (is_real(value) and value > 0):
-                raise ValueError(f"LiveInputConfig.{name}: expected a finite number > 0, got {value!r}")
+        check_real_fields(self, ("hold_time", "slider_step"))
         if not (is_real(self.dead_zone) and 0 <= self.dead_zone < 1):
             raise ValueError(
                 f"LiveInputConfig.dead_zone: expected a number in [0, 1), got {self.dead_zone!r}"

@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
+from drake_disamb.core._validation import all_finite
 from drake_disamb.core.interfaces import RAW_LAYOUTS, RAW_SIZE, InterfaceConfig
 from drake_disamb.core.user import UserConfig, UserState, user_step
 
@@ -143,11 +144,7 @@ class SimulatedUser(LeafSystem):
             and math.isfinite(mode_value)
             and mode_value == round(mode_value)
             and 0 <= mode_value < n_modes
-            # one reduction for the common all-finite case, the exact check otherwise
-            and (
-                math.isfinite(np.add.reduce(ee) + np.add.reduce(goals))
-                or bool(np.isfinite(ee).all() and np.isfinite(goals).all())
-            )
+            and all_finite(ee, goals)
             and math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz) > 1e-12
         )
         if usable:
