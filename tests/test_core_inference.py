@@ -14,6 +14,7 @@ from drake_disamb.core.inference import (
     bayes_likelihood,
     bayes_step,
     dft_drive,
+    dft_euler_rollout,
     dft_euler_step,
     dft_euler_update,
     dft_mass_conserving_rhs,
@@ -169,6 +170,48 @@ def test_permuting_goals_permutes_the_belief(scene) -> None:  # noqa: ANN001
     a, _ = memory_step(p, 0.1, x_r, x1, x_r - 0.2, goals, P)
     b, _ = memory_step(p[perm], 0.1, x_r, x1, x_r - 0.2, goals[perm], Pp)
     np.testing.assert_allclose(b, a[perm], rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("with_transition", [False, True])
+@pytest.mark.parametrize("per_row_dt", [False, True])
+def test_euler_rollout_is_the_iterated_update(with_transition: bool, per_row_dt: bool) -> None:
+    """dft_euler_rollout runs dft_euler_update's kernel K times: the same numbers, bit for bit,
+    including steps that clip (negative drives push small entries below zero)."""
+    rng = np.random.default_rng(11)
+    K, B, n = 20, 6, 5
+    p = rng.dirichlet(np.ones(n), size=B)
+    drives = rng.uniform(-1.5, 2.0, (K, B, n))
+    P = None
+    if with_transition:
+        P = np.eye(n) + rng.uniform(0, 0.05, (B, n, n))
+        P /= P.sum(axis=-1, keepdims=True)
+    params = DFTParams(tau1=4.0, transition=P)
+    dt = rng.uniform(0.05, 0.1, (B, 1)) if per_row_dt else 0.1
+    out = dft_euler_rollout(p, drives, params, dt)
+    assert out.shape == (K, B, n)
+    q = p
+    clipped = False
+    for s in range(K):
+        clipped |= bool(np.any(q + np.asarray(dt) * (drives[s] - transition_prior(q, P) / 4.0) <= 0))
+        q = dft_euler_update(q, drives[s], params, dt)
+        np.testing.assert_array_equal(out[s], q)
+        assert_simplex(out[s])
+    assert clipped  # the scene exercises the clip
+
+
+def test_euler_update_broadcasts_and_names_bad_shapes() -> None:
+    rng = np.random.default_rng(12)
+    p = rng.dirichlet(np.ones(3))
+    drive = rng.normal(size=(4, 2, 3))
+    out = dft_euler_update(p, drive, DFTParams(), 0.01)
+    assert out.shape == (4, 2, 3)
+    np.testing.assert_array_equal(out[3, 1], dft_euler_update(p, drive[3, 1], DFTParams(), 0.01))
+    with pytest.raises(ValueError, match="drive: expected 3 entries"):
+        dft_euler_update(p, np.zeros(4), DFTParams(), 0.01)
+    with pytest.raises(ValueError, match=r"dt: expected a scalar or shape \(\.\.\., 1\)"):
+        dft_euler_update(np.tile(p, (3, 1)), np.zeros((3, 3)), DFTParams(), np.full(3, 0.01))
+    with pytest.raises(ValueError, match="drives: expected shape|drive: expected shape"):
+        dft_euler_rollout(p, np.zeros((0, 3)), DFTParams(), 0.01)
 
 
 def test_batched_calls_equal_single_calls() -> None:

@@ -151,19 +151,20 @@ def test_bad_input_raises_value_error_naming_the_field(call, message) -> None:  
         call()
 
 
-def test_public_results_are_c_contiguous_and_kernel_layout_is_component_major() -> None:
-    from drake_disamb.core.geometry import _component_major, _quat_multiply
-
+def test_public_results_are_c_contiguous_and_kernels_broadcast_row_by_row() -> None:
     rng = np.random.default_rng(5)
     q1, q2 = _random_quats(rng, 6), _random_quats(rng, 6)
     assert quat_multiply(q1, q2).flags.c_contiguous
     assert orientation_error(q1, q2).flags.c_contiguous
     assert quat_to_rotvec(q1).flags.c_contiguous
     assert integrate_pose(np.zeros((6, 3)), q1, rng.normal(size=(6, 6)), 0.1)[1].flags.c_contiguous
-    # The unchecked kernel keeps each component contiguous (long inner loops in numpy).
-    prod = _quat_multiply(q1, q2)
-    assert prod[..., 0].flags.c_contiguous
-    np.testing.assert_array_equal(prod, quat_multiply(q1, q2))
-    cm = _component_major(q2, (3, 6))
-    assert cm.shape == (3, 6, 4) and cm[..., 2].flags.c_contiguous
-    np.testing.assert_array_equal(cm, np.broadcast_to(q2, (3, 6, 4)))
+    # The compiled row kernels broadcast like numpy: a (3, 1, 4) batch against a (6, 4) one gives
+    # (3, 6, ...), each entry exactly the one-pair result.
+    a = _random_quats(rng, 3)[:, None, :]
+    prod = quat_multiply(a, q2)
+    err = orientation_error(a, q2)
+    assert prod.shape == (3, 6, 4) and err.shape == (3, 6, 3)
+    for i in range(3):
+        for j in range(6):
+            np.testing.assert_array_equal(prod[i, j], quat_multiply(a[i, 0], q2[j]))
+            np.testing.assert_array_equal(err[i, j], orientation_error(a[i, 0], q2[j]))

@@ -1,4 +1,4 @@
-"""Potential-field autonomy: one 6-D end-effector command per goal (pure numpy).
+"""Potential-field autonomy: one 6-D end-effector command per goal (numpy, compiled row kernel).
 
 Paper, Section "Shared Control": every goal ``g`` has a potential field that treats ``g`` as an
 attractor and every *other* goal as a repeller; the autonomy command is the sum of the attractor
@@ -20,21 +20,21 @@ is capped at :data:`REPELLER_SPEED_CAP_FACTOR` times the maximum linear speed be
 
 from __future__ import annotations
 
-import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._validation import all_finite, check_real_fields
 from drake_disamb.core.geometry import (
-    _SMALL_BATCH,
+    _as_rows,
     _batch_shape,
     _check_last,
     _check_quat,
-    _component_major,
-    _norm3,
-    _orientation_error,
+    _orientation_error3,
+    _shared_rows,
 )
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
@@ -80,18 +80,88 @@ class PotentialFieldConfig:
         check_real_fields(self, ("max_linear_speed", "max_angular_speed"))
 
 
-@functools.lru_cache(maxsize=32)
-def _others(n: int) -> NDArray[np.float64]:
-    """``1 - I`` (n x n, read-only): row i sums every goal's repeller but goal i's own."""
-    m = 1.0 - np.eye(n)
-    m.setflags(write=False)
-    return m
+@njit(cache=True)
+def _saturated(
+    a0: float, a1: float, a2: float, max_norm: float
+) -> tuple[float, float, float]:  # pragma: no cover
+    """A 3-vector scaled down to at most ``max_norm``."""
+    k = min(1.0, max_norm / max(np.sqrt(a0 * a0 + a1 * a1 + a2 * a2), 1e-300))
+    return a0 * k, a1 * k, a2 * k
 
 
-def _saturate(v: NDArray[np.float64], max_norm: float) -> NDArray[np.float64]:
-    """Scale each vector along the last axis down to at most ``max_norm``."""
-    norm = _norm3(v)
-    return v * np.minimum(1.0, max_norm / np.maximum(norm, 1e-300))
+@njit(cache=True)
+def _field_rows(
+    x, q, gx, gq, k_t, k_r, gain, radius, cap, v_max, w_max, translation, out
+):  # pragma: no cover
+    """Per-goal commands for every row ``r``: ``out[r, i] = [v_i, w_i]`` (``translation``) or
+    ``out[r, i] = w_i`` (rotational part only, ``out`` ``(B, n, 3)``).
+
+    ``x`` ``(B, 3)``, ``q`` ``(B, 4)``; ``gx`` ``(B | 1, n, 3)`` and ``gq`` ``(B | 1, n, 4)`` (one
+    shared row for a fixed goal set).
+    """
+    B, n = out.shape[0], out.shape[1]
+    o = 3 if translation else 0  # where w_i goes
+    for r in range(B):
+        g = r if gq.shape[0] > 1 else 0
+        for i in range(n):
+            e0, e1, e2 = _orientation_error3(q[r], gq[g, i])
+            out[r, i, o], out[r, i, o + 1], out[r, i, o + 2] = _saturated(k_r * e0, k_r * e1, k_r * e2, w_max)
+        if not translation:
+            continue
+        gp = r if gx.shape[0] > 1 else 0
+        for i in range(n):
+            v0 = k_t * (gx[gp, i, 0] - x[r, 0])
+            v1 = k_t * (gx[gp, i, 1] - x[r, 1])
+            v2 = k_t * (gx[gp, i, 2] - x[r, 2])
+            if n > 1 and gain > 0.0:
+                # Goal j != i pushes the robot away from it within the radius (a goal exactly at
+                # the robot has no direction and pushes nothing).
+                s0 = s1 = s2 = 0.0
+                for j in range(n):
+                    d0 = gx[gp, j, 0] - x[r, 0]
+                    d1 = gx[gp, j, 1] - x[r, 1]
+                    d2 = gx[gp, j, 2] - x[r, 2]
+                    dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                    if j != i and 0.0 < dist < radius:
+                        speed = min(gain / dist, cap)
+                        s0 -= d0 / dist * speed
+                        s1 -= d1 / dist * speed
+                        s2 -= d2 / dist * speed
+                v0, v1, v2 = v0 + s0, v1 + s1, v2 + s2
+            out[r, i, 0], out[r, i, 1], out[r, i, 2] = _saturated(v0, v1, v2, v_max)
+
+
+def _field(
+    position: NDArray[np.float64] | None,
+    quat: NDArray[np.float64],
+    goal_positions: NDArray[np.float64] | None,
+    goal_quats: NDArray[np.float64],
+    config: PotentialFieldConfig,
+) -> NDArray[np.float64]:
+    """Run :func:`_field_rows` on broadcast operands; without positions, the rotational part only."""
+    n = goal_quats.shape[-2]
+    translation = position is not None
+    shapes = [quat.shape[:-1], goal_quats.shape[:-2]]
+    if translation:
+        shapes += [position.shape[:-1], goal_positions.shape[:-2]]
+    batch = _batch_shape(*shapes)
+    out = np.empty((math.prod(batch), n, 6 if translation else 3))
+    _field_rows(
+        _as_rows(position, batch, (3,)) if translation else np.empty((0, 3)),
+        _as_rows(quat, batch, (4,)),
+        _shared_rows(goal_positions, batch, (n, 3)) if translation else np.empty((0, n, 3)),
+        _shared_rows(goal_quats, batch, (n, 4)),
+        float(config.attractor_gain_translation),
+        float(config.attractor_gain_rotation),
+        float(config.repeller_gain),
+        float(config.repeller_radius),
+        REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed,
+        float(config.max_linear_speed),
+        float(config.max_angular_speed),
+        translation,
+        out,
+    )
+    return out.reshape(*batch, n, out.shape[-1])
 
 
 def _potential_field_rotation(
@@ -103,16 +173,7 @@ def _potential_field_rotation(
     the translational part alone, so callers that need just ``u_a[..., 3:6]`` (the agreement
     term) need neither the positions nor the repellers.
     """
-    # Every (pose, goal) pair, laid out component-major so the quaternion arithmetic runs on
-    # long contiguous arrays (a batch of poses times a few goals is otherwise slow in numpy).
-    batch = _batch_shape((*quat.shape[:-1], 1), goal_quats.shape[:-1])
-    if quat.size + goal_quats.size <= _SMALL_BATCH:  # a few quaternions: broadcasting is cheaper
-        w = config.attractor_gain_rotation * _orientation_error(quat[..., None, :], goal_quats)
-        return _saturate(w, config.max_angular_speed)
-    q = _component_major(quat[..., None, :], batch)
-    g = _component_major(goal_quats, batch)
-    w = config.attractor_gain_rotation * _orientation_error(q, g)
-    return _saturate(w, config.max_angular_speed)
+    return _field(None, quat, None, goal_quats, config)
 
 
 def _potential_field_commands(
@@ -123,27 +184,7 @@ def _potential_field_commands(
     config: PotentialFieldConfig,
 ) -> NDArray[np.float64]:
     """Unchecked kernel of :func:`potential_field_commands` (unit quaternions assumed)."""
-    diff = goal_positions - position[..., None, :]  # (..., n, 3), robot -> goal
-    v = config.attractor_gain_translation * diff
-    n = goal_positions.shape[-2]
-    if n > 1 and config.repeller_gain > 0:
-        dist = _norm3(diff)  # (..., n, 1)
-        active = (dist < config.repeller_radius) & (dist > 0.0)
-        if active.any():
-            safe = np.where(active, dist, 1.0)
-            speed = np.minimum(
-                config.repeller_gain / safe, REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed
-            )
-            rep = np.where(active, -diff / safe * speed, 0.0)  # goal j pushes the robot away from it
-            # Goal i feels every repeller except its own: an exact masked sum (no cancellation).
-            v = v + _others(n) @ rep
-        else:
-            v = v + 0.0  # what adding the all-zero repellers gives (a -0.0 becomes 0.0)
-    w = _potential_field_rotation(quat, goal_quats, config)
-    v = _saturate(v, config.max_linear_speed)
-    if v.shape == w.shape:
-        return np.concatenate((v, w), axis=-1)
-    return np.concatenate(np.broadcast_arrays(v, w), axis=-1)
+    return _field(position, quat, goal_positions, goal_quats, config)
 
 
 def potential_field_commands(
@@ -182,7 +223,7 @@ def potential_field_commands(
         )
     if gp.shape[-2] < 1:
         raise ValueError("goal_positions: expected at least one goal, got 0")
-    return np.ascontiguousarray(_potential_field_commands(p, q, gp, gq, cfg))
+    return _potential_field_commands(p, q, gp, gq, cfg)
 
 
 def potential_field_commands_from_poses(

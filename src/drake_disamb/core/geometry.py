@@ -1,4 +1,4 @@
-"""Quaternions and orientation errors (pure numpy).
+"""Quaternions and orientation errors (numpy, with numba-compiled row kernels).
 
 Conventions (see CONTRIBUTING.md):
 
@@ -13,13 +13,20 @@ Conventions (see CONTRIBUTING.md):
 Public functions validate their inputs and raise ``ValueError`` naming the argument and the
 offending shape or value. The underscore-prefixed helpers skip validation; they are used inside
 vectorised loops (the disambiguation forward projection) whose inputs were validated once.
+
+The Hamilton product and the rotation vector are written once, as scalar functions compiled with
+numba (``_qmul``, ``_rotvec``); every array function here, and the kernels of other modules that
+need them (the potential field's rotational part), loop over rows calling them. On the small
+arrays of a control step or a disambiguation request, numpy's cost per call would dominate.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._validation import all_finite
@@ -73,48 +80,94 @@ def _norm3(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.sqrt(x * x + y * y + z * z)
 
 
-def _component_major(a: NDArray[np.float64], batch: tuple[int, ...]) -> NDArray[np.float64]:
-    """``a`` (``(..., k)``) broadcast to ``(*batch, k)`` and copied component-major.
-
-    The result has shape ``(*batch, k)`` but is a view of a C-ordered ``(k, *batch)`` array, so
-    each component ``a[..., i]`` is one contiguous block. Element-wise numpy on such components
-    runs one long inner loop; on broadcast or interleaved components (a short last axis) it runs
-    many short ones, several times slower.
-    """
-    a = a.reshape((1,) * (len(batch) + 1 - a.ndim) + a.shape)
-    out = np.empty((a.shape[-1], *batch))
-    out[...] = a.transpose((a.ndim - 1, *range(a.ndim - 1)))
-    return out.transpose((*range(1, out.ndim), 0))
+def _as_rows(a: NDArray[np.float64], batch: tuple[int, ...], tail: tuple[int, ...]) -> NDArray[np.float64]:
+    """``a`` broadcast to ``batch + tail`` as a C-ordered ``(B, *tail)`` array (the layout of the
+    compiled row kernels; no copy when ``a`` already is one)."""
+    full = (*batch, *tail)
+    if a.shape != full:
+        a = np.broadcast_to(a, full)
+    return np.ascontiguousarray(a.reshape(-1, *tail))
 
 
-# The Hamilton product as index tables: component c of q1 (x) q2 is the sum over k, in this order,
-# of _HAMILTON_SIGN[c, k] * q1[k] * q2[_HAMILTON_RIGHT[c, k]] (the textbook formula term by term).
-_HAMILTON_RIGHT = np.array([[0, 1, 2, 3], [1, 0, 3, 2], [2, 3, 0, 1], [3, 2, 1, 0]])
-_HAMILTON_SIGN = np.array(
-    [[1.0, -1.0, -1.0, -1.0], [1.0, 1.0, 1.0, -1.0], [1.0, -1.0, 1.0, 1.0], [1.0, 1.0, -1.0, 1.0]]
-)
-_SMALL_BATCH = 256
-"""Inputs with at most this many entries take the few-numpy-calls paths (a control loop's one pose
-and a handful of goals, where numpy's per-call overhead dominates); larger batches take the
-component-major paths. Both evaluate the same floating-point operations in the same order, so they
-return identical numbers."""
+def _shared_rows(
+    a: NDArray[np.float64], batch: tuple[int, ...], tail: tuple[int, ...]
+) -> NDArray[np.float64]:
+    """As :func:`_as_rows`, but an ``a`` without batch axes stays one row ``(1, *tail)`` that a
+    kernel reads for every row (row index ``r if a.shape[0] > 1 else 0``)."""
+    if a.ndim == len(tail):
+        return np.ascontiguousarray(a[None])
+    return _as_rows(a, batch, tail)
+
+
+@njit(cache=True)
+def _qmul(
+    w1: float, x1: float, y1: float, z1: float, w2: float, x2: float, y2: float, z2: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """The Hamilton product ``q1 (x) q2``, term by term in the textbook order."""
+    return (
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    )
+
+
+@njit(cache=True)
+def _rotvec(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:  # pragma: no cover
+    """Rotation vector of a unit quaternion, shortest path (angle in ``[0, pi]``)."""
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    s = np.sqrt(x * x + y * y + z * z)
+    if s < 0.5 * _SMALL_ANGLE:
+        scale = 2.0 / w  # angle / s by its series, w ~ 1 here
+    else:
+        scale = 2.0 * np.arctan2(s, w) / s
+    return x * scale, y * scale, z * scale
+
+
+@njit(cache=True)
+def _orientation_error3(
+    f: NDArray[np.float64], t: NDArray[np.float64]
+) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """``rotvec(t (x) conj(f))`` for unit quaternions ``f`` (from) and ``t`` (to), 4-vectors."""
+    w, x, y, z = _qmul(t[0], t[1], t[2], t[3], f[0], -f[1], -f[2], -f[3])
+    return _rotvec(w, x, y, z)
+
+
+@njit(cache=True)
+def _quat_multiply_rows(a, b, out):  # pragma: no cover - compiled
+    for r in range(out.shape[0]):
+        out[r, 0], out[r, 1], out[r, 2], out[r, 3] = _qmul(
+            a[r, 0], a[r, 1], a[r, 2], a[r, 3], b[r, 0], b[r, 1], b[r, 2], b[r, 3]
+        )
+
+
+@njit(cache=True)
+def _rotvec_rows(q, out):  # pragma: no cover - compiled
+    for r in range(out.shape[0]):
+        out[r, 0], out[r, 1], out[r, 2] = _rotvec(q[r, 0], q[r, 1], q[r, 2], q[r, 3])
+
+
+@njit(cache=True)
+def _orientation_error_rows(f, t, out):  # pragma: no cover - compiled
+    for r in range(out.shape[0]):
+        out[r, 0], out[r, 1], out[r, 2] = _orientation_error3(f[r], t[r])
+
+
 _QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
 
 
+def _binary_rows(kernel, a: NDArray[np.float64], b: NDArray[np.float64], width: int) -> NDArray[np.float64]:
+    """Run a row kernel on ``a`` and ``b`` (``(..., 4)`` each, broadcasting): ``(..., width)``."""
+    batch = _batch_shape(a.shape[:-1], b.shape[:-1])
+    out = np.empty((math.prod(batch), width))
+    kernel(_as_rows(a, batch, (4,)), _as_rows(b, batch, (4,)), out)
+    return out.reshape(*batch, width)
+
+
 def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Hamilton product; for large batches the result is component-major (see :func:`_component_major`)."""
-    if q1.size + q2.size <= _SMALL_BATCH:
-        # All 16 products in one call; negating a product and adding it is exactly subtracting it.
-        t = q1[..., None, :] * q2[..., _HAMILTON_RIGHT] * _HAMILTON_SIGN
-        return t[..., 0] + t[..., 1] + t[..., 2] + t[..., 3]
-    w1, x1, y1, z1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
-    w2, x2, y2, z2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
-    out = np.empty((4, *_batch_shape(q1.shape[:-1], q2.shape[:-1])))  # component-major
-    np.subtract(w1 * w2 - x1 * x2 - y1 * y2, z1 * z2, out=out[0])
-    np.subtract(w1 * x2 + x1 * w2 + y1 * z2, z1 * y2, out=out[1])
-    np.add(w1 * y2 - x1 * z2 + y1 * w2, z1 * x2, out=out[2])
-    np.add(w1 * z2 + x1 * y2 - y1 * x2, z1 * w2, out=out[3])
-    return out.transpose((*range(1, out.ndim), 0))
+    """Hamilton product ``q1 (x) q2``, broadcasting (float arrays, unchecked)."""
+    return _binary_rows(_quat_multiply_rows, q1, q2, 4)
 
 
 def _quat_conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -133,22 +186,15 @@ def _quat_from_rotvec(rv: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """Rotation vector of unit quaternions, shortest path (angle in [0, pi])."""
-    q = np.where(q[..., :1] < 0.0, -q, q)
-    w = q[..., :1]
-    v = q[..., 1:]
-    s = _norm3(v)
-    angle = 2.0 * np.arctan2(s, w)
-    small = s < 0.5 * _SMALL_ANGLE
-    if not np.logical_or.reduce(small, axis=None):
-        return v * (angle / s)  # what the general expression below gives without tiny rotations
-    # angle / s, with its series 2/w (w ~ 1 here) for tiny rotations.
-    safe_s = np.where(small, 1.0, s)
-    scale = np.where(small, 2.0 / np.where(small, w, 1.0), angle / safe_s)
-    return v * scale
+    batch = q.shape[:-1]
+    out = np.empty((math.prod(batch), 3))
+    _rotvec_rows(_as_rows(q, batch, (4,)), out)
+    return out.reshape(*batch, 3)
 
 
 def _orientation_error(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> NDArray[np.float64]:
-    return _quat_to_rotvec(_quat_multiply(q_to, _quat_conjugate(q_from)))
+    """``rotvec(q_to (x) conj(q_from))``, broadcasting (unit quaternions, unchecked)."""
+    return _binary_rows(_orientation_error_rows, q_from, q_to, 3)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -1,8 +1,11 @@
 """Intent-inference updates: field-theoretic (DFT), recursive Bayes and memory-based.
 
-Every function here is pure numpy and broadcasts over any number of leading batch dimensions,
-so the same update serves a single live step, a vectorised replay of hundreds of trials, and the
-disambiguation forward projection of all probe directions at once.
+Every function here takes numpy arrays and broadcasts over any number of leading batch
+dimensions, so the same update serves a single live step, a vectorised replay of hundreds of
+trials, and the disambiguation forward projection of all probe directions at once. The hot
+per-row work (the input nonlinearity ``xi``, the Euler update, the clip-and-normalise
+projection) is written once as a numba-compiled row kernel that the array functions call; numpy's
+cost per call would otherwise dominate on the small arrays of a control step.
 
 Shapes (``...`` is any batch shape, ``n`` the number of goals):
 
@@ -37,19 +40,19 @@ The two baselines share one recursion, :func:`posterior_update` (posterior propo
 
 from __future__ import annotations
 
-import functools
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.geometry import _batch_shape
+from drake_disamb.core.geometry import _as_rows, _batch_shape, _shared_rows
 
 TINY = np.finfo(float).tiny
 """Smallest positive normal double: what the authors' code clips non-positive entries to."""
 
-_FAST_SUM_BOUND = 0.5 * np.finfo(float).max
-"""Row sums of entries below ``_FAST_SUM_BOUND / n`` cannot overflow (see normalize_belief)."""
+_TINY = float(TINY)  # a plain float: a global constant inside the compiled kernels
 
 BAYES_SIGMA = np.pi / 2.0
 """Standard deviation (rad) of the Gaussian angle likelihood of the recursive Bayes baseline."""
@@ -214,35 +217,66 @@ def transition_prior(p: NDArray[np.float64], transition: ArrayLike | None) -> ND
     return np.einsum("...i,...ij->...j", p, np.asarray(transition, dtype=float))
 
 
-def normalize_belief(p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Clip entries <= 0 (and NaN ones) to :data:`TINY` and divide by the sum.
+def normalize_belief(p: ArrayLike) -> NDArray[np.float64]:
+    """Clip entries <= 0 (and NaN ones) to :data:`TINY` and divide by the sum (last axis).
 
     This is the authors' projection back onto the simplex after each step. Should an entry be
     ``+inf`` (or the sum overflow), the mass goes uniformly to the infinite entries (or the vector
     is first scaled by its maximum), so the result is always a probability vector.
     """
-    return _normalize_clipped(np.fmax(p, TINY))  # fmax: TINY for NaN entries too, and a new array
+    a = np.asarray(p, dtype=float)
+    if a.ndim == 0:
+        raise ValueError(f"p: expected shape (..., n), got a scalar {p!r}")
+    if a.size == 0:
+        return a.copy()
+    rows = np.array(a.reshape(-1, a.shape[-1]), order="C")  # our own copy, normalised in place
+    _normalize_rows(rows)
+    return rows.reshape(a.shape)
 
 
-def _normalize_clipped(p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The rest of :func:`normalize_belief` for entries already clipped to ``>= TINY``.
+# The kernels below are the single implementation of the clip-and-normalise projection and of the
+# Euler update (compiled with numba: both run on small rows, where numpy's cost per call would
+# dominate). The wrappers broadcast, validate and lay out the rows; the kernels loop over rows.
 
-    ``p`` must be an array the caller owns (it is divided in place and returned).
-    """
-    # Fast path (the same sum, without the cost of an errstate context): when no entry exceeds
-    # DBL_MAX / (2 n), every entry is finite and no row sum can overflow.
-    if p.size and np.maximum.reduce(p, axis=None) < _FAST_SUM_BOUND / p.shape[-1]:
-        p /= np.add.reduce(p, axis=-1, keepdims=True)  # in place: p is our own copy
-        return p
-    with np.errstate(over="ignore", invalid="ignore"):
-        total = np.add.reduce(p, axis=-1, keepdims=True)  # = p.sum(...), without its Python wrapper
-        # The totals are positive: their sum is finite iff all of them are.
-        if not np.isfinite(np.add.reduce(total, axis=None)):
-            inf = np.isinf(p)
-            scaled = p / np.max(p, axis=-1, keepdims=True)
-            p = np.where(np.any(inf, axis=-1, keepdims=True), np.where(inf, 1.0, TINY), np.fmax(scaled, TINY))
-            total = p.sum(axis=-1, keepdims=True)
-    return p / total
+
+@njit(cache=True)
+def _clip_normalize_row(v: NDArray[np.float64], r: int) -> None:  # pragma: no cover - compiled
+    """Row ``r`` of ``v`` (``(rows, n)``), in place: the projection of :func:`normalize_belief`."""
+    n = v.shape[1]
+    total = 0.0
+    for i in range(n):
+        x = v[r, i]
+        if not x >= _TINY:  # non-positive, tiny or NaN
+            x = _TINY
+            v[r, i] = x
+        total += x
+    if total < np.inf:  # finite (entries are >= TINY > 0, so 0 < total, never NaN)
+        for i in range(n):
+            v[r, i] /= total
+        return
+    # An infinite entry (its mass shared by all infinite entries) or an overflowing sum.
+    n_inf = 0
+    largest = 0.0
+    for i in range(n):
+        if v[r, i] == np.inf:
+            n_inf += 1
+        largest = max(largest, v[r, i])
+    total = 0.0
+    for i in range(n):
+        if n_inf:
+            x = 1.0 if v[r, i] == np.inf else _TINY
+        else:
+            x = max(v[r, i] / largest, _TINY)
+        v[r, i] = x
+        total += x
+    for i in range(n):
+        v[r, i] /= total
+
+
+@njit(cache=True)
+def _normalize_rows(v: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
+    for r in range(v.shape[0]):
+        _clip_normalize_row(v, r)
 
 
 def uniform_belief(n_goals: int, batch_shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
@@ -283,92 +317,6 @@ def directedness(u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike) -> NDArray[np.f
     return dft_xi(u_h, x_r, x_g, _DIRECTEDNESS_ONLY)
 
 
-# The per-goal terms are computed "goal-major": an input of shape (*batch, n, k) is read as the
-# transposed view (k, n, *batch) and the offsets x_g - x_r are written in that order, so that
-# every component is one long run of memory and each numpy call runs one long loop. In the natural
-# layout a batch of poses times a few goals times 3 components is many short loops (several times
-# slower: the disambiguation forward projection evaluates 20 steps x 12 probes x n goals at
-# once). Only the final xi moves the goal axis back. Transposes use precomputed axis orders
-# (np.moveaxis costs more than the arithmetic on small batches).
-
-
-@functools.lru_cache(maxsize=64)
-def _to_goal_major_axes(ndim: int, vector: bool) -> tuple[int, ...]:
-    """Axis order taking ``(*b, k)`` (``vector``) or ``(*b, n, k)`` to ``(k, *b)`` / ``(k, n, *b)``."""
-    if vector:
-        return (ndim - 1, *range(ndim - 1))
-    return (ndim - 1, ndim - 2, *range(ndim - 2))
-
-
-def _vector_major(a: NDArray[np.float64], nb: int) -> NDArray[np.float64]:
-    """``(*b, k)`` -> view ``(k, 1, *ones, *b)`` with ``nb`` batch axes (the ``1`` is the goal axis)."""
-    t = a.transpose(_to_goal_major_axes(a.ndim, True))
-    return t.reshape((t.shape[0], 1) + (1,) * (nb - a.ndim + 1) + t.shape[1:])
-
-
-def _per_goal_major(a: NDArray[np.float64], nb: int) -> NDArray[np.float64]:
-    """``(*b, n, k)`` -> view ``(k, n, *ones, *b)`` with ``nb`` batch axes."""
-    t = a.transpose(_to_goal_major_axes(a.ndim, False))
-    if a.ndim - 2 == nb:
-        return t
-    return t.reshape(t.shape[:2] + (1,) * (nb - a.ndim + 2) + t.shape[2:])
-
-
-def _goal_offsets(x_r: NDArray[np.float64], x_g: NDArray[np.float64], nb: int) -> NDArray[np.float64]:
-    """``x_g_i - x_r`` goal-major, ``(3, n, *batch)``, in C order (component-major memory)."""
-    g = _per_goal_major(x_g, nb)
-    r = _vector_major(x_r, nb)
-    shape = (3, g.shape[1], *_batch_shape(g.shape[2:], r.shape[2:]))
-    return np.subtract(g, r, out=np.empty(shape))  # numpy would otherwise follow the inputs' order
-
-
-def _lengths(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Euclidean norms over the first (component) axis."""
-    return np.sqrt(np.add.reduce(v * v, axis=0))
-
-
-def _command_directions(u: NDArray[np.float64], nb: int) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Directions of a sanitised (finite) command's 3-vector parts, vector-major, and whether it is
-    non-zero.
-
-    Returns ``(units, moving)``: ``units`` ``(k, 3, 1, *ones, *b)`` holds the unit vectors of the
-    ``k`` parts (``[v]`` for a 3-entry command, ``[v, w]`` for a 6-entry one; zero parts stay
-    zero), ``moving`` ``(1, *ones, *b)`` is True where any entry is non-zero. ``hypot`` neither
-    overflows nor underflows (a tiny command keeps its direction); it is cheap on a command's few
-    rows, and both parts take the same few calls.
-    """
-    k = 2 if u.shape[-1] >= 6 else 1
-    parts = _vector_major(u[..., : 3 * k], nb)
-    parts = parts.reshape((k, 3) + parts.shape[1:])
-    norm = np.hypot(np.hypot(parts[:, 0], parts[:, 1]), parts[:, 2])  # (k, 1, *ones, *b)
-    if not np.isfinite(np.add.reduce(norm, axis=None)):  # a norm beyond DBL_MAX: rescale first
-        scale = np.maximum.reduce(np.abs(parts), axis=1)[:, None]
-        parts = np.divide(parts, scale, out=np.zeros_like(parts), where=scale > 0)
-        norm = np.hypot(np.hypot(parts[:, 0], parts[:, 1]), parts[:, 2])
-    units = parts / np.where(norm > 0, norm, np.inf)[:, None]
-    return units, np.logical_or.reduce(norm > 0, axis=0)
-
-
-def _cosine_to_unit(
-    v: NDArray[np.float64], norm: NDArray[np.float64], w: NDArray[np.float64], finite: bool | None = None
-) -> NDArray[np.float64]:
-    """``(v / |v|) . w`` over the first (component) axis for unit (or zero) ``w``; 0 where ``v = 0``.
-
-    ``norm`` is ``_lengths(v)``; ``finite``, when known, whether all of it is finite. As
-    :func:`_safe_unit`: when a norm is not finite, non-finite components of ``v`` are read as 0
-    and each vector is first divided by its largest absolute component (so the common case is a
-    few long element-wise loops).
-    """
-    if finite is None:
-        finite = bool(np.isfinite(np.add.reduce(norm, axis=None)))
-    if not finite:
-        v = np.where(np.isfinite(v), v, 0.0)
-        scale = np.max(np.abs(v), axis=0)
-        v = np.divide(v, scale, out=np.zeros_like(v), where=scale > 0)
-        norm = _lengths(v)
-    return np.add.reduce(v * w, axis=0) / np.where(norm > 0, norm, np.inf)  # zero vectors: 0 / inf = 0
-
-
 def agreement(u_h: ArrayLike, u_a: ArrayLike) -> NDArray[np.float64]:
     """Cosine between the rotational parts of ``u_h`` and of each goal's autonomy command.
 
@@ -402,38 +350,115 @@ def dft_xi(
     x_g = np.asarray(x_g, dtype=float)
     x_r = np.asarray(x_r, dtype=float)
     u = sanitize_command(u_h)
+    if (
+        x_g.ndim < 2
+        or x_g.shape[-1] != 3
+        or x_r.ndim < 1
+        or x_r.shape[-1] != 3
+        or u.ndim < 1
+        or u.shape[-1] < 3
+    ):
+        raise ValueError(
+            f"dft_xi: expected x_g (..., n, 3), x_r (..., 3) and u_h (..., d >= 3), got shapes "
+            f"{x_g.shape}, {x_r.shape} and {u.shape}"
+        )
+    n = x_g.shape[-2]
     shapes = [x_r.shape[:-1], x_g.shape[:-2], u.shape[:-1]]
-    if params.agreement:
+    agree = params.agreement
+    if agree:
         if u_a is None:
             raise ValueError("DFTParams.agreement is on but no per-goal autonomy commands u_a given")
         u_a = np.asarray(u_a, dtype=float)
+        if u_a.ndim < 2 or u_a.shape[-2:] != (n, 6):
+            raise ValueError(f"u_a: expected shape (..., {n}, 6), got {u_a.shape}")
         shapes.append(u_a.shape[:-2])
     batch = _batch_shape(*shapes)
-    nb = len(batch)
-    xi = np.zeros((x_g.shape[-2], *batch))  # goal-major (n, *batch)
-    if params.directedness or params.agreement or not params.zero_command_excitation:
-        units, moving = _command_directions(u, nb)
-    if params.directedness or params.proximity:  # both need x_g - x_r and its length: once
-        offsets = _goal_offsets(x_r, x_g, nb)
-        dist = _lengths(offsets)  # (n, *batch); may overflow to inf for absurd positions
-        finite = bool(np.isfinite(np.add.reduce(dist, axis=None)))
-    if params.directedness:
-        xi += 0.5 * (1.0 + _cosine_to_unit(offsets, dist, units[0], finite))
-    if params.agreement and units.shape[0] > 1:
-        rot = _per_goal_major(u_a[..., 3:6], nb)
-        xi += _cosine_to_unit(rot, _lengths(rot), units[1])
-    if not params.zero_command_excitation:
-        xi *= moving
-    if params.proximity:
-        closeness = np.maximum(1.0 - dist / params.R, 0.0)
-        xi += closeness if finite else np.where(np.isfinite(dist), closeness, 0.0)
-    return xi.transpose(_goal_last_axes(xi.ndim))
+    xi = np.empty((math.prod(batch), n))
+    _xi_rows(
+        _as_rows(u, batch, u.shape[-1:]),
+        _as_rows(x_r, batch, (3,)),
+        _shared_rows(x_g, batch, (n, 3)),
+        _as_rows(u_a, batch, (n, 6)) if agree else np.empty((0, n, 6)),
+        params.directedness,
+        agree,
+        params.proximity,
+        params.zero_command_excitation,
+        float(params.R),
+        xi,
+    )
+    return xi.reshape(*batch, n)
 
 
-@functools.lru_cache(maxsize=64)
-def _goal_last_axes(ndim: int) -> tuple[int, ...]:
-    """Axis order taking goal-major ``(n, *batch)`` back to ``(*batch, n)``."""
-    return (*range(1, ndim), 0)
+@njit(cache=True)
+def _unit3(a0: float, a1: float, a2: float) -> tuple[float, float, float, bool]:  # pragma: no cover
+    """The unit vector of a finite 3-vector and whether it is non-zero (zero stays zero).
+
+    ``hypot`` neither overflows nor underflows (a tiny command keeps its direction); a norm beyond
+    DBL_MAX is measured after dividing by the largest component.
+    """
+    norm = np.hypot(np.hypot(a0, a1), a2)
+    if not norm < np.inf:
+        s = max(abs(a0), abs(a1), abs(a2))
+        a0, a1, a2 = a0 / s, a1 / s, a2 / s
+        norm = np.hypot(np.hypot(a0, a1), a2)
+    if norm > 0.0:
+        return a0 / norm, a1 / norm, a2 / norm, True
+    return 0.0, 0.0, 0.0, False
+
+
+@njit(cache=True)
+def _cosine_to_unit(
+    v0: float, v1: float, v2: float, w0: float, w1: float, w2: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``((v / |v|) . w, |v|)`` for a unit (or zero) ``w``; 0 where ``v = 0``.
+
+    As :func:`_safe_unit`: when ``|v|`` is not finite, non-finite components of ``v`` are read as
+    0 and ``v`` is first divided by its largest absolute component. The returned length is the
+    plain one (``inf`` or NaN then).
+    """
+    length = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    norm = length
+    if not norm < np.inf:
+        v0 = v0 if np.isfinite(v0) else 0.0
+        v1 = v1 if np.isfinite(v1) else 0.0
+        v2 = v2 if np.isfinite(v2) else 0.0
+        s = max(abs(v0), abs(v1), abs(v2))
+        if s > 0.0:
+            v0, v1, v2 = v0 / s, v1 / s, v2 / s
+        norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if norm > 0.0:
+        return (v0 * w0 + v1 * w1 + v2 * w2) / norm, length
+    return 0.0, length
+
+
+@njit(cache=True)
+def _xi_rows(u, x_r, x_g, u_a, directed, agree, near, zero_excites, R, xi):  # pragma: no cover
+    """``xi`` for every row ``r``: a sanitised command ``u[r]``, ``x_r[r]``, the goals ``x_g[r]``
+    (or ``x_g[0]`` for every row when it has one) and ``u_a[r]``."""
+    B, n = xi.shape
+    rotation = u.shape[1] >= 6
+    for r in range(B):
+        v0, v1, v2, moving = _unit3(u[r, 0], u[r, 1], u[r, 2])
+        w0 = w1 = w2 = 0.0
+        if rotation:
+            w0, w1, w2, turning = _unit3(u[r, 3], u[r, 4], u[r, 5])
+            moving = moving or turning
+        g = r if x_g.shape[0] > 1 else 0  # one shared row for a fixed goal set
+        for i in range(n):
+            total = 0.0
+            d0 = x_g[g, i, 0] - x_r[r, 0]
+            d1 = x_g[g, i, 1] - x_r[r, 1]
+            d2 = x_g[g, i, 2] - x_r[r, 2]
+            cos, dist = _cosine_to_unit(d0, d1, d2, v0, v1, v2)
+            if directed:
+                total += 0.5 * (1.0 + cos)
+            if agree and rotation:
+                total += _cosine_to_unit(u_a[r, i, 3], u_a[r, i, 4], u_a[r, i, 5], w0, w1, w2)[0]
+            if not zero_excites and not moving:
+                total = 0.0
+            if near and dist < np.inf:  # a non-finite distance gives no proximity
+                total += max(1.0 - dist / R, 0.0)
+            xi[r, i] = total
 
 
 def biased_sigmoid(xi: ArrayLike) -> NDArray[np.float64]:
@@ -548,14 +573,113 @@ def dft_mass_conserving_rhs_from_drive(
 def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike) -> NDArray[np.float64]:
     """The authors' step from a precomputed drive: ``normalize(p + dt * (-(1/tau1) P^T p + drive))``.
 
-    ``dt`` (s) is a scalar or broadcasts against ``p`` (e.g. shape ``(batch, 1)``).
+    ``p`` and ``drive`` are ``(..., n)`` and broadcast; ``dt`` (s) is a scalar or has shape
+    ``(..., 1)`` (one step per batch entry, e.g. ``(batch, 1)``); ``params.transition`` is
+    ``None``, one ``(n, n)`` matrix or a batch ``(..., n, n)``.
     """
-    p = np.asarray(p, dtype=float)
-    if type(dt) is not float:  # a Python float multiplies exactly like its 0-d array
-        dt = np.asarray(dt, dtype=float)
-    step = dt * dft_rhs_from_drive(p, drive, params)  # a new array, of the broadcast shape
-    step += p
-    return _normalize_clipped(np.fmax(step, TINY, out=step))
+    rows = _EulerRows(p, drive, params, dt, n_steps=None)
+    out = np.empty_like(rows.p)
+    _euler_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
+    return out.reshape(*rows.batch, rows.n)
+
+
+def dft_euler_rollout(
+    p: ArrayLike, drives: ArrayLike, params: DFTParams, dt: ArrayLike
+) -> NDArray[np.float64]:
+    """The beliefs after each of ``K`` successive :func:`dft_euler_update` steps.
+
+    ``drives`` is ``(K, ..., n)`` (step ``s`` uses ``drives[s]``); ``p``, ``dt`` and the
+    transition matrix broadcast against one step as in :func:`dft_euler_update`. Returns
+    ``(K, ..., n)``: entry ``s`` is the belief after update ``s``. The steps run in one compiled
+    loop (the same kernel as :func:`dft_euler_update`), not one call per step.
+    """
+    rows = _EulerRows(p, drives, params, dt, n_steps=np.shape(drives)[0] if np.ndim(drives) else 0)
+    out = np.empty_like(rows.drive)
+    _euler_rollout_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
+    return out.reshape(out.shape[0], *rows.batch, rows.n)
+
+
+class _EulerRows:
+    """The operands of the Euler kernels, broadcast to one batch and flattened to C-ordered rows.
+
+    ``p``: ``(B, n)``; ``drive``: ``(B, n)``, or ``(K, B, n)`` for a rollout; ``P``: ``(B, n, n)``,
+    ``(1, n, n)`` (one matrix for all rows) or ``(0, n, n)`` (identity); ``dt``: ``(B,)`` or
+    ``(1,)``; ``batch`` the broadcast batch shape.
+    """
+
+    __slots__ = ("P", "batch", "drive", "dt", "n", "p")
+
+    def __init__(self, p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike, n_steps: int | None):
+        p = np.asarray(p, dtype=float)
+        drive = np.asarray(drive, dtype=float)
+        lead = 0 if n_steps is None else 1  # the rollout's step axis
+        if n_steps == 0 or drive.ndim < 1 + lead or p.ndim < 1:
+            expected = "(K, ..., n) with K >= 1" if lead else "(..., n)"
+            raise ValueError(f"drive: expected shape {expected}, got {drive.shape}")
+        n = p.shape[-1]
+        if drive.shape[-1] != n:
+            raise ValueError(
+                f"drive: expected {n} entries per row (one per goal, as p), got shape {drive.shape}"
+            )
+        dt = dt if type(dt) is float else np.asarray(dt, dtype=float)
+        dt_batch: tuple[int, ...] = ()
+        if type(dt) is not float and dt.ndim:
+            if dt.shape[-1] != 1:
+                raise ValueError(f"dt: expected a scalar or shape (..., 1), got shape {dt.shape}")
+            dt_batch = dt.shape[:-1]
+        P = params.transition
+        P_batch: tuple[int, ...] = ()
+        if P is not None:
+            P = np.asarray(P, dtype=float)
+            if P.shape[-2:] != (n, n):
+                raise ValueError(f"DFTParams.transition: expected ({n}, {n}) matrices, got shape {P.shape}")
+            P_batch = P.shape[:-2]
+        batch = _batch_shape(p.shape[:-1], drive.shape[lead:-1], dt_batch, P_batch)
+        self.batch, self.n = batch, n
+        self.p = _as_rows(p, batch, (n,))
+        if lead:
+            steps = (drive.shape[0],)
+            full = (*steps, *batch, n)
+            d = drive if drive.shape == full else np.broadcast_to(drive, full)
+            self.drive = np.ascontiguousarray(d.reshape(drive.shape[0], -1, n))
+        else:
+            self.drive = _as_rows(drive, batch, (n,))
+        if P is None:
+            self.P = np.empty((0, n, n))
+        elif P.ndim == 2:
+            self.P = np.ascontiguousarray(P[None])
+        else:
+            self.P = _as_rows(P, batch, (n, n))
+        if type(dt) is float or dt.ndim == 0:
+            self.dt = np.array([float(dt)])
+        else:
+            self.dt = _as_rows(dt, batch, (1,)).reshape(-1)
+
+
+@njit(cache=True)
+def _euler_rows(p, drive, P, tau1, dt, out):  # pragma: no cover - compiled
+    """``out[r] = normalize(p[r] + dt (drive[r] - P^T p[r] / tau1))`` for every row (see _EulerRows)."""
+    B, n = out.shape
+    for r in range(B):
+        h = dt[r] if dt.shape[0] > 1 else dt[0]
+        k = r if P.shape[0] > 1 else 0
+        for j in range(n):
+            if P.shape[0] == 0:
+                prior = p[r, j]
+            else:
+                prior = 0.0
+                for i in range(n):
+                    prior += p[r, i] * P[k, i, j]
+            out[r, j] = p[r, j] + h * (drive[r, j] - prior / tau1)
+        _clip_normalize_row(out, r)
+
+
+@njit(cache=True)
+def _euler_rollout_rows(p, drives, P, tau1, dt, out):  # pragma: no cover - compiled
+    """``out[s]`` = the rows after update ``s`` (``drives[s]``), starting from ``p``."""
+    _euler_rows(p, drives[0], P, tau1, dt, out[0])
+    for s in range(1, drives.shape[0]):
+        _euler_rows(out[s - 1], drives[s], P, tau1, dt, out[s])
 
 
 def dft_euler_step(
