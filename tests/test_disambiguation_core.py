@@ -431,3 +431,16 @@ def test_explain_names_a_near_tie() -> None:
     assert (mode, best) == (0, 1)
     text = tied.explain()
     assert "ties with mode 1" in text and "the first of the equally best modes wins" in text
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 50])
+def test_pairwise_spread_by_sorting_equals_the_sum_over_all_pairs(n: int) -> None:
+    from drake_disamb.core.disambiguation import _pairwise_abs_sum
+
+    rng = np.random.default_rng(n)
+    a = rng.normal(size=(2, 3, n))
+    brute = np.array(
+        [[sum(abs(x[i] - x[j]) for i, j in itertools.combinations(range(n), 2)) for x in row] for row in a]
+    )
+    np.testing.assert_allclose(_pairwise_abs_sum(a), brute, rtol=1e-12, atol=1e-15)
+    assert np.all(_pairwise_abs_sum(np.full((4, n), 1.0 / n)) == 0.0)  # uniform: exactly no spread
