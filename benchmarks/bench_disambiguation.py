@@ -10,23 +10,26 @@ probes, features, scores, mode choice) for:
 - the ``authors-r3`` preset (3 dimensions) for reference.
 
 Each row cycles through ``--scenes`` seeded random requests (belief, end-effector pose) after a
-warm-up. The paper reports 2 to 2.5 s per request on the robot; the target here is a median under
-1 ms.
+warm-up. The rows are interleaved: every round runs one request of each row (starting at a
+different row each round) and reads a short speed gauge, so all rows sample the same stretch of
+the machine's time, slow spells included. The paper reports 2 to 2.5 s per request on the robot;
+the target here is a median under 1 ms.
 
-Usage: ``python benchmarks/bench_disambiguation.py [--repeats 300] [--seed 0]``
+Usage: ``python benchmarks/bench_disambiguation.py [--rounds 1000] [--seed 0]``
 
 Measured on the shared 2-core development machine, MICO row, median ms (figures swing by up to
 1.5-2x with the machine's state; compare versions in the same minute):
 
 - before the caching/layout work (commit 1ad2845): 2.0 (quiet) to 3.5-3.9 (load ~3);
 - after it (commit c154a60): 1.2 (quiet) to 2.0;
-- after the goal-major DFT drive and the leaner kernels (2026-11-22): 0.90-0.93 in five of ten
-  runs, 1.10-1.48 in five runs during slow spells of the machine (the ``authors-r3`` row, 0.59 at
-  the usual speed, measured 0.92-1.08 in three of them). What remains is numpy's cost per call on
-  small arrays, mostly in the 20-step recursion of the inference update;
-- with the in-place Euler normalisation (later the same day), alternating with the previous commit
-  in one run: best medians 0.886 vs 0.896. Sixteen runs against the speed gauge of ``_host.py``:
-  0.885-0.917 at a gauge of 0.47-0.49 us (the usual speed), 1.15-1.34 at 0.6-1.2 us.
+- numpy kernels at their leanest (commit 63d3d50): 0.885-0.93 at the usual speed (gauge about
+  0.5 us), 1.07-1.48 in slow spells; 1.51-1.57 interleaved on 2026-11-22 morning (gauge about
+  1.0 us, hypervisor steal 14-20 %);
+- with the numba row kernels for xi, the potential field, the quaternions and the Euler rollout
+  (commits fc3fc38, aae9d86), the same morning at the same gauge (about 1.0 us): 0.67, 0.67 and
+  0.69 in three runs (p95 0.81-0.88); 2 goals 0.56-0.57, 10 goals 0.86-0.88, 50 goals 2.6-2.8,
+  ``authors-r3`` 0.47-0.49. What remains is mostly validation, features and the few numpy calls
+  around the kernels.
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ import argparse
 import time
 
 import numpy as np
-from _host import HostMeter, host_summary
+from _host import HostMeter, host_summary, speed_gauge
 
 from drake_disamb.core.disambiguation import DisambiguationConfig, disambiguate, preset
 from drake_disamb.core.geometry import quat_from_rotvec
@@ -72,14 +75,13 @@ def _scene(rng: np.random.Generator, n_goals: int) -> dict:
     }
 
 
-def measure(
-    config: DisambiguationConfig, n_goals: int, modes: list, repeats: int, scenes: int, seed: int
-) -> np.ndarray:
-    """Wall times (s) of ``repeats`` requests, cycling through ``scenes`` seeded scenes."""
+def request_call(config: DisambiguationConfig, n_goals: int, modes: list, scenes: int, seed: int):
+    """A function ``call(i)`` running request ``i`` (cycling through ``scenes`` seeded scenes)."""
     rng = np.random.default_rng(seed)
     requests = [_scene(rng, n_goals) for _ in range(scenes)]
 
-    def call(s: dict) -> None:
+    def call(i: int) -> None:
+        s = requests[i % scenes]
         disambiguate(
             s["belief"],
             s["position"],
@@ -91,25 +93,44 @@ def measure(
             current_mode=0,
         )
 
-    for s in requests[: min(10, scenes)]:  # warm-up
-        call(s)
-    times = np.empty(repeats)
-    for i in range(repeats):
-        s = requests[i % scenes]
-        start = time.perf_counter()
-        call(s)
-        times[i] = time.perf_counter() - start
-    return times
+    return call
+
+
+def measure_interleaved(calls: list, rounds: int) -> tuple[np.ndarray, np.ndarray]:
+    """Wall times (s) ``(rounds, len(calls))`` and a speed-gauge reading (us) per round.
+
+    Each round runs one request of every row, starting at a different row each round, and reads a
+    short speed gauge; so every row samples the same stretch of the machine's time and its slow
+    spells (which come and go within seconds) weigh on every row alike.
+    """
+    for call in calls:  # warm-up: caches, first-call costs
+        for i in range(10):
+            call(i)
+    times = np.empty((rounds, len(calls)))
+    gauges = np.empty(rounds)
+    clock = time.perf_counter
+    for r in range(rounds):
+        for j in range(len(calls)):
+            k = (r + j) % len(calls)
+            start = clock()
+            calls[k](r)
+            times[r, k] = clock() - start
+        gauges[r] = speed_gauge(calls=200, batches=1)
+    return times, gauges
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--repeats", type=int, default=300, help="requests per row (default 300)")
+    parser.add_argument(
+        "--rounds", type=int, default=1000, help="requests per row, interleaved (default 1000)"
+    )
     parser.add_argument("--scenes", type=int, default=20, help="distinct seeded scenes per row (default 20)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     args = parser.parse_args()
+    if args.rounds < 1 or args.scenes < 1:
+        parser.error(f"--rounds and --scenes must be >= 1, got {args.rounds} and {args.scenes}")
 
     rows = [
         ("mico, 5 goals (MICO reaching task), 6 dims, 6 modes", preset("mico"), 5, HEAD_ARRAY_ARM_MODES),
@@ -118,19 +139,23 @@ def main() -> None:
         ("mico, 50 goals", preset("mico"), 50, HEAD_ARRAY_ARM_MODES),
         ("authors-r3, 5 goals, 3 dims, 3 modes", preset("authors-r3"), 5, [[0], [1], [2]]),
     ]
-    print(f"One disambiguation request, {args.repeats} calls per row (seed {args.seed}); {host_summary()}")
-    print(f"{'configuration':<55} {'median ms':>10} {'p95 ms':>10} {'steal':>7} {'gauge us':>9}")
-    for label, config, n_goals, modes in rows:
-        with HostMeter() as host:
-            t = measure(config, n_goals, modes, args.repeats, args.scenes, args.seed) * 1e3
-        steal = "n/a" if host.steal is None else f"{100 * host.steal:.0f} %"
-        print(
-            f"{label:<55} {np.median(t):>10.3f} {np.percentile(t, 95):>10.3f} {steal:>7} {host.gauge:>9.2f}"
-        )
     print(
-        "(steal: share of the CPU the hypervisor gave to other guests during the row; gauge: us per\n"
-        " small numpy call around the row, the machine's speed: about 0.5 at the development machine's\n"
-        " usual speed, 0.8-1.2 in its slow spells; see _host.py)"
+        f"One disambiguation request, {args.rounds} calls per row interleaved with the other rows "
+        f"(seed {args.seed}); {host_summary()}"
+    )
+    calls = [request_call(config, n, modes, args.scenes, args.seed) for _, config, n, modes in rows]
+    with HostMeter() as host:
+        times, gauges = measure_interleaved(calls, args.rounds)
+    times *= 1e3
+    print(f"{'configuration':<55} {'median ms':>10} {'p95 ms':>10}")
+    for (label, *_), t in zip(rows, times.T, strict=True):
+        print(f"{label:<55} {np.median(t):>10.3f} {np.percentile(t, 95):>10.3f}")
+    q10, q50, q90 = np.percentile(gauges, [10, 50, 90])
+    print(f"{host.describe()}; gauge per round: median {q50:.2f} us (10-90 %: {q10:.2f}-{q90:.2f})")
+    print(
+        "(steal: share of the CPU the hypervisor gave to other guests during the run; gauge: us per\n"
+        " small numpy call, the machine's speed: about 0.5 at the development machine's usual speed,\n"
+        " 0.8-1.2 in its slow spells; see _host.py)"
     )
 
 
