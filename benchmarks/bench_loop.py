@@ -3,8 +3,8 @@
 Usage: ``python benchmarks/bench_loop.py [--seconds 8] [--time-step 0.01 0.001] [--interface
 head_array] [--profile]``. For each MultibodyPlant time step it builds the reaching diagram (the
 default scenario: disambiguation paradigm, goal 0), simulates ``--seconds`` of simulated time
-without stopping at success, and prints simulated seconds per wall second and per CPU second
-(the machine may be shared). ``--profile`` adds a cProfile table of the components that dominate.
+without stopping at success (after a 0.2 s warm-up trial that is not timed), and prints simulated
+seconds per wall second and per CPU second (the machine may be shared). ``--profile`` adds a cProfile table of the components that dominate.
 
 Each row also measures the *station floor*: the MICO station alone (the same MultibodyPlant, scene
 objects, differential IK and gripper integrator, at the same time step) replaying the blended
@@ -57,6 +57,9 @@ def measure(
     """``(wall rate, cpu rate, profile table, station floor rates)`` of ``seconds`` of the reaching loop."""
     scenario = with_overrides(load_scenario("reaching"), interface=interface)
     scenario = dataclasses.replace(scenario, duration=seconds, plant_time_step=time_step)
+    # Warm-up: a short trial of the same scenario first, so that the measured one runs at its
+    # steady rate (numba loads its compiled kernels on their first call, about a second).
+    run_trial(build_shared_control_diagram(dataclasses.replace(scenario, duration=0.2)), progress=False)
     handles = build_shared_control_diagram(scenario)
     profiler = cProfile.Profile() if profile else None
     cpu = time.process_time()

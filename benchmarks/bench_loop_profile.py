@@ -23,6 +23,7 @@ add about a microsecond per call, so that run is a little slower than the plain 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import statistics
 import time
@@ -121,6 +122,8 @@ def main() -> None:
         f"inference {scenario.inference.method}, control period {scenario.control_period} s, "
         f"plant step {scenario.plant_time_step} s, no Meshcat"
     )
+    # Warm-up (not timed): numba loads its compiled kernels on their first call, about a second.
+    run_trial(build_shared_control_diagram(dataclasses.replace(scenario, duration=0.2)), progress=False)
     rates, cpu_rates = [], []
     for k in range(args.repeats):
         handles = build_shared_control_diagram(scenario)

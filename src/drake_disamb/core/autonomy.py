@@ -34,6 +34,7 @@ from drake_disamb.core.geometry import (
     _check_last,
     _check_quat,
     _orientation_error3,
+    _saturated,
     _shared_rows,
 )
 
@@ -78,15 +79,6 @@ class PotentialFieldConfig:
             allow_zero=True,
         )
         check_real_fields(self, ("max_linear_speed", "max_angular_speed"))
-
-
-@njit(cache=True)
-def _saturated(
-    a0: float, a1: float, a2: float, max_norm: float
-) -> tuple[float, float, float]:  # pragma: no cover
-    """A 3-vector scaled down to at most ``max_norm``."""
-    k = min(1.0, max_norm / max(np.sqrt(a0 * a0 + a1 * a1 + a2 * a2), 1e-300))
-    return a0 * k, a1 * k, a2 * k
 
 
 @njit(cache=True)

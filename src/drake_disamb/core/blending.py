@@ -1,4 +1,4 @@
-"""Blending-based shared control (pure numpy).
+"""Blending-based shared control (numpy, with a numba-compiled row kernel).
 
 Paper, equations (sc) and (alpha) (FACTS section 6)::
 
@@ -11,18 +11,25 @@ Paper, equations (sc) and (alpha) (FACTS section 6)::
 with ``rho_i`` in ``[0, 1]``, ``rho2 > rho1``, and in the paper's implementation
 ``rho1 = 1.2 / n_g``, ``rho2 = 1.4 / n_g``, ``rho3 = 0.7``. Commands are ``[vx, vy, vz, wx, wy, wz]``
 (m/s, rad/s) in the world frame. Every function broadcasts over leading batch dimensions.
+
+The law is written once, as scalar functions compiled with numba (``_alpha1``, ``_has_input1``,
+``_blend_clamp1``); the array functions below loop over rows calling them (a control loop blends
+one command per tick, where numpy's cost per call would dominate).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 import numbers
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._validation import check_real_fields, is_real
+from drake_disamb.core.geometry import _as_rows, _batch_shape, _saturated
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -71,6 +78,73 @@ def _resolve_rhos(
 _resolve_rhos_cached = functools.lru_cache(maxsize=256, typed=True)(_resolve_rhos)
 
 
+@njit(cache=True)
+def _alpha1(p: float, r1: float, r2: float, r3: float) -> float:  # pragma: no cover - compiled
+    """The piecewise-linear alpha of one top belief (0 for a non-finite one)."""
+    if not np.isfinite(p) or p <= r1:
+        return 0.0
+    if p <= r2:
+        return r3 * (p - r1) / (r2 - r1)
+    return r3
+
+
+@njit(cache=True)
+def _has_input1(u: NDArray[np.float64], tolerance: float) -> bool:  # pragma: no cover - compiled
+    """Any entry of ``u`` larger than ``tolerance`` in magnitude (NaN is not)."""
+    for k in range(u.shape[0]):
+        if abs(u[k]) > tolerance:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _blend_clamp1(u_h, u_a, alpha, v_max, w_max, out):  # pragma: no cover - compiled
+    """``out = alpha u_a + (1 - alpha) u_h`` (6-vectors), each 3-vector part scaled down to its limit
+    (``inf``: no limit)."""
+    for k in range(6):
+        out[k] = alpha * u_a[k] + (1.0 - alpha) * u_h[k]
+    out[0], out[1], out[2] = _saturated(out[0], out[1], out[2], v_max)
+    out[3], out[4], out[5] = _saturated(out[3], out[4], out[5], w_max)
+
+
+@njit(cache=True)
+def _alpha_rows(p, r1, r2, r3, out):  # pragma: no cover - compiled
+    for r in range(out.shape[0]):
+        out[r] = _alpha1(p[r], r1, r2, r3)
+
+
+@njit(cache=True)
+def _has_input_rows(u, tolerance, out):  # pragma: no cover - compiled
+    for r in range(out.shape[0]):
+        out[r] = _has_input1(u[r], tolerance)
+
+
+@njit(cache=True)
+def _blend_rows(u_h, u_a, alpha, v_max, w_max, out):  # pragma: no cover - compiled
+    for r in range(out.shape[0]):
+        _blend_clamp1(u_h[r], u_a[r], alpha[r], v_max, w_max, out[r])
+
+
+@njit(cache=True)
+def _shared_control_rows(
+    u_h, p, u_a, r1, r2, r3, assist, tolerance, v_max, w_max, u, alpha, g_star
+):  # pragma: no cover
+    """The full step per row: ``g* = argmax p`` (the first maximum; a NaN counts as the maximum, as
+    in ``np.argmax``), alpha, zero alpha without input unless ``assist``, blend and limits."""
+    n = p.shape[1]
+    for r in range(u.shape[0]):
+        g = 0
+        for i in range(1, n):
+            if not np.isnan(p[r, g]) and (np.isnan(p[r, i]) or p[r, i] > p[r, g]):
+                g = i
+        a = _alpha1(p[r, g], r1, r2, r3)
+        if not assist and not _has_input1(u_h[r], tolerance):
+            a = 0.0
+        _blend_clamp1(u_h[r], u_a[r, g], a, v_max, w_max, u[r])
+        alpha[r] = a
+        g_star[r] = g
+
+
 def blending_alpha(
     p_star: ArrayLike,
     n_goals: int,
@@ -85,24 +159,25 @@ def blending_alpha(
     """
     r1, r2, r3 = resolve_rhos(n_goals, rho1, rho2, rho3)
     p = np.asarray(p_star, dtype=float)
-    ramp = r3 * (p - r1) / (r2 - r1)
-    alpha = np.where(p <= r1, 0.0, np.where(p <= r2, ramp, r3))
-    alpha = np.where(np.isfinite(p), alpha, 0.0)
-    return float(alpha) if alpha.ndim == 0 else alpha
+    out = np.empty(p.size)
+    _alpha_rows(np.ascontiguousarray(p.reshape(-1)), r1, r2, r3, out)
+    return float(out[0]) if p.ndim == 0 else out.reshape(p.shape)
 
 
 def blend(u_h: ArrayLike, u_a: ArrayLike, alpha: ArrayLike) -> NDArray[np.float64]:
     """``alpha * u_a + (1 - alpha) * u_h`` (broadcast; ``alpha`` has the batch shape, no command axis).
 
-    ``alpha`` must lie in ``[0, 1]``.
+    ``u_h`` and ``u_a`` are 6-D commands; ``alpha`` must lie in ``[0, 1]``.
     """
     a = np.asarray(alpha, dtype=float)
     if not np.logical_and.reduce((a >= 0.0) & (a <= 1.0), axis=None):  # np.all, minus its wrapper
         raise ValueError(f"alpha: expected numbers in [0, 1], got {a.tolist()!r}")
-    uh = np.asarray(u_h, dtype=float)
-    ua = np.asarray(u_a, dtype=float)
-    a = a[..., None]
-    return a * ua + (1.0 - a) * uh
+    uh, ua = _commands(u_h, "u_h"), _commands(u_a, "u_a")
+    batch = _batch_shape(uh.shape[:-1], ua.shape[:-1], a.shape)
+    out = np.empty((math.prod(batch), 6))
+    rows = (_as_rows(uh, batch, (6,)), _as_rows(ua, batch, (6,)), _as_rows(a, batch, ()))
+    _blend_rows(*rows, np.inf, np.inf, out)
+    return out.reshape(*batch, 6)
 
 
 def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float) -> NDArray[np.float64]:
@@ -110,22 +185,27 @@ def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float)
 
     Each part keeps its direction; a part already within its limit is unchanged.
     """
-    v = np.asarray(u, dtype=float)
-    if v.shape[-1] != 6:
-        raise ValueError(f"u: expected shape (..., 6), got {v.shape}")
-    out = v.copy()
-    for sl, limit in ((slice(0, 3), max_linear_speed), (slice(3, 6), max_angular_speed)):
-        part = v[..., sl]
-        norm = np.sqrt(np.sum(part * part, axis=-1, keepdims=True))
-        out[..., sl] = part * np.minimum(1.0, limit / np.maximum(norm, 1e-300))
-    return out
+    v = _commands(u, "u")
+    rows = _as_rows(v, v.shape[:-1], (6,))
+    out = np.empty_like(rows)
+    _blend_rows(rows, rows, np.zeros(rows.shape[0]), float(max_linear_speed), float(max_angular_speed), out)
+    return out.reshape(v.shape)
 
 
 def has_input(u_h: ArrayLike, tolerance: float = NO_INPUT_TOLERANCE) -> NDArray[np.bool_] | bool:
     """True where the human command has any entry larger than ``tolerance`` in magnitude."""
     u = np.asarray(u_h, dtype=float)
-    result = np.logical_or.reduce(np.abs(u) > tolerance, axis=-1)  # np.any, minus its wrapper
-    return bool(result) if np.ndim(result) == 0 else result
+    rows = _as_rows(u, u.shape[:-1], u.shape[-1:])
+    out = np.empty(rows.shape[0], dtype=np.bool_)
+    _has_input_rows(rows, float(tolerance), out)
+    return bool(out[0]) if u.ndim == 1 else out.reshape(u.shape[:-1])
+
+
+def _commands(u: ArrayLike, name: str) -> NDArray[np.float64]:
+    v = np.asarray(u, dtype=float)
+    if v.ndim == 0 or v.shape[-1] != 6:
+        raise ValueError(f"{name}: expected shape (..., 6), got {v.shape}")
+    return v
 
 
 @dataclass(frozen=True)
@@ -182,22 +262,33 @@ def shared_control(
         ``(u, alpha, g_star)``. ``alpha`` is the share actually applied: 0 where the user gives no
         input unless ``config.assist_without_input``.
     """
-    uh = np.asarray(u_h, dtype=float)
+    uh = _commands(u_h, "u_h")
     p = np.asarray(belief, dtype=float)
-    ua = np.asarray(u_a, dtype=float)
+    ua = _commands(u_a, "u_a")
+    if p.ndim == 0 or ua.ndim < 2 or ua.shape[-2] != p.shape[-1]:
+        raise ValueError(
+            f"belief/u_a: expected shapes (..., n) and (..., n, 6), got {p.shape} and {ua.shape}"
+        )
     n = p.shape[-1]
-    g_star = np.argmax(p, axis=-1)
-    if p.ndim == 1:  # one belief (a control loop's step): plain indexing
-        p_star = p[g_star]
-        ua_star = ua[..., g_star, :]
-    else:
-        p_star = np.take_along_axis(p, g_star[..., None], axis=-1)[..., 0]
-        ua_star = np.take_along_axis(ua, g_star[..., None, None], axis=-2)[..., 0, :]
     r1, r2, r3 = config.rhos(n)
-    alpha = np.asarray(blending_alpha(p_star, n, r1, r2, r3))
-    if not config.assist_without_input:
-        alpha = np.where(has_input(uh), alpha, 0.0)
-    u = clamp_speed(blend(uh, ua_star, alpha), config.max_linear_speed, config.max_angular_speed)
-    if alpha.ndim == 0:
-        return u, float(alpha), int(g_star)
-    return u, alpha, g_star
+    batch = _batch_shape(uh.shape[:-1], p.shape[:-1], ua.shape[:-2])
+    size = math.prod(batch)
+    u, alpha, g_star = np.empty((size, 6)), np.empty(size), np.empty(size, dtype=np.int64)
+    _shared_control_rows(
+        _as_rows(uh, batch, (6,)),
+        _as_rows(p, batch, (n,)),
+        _as_rows(ua, batch, (n, 6)),
+        r1,
+        r2,
+        r3,
+        config.assist_without_input,
+        NO_INPUT_TOLERANCE,
+        float(config.max_linear_speed),
+        float(config.max_angular_speed),
+        u,
+        alpha,
+        g_star,
+    )
+    if not batch:
+        return u[0], float(alpha[0]), int(g_star[0])
+    return u.reshape(*batch, 6), alpha.reshape(batch), g_star.reshape(batch)

@@ -135,6 +135,16 @@ def _orientation_error3(
 
 
 @njit(cache=True)
+def _saturated(
+    a0: float, a1: float, a2: float, max_norm: float
+) -> tuple[float, float, float]:  # pragma: no cover
+    """A 3-vector scaled down to at most ``max_norm`` (direction kept; used by the potential field
+    and the blending law's speed limits)."""
+    k = min(1.0, max_norm / max(np.sqrt(a0 * a0 + a1 * a1 + a2 * a2), 1e-300))
+    return a0 * k, a1 * k, a2 * k
+
+
+@njit(cache=True)
 def _quat_multiply_rows(a, b, out):  # pragma: no cover - compiled
     for r in range(out.shape[0]):
         out[r, 0], out[r, 1], out[r, 2], out[r, 3] = _qmul(

@@ -496,8 +496,24 @@ def dft_drive(
 
 def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDArray[np.float64]:
     """``f(p) = -(1/tau1) P^T p + drive`` (1/s), with ``drive`` from :func:`dft_drive`."""
-    p = np.asarray(p, dtype=float)
-    return drive - transition_prior(p, params.transition) / params.tau1
+    rows = _EulerRows(p, drive, params, 0.0, n_steps=None)
+    out = np.empty_like(rows.p)
+    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, False, 0.0, out)
+    return out.reshape(*rows.batch, rows.n)
+
+
+@njit(cache=True)
+def _dft_rhs_row(p, drive, P, k, tau1, out):  # pragma: no cover - compiled
+    """``out = drive - P[k]^T p / tau1`` for one row (``P`` empty: the identity)."""
+    n = p.shape[0]
+    for j in range(n):
+        if P.shape[0] == 0:
+            prior = p[j]
+        else:
+            prior = 0.0
+            for i in range(n):
+                prior += p[i] * P[k, i, j]
+        out[j] = drive[j] - prior / tau1
 
 
 def dft_rhs(
@@ -510,22 +526,6 @@ def dft_rhs(
 ) -> NDArray[np.float64]:
     """Right-hand side ``f(p)`` of the DFT ODE (1/s), shape ``(..., n)``."""
     return dft_rhs_from_drive(p, dft_drive(u_h, x_r, x_g, params, u_a), params)
-
-
-def _euler_rate_factor(total: NDArray[np.float64], tau1: float, h: float) -> NDArray[np.float64]:
-    """Rate factor that makes the mass-conserving flow over ``h`` equal the Euler map.
-
-    With ``P = I`` the flow ``dp/dt = f - p S`` (``S = sum f``, constant in ``p``) relaxes to its
-    fixed point at rate ``D = S + 1/tau1``, i.e. by ``exp(-D h)`` per step, while the Euler map
-    ``(p + h f) / (1 + h S)`` contracts by ``(1 - h/tau1) / (1 + h S)``. Scaling the flow by
-    ``log((1 + h S) / (1 - h / tau1)) / (h D)`` makes the two equal (same fixed point).
-    """
-    a = min(h / tau1, 0.9)
-    hS = np.maximum(h * total, -0.9)
-    x = hS + a  # h D
-    small = np.abs(x) < 1e-12
-    num = np.log1p(hS) - np.log1p(-a)
-    return np.where(small, 1.0 / (1.0 - a), num / np.where(small, 1.0, x))
 
 
 def dft_mass_conserving_rhs(
@@ -553,21 +553,65 @@ def dft_mass_conserving_rhs_from_drive(
     The drive does not depend on ``p``: an integrator that evaluates the right-hand side several
     times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
     """
-    p = np.asarray(p, dtype=float)
-    f = dft_rhs_from_drive(p, drive, params)
-    total = f.sum(axis=-1, keepdims=True)
-    g = f - p * total
-    if params.euler_equivalent_step is not None:
-        g = g * _euler_rate_factor(total, params.tau1, params.euler_equivalent_step)
-    # Positivity guard: an entry at (or below) zero may not decrease further.
-    blocked = (p <= 0.0) & (g < 0.0)
-    if np.any(blocked):
-        excess = np.where(blocked, g, 0.0).sum(axis=-1, keepdims=True)  # <= 0
-        g = np.where(blocked, 0.0, g)
-        free_mass = np.where(blocked, 0.0, np.maximum(p, 0.0)).sum(axis=-1, keepdims=True)
-        share = np.divide(np.maximum(p, 0.0), free_mass, out=np.zeros_like(p), where=free_mass > 0)
-        g = g + np.where(blocked, 0.0, share * excess)
-    return g
+    rows = _EulerRows(p, drive, params, 0.0, n_steps=None)
+    out = np.empty_like(rows.p)
+    h = params.euler_equivalent_step
+    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), out)
+    return out.reshape(*rows.batch, rows.n)
+
+
+@njit(cache=True)
+def _euler_rate_factor(total: float, tau1: float, h: float) -> float:  # pragma: no cover - compiled
+    """Rate factor that makes the mass-conserving flow over ``h`` equal the Euler map.
+
+    With ``P = I`` the flow ``dp/dt = f - p S`` (``S = sum f``, constant in ``p``) relaxes to its
+    fixed point at rate ``D = S + 1/tau1``, i.e. by ``exp(-D h)`` per step, while the Euler map
+    ``(p + h f) / (1 + h S)`` contracts by ``(1 - h/tau1) / (1 + h S)``. Scaling the flow by
+    ``log((1 + h S) / (1 - h / tau1)) / (h D)`` makes the two equal (same fixed point).
+    """
+    a = min(h / tau1, 0.9)
+    hS = max(h * total, -0.9)
+    x = hS + a  # h D
+    if abs(x) < 1e-12:
+        return 1.0 / (1.0 - a)
+    return (np.log1p(hS) - np.log1p(-a)) / x
+
+
+@njit(cache=True)
+def _dft_flow_rows(p, drive, P, tau1, conserve, h, out):  # pragma: no cover - compiled
+    """Per row: ``f(p)`` (``conserve`` False) or the mass-conserving flow ``f - p sum(f)`` with
+    the Euler-equivalent rate factor (``h > 0``) and the positivity guard (``conserve`` True)."""
+    B, n = out.shape
+    for r in range(B):
+        k = r if P.shape[0] > 1 else 0
+        f = out[r]
+        _dft_rhs_row(p[r], drive[r], P, k, tau1, f)
+        if not conserve:
+            continue
+        total = 0.0
+        for j in range(n):
+            total += f[j]
+        for j in range(n):
+            f[j] = f[j] - p[r, j] * total
+        if h > 0.0:
+            factor = _euler_rate_factor(total, tau1, h)
+            for j in range(n):
+                f[j] = f[j] * factor
+        # Positivity guard: an entry at (or below) zero may not decrease further; the mass it
+        # would have lost is taken from the others in proportion to their mass.
+        excess = 0.0
+        free_mass = 0.0
+        for j in range(n):
+            if p[r, j] <= 0.0 and f[j] < 0.0:
+                excess += f[j]
+            else:
+                free_mass += max(p[r, j], 0.0)
+        if excess < 0.0:
+            for j in range(n):
+                if p[r, j] <= 0.0 and f[j] < 0.0:
+                    f[j] = 0.0
+                else:
+                    f[j] = f[j] + (max(p[r, j], 0.0) / free_mass if free_mass > 0.0 else 0.0) * excess
 
 
 def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike) -> NDArray[np.float64]:
@@ -662,15 +706,9 @@ def _euler_rows(p, drive, P, tau1, dt, out):  # pragma: no cover - compiled
     B, n = out.shape
     for r in range(B):
         h = dt[r] if dt.shape[0] > 1 else dt[0]
-        k = r if P.shape[0] > 1 else 0
+        _dft_rhs_row(p[r], drive[r], P, r if P.shape[0] > 1 else 0, tau1, out[r])
         for j in range(n):
-            if P.shape[0] == 0:
-                prior = p[r, j]
-            else:
-                prior = 0.0
-                for i in range(n):
-                    prior += p[r, i] * P[k, i, j]
-            out[r, j] = p[r, j] + h * (drive[r, j] - prior / tau1)
+            out[r, j] = p[r, j] + h * out[r, j]
         _clip_normalize_row(out, r)
 
 
