@@ -4,7 +4,8 @@ Usage: ``python benchmarks/bench_loop.py [--seconds 8] [--time-step 0.01 0.001] 
 head_array] [--profile]``. For each MultibodyPlant time step it builds the reaching diagram (the
 default scenario: disambiguation paradigm, goal 0), simulates ``--seconds`` of simulated time
 without stopping at success (after a 0.2 s warm-up trial that is not timed), and prints simulated
-seconds per wall second and per CPU second (the machine may be shared). ``--profile`` adds a cProfile table of the components that dominate.
+seconds per wall second and per CPU second (the machine may be shared). ``--profile`` adds a
+cProfile table of the components that dominate.
 
 Each row also measures the *station floor*: the MICO station alone (the same MultibodyPlant, scene
 objects, differential IK and gripper integrator, at the same time step) replaying the blended

@@ -113,6 +113,10 @@ def test_constructor_validation() -> None:
         DisambiguationSystem(2, [[9]])
     with pytest.raises(ValueError, match="control_period"):
         DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.0)
+    # The constructor runs one request (it loads the compiled kernels before any simulation), so
+    # a configuration that does not fit the goal count fails when the diagram is built.
+    with pytest.raises(ValueError, match="transition: expected a 3x3 matrix"):
+        DisambiguationSystem(3, HEAD_ARRAY_ARM_MODES, preset("mico", transition=np.eye(2)))
 
 
 def test_interface_switches_mode_in_the_request_period() -> None:

@@ -167,6 +167,21 @@ def _orientation_error_rows(f, t, out):  # pragma: no cover - compiled
 _QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
 
 
+@njit(cache=True)
+def _pose_error_rows(x, goals, dist, angle):  # pragma: no cover - compiled
+    """Distance (m) and rotation angle (rad) from the pose ``x`` (7) to each goal pose (``(n, 7)``);
+    quaternions are normalised first."""
+    f = x[3:7] / np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6])
+    for i in range(goals.shape[0]):
+        d0, d1, d2 = goals[i, 0] - x[0], goals[i, 1] - x[1], goals[i, 2] - x[2]
+        dist[i] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        g = goals[i, 3:7]
+        e0, e1, e2 = _orientation_error3(
+            f, g / np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] + g[3] * g[3])
+        )
+        angle[i] = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+
+
 def _binary_rows(kernel, a: NDArray[np.float64], b: NDArray[np.float64], width: int) -> NDArray[np.float64]:
     """Run a row kernel on ``a`` and ``b`` (``(..., 4)`` each, broadcasting): ``(..., width)``."""
     batch = _batch_shape(a.shape[:-1], b.shape[:-1])
@@ -261,6 +276,30 @@ def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]
     an orientation with angular velocity ``k * r`` (world frame) moves it towards ``q_to``.
     """
     return np.ascontiguousarray(_orientation_error(_check_quat(q_from, "q_from"), _check_quat(q_to, "q_to")))
+
+
+def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Position (m) and orientation (rad) errors between one pose and each of ``n`` goal poses.
+
+    Args:
+        ee_pose: ``[x, y, z, qw, qx, qy, qz]``.
+        goal_poses: ``(n, 7)`` (or flat ``7 n``) goal poses with non-zero quaternions.
+
+    Returns:
+        ``(distances (n,), angles (n,))``: ``|x_g - x|`` and the angle of the shortest rotation
+        between the orientations (``|orientation_error|``). A non-finite ``ee_pose`` or one with a
+        (near) zero quaternion gives ``inf`` errors.
+    """
+    x = np.asarray(ee_pose, dtype=float)
+    g = np.ascontiguousarray(np.asarray(goal_poses, dtype=float).reshape(-1, 7))
+    n = g.shape[0]
+    if x.shape != (7,):
+        raise ValueError(f"ee_pose: expected 7 numbers, got shape {x.shape}")
+    if not all_finite(x) or x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6] < 1e-18:
+        return np.full(n, np.inf), np.full(n, np.inf)
+    dist, angle = np.empty(n), np.empty(n)
+    _pose_error_rows(x, g, dist, angle)
+    return dist, angle
 
 
 def _integrate_pose(

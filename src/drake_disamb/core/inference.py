@@ -496,7 +496,7 @@ def dft_drive(
 
 def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDArray[np.float64]:
     """``f(p) = -(1/tau1) P^T p + drive`` (1/s), with ``drive`` from :func:`dft_drive`."""
-    rows = _EulerRows(p, drive, params, 0.0, n_steps=None)
+    rows = _BeliefRows(p, drive, params, 0.0, n_steps=None)
     out = np.empty_like(rows.p)
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, False, 0.0, out)
     return out.reshape(*rows.batch, rows.n)
@@ -553,7 +553,7 @@ def dft_mass_conserving_rhs_from_drive(
     The drive does not depend on ``p``: an integrator that evaluates the right-hand side several
     times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
     """
-    rows = _EulerRows(p, drive, params, 0.0, n_steps=None)
+    rows = _BeliefRows(p, drive, params, 0.0, n_steps=None)
     out = np.empty_like(rows.p)
     h = params.euler_equivalent_step
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), out)
@@ -621,7 +621,7 @@ def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: Arra
     ``(..., 1)`` (one step per batch entry, e.g. ``(batch, 1)``); ``params.transition`` is
     ``None``, one ``(n, n)`` matrix or a batch ``(..., n, n)``.
     """
-    rows = _EulerRows(p, drive, params, dt, n_steps=None)
+    rows = _BeliefRows(p, drive, params, dt, n_steps=None)
     out = np.empty_like(rows.p)
     _euler_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
     return out.reshape(*rows.batch, rows.n)
@@ -637,14 +637,15 @@ def dft_euler_rollout(
     ``(K, ..., n)``: entry ``s`` is the belief after update ``s``. The steps run in one compiled
     loop (the same kernel as :func:`dft_euler_update`), not one call per step.
     """
-    rows = _EulerRows(p, drives, params, dt, n_steps=np.shape(drives)[0] if np.ndim(drives) else 0)
+    rows = _BeliefRows(p, drives, params, dt, n_steps=np.shape(drives)[0] if np.ndim(drives) else 0)
     out = np.empty_like(rows.drive)
     _euler_rollout_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
     return out.reshape(out.shape[0], *rows.batch, rows.n)
 
 
-class _EulerRows:
-    """The operands of the Euler kernels, broadcast to one batch and flattened to C-ordered rows.
+class _BeliefRows:
+    """The operands of the DFT kernels (right-hand side, flow, Euler update and rollout), broadcast
+    to one batch and flattened to C-ordered rows.
 
     ``p``: ``(B, n)``; ``drive``: ``(B, n)``, or ``(K, B, n)`` for a rollout; ``P``: ``(B, n, n)``,
     ``(1, n, n)`` (one matrix for all rows) or ``(0, n, n)`` (identity); ``dt``: ``(B,)`` or
@@ -702,7 +703,7 @@ class _EulerRows:
 
 @njit(cache=True)
 def _euler_rows(p, drive, P, tau1, dt, out):  # pragma: no cover - compiled
-    """``out[r] = normalize(p[r] + dt (drive[r] - P^T p[r] / tau1))`` for every row (see _EulerRows)."""
+    """``out[r] = normalize(p[r] + dt (drive[r] - P^T p[r] / tau1))`` for every row (see _BeliefRows)."""
     B, n = out.shape
     for r in range(B):
         h = dt[r] if dt.shape[0] > 1 else dt[0]

@@ -86,6 +86,11 @@ class DisambiguationSystem(LeafSystem):
     one control period after the request. (No abstract state: Drake copies the whole state at
     every unrestricted update in the diagram, and numbers copy cheaply.)
 
+    The constructor runs one request on a small scene: it loads the core's compiled kernels (a
+    fraction of a second, once per process) so that the user's first request in a simulation or a
+    live session is as fast as the others, and a configuration that does not fit ``n_goals`` (a
+    transition matrix of the wrong size, say) fails when the diagram is built.
+
     Attributes:
         n_goals: Number of goals.
         modes: The arm modes (dimension indices), as tuples.
@@ -137,6 +142,16 @@ class DisambiguationSystem(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._served_index)},
         )
         self.DeclarePeriodicUnrestrictedUpdateEvent(control_period, 0.0, self._update)
+        # One request on a small scene now, so that the compiled kernels of the core are loaded
+        # (a fraction of a second, once per process) before a simulation, not at the user's first
+        # request in a live session.
+        disambiguate(
+            np.full(n, 1.0 / n),
+            np.zeros(3),
+            0.1 * np.arange(3.0 * n).reshape(n, 3) + 0.2,
+            self.modes,
+            self.config,
+        )
 
     # ------------------------------------------------------------------------------------------
 

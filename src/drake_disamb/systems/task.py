@@ -19,32 +19,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
 
-from drake_disamb.core.geometry import orientation_error
+from drake_disamb.core.geometry import pose_errors
 
 POSE_SIZE = 7
 
 # Discrete state layout: [stage, candidate goal, hold start time, reached[S], stage end times[S]].
 _STAGE, _CANDIDATE, _HOLD_START, _HEADER = 0, 1, 2, 3
-
-
-def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Position (m) and orientation (rad) errors between one pose and each of ``n`` goal poses.
-
-    Args:
-        ee_pose: ``[x, y, z, qw, qx, qy, qz]``.
-        goal_poses: ``(n, 7)`` goal poses.
-
-    Returns:
-        ``(distances (n,), angles (n,))``; non-finite input gives ``inf`` errors.
-    """
-    x = np.asarray(ee_pose, dtype=float)
-    g = np.asarray(goal_poses, dtype=float).reshape(-1, POSE_SIZE)
-    n = g.shape[0]
-    if not np.all(np.isfinite(x)) or np.linalg.norm(x[3:]) < 1e-9:
-        return np.full(n, np.inf), np.full(n, np.inf)
-    dist = np.linalg.norm(g[:, :3] - x[:3], axis=1)
-    angle = np.linalg.norm(orientation_error(x[3:], g[:, 3:]), axis=-1)
-    return dist, angle
 
 
 class TaskManager(LeafSystem):
