@@ -96,7 +96,9 @@ def _field_rows(
     for r in range(B):
         g = r if gq.shape[0] > 1 else 0
         for i in range(n):
-            e0, e1, e2 = _orientation_error3(q[r], gq[g, i])
+            e0, e1, e2 = _orientation_error3(
+                q[r, 0], q[r, 1], q[r, 2], q[r, 3], gq[g, i, 0], gq[g, i, 1], gq[g, i, 2], gq[g, i, 3]
+            )
             out[r, i, o], out[r, i, o + 1], out[r, i, o + 2] = _saturated(k_r * e0, k_r * e1, k_r * e2, w_max)
         if not translation:
             continue

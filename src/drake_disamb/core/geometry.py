@@ -127,10 +127,12 @@ def _rotvec(w: float, x: float, y: float, z: float) -> tuple[float, float, float
 
 @njit(cache=True)
 def _orientation_error3(
-    f: NDArray[np.float64], t: NDArray[np.float64]
+    f0: float, f1: float, f2: float, f3: float, t0: float, t1: float, t2: float, t3: float
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    """``rotvec(t (x) conj(f))`` for unit quaternions ``f`` (from) and ``t`` (to), 4-vectors."""
-    w, x, y, z = _qmul(t[0], t[1], t[2], t[3], f[0], -f[1], -f[2], -f[3])
+    """``rotvec(t (x) conj(f))`` for unit quaternions ``f`` (from) and ``t`` (to).
+
+    Scalars, not array rows: a row view costs a kernel more than this arithmetic."""
+    w, x, y, z = _qmul(t0, t1, t2, t3, f0, -f1, -f2, -f3)
     return _rotvec(w, x, y, z)
 
 
@@ -161,7 +163,9 @@ def _rotvec_rows(q, out):  # pragma: no cover - compiled
 @njit(cache=True)
 def _orientation_error_rows(f, t, out):  # pragma: no cover - compiled
     for r in range(out.shape[0]):
-        out[r, 0], out[r, 1], out[r, 2] = _orientation_error3(f[r], t[r])
+        out[r, 0], out[r, 1], out[r, 2] = _orientation_error3(
+            f[r, 0], f[r, 1], f[r, 2], f[r, 3], t[r, 0], t[r, 1], t[r, 2], t[r, 3]
+        )
 
 
 _QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
@@ -171,14 +175,14 @@ _QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
 def _pose_error_rows(x, goals, dist, angle):  # pragma: no cover - compiled
     """Distance (m) and rotation angle (rad) from the pose ``x`` (7) to each goal pose (``(n, 7)``);
     quaternions are normalised first."""
-    f = x[3:7] / np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6])
+    m = np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6])
+    f0, f1, f2, f3 = x[3] / m, x[4] / m, x[5] / m, x[6] / m
     for i in range(goals.shape[0]):
         d0, d1, d2 = goals[i, 0] - x[0], goals[i, 1] - x[1], goals[i, 2] - x[2]
         dist[i] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        g = goals[i, 3:7]
-        e0, e1, e2 = _orientation_error3(
-            f, g / np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2] + g[3] * g[3])
-        )
+        t0, t1, t2, t3 = goals[i, 3], goals[i, 4], goals[i, 5], goals[i, 6]
+        k = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2 + t3 * t3)
+        e0, e1, e2 = _orientation_error3(f0, f1, f2, f3, t0 / k, t1 / k, t2 / k, t3 / k)
         angle[i] = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
 
 

@@ -503,17 +503,19 @@ def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDA
 
 
 @njit(cache=True)
-def _dft_rhs_row(p, drive, P, k, tau1, out):  # pragma: no cover - compiled
-    """``out = drive - P[k]^T p / tau1`` for one row (``P`` empty: the identity)."""
-    n = p.shape[0]
+def _dft_rhs_row(p, pr, drive, dr, P, k, tau1, out, o):  # pragma: no cover - compiled
+    """``out[o] = drive[dr] - P[k]^T p[pr] / tau1`` (rows of 2-D arrays; ``P`` empty: identity).
+
+    Rows by index, not as views: a view costs a kernel more than a row's arithmetic."""
+    n = p.shape[1]
     for j in range(n):
         if P.shape[0] == 0:
-            prior = p[j]
+            prior = p[pr, j]
         else:
             prior = 0.0
             for i in range(n):
-                prior += p[i] * P[k, i, j]
-        out[j] = drive[j] - prior / tau1
+                prior += p[pr, i] * P[k, i, j]
+        out[o, j] = drive[dr, j] - prior / tau1
 
 
 def dft_rhs(
@@ -583,11 +585,10 @@ def _dft_flow_rows(p, drive, P, tau1, conserve, h, out):  # pragma: no cover - c
     the Euler-equivalent rate factor (``h > 0``) and the positivity guard (``conserve`` True)."""
     B, n = out.shape
     for r in range(B):
-        k = r if P.shape[0] > 1 else 0
-        f = out[r]
-        _dft_rhs_row(p[r], drive[r], P, k, tau1, f)
+        _dft_rhs_row(p, r, drive, r, P, r if P.shape[0] > 1 else 0, tau1, out, r)
         if not conserve:
             continue
+        f = out[r]  # one view per row here: the flow's few passes over it are worth it
         total = 0.0
         for j in range(n):
             total += f[j]
@@ -623,7 +624,7 @@ def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: Arra
     """
     rows = _BeliefRows(p, drive, params, dt, n_steps=None)
     out = np.empty_like(rows.p)
-    _euler_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
+    _euler_rows(rows.p, 0, rows.drive, 0, rows.P, params.tau1, rows.dt, out, 0, out.shape[0])
     return out.reshape(*rows.batch, rows.n)
 
 
@@ -638,9 +639,10 @@ def dft_euler_rollout(
     loop (the same kernel as :func:`dft_euler_update`), not one call per step.
     """
     rows = _BeliefRows(p, drives, params, dt, n_steps=np.shape(drives)[0] if np.ndim(drives) else 0)
-    out = np.empty_like(rows.drive)
-    _euler_rollout_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
-    return out.reshape(out.shape[0], *rows.batch, rows.n)
+    K = rows.drive.shape[0]
+    out = np.empty((K * rows.p.shape[0], rows.n))
+    _euler_rollout_rows(rows.p, rows.drive.reshape(-1, rows.n), rows.P, params.tau1, rows.dt, out)
+    return out.reshape(K, *rows.batch, rows.n)
 
 
 class _BeliefRows:
@@ -702,23 +704,28 @@ class _BeliefRows:
 
 
 @njit(cache=True)
-def _euler_rows(p, drive, P, tau1, dt, out):  # pragma: no cover - compiled
-    """``out[r] = normalize(p[r] + dt (drive[r] - P^T p[r] / tau1))`` for every row (see _BeliefRows)."""
-    B, n = out.shape
+def _euler_rows(p, p0, drive, d0, P, tau1, dt, out, o0, B):  # pragma: no cover - compiled
+    """``out[o0 + r] = normalize(p[p0 + r] + dt (drive[d0 + r] - P^T p[p0 + r] / tau1))`` for
+    ``r < B`` (rows of 2-D arrays; ``P`` and ``dt`` per row or shared, see _BeliefRows)."""
+    n = out.shape[1]
     for r in range(B):
         h = dt[r] if dt.shape[0] > 1 else dt[0]
-        _dft_rhs_row(p[r], drive[r], P, r if P.shape[0] > 1 else 0, tau1, out[r])
+        _dft_rhs_row(p, p0 + r, drive, d0 + r, P, r if P.shape[0] > 1 else 0, tau1, out, o0 + r)
         for j in range(n):
-            out[r, j] = p[r, j] + h * out[r, j]
-        _clip_normalize_row(out, r)
+            out[o0 + r, j] = p[p0 + r, j] + h * out[o0 + r, j]
+        _clip_normalize_row(out, o0 + r)
 
 
 @njit(cache=True)
 def _euler_rollout_rows(p, drives, P, tau1, dt, out):  # pragma: no cover - compiled
-    """``out[s]`` = the rows after update ``s`` (``drives[s]``), starting from ``p``."""
-    _euler_rows(p, drives[0], P, tau1, dt, out[0])
-    for s in range(1, drives.shape[0]):
-        _euler_rows(out[s - 1], drives[s], P, tau1, dt, out[s])
+    """Step ``s`` of ``K``: rows ``s B .. s B + B - 1`` of ``out`` (``(K B, n)``) are the beliefs
+    after update ``s`` (``drives`` rows alike), starting from ``p`` (``(B, n)``)."""
+    B = p.shape[0]
+    if B == 0:
+        return
+    _euler_rows(p, 0, drives, 0, P, tau1, dt, out, 0, B)
+    for s in range(1, drives.shape[0] // B):
+        _euler_rows(out, (s - 1) * B, drives, s * B, P, tau1, dt, out, s * B, B)
 
 
 def dft_euler_step(
