@@ -27,9 +27,12 @@ Measured on the shared 2-core development machine, MICO row, median ms (figures 
   1.0 us, hypervisor steal 14-20 %);
 - with the numba row kernels for xi, the potential field, the quaternions and the Euler rollout
   (commits fc3fc38, aae9d86), the same morning at the same gauge (about 1.0 us): 0.67, 0.67 and
-  0.69 in three runs (p95 0.81-0.88); 2 goals 0.56-0.57, 10 goals 0.86-0.88, 50 goals 2.6-2.8,
-  ``authors-r3`` 0.47-0.49. What remains is mostly validation, features and the few numpy calls
-  around the kernels.
+  0.69 in three runs (p95 0.81-0.88);
+- with the kernels addressing rows by index (commit 75b1964), alternating with commit 63d3d50 in
+  the same minutes (gauge medians 0.61-0.71 us): 0.52 and 0.52 against 1.20 and 1.08; 2 goals
+  0.43-0.45, 10 goals 0.65-0.66, 50 goals 1.90, ``authors-r3`` 0.39-0.41. At gauge medians of
+  0.87-0.98 us: 0.60-0.71 (p95 0.84-0.88). What remains is mostly validation, features and the
+  numpy calls around the kernels.
 """
 
 from __future__ import annotations
