@@ -24,19 +24,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._kernels import _field_rows
 from drake_disamb.core._validation import all_finite, check_real_fields
-from drake_disamb.core.geometry import (
-    _as_rows,
-    _batch_shape,
-    _check_last,
-    _check_quat,
-    _orientation_error3,
-    _saturated,
-    _shared_rows,
-)
+from drake_disamb.core.geometry import _as_rows, _batch_shape, _check_last, _check_quat, _shared_rows
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
@@ -79,50 +71,6 @@ class PotentialFieldConfig:
             allow_zero=True,
         )
         check_real_fields(self, ("max_linear_speed", "max_angular_speed"))
-
-
-@njit(cache=True)
-def _field_rows(
-    x, q, gx, gq, k_t, k_r, gain, radius, cap, v_max, w_max, translation, out
-):  # pragma: no cover
-    """Per-goal commands for every row ``r``: ``out[r, i] = [v_i, w_i]`` (``translation``) or
-    ``out[r, i] = w_i`` (rotational part only, ``out`` ``(B, n, 3)``).
-
-    ``x`` ``(B, 3)``, ``q`` ``(B, 4)``; ``gx`` ``(B | 1, n, 3)`` and ``gq`` ``(B | 1, n, 4)`` (one
-    shared row for a fixed goal set).
-    """
-    B, n = out.shape[0], out.shape[1]
-    o = 3 if translation else 0  # where w_i goes
-    for r in range(B):
-        g = r if gq.shape[0] > 1 else 0
-        for i in range(n):
-            e0, e1, e2 = _orientation_error3(
-                q[r, 0], q[r, 1], q[r, 2], q[r, 3], gq[g, i, 0], gq[g, i, 1], gq[g, i, 2], gq[g, i, 3]
-            )
-            out[r, i, o], out[r, i, o + 1], out[r, i, o + 2] = _saturated(k_r * e0, k_r * e1, k_r * e2, w_max)
-        if not translation:
-            continue
-        gp = r if gx.shape[0] > 1 else 0
-        for i in range(n):
-            v0 = k_t * (gx[gp, i, 0] - x[r, 0])
-            v1 = k_t * (gx[gp, i, 1] - x[r, 1])
-            v2 = k_t * (gx[gp, i, 2] - x[r, 2])
-            if n > 1 and gain > 0.0:
-                # Goal j != i pushes the robot away from it within the radius (a goal exactly at
-                # the robot has no direction and pushes nothing).
-                s0 = s1 = s2 = 0.0
-                for j in range(n):
-                    d0 = gx[gp, j, 0] - x[r, 0]
-                    d1 = gx[gp, j, 1] - x[r, 1]
-                    d2 = gx[gp, j, 2] - x[r, 2]
-                    dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                    if j != i and 0.0 < dist < radius:
-                        speed = min(gain / dist, cap)
-                        s0 -= d0 / dist * speed
-                        s1 -= d1 / dist * speed
-                        s2 -= d2 / dist * speed
-                v0, v1, v2 = v0 + s0, v1 + s1, v2 + s2
-            out[r, i, 0], out[r, i, 1], out[r, i, 2] = _saturated(v0, v1, v2, v_max)
 
 
 def _field(

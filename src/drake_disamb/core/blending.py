@@ -13,7 +13,8 @@ with ``rho_i`` in ``[0, 1]``, ``rho2 > rho1``, and in the paper's implementation
 (m/s, rad/s) in the world frame. Every function broadcasts over leading batch dimensions.
 
 The law is written once, as scalar functions compiled with numba (``_alpha1``, ``_has_input1``,
-``_blend_clamp1``); the array functions below loop over rows calling them (a control loop blends
+``_blend_clamp1`` in :mod:`drake_disamb.core._kernels`); the array functions below call row
+kernels built on them (a control loop blends
 one command per tick, where numpy's cost per call would dominate).
 """
 
@@ -25,11 +26,11 @@ import numbers
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._kernels import _alpha_rows, _blend_rows, _has_input_rows, _shared_control_rows
 from drake_disamb.core._validation import check_real_fields, is_real
-from drake_disamb.core.geometry import _as_rows, _batch_shape, _saturated
+from drake_disamb.core.geometry import _as_rows, _batch_shape
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -76,73 +77,6 @@ def _resolve_rhos(
 
 # typed: 1 and True (or 0.5 and a numpy 0.5) are different keys, so a bool is still refused.
 _resolve_rhos_cached = functools.lru_cache(maxsize=256, typed=True)(_resolve_rhos)
-
-
-@njit(cache=True)
-def _alpha1(p: float, r1: float, r2: float, r3: float) -> float:  # pragma: no cover - compiled
-    """The piecewise-linear alpha of one top belief (0 for a non-finite one)."""
-    if not np.isfinite(p) or p <= r1:
-        return 0.0
-    if p <= r2:
-        return r3 * (p - r1) / (r2 - r1)
-    return r3
-
-
-@njit(cache=True)
-def _has_input1(u: NDArray[np.float64], tolerance: float) -> bool:  # pragma: no cover - compiled
-    """Any entry of ``u`` larger than ``tolerance`` in magnitude (NaN is not)."""
-    for k in range(u.shape[0]):
-        if abs(u[k]) > tolerance:
-            return True
-    return False
-
-
-@njit(cache=True)
-def _blend_clamp1(u_h, u_a, alpha, v_max, w_max, out):  # pragma: no cover - compiled
-    """``out = alpha u_a + (1 - alpha) u_h`` (6-vectors), each 3-vector part scaled down to its limit
-    (``inf``: no limit)."""
-    for k in range(6):
-        out[k] = alpha * u_a[k] + (1.0 - alpha) * u_h[k]
-    out[0], out[1], out[2] = _saturated(out[0], out[1], out[2], v_max)
-    out[3], out[4], out[5] = _saturated(out[3], out[4], out[5], w_max)
-
-
-@njit(cache=True)
-def _alpha_rows(p, r1, r2, r3, out):  # pragma: no cover - compiled
-    for r in range(out.shape[0]):
-        out[r] = _alpha1(p[r], r1, r2, r3)
-
-
-@njit(cache=True)
-def _has_input_rows(u, tolerance, out):  # pragma: no cover - compiled
-    for r in range(out.shape[0]):
-        out[r] = _has_input1(u[r], tolerance)
-
-
-@njit(cache=True)
-def _blend_rows(u_h, u_a, alpha, v_max, w_max, out):  # pragma: no cover - compiled
-    for r in range(out.shape[0]):
-        _blend_clamp1(u_h[r], u_a[r], alpha[r], v_max, w_max, out[r])
-
-
-@njit(cache=True)
-def _shared_control_rows(
-    u_h, p, u_a, r1, r2, r3, assist, tolerance, v_max, w_max, u, alpha, g_star
-):  # pragma: no cover
-    """The full step per row: ``g* = argmax p`` (the first maximum; a NaN counts as the maximum, as
-    in ``np.argmax``), alpha, zero alpha without input unless ``assist``, blend and limits."""
-    n = p.shape[1]
-    for r in range(u.shape[0]):
-        g = 0
-        for i in range(1, n):
-            if not np.isnan(p[r, g]) and (np.isnan(p[r, i]) or p[r, i] > p[r, g]):
-                g = i
-        a = _alpha1(p[r, g], r1, r2, r3)
-        if not assist and not _has_input1(u_h[r], tolerance):
-            a = 0.0
-        _blend_clamp1(u_h[r], u_a[r, g], a, v_max, w_max, u[r])
-        alpha[r] = a
-        g_star[r] = g
 
 
 def blending_alpha(

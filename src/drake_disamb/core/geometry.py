@@ -15,9 +15,10 @@ offending shape or value. The underscore-prefixed helpers skip validation; they 
 vectorised loops (the disambiguation forward projection) whose inputs were validated once.
 
 The Hamilton product and the rotation vector are written once, as scalar functions compiled with
-numba (``_qmul``, ``_rotvec``); every array function here, and the kernels of other modules that
-need them (the potential field's rotational part), loop over rows calling them. On the small
-arrays of a control step or a disambiguation request, numpy's cost per call would dominate.
+numba (``_qmul`` and ``_rotvec`` in :mod:`drake_disamb.core._kernels`); the array functions here,
+and the kernels that need them (the potential field's rotational part), loop over rows calling
+them. On the small arrays of a control step or a disambiguation request, numpy's cost per call
+would dominate.
 """
 
 from __future__ import annotations
@@ -26,14 +27,16 @@ import functools
 import math
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._kernels import (
+    _SMALL_ANGLE,
+    _orientation_error_rows,
+    _pose_error_rows,
+    _quat_multiply_rows,
+    _rotvec_rows,
+)
 from drake_disamb.core._validation import all_finite
-
-_SMALL_ANGLE = 1e-8
-"""Below this angle (rad) the series expansions of sin(a)/a are used instead of the quotient."""
-
 
 # ----------------------------------------------------------------------------------------------
 # Validation
@@ -99,91 +102,7 @@ def _shared_rows(
     return _as_rows(a, batch, tail)
 
 
-@njit(cache=True)
-def _qmul(
-    w1: float, x1: float, y1: float, z1: float, w2: float, x2: float, y2: float, z2: float
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """The Hamilton product ``q1 (x) q2``, term by term in the textbook order."""
-    return (
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-    )
-
-
-@njit(cache=True)
-def _rotvec(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:  # pragma: no cover
-    """Rotation vector of a unit quaternion, shortest path (angle in ``[0, pi]``)."""
-    if w < 0.0:
-        w, x, y, z = -w, -x, -y, -z
-    s = np.sqrt(x * x + y * y + z * z)
-    if s < 0.5 * _SMALL_ANGLE:
-        scale = 2.0 / w  # angle / s by its series, w ~ 1 here
-    else:
-        scale = 2.0 * np.arctan2(s, w) / s
-    return x * scale, y * scale, z * scale
-
-
-@njit(cache=True)
-def _orientation_error3(
-    f0: float, f1: float, f2: float, f3: float, t0: float, t1: float, t2: float, t3: float
-) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    """``rotvec(t (x) conj(f))`` for unit quaternions ``f`` (from) and ``t`` (to).
-
-    Scalars, not array rows: a row view costs a kernel more than this arithmetic."""
-    w, x, y, z = _qmul(t0, t1, t2, t3, f0, -f1, -f2, -f3)
-    return _rotvec(w, x, y, z)
-
-
-@njit(cache=True)
-def _saturated(
-    a0: float, a1: float, a2: float, max_norm: float
-) -> tuple[float, float, float]:  # pragma: no cover
-    """A 3-vector scaled down to at most ``max_norm`` (direction kept; used by the potential field
-    and the blending law's speed limits)."""
-    k = min(1.0, max_norm / max(np.sqrt(a0 * a0 + a1 * a1 + a2 * a2), 1e-300))
-    return a0 * k, a1 * k, a2 * k
-
-
-@njit(cache=True)
-def _quat_multiply_rows(a, b, out):  # pragma: no cover - compiled
-    for r in range(out.shape[0]):
-        out[r, 0], out[r, 1], out[r, 2], out[r, 3] = _qmul(
-            a[r, 0], a[r, 1], a[r, 2], a[r, 3], b[r, 0], b[r, 1], b[r, 2], b[r, 3]
-        )
-
-
-@njit(cache=True)
-def _rotvec_rows(q, out):  # pragma: no cover - compiled
-    for r in range(out.shape[0]):
-        out[r, 0], out[r, 1], out[r, 2] = _rotvec(q[r, 0], q[r, 1], q[r, 2], q[r, 3])
-
-
-@njit(cache=True)
-def _orientation_error_rows(f, t, out):  # pragma: no cover - compiled
-    for r in range(out.shape[0]):
-        out[r, 0], out[r, 1], out[r, 2] = _orientation_error3(
-            f[r, 0], f[r, 1], f[r, 2], f[r, 3], t[r, 0], t[r, 1], t[r, 2], t[r, 3]
-        )
-
-
 _QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
-
-
-@njit(cache=True)
-def _pose_error_rows(x, goals, dist, angle):  # pragma: no cover - compiled
-    """Distance (m) and rotation angle (rad) from the pose ``x`` (7) to each goal pose (``(n, 7)``);
-    quaternions are normalised first."""
-    m = np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6])
-    f0, f1, f2, f3 = x[3] / m, x[4] / m, x[5] / m, x[6] / m
-    for i in range(goals.shape[0]):
-        d0, d1, d2 = goals[i, 0] - x[0], goals[i, 1] - x[1], goals[i, 2] - x[2]
-        dist[i] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        t0, t1, t2, t3 = goals[i, 3], goals[i, 4], goals[i, 5], goals[i, 6]
-        k = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2 + t3 * t3)
-        e0, e1, e2 = _orientation_error3(f0, f1, f2, f3, t0 / k, t1 / k, t2 / k, t3 / k)
-        angle[i] = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
 
 
 def _binary_rows(kernel, a: NDArray[np.float64], b: NDArray[np.float64], width: int) -> NDArray[np.float64]:

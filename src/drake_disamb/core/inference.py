@@ -3,9 +3,10 @@
 Every function here takes numpy arrays and broadcasts over any number of leading batch
 dimensions, so the same update serves a single live step, a vectorised replay of hundreds of
 trials, and the disambiguation forward projection of all probe directions at once. The hot
-per-row work (the input nonlinearity ``xi``, the Euler update, the clip-and-normalise
-projection) is written once as a numba-compiled row kernel that the array functions call; numpy's
-cost per call would otherwise dominate on the small arrays of a control step.
+per-row work (the input nonlinearity ``xi``, the right-hand side and flow, the Euler update, the
+clip-and-normalise projection) is written once as a numba-compiled row kernel
+(:mod:`drake_disamb.core._kernels`) that the array functions here call; numpy's cost per call
+would otherwise dominate on the small arrays of a control step.
 
 Shapes (``...`` is any batch shape, ``n`` the number of goals):
 
@@ -44,15 +45,20 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core._kernels import (
+    _dft_flow_rows,
+    _euler_rollout_rows,
+    _euler_rows,
+    _normalize_rows,
+    _xi_rows,
+)
 from drake_disamb.core.geometry import _as_rows, _batch_shape, _shared_rows
 
 TINY = np.finfo(float).tiny
 """Smallest positive normal double: what the authors' code clips non-positive entries to."""
 
-_TINY = float(TINY)  # a plain float: a global constant inside the compiled kernels
 
 BAYES_SIGMA = np.pi / 2.0
 """Standard deviation (rad) of the Gaussian angle likelihood of the recursive Bayes baseline."""
@@ -234,51 +240,6 @@ def normalize_belief(p: ArrayLike) -> NDArray[np.float64]:
     return rows.reshape(a.shape)
 
 
-# The kernels below are the single implementation of the clip-and-normalise projection and of the
-# Euler update (compiled with numba: both run on small rows, where numpy's cost per call would
-# dominate). The wrappers broadcast, validate and lay out the rows; the kernels loop over rows.
-
-
-@njit(cache=True)
-def _clip_normalize_row(v: NDArray[np.float64], r: int) -> None:  # pragma: no cover - compiled
-    """Row ``r`` of ``v`` (``(rows, n)``), in place: the projection of :func:`normalize_belief`."""
-    n = v.shape[1]
-    total = 0.0
-    for i in range(n):
-        x = v[r, i]
-        if not x >= _TINY:  # non-positive, tiny or NaN
-            x = _TINY
-            v[r, i] = x
-        total += x
-    if total < np.inf:  # finite (entries are >= TINY > 0, so 0 < total, never NaN)
-        for i in range(n):
-            v[r, i] /= total
-        return
-    # An infinite entry (its mass shared by all infinite entries) or an overflowing sum.
-    n_inf = 0
-    largest = 0.0
-    for i in range(n):
-        if v[r, i] == np.inf:
-            n_inf += 1
-        largest = max(largest, v[r, i])
-    total = 0.0
-    for i in range(n):
-        if n_inf:
-            x = 1.0 if v[r, i] == np.inf else _TINY
-        else:
-            x = max(v[r, i] / largest, _TINY)
-        v[r, i] = x
-        total += x
-    for i in range(n):
-        v[r, i] /= total
-
-
-@njit(cache=True)
-def _normalize_rows(v: NDArray[np.float64]) -> None:  # pragma: no cover - compiled
-    for r in range(v.shape[0]):
-        _clip_normalize_row(v, r)
-
-
 def uniform_belief(n_goals: int, batch_shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
     """The uniform belief over ``n_goals`` goals."""
     if n_goals < 1:
@@ -389,78 +350,6 @@ def dft_xi(
     return xi.reshape(*batch, n)
 
 
-@njit(cache=True)
-def _unit3(a0: float, a1: float, a2: float) -> tuple[float, float, float, bool]:  # pragma: no cover
-    """The unit vector of a finite 3-vector and whether it is non-zero (zero stays zero).
-
-    ``hypot`` neither overflows nor underflows (a tiny command keeps its direction); a norm beyond
-    DBL_MAX is measured after dividing by the largest component.
-    """
-    norm = np.hypot(np.hypot(a0, a1), a2)
-    if not norm < np.inf:
-        s = max(abs(a0), abs(a1), abs(a2))
-        a0, a1, a2 = a0 / s, a1 / s, a2 / s
-        norm = np.hypot(np.hypot(a0, a1), a2)
-    if norm > 0.0:
-        return a0 / norm, a1 / norm, a2 / norm, True
-    return 0.0, 0.0, 0.0, False
-
-
-@njit(cache=True)
-def _cosine_to_unit(
-    v0: float, v1: float, v2: float, w0: float, w1: float, w2: float
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``((v / |v|) . w, |v|)`` for a unit (or zero) ``w``; 0 where ``v = 0``.
-
-    As :func:`_safe_unit`: when ``|v|`` is not finite, non-finite components of ``v`` are read as
-    0 and ``v`` is first divided by its largest absolute component. The returned length is the
-    plain one (``inf`` or NaN then).
-    """
-    length = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    norm = length
-    if not norm < np.inf:
-        v0 = v0 if np.isfinite(v0) else 0.0
-        v1 = v1 if np.isfinite(v1) else 0.0
-        v2 = v2 if np.isfinite(v2) else 0.0
-        s = max(abs(v0), abs(v1), abs(v2))
-        if s > 0.0:
-            v0, v1, v2 = v0 / s, v1 / s, v2 / s
-        norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    if norm > 0.0:
-        return (v0 * w0 + v1 * w1 + v2 * w2) / norm, length
-    return 0.0, length
-
-
-@njit(cache=True)
-def _xi_rows(u, x_r, x_g, u_a, directed, agree, near, zero_excites, R, xi):  # pragma: no cover
-    """``xi`` for every row ``r``: a sanitised command ``u[r]``, ``x_r[r]``, the goals ``x_g[r]``
-    (or ``x_g[0]`` for every row when it has one) and ``u_a[r]``."""
-    B, n = xi.shape
-    rotation = u.shape[1] >= 6
-    for r in range(B):
-        v0, v1, v2, moving = _unit3(u[r, 0], u[r, 1], u[r, 2])
-        w0 = w1 = w2 = 0.0
-        if rotation:
-            w0, w1, w2, turning = _unit3(u[r, 3], u[r, 4], u[r, 5])
-            moving = moving or turning
-        g = r if x_g.shape[0] > 1 else 0  # one shared row for a fixed goal set
-        for i in range(n):
-            total = 0.0
-            d0 = x_g[g, i, 0] - x_r[r, 0]
-            d1 = x_g[g, i, 1] - x_r[r, 1]
-            d2 = x_g[g, i, 2] - x_r[r, 2]
-            cos, dist = _cosine_to_unit(d0, d1, d2, v0, v1, v2)
-            if directed:
-                total += 0.5 * (1.0 + cos)
-            if agree and rotation:
-                total += _cosine_to_unit(u_a[r, i, 3], u_a[r, i, 4], u_a[r, i, 5], w0, w1, w2)[0]
-            if not zero_excites and not moving:
-                total = 0.0
-            if near and dist < np.inf:  # a non-finite distance gives no proximity
-                total += max(1.0 - dist / R, 0.0)
-            xi[r, i] = total
-
-
 def biased_sigmoid(xi: ArrayLike) -> NDArray[np.float64]:
     """``sigma(xi) = 1 / (1 + exp(-xi)) - 0.5``."""
     return 1.0 / (1.0 + np.exp(-np.asarray(xi, dtype=float))) - 0.5
@@ -500,22 +389,6 @@ def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDA
     out = np.empty_like(rows.p)
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, False, 0.0, out)
     return out.reshape(*rows.batch, rows.n)
-
-
-@njit(cache=True)
-def _dft_rhs_row(p, pr, drive, dr, P, k, tau1, out, o):  # pragma: no cover - compiled
-    """``out[o] = drive[dr] - P[k]^T p[pr] / tau1`` (rows of 2-D arrays; ``P`` empty: identity).
-
-    Rows by index, not as views: a view costs a kernel more than a row's arithmetic."""
-    n = p.shape[1]
-    for j in range(n):
-        if P.shape[0] == 0:
-            prior = p[pr, j]
-        else:
-            prior = 0.0
-            for i in range(n):
-                prior += p[pr, i] * P[k, i, j]
-        out[o, j] = drive[dr, j] - prior / tau1
 
 
 def dft_rhs(
@@ -560,59 +433,6 @@ def dft_mass_conserving_rhs_from_drive(
     h = params.euler_equivalent_step
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), out)
     return out.reshape(*rows.batch, rows.n)
-
-
-@njit(cache=True)
-def _euler_rate_factor(total: float, tau1: float, h: float) -> float:  # pragma: no cover - compiled
-    """Rate factor that makes the mass-conserving flow over ``h`` equal the Euler map.
-
-    With ``P = I`` the flow ``dp/dt = f - p S`` (``S = sum f``, constant in ``p``) relaxes to its
-    fixed point at rate ``D = S + 1/tau1``, i.e. by ``exp(-D h)`` per step, while the Euler map
-    ``(p + h f) / (1 + h S)`` contracts by ``(1 - h/tau1) / (1 + h S)``. Scaling the flow by
-    ``log((1 + h S) / (1 - h / tau1)) / (h D)`` makes the two equal (same fixed point).
-    """
-    a = min(h / tau1, 0.9)
-    hS = max(h * total, -0.9)
-    x = hS + a  # h D
-    if abs(x) < 1e-12:
-        return 1.0 / (1.0 - a)
-    return (np.log1p(hS) - np.log1p(-a)) / x
-
-
-@njit(cache=True)
-def _dft_flow_rows(p, drive, P, tau1, conserve, h, out):  # pragma: no cover - compiled
-    """Per row: ``f(p)`` (``conserve`` False) or the mass-conserving flow ``f - p sum(f)`` with
-    the Euler-equivalent rate factor (``h > 0``) and the positivity guard (``conserve`` True)."""
-    B, n = out.shape
-    for r in range(B):
-        _dft_rhs_row(p, r, drive, r, P, r if P.shape[0] > 1 else 0, tau1, out, r)
-        if not conserve:
-            continue
-        f = out[r]  # one view per row here: the flow's few passes over it are worth it
-        total = 0.0
-        for j in range(n):
-            total += f[j]
-        for j in range(n):
-            f[j] = f[j] - p[r, j] * total
-        if h > 0.0:
-            factor = _euler_rate_factor(total, tau1, h)
-            for j in range(n):
-                f[j] = f[j] * factor
-        # Positivity guard: an entry at (or below) zero may not decrease further; the mass it
-        # would have lost is taken from the others in proportion to their mass.
-        excess = 0.0
-        free_mass = 0.0
-        for j in range(n):
-            if p[r, j] <= 0.0 and f[j] < 0.0:
-                excess += f[j]
-            else:
-                free_mass += max(p[r, j], 0.0)
-        if excess < 0.0:
-            for j in range(n):
-                if p[r, j] <= 0.0 and f[j] < 0.0:
-                    f[j] = 0.0
-                else:
-                    f[j] = f[j] + (max(p[r, j], 0.0) / free_mass if free_mass > 0.0 else 0.0) * excess
 
 
 def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike) -> NDArray[np.float64]:
@@ -701,31 +521,6 @@ class _BeliefRows:
             self.dt = np.array([float(dt)])
         else:
             self.dt = _as_rows(dt, batch, (1,)).reshape(-1)
-
-
-@njit(cache=True)
-def _euler_rows(p, p0, drive, d0, P, tau1, dt, out, o0, B):  # pragma: no cover - compiled
-    """``out[o0 + r] = normalize(p[p0 + r] + dt (drive[d0 + r] - P^T p[p0 + r] / tau1))`` for
-    ``r < B`` (rows of 2-D arrays; ``P`` and ``dt`` per row or shared, see _BeliefRows)."""
-    n = out.shape[1]
-    for r in range(B):
-        h = dt[r] if dt.shape[0] > 1 else dt[0]
-        _dft_rhs_row(p, p0 + r, drive, d0 + r, P, r if P.shape[0] > 1 else 0, tau1, out, o0 + r)
-        for j in range(n):
-            out[o0 + r, j] = p[p0 + r, j] + h * out[o0 + r, j]
-        _clip_normalize_row(out, o0 + r)
-
-
-@njit(cache=True)
-def _euler_rollout_rows(p, drives, P, tau1, dt, out):  # pragma: no cover - compiled
-    """Step ``s`` of ``K``: rows ``s B .. s B + B - 1`` of ``out`` (``(K B, n)``) are the beliefs
-    after update ``s`` (``drives`` rows alike), starting from ``p`` (``(B, n)``)."""
-    B = p.shape[0]
-    if B == 0:
-        return
-    _euler_rows(p, 0, drives, 0, P, tau1, dt, out, 0, B)
-    for s in range(1, drives.shape[0] // B):
-        _euler_rows(out, (s - 1) * B, drives, s * B, P, tau1, dt, out, s * B, B)
 
 
 def dft_euler_step(
