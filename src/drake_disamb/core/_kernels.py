@@ -342,6 +342,7 @@ def _field_rows(
     """
     B, n = out.shape[0], out.shape[1]
     o = 3 if translation else 0  # where w_i goes
+    push = np.zeros((n, 3))  # per row: the repeller velocity of each goal (0 outside the radius)
     for r in range(B):
         g = r if gq.shape[0] > 1 else 0
         for i in range(n):
@@ -352,24 +353,30 @@ def _field_rows(
         if not translation:
             continue
         gp = r if gx.shape[0] > 1 else 0
+        repel = n > 1 and gain > 0.0
+        if repel:
+            # Goal j pushes the robot away from it within the radius (a goal exactly at the robot
+            # has no direction and pushes nothing): once per row, felt by every other goal's field.
+            for j in range(n):
+                d0 = gx[gp, j, 0] - x[r, 0]
+                d1 = gx[gp, j, 1] - x[r, 1]
+                d2 = gx[gp, j, 2] - x[r, 2]
+                dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+                speed = min(gain / dist, cap) if 0.0 < dist < radius else 0.0
+                push[j, 0] = d0 / dist * speed if speed > 0.0 else 0.0
+                push[j, 1] = d1 / dist * speed if speed > 0.0 else 0.0
+                push[j, 2] = d2 / dist * speed if speed > 0.0 else 0.0
         for i in range(n):
             v0 = k_t * (gx[gp, i, 0] - x[r, 0])
             v1 = k_t * (gx[gp, i, 1] - x[r, 1])
             v2 = k_t * (gx[gp, i, 2] - x[r, 2])
-            if n > 1 and gain > 0.0:
-                # Goal j != i pushes the robot away from it within the radius (a goal exactly at
-                # the robot has no direction and pushes nothing).
-                s0 = s1 = s2 = 0.0
+            if repel:
+                s0 = s1 = s2 = 0.0  # goal i feels every repeller but its own: an exact masked sum
                 for j in range(n):
-                    d0 = gx[gp, j, 0] - x[r, 0]
-                    d1 = gx[gp, j, 1] - x[r, 1]
-                    d2 = gx[gp, j, 2] - x[r, 2]
-                    dist = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-                    if j != i and 0.0 < dist < radius:
-                        speed = min(gain / dist, cap)
-                        s0 -= d0 / dist * speed
-                        s1 -= d1 / dist * speed
-                        s2 -= d2 / dist * speed
+                    if j != i:
+                        s0 -= push[j, 0]
+                        s1 -= push[j, 1]
+                        s2 -= push[j, 2]
                 v0, v1, v2 = v0 + s0, v1 + s1, v2 + s2
             out[r, i, 0], out[r, i, 1], out[r, i, 2] = _saturated(v0, v1, v2, v_max)
 

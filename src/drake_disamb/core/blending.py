@@ -14,8 +14,8 @@ with ``rho_i`` in ``[0, 1]``, ``rho2 > rho1``, and in the paper's implementation
 
 The law is written once, as scalar functions compiled with numba (``_alpha1``, ``_has_input1``,
 ``_blend_clamp1`` in :mod:`drake_disamb.core._kernels`); the array functions below call row
-kernels built on them (a control loop blends
-one command per tick, where numpy's cost per call would dominate).
+kernels built on them (a control loop blends one command per tick, where numpy's cost per call
+would dominate).
 """
 
 from __future__ import annotations
@@ -122,6 +122,7 @@ def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float)
     v = _commands(u, "u")
     rows = _as_rows(v, v.shape[:-1], (6,))
     out = np.empty_like(rows)
+    # The blending kernel's own limits on a blend with alpha = 0 (the command itself): one limiter.
     _blend_rows(rows, rows, np.zeros(rows.shape[0]), float(max_linear_speed), float(max_angular_speed), out)
     return out.reshape(v.shape)
 

@@ -66,7 +66,7 @@ def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
 
 
 # ----------------------------------------------------------------------------------------------
-# Unchecked kernels (for hot vectorised loops)
+# Unchecked helpers: row layout for the compiled kernels, quaternion arithmetic
 # ----------------------------------------------------------------------------------------------
 
 
@@ -159,7 +159,7 @@ def quat_multiply(q1: ArrayLike, q2: ArrayLike) -> NDArray[np.float64]:
     """Hamilton product ``q1 (x) q2`` (apply ``q2`` first, then ``q1``), broadcasting."""
     a = _check_last(q1, 4, "q1")
     b = _check_last(q2, 4, "q2")
-    return np.ascontiguousarray(_quat_multiply(a, b))
+    return _quat_multiply(a, b)
 
 
 def quat_conjugate(q: ArrayLike) -> NDArray[np.float64]:
@@ -177,7 +177,7 @@ def quat_to_rotvec(q: ArrayLike) -> NDArray[np.float64]:
 
     ``q`` and ``-q`` give the same result (the shortest rotation); ``q`` need not be unit.
     """
-    return np.ascontiguousarray(_quat_to_rotvec(_check_quat(q, "q")))
+    return _quat_to_rotvec(_check_quat(q, "q"))
 
 
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
@@ -198,7 +198,7 @@ def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]
     The shortest rotation: ``|r| <= pi``, and ``q_to`` and ``-q_to`` give the same ``r``. Driving
     an orientation with angular velocity ``k * r`` (world frame) moves it towards ``q_to``.
     """
-    return np.ascontiguousarray(_orientation_error(_check_quat(q_from, "q_from"), _check_quat(q_to, "q_to")))
+    return _orientation_error(_check_quat(q_from, "q_from"), _check_quat(q_to, "q_to"))
 
 
 def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -255,4 +255,4 @@ def integrate_pose(
     q = _check_quat(quat, "quat")
     t = _check_last(twist_vw, 6, "twist_vw")
     new_position, new_quat = _integrate_pose(p, q, t, float(dt))
-    return new_position, np.ascontiguousarray(new_quat)
+    return new_position, new_quat

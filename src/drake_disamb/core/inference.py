@@ -385,7 +385,7 @@ def dft_drive(
 
 def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDArray[np.float64]:
     """``f(p) = -(1/tau1) P^T p + drive`` (1/s), with ``drive`` from :func:`dft_drive`."""
-    rows = _BeliefRows(p, drive, params, 0.0, n_steps=None)
+    rows = _BeliefRows(p, drive, params)
     out = np.empty_like(rows.p)
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, False, 0.0, out)
     return out.reshape(*rows.batch, rows.n)
@@ -428,7 +428,7 @@ def dft_mass_conserving_rhs_from_drive(
     The drive does not depend on ``p``: an integrator that evaluates the right-hand side several
     times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
     """
-    rows = _BeliefRows(p, drive, params, 0.0, n_steps=None)
+    rows = _BeliefRows(p, drive, params)
     out = np.empty_like(rows.p)
     h = params.euler_equivalent_step
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), out)
@@ -442,7 +442,7 @@ def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: Arra
     ``(..., 1)`` (one step per batch entry, e.g. ``(batch, 1)``); ``params.transition`` is
     ``None``, one ``(n, n)`` matrix or a batch ``(..., n, n)``.
     """
-    rows = _BeliefRows(p, drive, params, dt, n_steps=None)
+    rows = _BeliefRows(p, drive, params, dt)
     out = np.empty_like(rows.p)
     _euler_rows(rows.p, 0, rows.drive, 0, rows.P, params.tau1, rows.dt, out, 0, out.shape[0])
     return out.reshape(*rows.batch, rows.n)
@@ -458,69 +458,54 @@ def dft_euler_rollout(
     ``(K, ..., n)``: entry ``s`` is the belief after update ``s``. The steps run in one compiled
     loop (the same kernel as :func:`dft_euler_update`), not one call per step.
     """
-    rows = _BeliefRows(p, drives, params, dt, n_steps=np.shape(drives)[0] if np.ndim(drives) else 0)
-    K = rows.drive.shape[0]
-    out = np.empty((K * rows.p.shape[0], rows.n))
-    _euler_rollout_rows(rows.p, rows.drive.reshape(-1, rows.n), rows.P, params.tau1, rows.dt, out)
-    return out.reshape(K, *rows.batch, rows.n)
+    rows = _BeliefRows(p, drives, params, dt, rollout=True)
+    out = np.empty_like(rows.drive)
+    _euler_rollout_rows(rows.p, rows.drive, rows.P, params.tau1, rows.dt, out)
+    return out.reshape(rows.steps, *rows.batch, rows.n)
 
 
 class _BeliefRows:
     """The operands of the DFT kernels (right-hand side, flow, Euler update and rollout), broadcast
     to one batch and flattened to C-ordered rows.
 
-    ``p``: ``(B, n)``; ``drive``: ``(B, n)``, or ``(K, B, n)`` for a rollout; ``P``: ``(B, n, n)``,
-    ``(1, n, n)`` (one matrix for all rows) or ``(0, n, n)`` (identity); ``dt``: ``(B,)`` or
-    ``(1,)``; ``batch`` the broadcast batch shape.
+    ``p``: ``(B, n)``; ``drive``: ``(B, n)``, or ``(K B, n)`` for a rollout (step-major);
+    ``P``: ``(B, n, n)``, ``(1, n, n)`` (one matrix for all rows) or ``(0, n, n)`` (identity);
+    ``dt``: ``(B,)`` or ``(1,)``; ``batch`` the broadcast batch shape; ``steps`` the rollout's
+    ``K`` (1 otherwise).
     """
 
-    __slots__ = ("P", "batch", "drive", "dt", "n", "p")
+    __slots__ = ("P", "batch", "drive", "dt", "n", "p", "steps")
 
-    def __init__(self, p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike, n_steps: int | None):
+    def __init__(
+        self, p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike = 0.0, rollout: bool = False
+    ):
         p = np.asarray(p, dtype=float)
         drive = np.asarray(drive, dtype=float)
-        lead = 0 if n_steps is None else 1  # the rollout's step axis
-        if n_steps == 0 or drive.ndim < 1 + lead or p.ndim < 1:
-            expected = "(K, ..., n) with K >= 1" if lead else "(..., n)"
+        lead = drive.shape[:1] if rollout else ()  # the rollout's step axis
+        if drive.ndim < 1 + len(lead) or p.ndim < 1 or lead == (0,):
+            expected = "(K, ..., n) with K >= 1" if rollout else "(..., n)"
             raise ValueError(f"drive: expected shape {expected}, got {drive.shape}")
         n = p.shape[-1]
         if drive.shape[-1] != n:
             raise ValueError(
                 f"drive: expected {n} entries per row (one per goal, as p), got shape {drive.shape}"
             )
-        dt = dt if type(dt) is float else np.asarray(dt, dtype=float)
-        dt_batch: tuple[int, ...] = ()
-        if type(dt) is not float and dt.ndim:
-            if dt.shape[-1] != 1:
-                raise ValueError(f"dt: expected a scalar or shape (..., 1), got shape {dt.shape}")
-            dt_batch = dt.shape[:-1]
+        dt = np.asarray(dt, dtype=float)
+        if dt.ndim and dt.shape[-1] != 1:
+            raise ValueError(f"dt: expected a scalar or shape (..., 1), got shape {dt.shape}")
         P = params.transition
-        P_batch: tuple[int, ...] = ()
         if P is not None:
             P = np.asarray(P, dtype=float)
             if P.shape[-2:] != (n, n):
                 raise ValueError(f"DFTParams.transition: expected ({n}, {n}) matrices, got shape {P.shape}")
-            P_batch = P.shape[:-2]
-        batch = _batch_shape(p.shape[:-1], drive.shape[lead:-1], dt_batch, P_batch)
-        self.batch, self.n = batch, n
+        batch = _batch_shape(
+            p.shape[:-1], drive.shape[len(lead) : -1], dt.shape[:-1], () if P is None else P.shape[:-2]
+        )
+        self.batch, self.n, self.steps = batch, n, lead[0] if rollout else 1
         self.p = _as_rows(p, batch, (n,))
-        if lead:
-            steps = (drive.shape[0],)
-            full = (*steps, *batch, n)
-            d = drive if drive.shape == full else np.broadcast_to(drive, full)
-            self.drive = np.ascontiguousarray(d.reshape(drive.shape[0], -1, n))
-        else:
-            self.drive = _as_rows(drive, batch, (n,))
-        if P is None:
-            self.P = np.empty((0, n, n))
-        elif P.ndim == 2:
-            self.P = np.ascontiguousarray(P[None])
-        else:
-            self.P = _as_rows(P, batch, (n, n))
-        if type(dt) is float or dt.ndim == 0:
-            self.dt = np.array([float(dt)])
-        else:
-            self.dt = _as_rows(dt, batch, (1,)).reshape(-1)
+        self.drive = _as_rows(drive, (*lead, *batch), (n,))
+        self.P = np.empty((0, n, n)) if P is None else _shared_rows(P, batch, (n, n))
+        self.dt = dt.reshape(1) if dt.ndim == 0 else _as_rows(dt, batch, (1,)).reshape(-1)
 
 
 def dft_euler_step(
