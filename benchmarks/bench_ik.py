@@ -3,7 +3,9 @@
 Usage: ``python benchmarks/bench_ik.py [--calls 3000]``. Prints the median and 95th percentile
 wall time (microseconds) of ``VelocityIkSolver.solve`` for: the fast path (home pose, a command
 J^-1 V meets every limit), the robust path at a near-singular wrist (theta_5 = 0.01), the robust
-path with joint 3 on its limit, and Drake's Jacobian evaluation for comparison.
+path with joint 3 on its limit, and for comparison Drake's Jacobian evaluation and Drake's own
+``DoDifferentialInverseKinematics`` (the same direction-preserving problem posed as a
+MathematicalProgram and handed to a QP solver) on the home case.
 """
 
 from __future__ import annotations
@@ -12,6 +14,10 @@ import argparse
 import time
 
 import numpy as np
+from pydrake.multibody.inverse_kinematics import (
+    DifferentialInverseKinematicsParameters,
+    DoDifferentialInverseKinematics,
+)
 from pydrake.multibody.tree import JacobianWrtVariable
 
 from drake_disamb.ik import IkStatus, JointLimits, VelocityIkSolver
@@ -71,6 +77,20 @@ def main() -> None:
         print(f"{name:40s} {status:>9s} {med:10.1f} {p95:8.1f}")
     med, p95 = _timed(lambda: jacobian(home), args.calls)
     print(f"{'(Drake Jacobian, for comparison)':40s} {'':>9s} {med:10.1f} {p95:8.1f}")
+    params = DifferentialInverseKinematicsParameters(6, 6)
+    params.set_time_step(0.01)
+    params.set_joint_position_limits((lower, upper))
+    params.set_joint_velocity_limits((-vmax, vmax))
+    params.set_joint_acceleration_limits((np.full(6, -20.0), np.full(6, 20.0)))
+    params.set_nominal_joint_position(home)
+    J = jacobian(home)
+    V = np.array([0.05, 0.0, 0.0, 0.0, 0.0, 0.0])
+    J_drake, V_drake = J[[3, 4, 5, 0, 1, 2]], V[[3, 4, 5, 0, 1, 2]]
+    v0 = np.linalg.solve(J, V)
+    result = DoDifferentialInverseKinematics(home, v0, V_drake, J_drake, params)
+    med, p95 = _timed(lambda: DoDifferentialInverseKinematics(home, v0, V_drake, J_drake, params), args.calls)
+    label = "(Drake DoDifferentialInverseKinematics)"
+    print(f"{label:40s} {result.status.name[1:]:>9s} {med:10.1f} {p95:8.1f}")
 
 
 if __name__ == "__main__":

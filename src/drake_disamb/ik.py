@@ -1,40 +1,71 @@
-"""Robust differential inverse kinematics: joint velocities for a commanded end-effector twist
-that keep moving near singularities and joint limits (pure numpy, no pydrake).
+"""Direction-preserving differential inverse kinematics: joint velocities for a commanded
+end-effector twist that move the end effector along that twist and nowhere else (pure numpy, no
+pydrake).
 
 The station's :class:`~drake_disamb.station.DifferentialIKIntegrator` calls
-:func:`solve_velocity_ik` once per control tick with the Jacobian at the integrated set point.
+:meth:`VelocityIkSolver.solve` once per control tick with the Jacobian at the integrated set point.
 Everything here works on plain arrays: ``J`` is any ``(m, n)`` Jacobian (the station passes the
 6 x 6 MICO Jacobian in the paper's row order ``[v; w]``) and ``V`` the commanded twist in the same
 row order and units (m/s, rad/s).
 
+The safety contract
+-------------------
+An assistive arm moves next to a person, so the step never trades the command's direction for
+progress: **the end effector moves along the commanded twist, slower, or not at all.** Formally
+the joint velocity is ``v = t * v_V + v_N`` where
+
+- ``J v_V = V / |V|_inf`` exactly (up to floating-point rounding, checked to a relative residual of
+  ``1e-9``), and ``t in [0, |V|_inf]`` is the largest speed along the command that every joint
+  limit allows; the achieved fraction ``alpha = t / |V|_inf`` is reported, never silently bent;
+- ``v_N`` is the nominal-posture pull, projected onto the joint directions whose singular value is
+  at most ``IkParams.null_threshold`` (the null space of the task). It moves the end effector at
+  most ``null_threshold * |v_N|``: with the defaults (1e-4 m/rad and joint speeds under 1 rad/s)
+  **under 0.2 mm/s**, whatever the command. For the non-redundant MICO away from an exact
+  singularity that space is empty and ``v_N = 0``.
+
+So the end effector's motion outside the commanded direction per step is bounded by that pull plus
+rounding; a zero command gives ``v = 0`` (the arm holds still). What is left is the physical arm's
+tracking of these set points (the station's PD), which the station's tests bound on the real
+plant: at most 2 cm and 1 cm/s off the command over 10 s of any single-axis command from any
+tested posture, singular and joint-limited ones included.
+
 How a step is chosen
 --------------------
-1. **Fast path.** When ``J`` is square and invertible and ``v = J^-1 V`` satisfies every limit
-   (position, velocity, acceleration) the command is tracked exactly: status ``OK``.
-2. **Singular-value filtering.** Otherwise ``J = U diag(sigma) W^T`` is split into well-conditioned
-   directions (``sigma >= singular_threshold``), inverted exactly, and near-singular ones, inverted
-   with damped least squares: gain ``sigma / (sigma^2 + mu^2)`` with
-   ``mu^2 = max_damping^2 (1 - (sigma / singular_threshold)^2)``, growing as sigma shrinks (no
-   damping at the threshold, ``max_damping`` at sigma = 0, never a division by zero). In the damped
-   directions the joints are also pulled towards a nominal posture (gain ``nominal_gain``,
-   weighted by ``mu^2 / (sigma^2 + mu^2)``), which moves the arm away from the singularity
-   instead of freezing on it.
-3. **Position limits.** A joint within one full-speed step of a position limit whose step would
-   cross it is held at the limit (its velocity lands it there) and the rest of the command is
-   re-solved with the remaining joints (least squares over their columns); repeated until no free
-   joint crosses. Joints farther away are slowed by step 4 as they approach.
-4. **Velocity limits.** The well-conditioned part is scaled by the largest ``s1 in [0, 1]`` that
-   keeps every joint inside its position and velocity bounds; then the damped part is added,
-   scaled by the largest ``s2 in [0, 1]`` that still fits. Scaling keeps the direction of each
-   part, and the well-conditioned directions get the joint-speed budget first.
-5. **Acceleration limits.** The step is the fastest multiple of that target (at most 1) that also
-   meets the acceleration bounds; when no multiple does (a sudden turn) each joint moves towards
-   the target as fast as it may (per-joint clipping), reaching it within a few steps.
+1. **Fast path.** When ``J`` is square and ``np.linalg.solve`` gives ``v_V`` with a residual under
+   ``1e-9`` (a near-singular ``J`` gives a huge but exact ``v_V``), the speed ``t`` is the largest
+   in ``[0, |V|_inf]`` for which ``t v_V`` meets every bound of :func:`velocity_bounds` (position,
+   velocity, acceleration). Near a singularity ``v_V`` grows like ``1 / sigma_min``, so the arm
+   slows smoothly to a stop as it approaches it instead of being pushed through it.
+2. **Rank-deficient or non-square ``J``.** An SVD splits ``J``: directions with singular value
+   above ``null_threshold`` are inverted exactly; if the command has a component outside their
+   span (more than ``1e-6`` of it) no joint motion produces it and ``t = 0``: the command is
+   refused (``STOPPED``), it is not replaced by its achievable part. The remaining joint
+   directions form the null space where the posture pull acts.
+3. **Acceleration limits give way to direction.** When no point of the commanded line meets the
+   acceleration bounds (a sudden turn while moving fast), the step takes the point of the line
+   inside the position and velocity bounds that is nearest to the previous velocity (weighted by
+   the acceleration limits): the set point changes direction at once instead of curving through
+   directions nobody commanded. Position and velocity limits always hold.
 
-The result never has NaN, always respects the position limits (``q + v dt`` stays inside them,
-given ``q`` inside) and the velocity limits; the acceleration limits are given up only where they
-conflict with the position limits. Its status says how much of the command it achieved (see
-:class:`IkStatus`).
+Why not Drake's ``DoDifferentialInverseKinematics``
+---------------------------------------------------
+Drake's function poses the same core problem as a quadratic program (maximise the fraction
+``alpha`` of the command subject to ``J v = alpha V`` and box constraints on position, velocity and
+acceleration, plus a null-space posture cost) and hands it to a solver on every call. It is
+direction-preserving too, and it costs about as much per tick as this module
+(``benchmarks/bench_ik.py`` prints both on the MICO). We keep our own because the safety contract
+above needs behaviour that program does not have:
+
+- it **brakes** towards a joint's position limit at the acceleration limit; Drake's program only
+  keeps the next step inside the limit, so a joint arrives at full speed and stops in one step,
+  a jolt whose tracking transient moves the physical end effector off the command;
+- it **slows the joints near a singularity** (the speed factor above), not only the end effector;
+- it keeps the **direction when the acceleration bounds cannot be met** (a sudden turn while
+  moving fast): Drake's program is then infeasible and returns no step at all;
+- it applies **task-space bounds** (the station's floor above the table) along the same line;
+- it says **why** a step was slowed (:class:`IkStatus`: joint limit, singularity, workspace,
+  refused direction), which the station reports on ``ik_status``;
+- it is plain numpy, so every rule above is tested in isolation without building a plant.
 """
 
 from __future__ import annotations
@@ -46,27 +77,34 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+_RANGE_TOL = 1e-6
+"""Relative part of a command outside the span of J beyond which the command is refused."""
+
 
 class IkStatus(IntEnum):
     """Outcome codes of a differential-IK step (also the station's ``ik_status`` port)."""
 
     OK = 0
-    """The command was tracked at full speed (a zero command holds the arm still)."""
+    """The command was tracked at (at least ``limited_alpha`` of) full speed; a zero command holds
+    the arm still."""
     STOPPED = 1
-    """None of the command could be achieved: less than ``stopped_alpha`` of it along it, and the
-    end effector (if it moves at all) moves more than 60 deg away from it. The joints may still move
-    slowly towards the nominal posture, out of a singularity."""
+    """Less than ``stopped_alpha`` of the command can be achieved along it, and every joint moves at
+    less than that fraction of its speed limit (a joint on its limit, an exact singularity, or a direction no joint motion
+    produces): the end effector stays still, apart from the bounded null-space pull."""
     INVALID_COMMAND = 2
     """The command had a NaN or infinite entry and was replaced by zero."""
     LIMITED = 3
-    """Only part of the command was achieved because of joint position, velocity or acceleration
-    limits: the arm moved as well as it could (slower, or with limited joints held)."""
+    """The command was slowed along its own direction by joint position, velocity or acceleration
+    limits."""
     RESEEDED = 4
     """The integrated set point had drifted from the measured joints (e.g. blocked by contact) and
     was reset to the measured position; the arm held still for this step."""
     SINGULAR = 5
-    """The arm is near a singularity and part of the command lies along a near-singular direction:
-    that part was damped, the rest was tracked."""
+    """The arm is near a singularity (smallest singular value under ``singular_threshold``) and the
+    command was slowed along its own direction because it needs the near-singular direction."""
+    WORKSPACE = 6
+    """The command was slowed or stopped along its own direction at the edge of the allowed
+    workspace (the station's floor above the table top)."""
 
 
 @dataclass(frozen=True)
@@ -126,32 +164,45 @@ class IkParams:
     """Settings of :func:`solve_velocity_ik`.
 
     Attributes:
-        singular_threshold: Singular value of ``J`` below which a direction is damped (units of
-            ``J``: m/rad for translation rows, 1 for rotation rows). The MICO's home pose has a
-            smallest singular value of about 0.07, well above it.
-        max_damping: Damping ``mu`` at sigma = 0 (same units); the largest joint-speed gain on a
-            damped direction is about ``1 / singular_threshold``.
-        nominal_gain: Pull (1/s) towards the nominal posture inside the damped directions.
-        limited_alpha: Report ``OK`` only when at least this fraction of the command was achieved
-            along it and the error is at most ``1 - limited_alpha`` of it.
-        stopped_alpha: Report ``STOPPED`` when less than this fraction was achieved and the end
-            effector's motion is more than 60 deg off the command.
+        singular_threshold: Smallest singular value of ``J`` (m/rad for translation rows, 1 for
+            rotation rows) below which the arm is near a singularity: the joint speed limits shrink
+            in proportion (``sigma_min / singular_threshold``, at least ``singular_speed_floor``),
+            so the joints slow down with the end effector instead of whirling at full speed while
+            it barely moves (the physical arm's lag behind such a fast set point is what would
+            move it off the command), and a slowed step is reported ``SINGULAR``. The MICO's home
+            pose has a smallest singular value of about 0.07, above the default.
+        singular_speed_floor: Smallest fraction of the joint speed limits near a singularity, so
+            that commands leading out of it still move the arm.
+        null_threshold: Singular value at or below which a joint direction counts as the task's
+            null space (same units): the command is never sent along it, and the posture pull
+            acts only there. It bounds the end-effector speed the pull can cause
+            (``null_threshold`` times the pull's joint speed).
+        nominal_gain: Pull (1/s) towards the nominal posture inside the null space.
+        limited_alpha: Report ``OK`` only when at least this fraction of the command was achieved.
+        stopped_alpha: Report ``STOPPED`` when less than this fraction was achieved.
     """
 
     singular_threshold: float = 0.025
-    max_damping: float = 0.025
+    singular_speed_floor: float = 0.1
+    null_threshold: float = 1e-4
     nominal_gain: float = 0.5
     limited_alpha: float = 0.95
     stopped_alpha: float = 0.02
 
     def __post_init__(self) -> None:
-        for name in ("singular_threshold", "max_damping", "nominal_gain"):
+        for name in ("singular_threshold", "null_threshold", "nominal_gain"):
             v = getattr(self, name)
-            if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+            if not (isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"IkParams.{name}: expected a finite number >= 0, got {v!r}")
-        if self.singular_threshold > 0 and not self.max_damping > 0:
+        if not (isinstance(self.singular_speed_floor, int | float) and 0 < self.singular_speed_floor <= 1):
             raise ValueError(
-                f"IkParams.max_damping: expected > 0 when singular_threshold > 0, got {self.max_damping!r}"
+                "IkParams.singular_speed_floor: expected a number in (0, 1], "
+                f"got {self.singular_speed_floor!r}"
+            )
+        if not self.null_threshold <= 1e-2:
+            raise ValueError(
+                f"IkParams.null_threshold: expected at most 0.01 (it bounds uncommanded motion), "
+                f"got {self.null_threshold!r}"
             )
         if not (0 < self.limited_alpha <= 1):
             raise ValueError(
@@ -168,12 +219,15 @@ class IkSolution:
     """One differential-IK step.
 
     Attributes:
-        v: Joint velocities (n), inside every bound of :func:`velocity_bounds`.
-        status: How much of the command was achieved (:class:`IkStatus`).
+        v: Joint velocities (n), inside the position and velocity bounds of :func:`velocity_bounds`
+            (and inside the acceleration bounds too unless the commanded line misses them).
+        status: How much of the command was achieved and why not all of it (:class:`IkStatus`).
         alpha: Achieved fraction of the command along it, ``(J v) . V / |V|^2`` (1 for a zero command).
-        error: Relative tracking error ``|J v - V| / |V|`` (0 for a zero command).
+        error: Relative tracking error ``|J v - alpha V| / |V|``: the motion outside the command's
+            direction, relative to the command (0 up to rounding and the null-space pull).
         sigma_min: Smallest singular value of ``J`` (NaN when the fast path skipped the SVD).
-        held_joints: Joints held at a position limit (indices), empty when none.
+        limiting_joints: Joints whose bound set the speed along the command (indices), empty when
+            the full command was achieved.
     """
 
     v: NDArray[np.float64]
@@ -181,7 +235,7 @@ class IkSolution:
     alpha: float
     error: float
     sigma_min: float
-    held_joints: tuple[int, ...] = ()
+    limiting_joints: tuple[int, ...] = ()
 
 
 def _vector(name: str, value: ArrayLike, n: int) -> NDArray[np.float64]:
@@ -197,119 +251,110 @@ def _vector(name: str, value: ArrayLike, n: int) -> NDArray[np.float64]:
 
 
 def velocity_bounds(
-    q: ArrayLike, v_prev: ArrayLike, dt: float, limits: JointLimits
+    q: ArrayLike, v_prev: ArrayLike, dt: float, limits: JointLimits, speed_factor: float = 1.0
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The box ``[lo, hi]`` of joint velocities allowed for one step of length ``dt``.
 
-    It is the intersection of the position bounds (``q + v dt`` inside ``[lower, upper]``), the
-    velocity bounds and the acceleration bounds (``|v - v_prev| <= acceleration * dt``). Where the
-    acceleration interval misses the position/velocity interval of a joint (e.g. moving fast right
-    next to a limit), the position/velocity bound nearest to it wins: ``lo = hi`` = that bound.
-    ``q`` outside the position limits is treated as on them (the bound then moves it back inside).
+    It is the intersection of the position bounds, the velocity bounds (``speed_factor`` times
+    ``limits.velocity``) and the acceleration bounds (``|v - v_prev| <= acceleration * dt``). The
+    position bounds brake: towards a limit a joint may go no faster than it can still stop on it at
+    its acceleration limit (``v <= -a dt / 2 + sqrt((a dt / 2)^2 + 2 a d)`` for a distance ``d``),
+    and never past it (``q + v dt`` inside ``[lower, upper]``). Where the acceleration interval
+    misses the position/velocity interval of a joint (e.g. moving fast right next to a limit), the
+    position/velocity bound nearest to it wins: ``lo = hi`` = that bound. ``q`` outside the
+    position limits is treated as on them (the bound then moves it back inside).
     """
     n = limits.size
     q = _vector("velocity_bounds.q", q, n)
     v_prev = _vector("velocity_bounds.v_prev", v_prev, n)
     if not (math.isfinite(dt) and dt > 0):
         raise ValueError(f"velocity_bounds.dt: expected a finite positive number, got {dt!r}")
-    return _bounds(q, v_prev, dt, limits)
+    if not (isinstance(speed_factor, int | float) and 0 < speed_factor <= 1):
+        raise ValueError(f"velocity_bounds.speed_factor: expected a number in (0, 1], got {speed_factor!r}")
+    return _bounds(q, v_prev, dt, limits, float(speed_factor))
+
+
+def _position_velocity_bounds(
+    q: NDArray[np.float64], dt: float, limits: JointLimits, speed_factor: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The braking position bounds and the velocity bounds (no acceleration bounds). They hold 0
+    when ``q`` is inside its limits; outside them ``lo = hi`` points back inside."""
+    vmax = limits.velocity * speed_factor
+    ad = np.minimum(limits.acceleration, 1e12) * dt * 0.5
+    up = np.maximum(limits.upper - q, 0.0)
+    down = np.maximum(q - limits.lower, 0.0)
+    brake_up = np.sqrt(ad * ad + 4.0 * ad / dt * up) - ad  # sqrt((a dt/2)^2 + 2 a d) - a dt/2
+    brake_down = np.sqrt(ad * ad + 4.0 * ad / dt * down) - ad
+    hi = np.minimum(np.minimum(brake_up, up / dt), vmax)
+    lo = np.maximum(np.maximum(-brake_down, -down / dt), -vmax)
+    back_up = q < limits.lower  # outside a limit: head straight back, as fast as allowed
+    back_down = q > limits.upper
+    lo = np.where(back_up, np.minimum((limits.lower - q) / dt, vmax), lo)
+    hi = np.where(back_up, lo, hi)
+    hi = np.where(back_down, np.maximum((limits.upper - q) / dt, -vmax), hi)
+    lo = np.where(back_down, hi, lo)
+    return lo, hi
 
 
 def _bounds(
-    q: NDArray[np.float64], v_prev: NDArray[np.float64], dt: float, limits: JointLimits
+    q: NDArray[np.float64],
+    v_prev: NDArray[np.float64],
+    dt: float,
+    limits: JointLimits,
+    speed_factor: float = 1.0,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    vmax = limits.velocity
+    lo_pv, hi_pv = _position_velocity_bounds(q, dt, limits, speed_factor)
     da = limits.acceleration * dt
-    lo_pv = np.maximum((limits.lower - q) / dt, -vmax)
-    hi_pv = np.minimum((limits.upper - q) / dt, vmax)
     lo = np.maximum(lo_pv, v_prev - da)
     hi = np.minimum(hi_pv, v_prev + da)
-    if (lo > hi).any():  # rare: q outside its limits, or the acceleration interval misses
-        lo_pv = np.minimum(lo_pv, vmax)
-        hi_pv = np.maximum(np.maximum(hi_pv, -vmax), lo_pv)  # outside: both point back inside
-        lo = np.maximum(lo_pv, v_prev - da)
-        hi = np.minimum(hi_pv, v_prev + da)
-        empty = lo > hi
+    empty = lo > hi
+    if empty.any():  # the acceleration interval misses: the nearest position/velocity bound wins
         nearest = np.where(v_prev - da > hi_pv, hi_pv, lo_pv)
         lo = np.where(empty, nearest, lo)
         hi = np.where(empty, nearest, hi)
     return lo, hi
 
 
-def _near_limit_bounds(
-    q: NDArray[np.float64], dt: float, limits: JointLimits
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Position bounds on v that are tighter than the speed limit (else -inf / inf): a joint whose
-    step goes past one is at its limit (within one step at full speed) and gets held there."""
-    lo = (limits.lower - q) / dt
-    hi = np.maximum((limits.upper - q) / dt, lo)
-    vmax = limits.velocity
-    return np.where(lo > -vmax, lo, -np.inf), np.where(hi < vmax, hi, np.inf)
-
-
-def _largest_scale(
+def _speed_interval(
     base: NDArray[np.float64], d: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]
-) -> float | None:
-    """Largest s in [0, 1] with lo <= base + s d <= hi, or None when no s in [0, 1] fits."""
-    s_lo, s_hi = 0.0, 1.0
+) -> tuple[float, float, int, int] | None:
+    """The interval ``[t_lo, t_hi]`` of ``t >= 0`` with ``lo <= base + t d <= hi``, and the joints
+    that set its ends (-1 for none); ``None`` when it is empty."""
+    t_lo, t_hi, j_lo, j_hi = 0.0, math.inf, -1, -1
     # A plain loop: for a handful of joints it is several times faster than numpy's ufuncs.
-    for b_j, d_j, lo_j, hi_j in zip(base.tolist(), d.tolist(), lo.tolist(), hi.tolist(), strict=True):
+    for j, (b_j, d_j, lo_j, hi_j) in enumerate(
+        zip(base.tolist(), d.tolist(), lo.tolist(), hi.tolist(), strict=True)
+    ):
         if d_j > 0.0:
-            s_lo = max(s_lo, (lo_j - b_j) / d_j)
-            s_hi = min(s_hi, (hi_j - b_j) / d_j)
+            a, b = (lo_j - b_j) / d_j, (hi_j - b_j) / d_j
         elif d_j < 0.0:
-            s_lo = max(s_lo, (hi_j - b_j) / d_j)
-            s_hi = min(s_hi, (lo_j - b_j) / d_j)
-        elif b_j < lo_j or b_j > hi_j:
+            a, b = (hi_j - b_j) / d_j, (lo_j - b_j) / d_j
+        elif lo_j - 1e-12 <= b_j <= hi_j + 1e-12:
+            continue
+        else:
             return None
-    if s_hi < s_lo - 1e-12:
+        if a > t_lo:
+            t_lo, j_lo = a, j
+        if b < t_hi:
+            t_hi, j_hi = b, j
+    if t_hi < t_lo - 1e-12 * max(1.0, abs(t_lo)):
         return None
-    return max(s_hi, s_lo)
+    return t_lo, max(t_hi, t_lo), j_lo, j_hi
 
 
-def filtered_inverse(
-    J: NDArray[np.float64],
-    V: NDArray[np.float64],
-    params: IkParams,
-    v_nominal: NDArray[np.float64] | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
-    """Singular-value-filtered inverse of ``J`` applied to ``V`` (step 2 of the module docstring).
-
-    Args:
-        J: ``(m, k)`` Jacobian (finite).
-        V: ``(m,)`` twist in J's row order.
-        params: Threshold and damping.
-        v_nominal: ``(k,)`` joint velocity towards the nominal posture, added inside the damped
-            directions only; ``None`` for none.
-
-    Returns:
-        ``(v_good, v_damped, singular_part, sigma_min)``: the joint velocity from the
-        well-conditioned directions (exact inverse there), the one from the damped directions
-        (damped inverse plus the nominal pull), the part of ``V`` along the damped directions
-        (m-vector), and the smallest singular value of ``J`` (0 when ``k < m`` leaves a direction
-        unreachable, which is not counted as singular: it is a held-joint limitation).
-    """
-    U, sigma, Wt = np.linalg.svd(J, full_matrices=False)
-    c = U.T @ V
-    eps = params.singular_threshold
-    bad = sigma < eps
-    k = sigma.size
-    if not bad.any():
-        v_good = Wt.T @ (c / sigma)
-        return v_good, np.zeros(k), np.zeros_like(V), float(sigma[-1]) if k else 0.0
-    good = ~bad
-    v_good = Wt[good].T @ (c[good] / sigma[good]) if good.any() else np.zeros(k)
-    sb = sigma[bad]
-    mu2 = params.max_damping**2 * (1.0 - (sb / eps) ** 2)
-    den = sb * sb + mu2
-    gain = np.divide(sb, den, out=np.zeros_like(sb), where=den > 0)
-    coeff = gain * c[bad]
-    if v_nominal is not None and params.nominal_gain > 0:
-        pull = np.divide(mu2, den, out=np.ones_like(sb), where=den > 0)
-        coeff = coeff + pull * (Wt[bad] @ v_nominal)
-    v_damped = Wt[bad].T @ coeff
-    singular_part = U[:, bad] @ c[bad]
-    return v_good, v_damped, singular_part, float(sigma[-1])
+def _twist_cap(
+    d: NDArray[np.float64], lower: NDArray[np.float64] | None, upper: NDArray[np.float64] | None
+) -> float:
+    """Largest ``t >= 0`` with ``lower <= t d <= upper`` row by row (bounds excluding 0 count as 0)."""
+    t = math.inf
+    lo = None if lower is None else np.minimum(lower, 0.0)
+    hi = None if upper is None else np.maximum(upper, 0.0)
+    for i, d_i in enumerate(d.tolist()):
+        if d_i > 0.0 and hi is not None:
+            t = min(t, float(hi[i]) / d_i)
+        elif d_i < 0.0 and lo is not None:
+            t = min(t, float(lo[i]) / d_i)
+    return t
 
 
 class VelocityIkSolver:
@@ -322,7 +367,7 @@ class VelocityIkSolver:
         limits: Joint limits (``n`` joints).
         dt: Step length (s) over which each answer is applied.
         params: Solver settings (defaults when ``None``).
-        q_nominal: Nominal posture the damped directions pull towards; ``None`` for no pull.
+        q_nominal: Nominal posture the null-space pull goes towards; ``None`` for no pull.
     """
 
     def __init__(
@@ -344,6 +389,7 @@ class VelocityIkSolver:
         n = limits.size
         self.q_nominal = None if q_nominal is None else _vector("VelocityIkSolver.q_nominal", q_nominal, n)
         self._n = n
+        self._accel_weight = 1.0 / np.minimum(limits.acceleration, 1e12) ** 2
 
     def bounds(
         self, q: NDArray[np.float64], v_prev: NDArray[np.float64]
@@ -357,100 +403,132 @@ class VelocityIkSolver:
         V: NDArray[np.float64],
         q: NDArray[np.float64],
         v_prev: NDArray[np.float64],
+        twist_lower: NDArray[np.float64] | None = None,
+        twist_upper: NDArray[np.float64] | None = None,
     ) -> IkSolution:
-        """One step: ``J`` (m, n), ``V`` (m,), ``q`` and ``v_prev`` (n,), all finite (unchecked)."""
+        """One step: ``J`` (m, n), ``V`` (m,), ``q`` and ``v_prev`` (n,), all finite (unchecked).
+
+        ``twist_lower`` / ``twist_upper`` (m,), optional, bound the end-effector twist ``J v`` row by
+        row (e.g. a floor: the vertical speed may not go below ``-brake(height above it)``); ``-inf``
+        / ``inf`` for no bound. A bound that excludes zero is taken as zero (the command stops
+        rather than being pushed). Like the joint limits, they only shorten the step along the
+        command: a step they limit is reported ``WORKSPACE``.
+        """
         n = self._n
-        nV2 = float(V @ V)
-        if nV2 == 0.0:
+        scale = float(np.max(np.abs(V))) if V.size else 0.0
+        if scale == 0.0:
             return IkSolution(np.zeros(n), IkStatus.OK, 1.0, 0.0, float("nan"))
-        lo, hi = _bounds(q, v_prev, self.dt, self.limits)
+        d = V / scale  # the direction, |d|_inf = 1: nothing below overflows for a huge command
+        v_dir, v_null, sigma_min = self._decompose(J, d, q)
+        params = self.params
+        factor = 1.0
+        if sigma_min < params.singular_threshold:
+            factor = max(params.singular_speed_floor, sigma_min / params.singular_threshold)
+        lo, hi = _bounds(q, v_prev, self.dt, self.limits, factor)
+        t_cap = scale
+        if twist_lower is not None or twist_upper is not None:
+            t_cap = min(scale, _twist_cap(d, twist_lower, twist_upper))
+        sol = self._along_line(J, d, scale, t_cap, v_dir, v_null, q, v_prev, lo, hi, sigma_min, factor)
+        if t_cap < scale and sol.status != IkStatus.OK and sol.alpha * scale >= t_cap * (1 - 1e-9):
+            return IkSolution(sol.v, IkStatus.WORKSPACE, sol.alpha, sol.error, sol.sigma_min, ())
+        return sol
 
-        # 1. Fast path: the exact inverse, when it satisfies every bound (NaN fails the test).
-        if J.shape[0] == n:
-            try:
-                v = np.linalg.solve(J, V)
-            except np.linalg.LinAlgError:
-                v = None
-            if v is not None and (v >= lo).all() and (v <= hi).all():
-                return IkSolution(v, IkStatus.OK, 1.0, 0.0, float("nan"))
-        return self._robust(J, V, q, nV2, lo, hi)
+    def _decompose(
+        self, J: NDArray[np.float64], d: NDArray[np.float64], q: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64] | None, NDArray[np.float64], float]:
+        """The exact joint direction for ``d`` (None when ``d`` leaves J's span), the null-space
+        pull, and the smallest of J's ``min(m, n)`` singular values."""
+        U, sigma, Wt = np.linalg.svd(J, full_matrices=True)
+        n = J.shape[1]
+        sigma_min = float(sigma[-1]) if sigma.size else 0.0
+        thr = self.params.null_threshold
+        r = int(np.count_nonzero(sigma > thr))
+        c = U[:, :r].T @ d
+        outside = d - U[:, :r] @ c
+        v_dir = None
+        if float(np.max(np.abs(outside))) <= _RANGE_TOL:
+            v_dir = Wt[:r].T @ (c / sigma[:r])
+        v_null = np.zeros(n)
+        if r < n and self.q_nominal is not None and self.params.nominal_gain > 0:
+            # Weight 1 on the exact null space, fading to 0 at null_threshold: no switching chatter.
+            s_all = np.zeros(n)
+            s_all[: sigma.size] = sigma
+            w = (1.0 - s_all[r:] / thr) if thr > 0 else np.ones(n - r)
+            N = Wt[r:]
+            v_null = N.T @ (w * (N @ (self.params.nominal_gain * (self.q_nominal - q))))
+        return v_dir, v_null, sigma_min
 
-    def _robust(
+    def _along_line(
         self,
         J: NDArray[np.float64],
-        V: NDArray[np.float64],
+        d: NDArray[np.float64],
+        scale: float,
+        t_cap: float,
+        v_dir: NDArray[np.float64] | None,
+        v_null: NDArray[np.float64],
         q: NDArray[np.float64],
-        nV2: float,
+        v_prev: NDArray[np.float64],
         lo: NDArray[np.float64],
         hi: NDArray[np.float64],
+        sigma_min: float,
+        factor: float,
     ) -> IkSolution:
-        n, params = self._n, self.params
-        # 2 + 3. Filtered inverse over the free joints; hold joints at a position limit.
-        plo, phi = _near_limit_bounds(q, self.dt, self.limits)
-        v_nom_full = None if self.q_nominal is None else params.nominal_gain * (self.q_nominal - q)
-        free = np.ones(n, dtype=bool)
-        v_held = np.zeros(n)
-        sigma_min = float("nan")
-        v_good = np.zeros(n)
-        v_damped = np.zeros(n)
-        for _ in range(n):
-            all_free = bool(free.all())
-            if all_free:
-                Jf, Vr, v_nom = J, V, v_nom_full
-            else:
-                Jf = J[:, free]
-                Vr = V - J[:, ~free] @ v_held[~free]
-                v_nom = None if v_nom_full is None else v_nom_full[free]
-            g, d, singular_part, smin = filtered_inverse(Jf, Vr, params, v_nom)
-            if all_free:
-                sigma_min = smin
-            v_good[:] = 0.0
-            v_damped[:] = 0.0
-            v_good[free] = g
-            v_damped[free] = d
-            step = v_good + v_damped
-            cross = free & ((step > phi) | (step < plo))
-            if not cross.any():
-                break
-            v_held[cross] = np.clip(step[cross], lo[cross], hi[cross])
-            free &= ~cross
-            if not free.any():
-                v_good[:] = 0.0
-                v_damped[:] = 0.0
-                singular_part = np.zeros_like(V)
-                break
+        """The fastest point ``base + t v_dir`` (t <= scale) inside the bounds (module docstring)."""
+        n = self._n
+        lo_pv, hi_pv = _position_velocity_bounds(q, self.dt, self.limits, factor)
+        # The pull alone, shrunk into the box (it must never cost the command its direction).
+        base = np.zeros(n)
+        if v_null.any():
+            pull = _speed_interval(np.zeros(n), v_null, lo, hi)
+            if pull is not None and pull[0] <= 1.0:
+                base = min(1.0, pull[1]) * v_null
+        if v_dir is None:  # the command's direction is out of reach: refuse it, hold still
+            v = base if _speed_interval(base, np.zeros(n), lo, hi) is not None else np.zeros(n)
+            return self._solution(J, d, scale, v, sigma_min, (), factor)
+        interval = _speed_interval(base, v_dir, lo, hi)
+        if interval is not None and interval[0] <= t_cap:
+            t = min(t_cap, interval[1])
+            limiting = () if t >= scale or t >= t_cap else (interval[3],)
+            return self._solution(J, d, scale, base + t * v_dir, sigma_min, limiting, factor)
+        # No allowed point of the line meets the acceleration bounds: keep the direction (and the
+        # workspace cap), give those up; take the point nearest the previous velocity.
+        interval = _speed_interval(np.zeros(n), v_dir, lo_pv, hi_pv)
+        t_max = min(t_cap, interval[1]) if interval is not None else 0.0
+        w = self._accel_weight
+        t = float((v_dir * w) @ v_prev) / float((v_dir * w) @ v_dir)
+        t = min(max(t, 0.0), t_max)
+        outside = np.flatnonzero((t * v_dir < lo) | (t * v_dir > hi))
+        limiting = () if t >= scale else tuple(int(j) for j in outside)
+        return self._solution(J, d, scale, t * v_dir, sigma_min, limiting, factor)
 
-        # 4. Scale into the velocity box: the well-conditioned part first, then the damped part.
-        # (a) Target: inside the position and velocity box (which holds 0), scaled part by part.
-        vmax = self.limits.velocity
-        lo_pv = np.minimum(np.maximum((self.limits.lower - q) / self.dt, -vmax), vmax)
-        hi_pv = np.maximum(np.minimum((self.limits.upper - q) / self.dt, vmax), lo_pv)
-        base = np.where(free, 0.0, v_held)
-        s1 = _largest_scale(base, v_good, lo_pv, hi_pv)
-        v1 = base + s1 * v_good if s1 is not None else np.clip(base + v_good, lo_pv, hi_pv)
-        s2 = _largest_scale(v1, v_damped, lo_pv, hi_pv) or 0.0
-        target = v1 + s2 * v_damped
-        # (b) Acceleration: the fastest speed along the target's direction that meets the bounds;
-        # when none does (a sudden turn) each joint moves towards the target as fast as it may.
-        s3 = _largest_scale(np.zeros(n), target, lo, hi)
-        v = np.clip(s3 * target if s3 is not None else target, lo, hi)  # the clip: rounding only
-
-        JV = J @ v
-        alpha = float(JV @ V) / nV2
-        error = math.sqrt(float((JV - V) @ (JV - V)) / nV2)
-        held = tuple(int(i) for i in np.flatnonzero(~free))
-        if alpha >= params.limited_alpha and error <= 1.0 - params.limited_alpha:
+    def _solution(
+        self,
+        J: NDArray[np.float64],
+        d: NDArray[np.float64],
+        scale: float,
+        v: NDArray[np.float64],
+        sigma_min: float,
+        limiting: tuple[int, ...],
+        factor: float = 1.0,
+    ) -> IkSolution:
+        params = self.params
+        Jd = (J @ v) / scale  # the achieved twist over |V|_inf: comparable with d
+        dd = float(d @ d)
+        alpha = float(Jd @ d) / dd
+        off = Jd - alpha * d
+        error = math.sqrt(float(off @ off) / dd)
+        if alpha >= params.limited_alpha:
             status = IkStatus.OK
-        elif alpha < params.stopped_alpha and 2.0 * alpha * nV2 < math.sqrt(float(JV @ JV) * nV2):
-            # Under stopped_alpha of the command and the end effector, if it moves at all, moves
-            # more than 60 deg away from it (a huge command merely slowed to the speed limits
-            # keeps its direction: that is LIMITED).
+        elif alpha < params.stopped_alpha and float(np.max(np.abs(v) / self.limits.velocity)) < (
+            params.stopped_alpha * factor
+        ):  # the joints hardly move (a huge command slowed to the joint limits is LIMITED)
             status = IkStatus.STOPPED
-        elif float(singular_part @ singular_part) > (1.0 - params.limited_alpha) ** 2 * nV2:
-            status = IkStatus.SINGULAR
         else:
-            status = IkStatus.LIMITED
-        return IkSolution(v, status, alpha, error, sigma_min, held)
+            if math.isnan(sigma_min):
+                sigma_min = float(np.linalg.svd(J, compute_uv=False)[-1])
+            status = IkStatus.SINGULAR if sigma_min < params.singular_threshold else IkStatus.LIMITED
+        limiting = tuple(j for j in limiting if j >= 0)
+        return IkSolution(v, status, alpha, error, sigma_min, limiting)
 
 
 def solve_velocity_ik(
@@ -463,7 +541,8 @@ def solve_velocity_ik(
     params: IkParams | None = None,
     q_nominal: ArrayLike | None = None,
 ) -> IkSolution:
-    """Joint velocities that achieve as much of the twist ``V`` as the arm can (module docstring).
+    """Joint velocities that move the end effector along the twist ``V``, as fast as the joint limits
+    allow up to ``V`` itself (module docstring).
 
     Args:
         J: ``(m, n)`` Jacobian at ``q``, finite; rows in the same order and units as ``V``.
@@ -473,7 +552,7 @@ def solve_velocity_ik(
         dt: Step length (s) over which ``v`` is applied.
         limits: Joint limits (``n`` joints).
         params: Solver settings (defaults when ``None``).
-        q_nominal: Nominal posture the damped directions pull towards; ``None`` for no pull.
+        q_nominal: Nominal posture the null-space pull goes towards; ``None`` for no pull.
 
     Returns:
         The :class:`IkSolution`. A zero ``V`` gives ``v = 0`` and ``OK`` (the arm holds still).
@@ -506,7 +585,6 @@ __all__ = [
     "IkStatus",
     "JointLimits",
     "VelocityIkSolver",
-    "filtered_inverse",
     "solve_velocity_ik",
     "velocity_bounds",
 ]

@@ -1,0 +1,204 @@
+"""Safety of the station: the end effector moves along the commanded twist and nowhere else.
+
+Issue 11's acceptance: from the home pose and other postures (near the wrist singularity, a joint on
+its limit, ...), each pure single-axis command held for 10 s (translations at 0.1 m/s, rotations at
+0.2 and 0.67 rad/s) moves the end effector outside the commanded direction by at most 2 cm in total
+and never faster than 1 cm/s, on the simulated arm (PD tracking, gravity, the table), while the
+commanded motion is still achieved where the arm can; the IK status says when it cannot. A
+property test does the same for random postures and random twists.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RotationMatrix
+from pydrake.systems.analysis import Simulator
+
+from drake_disamb.station import MICO_HOME_Q, IkStatus, StationConfig, build_station
+
+DT = 0.01
+OFF_TOTAL = 0.02  # m, motion outside the commanded direction over the whole hold
+OFF_SPEED = 0.01  # m/s, at any control step
+OFF_ROTATION = 0.05  # rad, rotation outside the commanded direction over the whole hold
+
+LOWER = np.array([-6.283185307, -0.7504915784, 1.902408885, -6.283185307, -6.283185307, -6.283185307])
+UPPER = -LOWER
+UPPER[1], UPPER[2] = 3.892084232, 7.522369076
+
+
+def _posture(**changes: float) -> tuple[float, ...]:
+    q = np.array(MICO_HOME_Q)
+    for k, v in changes.items():
+        q[int(k[1:]) - 1] = v
+    return tuple(q.tolist())
+
+
+POSTURES = {
+    "home": _posture(),
+    "near_wrist_singularity": _posture(j5=0.05),  # theta_5 = 0: joints 4 and 6 align
+    "elbow_on_its_limit": _posture(j3=LOWER[2] + 1e-3),  # the elbow stretched to its lower limit
+    "wrist_roll_on_its_limit": _posture(j6=UPPER[5] - 1e-3),
+    "turned_left": _posture(j1=-0.6, j2=1.3, j4=2.0),
+}
+COMMANDS = [(axis, speed) for axis in range(3) for speed in (0.1, -0.1)] + [
+    (axis, speed) for axis in range(3, 6) for speed in (0.2, -0.2, 0.67, -0.67)
+]
+
+
+def _rotation(p: np.ndarray) -> RotationMatrix:
+    return RotationMatrix(Quaternion(p[3:] / np.linalg.norm(p[3:])))
+
+
+class Hold:
+    """Holds one command on a station and measures the end effector's motion off it, each step."""
+
+    def __init__(self, home_q: tuple[float, ...]) -> None:
+        self.station = build_station(StationConfig(home_q=home_q))
+        self.sim = Simulator(self.station.diagram)
+        self.ctx = self.sim.get_mutable_context()
+        self.station.input_port("gripper_command").FixValue(self.ctx, [0.0])
+        self.station.input_port("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
+        self.sim.Initialize()
+        self.start = self.ctx.Clone()
+
+    def run(self, V: np.ndarray, duration: float) -> dict:
+        self.ctx.SetTimeStateAndParametersFrom(self.start)
+        self.sim.Initialize()
+        self.station.input_port("ee_velocity_command").FixValue(self.ctx, V)
+        pose = self.station.output_port("ee_pose")
+        status = self.station.output_port("ik_status")
+        v, w = V[:3], V[3:]
+        e_v = v / np.linalg.norm(v) if v.any() else np.zeros(3)
+        e_w = w / np.linalg.norm(w) if w.any() else np.zeros(3)
+        p_prev = np.array(pose.Eval(self.ctx))
+        p0 = p_prev.copy()
+        off_total = off_speed = off_rot = progress = progress_1s = 0.0
+        statuses: list[IkStatus] = []
+        t0 = self.ctx.get_time()
+        for k in range(int(round(duration / DT))):
+            self.sim.AdvanceTo(t0 + (k + 1) * DT)
+            p = np.array(pose.Eval(self.ctx))
+            dp = p[:3] - p_prev[:3]
+            along = max(0.0, float(dp @ e_v))
+            off = float(np.linalg.norm(dp - along * e_v))
+            aa = _rotation(p).multiply(_rotation(p_prev).inverse()).ToAngleAxis()
+            dth = aa.axis() * aa.angle()
+            turn = max(0.0, float(dth @ e_w))
+            off_total += off
+            off_speed = max(off_speed, off / DT)
+            off_rot += float(np.linalg.norm(dth - turn * e_w))
+            progress += along if v.any() else turn
+            if k < round(1.0 / DT):
+                progress_1s = progress
+            statuses.append(IkStatus(int(status.Eval(self.ctx)[0])))
+            p_prev = p
+        return {
+            "off_total": off_total,
+            "off_speed": off_speed,
+            "off_rotation": off_rot,
+            "progress": progress,
+            "progress_1s": progress_1s,
+            "statuses": statuses,
+            "displacement": float(np.linalg.norm(p[:3] - p0[:3])),
+        }
+
+
+def _check(result: dict, V: np.ndarray, where: str) -> None:
+    assert result["off_total"] <= OFF_TOTAL, (where, result["off_total"])
+    assert result["off_speed"] <= OFF_SPEED, (where, result["off_speed"])
+    assert result["off_rotation"] <= OFF_ROTATION, (where, result["off_rotation"])
+    # Achieved where the arm can; where it cannot, the status says so from the start.
+    first_second = result["statuses"][: int(round(1.0 / DT))]
+    speed = float(np.max(np.abs(V)))
+    if all(s == IkStatus.OK for s in first_second[10:]):  # after the 0.1 s ramp
+        assert result["progress_1s"] >= 0.8 * speed * 1.0, (where, result["progress_1s"])
+    else:
+        assert any(s != IkStatus.OK for s in first_second), where
+
+
+@pytest.fixture(scope="module", params=list(POSTURES))
+def hold(request: pytest.FixtureRequest) -> tuple[str, Hold]:
+    return request.param, Hold(POSTURES[request.param])
+
+
+@pytest.mark.parametrize(
+    ("axis", "speed"), COMMANDS, ids=[f"{'xyz'[a % 3]}{'vw'[a // 3]}{s:+}" for a, s in COMMANDS]
+)
+def test_single_axis_command_moves_only_along_it(hold: tuple[str, Hold], axis: int, speed: float) -> None:
+    name, rig = hold
+    V = np.zeros(6)
+    V[axis] = speed
+    result = rig.run(V, 10.0)
+    _check(result, V, f"{name} V[{axis}] = {speed}")
+
+
+def test_home_commands_are_achieved() -> None:
+    """From home every translation and rotation makes real progress before any limit."""
+    rig = Hold(POSTURES["home"])
+    for axis in range(6):
+        V = np.zeros(6)
+        V[axis] = 0.1 if axis < 3 else 0.2
+        result = rig.run(V, 1.0)
+        assert result["progress"] >= 0.8 * V[axis], (axis, result["progress"])
+
+
+def test_pure_rotation_does_not_translate() -> None:
+    """The issue's probe: wx = 0.2 rad/s held 10 s from home moved the gripper 0.34 m down."""
+    rig = Hold(POSTURES["home"])
+    for V in ([0, 0, 0, 0.2, 0, 0], [0, 0, 0, 0, 0, 0.67]):
+        result = rig.run(np.array(V, dtype=float), 20.0 if V[5] else 10.0)
+        assert result["displacement"] <= OFF_TOTAL, (V, result["displacement"])
+
+
+def test_floor_stops_a_downward_command() -> None:
+    rig = Hold(POSTURES["home"])
+    result = rig.run(np.array([0, 0, -0.1, 0, 0, 0.0]), 6.0)
+    z = rig.station.output_port("ee_pose").Eval(rig.ctx)[2]
+    assert rig.station.config.ee_min_height - 0.005 <= z <= rig.station.config.ee_min_height + 0.01
+    assert result["statuses"][-1] == IkStatus.WORKSPACE
+    assert result["off_total"] <= OFF_TOTAL
+
+
+_RANDOM_RIG: dict[str, Hold] = {}
+
+
+def _random_posture(rng: np.random.Generator) -> tuple[float, ...] | None:
+    """A posture near the workspace, with the gripper above the table (None when it is not)."""
+    q = np.clip(np.array(MICO_HOME_Q) + rng.uniform(-0.7, 0.7, 6), LOWER, UPPER)
+    from drake_disamb.station import EE_FRAME  # noqa: PLC0415
+
+    rig = _RANDOM_RIG.setdefault("fk", Hold(POSTURES["home"]))
+    plant = rig.station.control_plant
+    ctx = plant.CreateDefaultContext()
+    full = plant.GetPositions(ctx)
+    full[:6] = q
+    plant.SetPositions(ctx, full)
+    lowest = min(
+        plant.EvalBodyPoseInWorld(ctx, plant.get_body(b)).translation()[2]
+        for b in plant.GetBodyIndices(plant.GetModelInstanceByName("mico"))
+    )
+    z = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(ctx).translation()[2]
+    return tuple(q.tolist()) if z > 0.12 and lowest > 0.08 else None
+
+
+@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1))
+def test_random_postures_and_twists_move_only_along_the_command(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    home_q = None
+    while home_q is None:
+        home_q = _random_posture(rng)
+    direction = rng.normal(size=6)
+    direction[rng.random(6) < 0.4] = 0.0  # some components zero: mixed and pure commands
+    if not direction.any():
+        direction[rng.integers(0, 6)] = 1.0
+    V = direction / np.linalg.norm(direction) * np.array([0.1] * 3 + [0.5] * 3)
+    result = Hold(home_q).run(V, 3.0)
+    _check(result, V, f"seed {seed}, q0 {np.round(home_q, 3).tolist()}, V {np.round(V, 3).tolist()}")
+    assert math.isfinite(result["off_total"])
