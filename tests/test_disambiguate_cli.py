@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import io
 import json
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -128,3 +131,243 @@ def test_registered_in_cli() -> None:
 
     assert COMMANDS["disambiguate"] == "disambiguate"
     assert command.HELP and callable(command.add_arguments) and callable(command.run)
+
+
+# ----------------------------------------------------------------------------------------------
+# Batch isolation and exit codes (issue 11): every probe of the issue, each in under 2 s
+# ----------------------------------------------------------------------------------------------
+
+
+def _run_raw(tmp_path: Path, data: bytes, capsys: pytest.CaptureFixture[str], *extra: str) -> tuple:
+    """Run on the bytes ``data``; returns ``(exit code, stdout, stderr, seconds)``."""
+    path = tmp_path / "raw.json"
+    path.write_bytes(data)
+    parser = argparse.ArgumentParser(prog="drake-disamb disambiguate")
+    command.add_arguments(parser)
+    args = parser.parse_args(["--cases", str(path), *extra])
+    capsys.readouterr()
+    start = time.perf_counter()
+    code = command.run(args)
+    elapsed = time.perf_counter() - start
+    out = capsys.readouterr()
+    return code, out.out, out.err, elapsed
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _warm() -> None:
+    """Load the compiled kernels once, so that the timings below measure the command only."""
+    disambiguate([0.5, 0.5], [0, 0, 0], np.array([[0.2, 0, 0], [0, 0.2, 0]]), [[0], [1], [3]])
+
+
+def _json_text(value: object) -> str:
+    return json.dumps(value, allow_nan=True)
+
+
+BAD_CASES: list[tuple[str, str, str]] = [
+    # (JSON text of the case, field named in its error, a phrase of the error)
+    (_json_text(dict(Y_SCENE, orientation=[1e200, 0, 0, 0])), "orientation", "norm overflows"),
+    (
+        _json_text(dict(Y_SCENE, belief=[0.5, 0.5])).replace("[0.5, 0.5]", "[" + "9" * 401 + ", 0]", 1),
+        "belief",
+        "integer of 401 digits",
+    ),
+    (_json_text(dict(Y_SCENE, belief=[10**300, 0])), "belief", "summing to 1"),
+    (_json_text(dict(Y_SCENE, belief=[True, False])), "belief", "expected numbers, got True"),
+    (_json_text(dict(Y_SCENE, position=["0.1", 0, 0])), "position", "expected numbers, got '0.1'"),
+    (_json_text(dict(Y_SCENE, position=[None, 0, 0])), "position", "expected numbers, got None"),
+    (_json_text(dict(Y_SCENE, position=[float("nan"), 0, 0])), "position", "finite"),
+    (_json_text(dict(Y_SCENE, position=[0, float("inf"), 0])), "position", "finite"),
+    (
+        _json_text(dict(Y_SCENE, position=[0, 0, 0])).replace("[0, 0, 0]", "[1e400, 0, 0]"),
+        "position",
+        "finite",
+    ),
+    (_json_text(dict(Y_SCENE, position=[1e300, 0, 0])), "position", "within +/-1000 m"),
+    (_json_text(dict(Y_SCENE, goals=[[0.2, -0.25, 0.1], [2e3, 0.25, 0.1]])), "goals[1]", "within +/-1000 m"),
+    (
+        _json_text(dict(Y_SCENE, goals=[[0.2, -0.25, 0.1, 0, 0, 1e200, 0], [0.2, 0.25, 0.1]])),
+        "goals",
+        "norm overflows",
+    ),
+    (_json_text(dict(Y_SCENE, orientation=[0, 0, 0, 1e-200])), "orientation", "zero norm"),
+    (
+        _json_text(dict(Y_SCENE, belief=[1 / 1001] * 1001, goals=[[0.1, 0.1, 0.1]] * 1001)),
+        "goals",
+        "MAX_GOALS",
+    ),
+    (_json_text(dict(Y_SCENE, transition_matrix=[[1e308, 1e308], [0, 1]])), "transition_matrix", "sum to 1"),
+    (_json_text(dict(Y_SCENE, current_mode=True)), "current_mode", "non-negative integer"),
+    (_json_text(dict(Y_SCENE, modes=[[0], ["1"]])), "modes", "modes[1]"),
+    (_json_text(dict(Y_SCENE, preset=["mico"])), "preset", "expected 'mico'"),
+    ("[[[[1]]]]", "case", "expected a JSON object"),
+]
+
+
+def test_every_bad_case_is_its_own_error_and_the_rest_is_solved(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A file mixing valid cases with each probe: valid JSON, every valid case solved, exit 1."""
+    texts = [_json_text(Y_SCENE)]
+    for text, _, _ in BAD_CASES:
+        texts += [text, _json_text(ROTATION_SCENE)]
+    code, out, err, elapsed = _run_raw(tmp_path, ("[" + ",\n".join(texts) + "]").encode(), capsys)
+    assert code == 1
+    assert err == ""
+    assert elapsed < 2.0
+    results = json.loads(out)
+    assert len(results) == 1 + 2 * len(BAD_CASES)
+    assert results[0]["mode"] == 1
+    for j, (_, field, phrase) in enumerate(BAD_CASES):
+        i = 1 + 2 * j
+        assert set(results[i]) == {"error"}
+        assert results[i]["error"].startswith(f"case {i}: field '{field}'"), results[i]["error"]
+        assert phrase in results[i]["error"], results[i]["error"]
+        assert results[i + 1]["mode"] == 2  # the valid case after it is solved
+
+
+@pytest.mark.parametrize(("text", "field", "phrase"), BAD_CASES, ids=[f for _, f, _ in BAD_CASES])
+def test_each_bad_case_alone_exits_1_in_under_2_s(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, field: str, phrase: str
+) -> None:
+    code, out, err, elapsed = _run_raw(tmp_path, f"[{text}]".encode(), capsys)
+    assert (code, err) == (1, "")
+    assert elapsed < 2.0
+    [result] = json.loads(out)
+    assert result["error"].startswith(f"case 0: field '{field}'") and phrase in result["error"]
+
+
+def test_a_failure_inside_one_case_is_that_cases_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Any exception while solving a case (or a non-finite result) is its error entry, exit 1."""
+    import drake_disamb.core.disambiguation as core
+
+    real = core.disambiguate
+
+    def flaky(belief, position, *args, **kwargs):  # type: ignore[no-untyped-def]
+        if position[0] == 0.125:
+            raise ZeroDivisionError("division by zero")
+        result = real(belief, position, *args, **kwargs)
+        if position[0] == 0.25:
+            result.mode_scores[0] = np.nan
+        return result
+
+    monkeypatch.setattr(core, "disambiguate", flaky)
+    cases = [
+        Y_SCENE,
+        dict(Y_SCENE, position=[0.125, 0, 0.1]),
+        dict(Y_SCENE, position=[0.25, 0, 0.1]),
+        Y_SCENE,
+    ]
+    code, out, err, _ = _run_raw(tmp_path, json.dumps(cases).encode(), capsys, "--explain")
+    assert code == 1
+    results = json.loads(out)
+    assert results[1] == {"error": "case 1: could not be solved: ZeroDivisionError: division by zero"}
+    assert results[2]["error"].startswith("case 2: could not be solved: ValueError: Out of range float")
+    assert results[0]["mode"] == results[3]["mode"] == 1
+    assert "Traceback" not in err
+
+
+def _deep(n: int) -> bytes:
+    return b"[" * n + b"]" * n
+
+
+UNUSABLE: list[tuple[str, bytes | None, str]] = [
+    # (id, file contents or None for a missing file, a phrase of the one-line error)
+    ("missing", None, "cannot read: No such file or directory"),
+    (
+        "not-utf8",
+        b'[{"belief": [0.5, 0.5], "position": "\xff\xfe"}]',
+        "not UTF-8 text: byte 0xff at offset 37",
+    ),
+    ("utf16", json.dumps([Y_SCENE]).encode("utf-16"), "not UTF-8 text: byte 0xff at offset 0"),
+    ("deep-200000", _deep(200_000), "JSON nested too deep (more than 64 levels"),
+    ("deep-objects", b'[{"a":' * 100 + b"1" + b"}]" * 100, "JSON nested too deep"),
+    (
+        "duplicate-key",
+        b'[{"belief": [0.5, 0.5], "belief": [1, 0]}]',
+        "duplicate key 'belief' in a JSON object",
+    ),
+    ("nested-duplicate", b'[{"x": {"k": 1, "k": 2}}]', "duplicate key 'k'"),
+    ("too-large", b"[" + b" " * (16 * 2**20) + b"]", "larger than the limit of 16 MiB"),
+    ("not-json", b"[{belief: 1}]", "not valid JSON: Expecting property name"),
+    ("truncated", json.dumps([Y_SCENE]).encode()[:-3], "not valid JSON"),
+    ("trailing", b"[] []", "not valid JSON: Extra data"),
+    ("empty", b"", "not valid JSON: Expecting value"),
+    ("object", json.dumps(Y_SCENE).encode(), "expected a JSON list of cases, got a JSON object"),
+    ("number", b"3", "expected a JSON list of cases, got a JSON number"),
+    ("unterminated-string", b'["' + b'a\\"' * 100_000, "not valid JSON: Unterminated string"),
+]
+
+
+@pytest.mark.parametrize(("data", "phrase"), [u[1:] for u in UNUSABLE], ids=[u[0] for u in UNUSABLE])
+def test_unusable_input_exits_2_with_one_line_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], data: bytes | None, phrase: str
+) -> None:
+    path = tmp_path / "cases file.json"
+    if data is not None:
+        path.write_bytes(data)
+    parser = argparse.ArgumentParser()
+    command.add_arguments(parser)
+    start = time.perf_counter()
+    code = command.run(parser.parse_args(["--cases", str(path)]))
+    elapsed = time.perf_counter() - start
+    out = capsys.readouterr()
+    assert code == 2
+    assert out.out == ""
+    assert out.err.count("\n") == 1 and out.err.endswith("\n"), out.err
+    assert out.err.startswith(f"drake-disamb disambiguate: --cases {str(path)!r}: "), out.err
+    assert phrase in out.err, out.err
+    assert elapsed < 2.0
+
+
+def test_a_directory_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    parser = argparse.ArgumentParser()
+    command.add_arguments(parser)
+    assert command.run(parser.parse_args(["--cases", str(tmp_path)])) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot read: Is a directory" in err
+
+
+def test_stdin_and_byte_order_mark(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    parser = argparse.ArgumentParser()
+    command.add_arguments(parser)
+    args = parser.parse_args(["--cases", "-"])
+    stdin = io.TextIOWrapper(io.BytesIO(b"\xef\xbb\xbf" + json.dumps([Y_SCENE]).encode()))
+    monkeypatch.setattr(sys, "stdin", stdin)
+    assert command.run(args) == 0
+    assert json.loads(capsys.readouterr().out)[0]["mode"] == 1
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(b"[\x80]")))
+    assert command.run(args) == 2
+    assert capsys.readouterr().err == (
+        "drake-disamb disambiguate: --cases '<stdin>': "
+        "not UTF-8 text: byte 0x80 at offset 1 cannot be decoded\n"
+    )
+
+
+def test_strings_with_brackets_do_not_count_as_nesting(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    case = dict(Y_SCENE, preset="[" * 100 + '\\"{' * 100)
+    code, out, _, _ = _run_raw(tmp_path, json.dumps([case, Y_SCENE]).encode(), capsys)
+    assert code == 1
+    results = json.loads(out)
+    assert "field 'preset'" in results[0]["error"] and len(results[0]["error"]) < 300  # cut repr
+    assert results[1]["mode"] == 1
+    assert command._nesting_depth(b'[{"a": "]]]}}}", "b": [[1]]}]') == 4  # noqa: SLF001
+    assert command._nesting_depth(b'["\\\\", [[]]]') == 3  # noqa: SLF001  an escaped backslash
+
+
+def test_help_documents_the_exit_codes_and_bad_options_exit_2() -> None:
+    parser = argparse.ArgumentParser(prog="drake-disamb disambiguate")
+    command.add_arguments(parser)
+    text = parser.format_help()
+    assert "exit status:" in text
+    for line in ("  0  every case was solved", "  1  some cases are invalid", "  2  the input as a whole"):
+        assert line in text
+    for bad in ("99", "x", "-2"):
+        with pytest.raises(SystemExit) as exc:
+            parser.parse_args(["--cases", "c.json", "--indent", bad])
+        assert exc.value.code == 2

@@ -138,6 +138,7 @@ def test_integrate_pose_batched() -> None:
     [
         (lambda: quat_normalize([1.0, 0.0, 0.0]), r"q: expected shape \(\.\.\., 4\)"),
         (lambda: quat_normalize([0.0, 0.0, 0.0, 0.0]), "zero norm"),
+        (lambda: quat_normalize([1e200, 0.0, 0.0, 0.0]), "norm overflows"),
         (lambda: quat_to_rotvec([np.nan, 0.0, 0.0, 1.0]), "q: expected finite"),
         (lambda: quat_from_rotvec([1.0, 2.0]), r"rotvec: expected shape \(\.\.\., 3\)"),
         (lambda: orientation_error([1, 0, 0, 0], [1, 0, 0]), "q_to"),

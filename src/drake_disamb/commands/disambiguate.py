@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import codecs
 import json
-import math
+import re
+import reprlib
 import sys
 from typing import Any
 
@@ -16,10 +18,11 @@ but that JSON goes to stdout.
 
 Case fields:
   belief             [p1, ..., pn]  probabilities over the n goals (sum 1)
-  position           [x, y, z]  end-effector position (m, world frame)
+  position           [x, y, z]  end-effector position (m, world frame), |x|, |y|, |z| <= 1000
   orientation        [qw, qx, qy, qz]  end-effector orientation (optional, default identity)
-  goals              [[x, y, z] or [x, y, z, qw, qx, qy, qz], ...]  goal poses (a goal without
-                     an orientation takes the end-effector's, i.e. no orientation preference)
+  goals              [[x, y, z] or [x, y, z, qw, qx, qy, qz], ...]  1 to 1000 goal poses (a goal
+                     without an orientation takes the end-effector's, i.e. no orientation
+                     preference); coordinates bounded like position
   modes              [[0, 1], [2], ...]  control modes as dimension indices (0 = vx ... 5 = wz)
   current_mode       i  index of the mode in use (optional; kept on ties)
   preset             "mico" or "authors-r3" (optional, default --preset)
@@ -28,14 +31,38 @@ Case fields:
 Result fields: "mode" (index into modes, or null when the current mode is kept), "best_mode",
 "dimension" (k*), "dimensions" (the probed ones), "dimension_scores" {"plus", "minus", "total"},
 "mode_scores", "features" {"gamma", "omega", "lambda", "upsilon": {"plus", "minus"}}. An invalid
-case gives {"error": "case I: field 'NAME': ..."} in its place; the other cases are still solved.
+case gives {"error": "case I: field 'NAME': ..."} in its place, and a case that fails while being
+solved gives {"error": "case I: could not be solved: ..."}; the other cases are still solved.
+
+Numbers are JSON numbers, never strings or booleans; coordinates, quaternions, probabilities
+and transition entries must be finite floats (NaN, Infinity, 1e400 or a 400-digit integer are
+case errors). Quaternions are normalised, so their scale is free, but a norm that vanishes
+(< 1e-12) or overflows (entries beyond about 1e154) is a case error.
 
 With --explain each result also gets an "explanation" field (a short account of why the mode won
 and which features dominated), and the same text is printed to stderr for people.
-
-Exit status: 0 if every case was valid, 1 if any case was invalid, 2 if the file itself could not
-be read as a JSON list.
 """
+
+EPILOG = """\
+exit status:
+  0  every case was solved
+  1  some cases are invalid or could not be solved: each has an "error" entry in its place, the
+     others are solved, and stdout is still one valid JSON list
+  2  the input as a whole is unusable: --cases cannot be read, is larger than 16 MiB, is not
+     UTF-8 text, is not JSON, is nested deeper than 64 levels, has a duplicate key in an object,
+     or is not a JSON list (also a bad command-line option). One line on stderr names the
+     problem and the file; nothing goes to stdout.
+"""
+
+MAX_BYTES = 16 * 1024 * 1024
+"""Largest accepted --cases input (bytes)."""
+
+MAX_DEPTH = 64
+"""Deepest accepted nesting of JSON lists and objects (a case needs 4: list, case, goals, goal)."""
+
+_MAX_INT_DIGITS = 309
+"""JSON integers with more digits than this cannot be a float (1.8e308 has 309 digits): they are
+kept as :class:`_HugeInt` (a case error where a number is expected) instead of being parsed."""
 
 CASE_FIELDS = (
     "belief",
@@ -71,9 +98,46 @@ class CaseError(ValueError):
         self.field = field
 
 
+class InputError(Exception):
+    """The --cases input as a whole is unusable (exit status 2); the message names the problem."""
+
+
+class _HugeInt:
+    """A JSON integer too long to be a float, kept unparsed (its digits are never converted)."""
+
+    __slots__ = ("digits",)
+
+    def __init__(self, text: str) -> None:
+        self.digits = len(text.lstrip("-"))
+
+    def __repr__(self) -> str:
+        return f"<integer of {self.digits} digits>"
+
+
+class _DuplicateKey(ValueError):
+    def __init__(self, key: str) -> None:
+        super().__init__(f"duplicate key {_short(key)} in a JSON object")
+
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel = 3
+_REPR.maxlist = _REPR.maxdict = 8
+_REPR.maxstring = _REPR.maxother = 60
+_REPR.maxlong = 40
+
+
+def _short(value: Any) -> str:
+    """``repr(value)`` cut while it is built (a huge or deep input never gets formatted whole)."""
+    try:
+        return _REPR.repr(value)
+    except (ValueError, RecursionError):  # ints beyond str()'s digit limit, pathological nesting
+        return f"<{type(value).__name__}>"
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the sub-command's options."""
     parser.description = HELP + "\n\n" + DESCRIPTION
+    parser.epilog = EPILOG
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
     parser.add_argument(
         "--cases", required=True, metavar="FILE.json", help="JSON list of cases ('-' reads stdin)."
@@ -90,18 +154,148 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="Add an 'explanation' field to each result and print the explanations to stderr.",
     )
     parser.add_argument(
-        "--indent", type=int, default=2, help="JSON indentation (default 2; -1 for one line)."
+        "--indent", type=_indent, default=2, help="JSON indentation, 0 to 16 (default 2; -1 for one line)."
     )
 
 
+def _indent(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = None
+    if value is None or not -1 <= value <= 16:
+        raise argparse.ArgumentTypeError(f"expected an integer from -1 to 16, got {text!r}")
+    return value
+
+
+# ----------------------------------------------------------------------------------------------
+# Loading the input (every failure here is an InputError: exit status 2)
+# ----------------------------------------------------------------------------------------------
+
+# A JSON string (its closing quote optional, so that an unterminated one is skipped in linear
+# time) or a run of bytes that are neither brackets nor quotes: what the depth scan ignores.
+_NOT_NESTING = re.compile(rb'"[^"\\]*+(?:\\.[^"\\]*+)*+"?|[^\[\]{}"]++', re.DOTALL)
+_STEP = bytes.maketrans(b"[{]}", b"\x01\x01\xff\xff")  # +1 / -1 as int8
+
+
+def _nesting_depth(data: bytes) -> int:
+    """The deepest nesting of lists and objects in ``data`` (JSON text), stopping once it exceeds
+    :data:`MAX_DEPTH`. Linear time; for text that is not JSON the result is only an estimate."""
+    import numpy as np
+
+    brackets = _NOT_NESTING.sub(b"", data).translate(_STEP)
+    depth = deepest = 0
+    chunk = 1 << 20
+    for start in range(0, len(brackets), chunk):
+        steps = np.frombuffer(brackets, dtype=np.int8, count=min(chunk, len(brackets) - start), offset=start)
+        levels = np.cumsum(steps, dtype=np.int64) + depth
+        deepest, depth = max(deepest, int(levels.max())), int(levels[-1])
+        if deepest > MAX_DEPTH:
+            break
+    return deepest
+
+
+def _object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    obj: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in obj:
+            raise _DuplicateKey(key)
+        obj[key] = value
+    return obj
+
+
+def _parse_int(text: str) -> int | _HugeInt:
+    return _HugeInt(text) if len(text) - text.startswith("-") > _MAX_INT_DIGITS else int(text)
+
+
+def parse_cases(data: bytes) -> list[Any]:
+    """The JSON list of cases in ``data``; :class:`InputError` (one line, no file name) if unusable.
+
+    Limits: at most :data:`MAX_BYTES` bytes, UTF-8 (a leading byte-order mark is allowed), nesting
+    at most :data:`MAX_DEPTH` deep, no duplicate key in any object, a list at the top level.
+    Integers too long to be floats are kept as :class:`_HugeInt` (a case error where used).
+    """
+    if len(data) > MAX_BYTES:
+        raise InputError(f"larger than the limit of {MAX_BYTES // 2**20} MiB")
+    bom = len(codecs.BOM_UTF8) if data.startswith(codecs.BOM_UTF8) else 0
+    try:
+        text = data[bom:].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        at = bom + exc.start
+        raise InputError(f"not UTF-8 text: byte 0x{data[at]:02x} at offset {at} cannot be decoded") from None
+    depth = _nesting_depth(data)
+    if depth > MAX_DEPTH:
+        raise InputError(f"JSON nested too deep (more than {MAX_DEPTH} levels of lists and objects)")
+    try:
+        cases = json.loads(text, object_pairs_hook=_object, parse_int=_parse_int)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON: {exc}") from None
+    except _DuplicateKey as exc:
+        raise InputError(str(exc)) from None
+    except RecursionError:  # the depth scan should have caught it: a backstop
+        raise InputError("JSON nested too deep") from None
+    except (ValueError, MemoryError) as exc:
+        raise InputError(f"cannot parse the JSON: {type(exc).__name__}: {_short(str(exc))}") from None
+    if not isinstance(cases, list):
+        raise InputError(f"expected a JSON list of cases, got a JSON {_json_type(cases)}")
+    return cases
+
+
+def _json_type(value: Any) -> str:
+    if isinstance(value, dict):
+        return "object"
+    if isinstance(value, str):
+        return "string"
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "boolean"
+    return "number"
+
+
+def read_cases(path: str) -> list[Any]:
+    """Read and parse --cases (``'-'``: stdin); :class:`InputError` naming the problem if unusable."""
+    try:
+        if path == "-":
+            stream = getattr(sys.stdin, "buffer", sys.stdin)
+            if stream is None:
+                raise InputError("no standard input")
+            data = stream.read(MAX_BYTES + 1)
+            if isinstance(data, str):  # a text stream without a buffer (tests)
+                data = data.encode("utf-8", "surrogateescape")
+        else:
+            with open(path, "rb") as f:
+                data = f.read(MAX_BYTES + 1)
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or type(exc).__name__}") from None
+    except ValueError as exc:  # e.g. a path with a NUL byte
+        raise InputError(f"cannot read: {exc}") from None
+    return parse_cases(data)
+
+
+# ----------------------------------------------------------------------------------------------
+# Solving the cases (every failure here is one case's error entry: exit status 1)
+# ----------------------------------------------------------------------------------------------
+
+
 def _numbers(value: Any, field: str, size: int | None = None) -> list[float]:
-    if not isinstance(value, list) or not all(
-        isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in value
-    ):
-        raise CaseError(field, f"expected a list of finite numbers, got {value!r}")
-    if size is not None and len(value) != size:
-        raise CaseError(field, f"expected {size} numbers, got {value!r}")
-    return [float(v) for v in value]
+    """A JSON list of numbers as floats. Only the JSON types are checked here: finiteness and
+    bounds are the core's checks (:func:`drake_disamb.core.disambiguation.disambiguate`)."""
+    if not isinstance(value, list):
+        raise CaseError(field, f"expected a list of numbers, got {_short(value)}")
+    out = []
+    for v in value:
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise CaseError(field, f"expected numbers, got {_short(v)} in {_short(value)}")
+        try:
+            out.append(float(v))
+        except OverflowError:  # an int beyond the float range
+            raise CaseError(
+                field, f"expected numbers within the float range, got an integer of {v.bit_length()} bits"
+            ) from None
+    if size is not None and len(out) != size:
+        raise CaseError(field, f"expected {size} numbers, got {_short(value)}")
+    return out
 
 
 def _solve_case(case: Any, default_preset: str) -> Any:
@@ -111,10 +305,10 @@ def _solve_case(case: Any, default_preset: str) -> Any:
     from drake_disamb.core.disambiguation import disambiguate, preset
 
     if not isinstance(case, dict):
-        raise CaseError("case", f"expected a JSON object, got {case!r}")
+        raise CaseError("case", f"expected a JSON object, got {_short(case)}")
     unknown = sorted(set(case) - set(CASE_FIELDS))
     if unknown:
-        raise CaseError(unknown[0], f"unknown field (expected some of {', '.join(CASE_FIELDS)})")
+        raise CaseError(unknown[0][:60], f"unknown field (expected some of {', '.join(CASE_FIELDS)})")
     for required in ("belief", "position", "goals", "modes"):
         if required not in case:
             raise CaseError(required, "missing")
@@ -126,32 +320,33 @@ def _solve_case(case: Any, default_preset: str) -> Any:
     goals = case["goals"]
     if not isinstance(goals, list) or not goals:
         raise CaseError(
-            "goals", f"expected a non-empty list of [x, y, z] or [x, y, z, qw, qx, qy, qz], got {goals!r}"
+            "goals",
+            f"expected a non-empty list of [x, y, z] or [x, y, z, qw, qx, qy, qz], got {_short(goals)}",
         )
     rows = []
     for i, g in enumerate(goals):
         row = _numbers(g, f"goals[{i}]")
         if len(row) not in (3, 7):
-            raise CaseError(f"goals[{i}]", f"expected 3 or 7 numbers, got {g!r}")
+            raise CaseError(f"goals[{i}]", f"expected 3 or 7 numbers, got {_short(g)}")
         rows.append(row)
     if len(belief) != len(rows):
         raise CaseError(
-            "belief", f"expected {len(rows)} probabilities (one per goal), got {case['belief']!r}"
+            "belief", f"expected {len(rows)} probabilities (one per goal), got {_short(case['belief'])}"
         )
     default_q = orientation if orientation is not None else [1.0, 0.0, 0.0, 0.0]
     goal_positions = np.array([r[:3] for r in rows])
     goal_orientations = np.array([r[3:] if len(r) == 7 else default_q for r in rows])
     current = case.get("current_mode")
     if current is not None and (isinstance(current, bool) or not isinstance(current, int) or current < 0):
-        raise CaseError("current_mode", f"expected a non-negative integer, got {current!r}")
+        raise CaseError("current_mode", f"expected a non-negative integer, got {_short(current)}")
     name = case.get("preset", default_preset)
-    if name not in ("mico", "authors-r3"):
-        raise CaseError("preset", f"expected 'mico' or 'authors-r3', got {name!r}")
+    if not isinstance(name, str) or name not in ("mico", "authors-r3"):
+        raise CaseError("preset", f"expected 'mico' or 'authors-r3', got {_short(name)}")
     transition = case.get("transition_matrix")
     if transition is not None:
         if not isinstance(transition, list) or len(transition) != len(rows):
             raise CaseError(
-                "transition_matrix", f"expected a {len(rows)}x{len(rows)} matrix, got {transition!r}"
+                "transition_matrix", f"expected a {len(rows)}x{len(rows)} matrix, got {_short(transition)}"
             )
         transition = [_numbers(r, "transition_matrix", len(rows)) for r in transition]
     try:
@@ -169,47 +364,59 @@ def _solve_case(case: Any, default_preset: str) -> Any:
     except ValueError as exc:
         message = str(exc)
         prefix = message.split(":", 1)[0]
-        field = _CORE_FIELD.get(prefix.split("[", 1)[0], prefix)
-        raise CaseError(field, message) from exc
+        base, bracket, index = prefix.partition("[")
+        field = _CORE_FIELD.get(base, base)
+        if bracket and field == "goals":  # goal_positions[i] -> goals[i]
+            field += bracket + index
+        raise CaseError(field[:60], message) from exc
+
+
+def _cut(text: str, limit: int = 1000) -> str:
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def solve_cases(
     cases: list[Any], default_preset: str = "mico", explain: bool = False
 ) -> tuple[list[dict], int]:
-    """Solve every case. Returns ``(results, number of invalid cases)``."""
+    """Solve every case. Returns ``(results, number of cases with an error entry)``.
+
+    A case never costs the others: a :class:`CaseError` (invalid input) and any other exception
+    raised while solving it (or building its JSON result) become that case's ``{"error": ...}``
+    entry. Only ``KeyboardInterrupt`` and ``SystemExit`` pass.
+    """
+    import numpy as np
+
     results: list[dict] = []
     invalid = 0
-    for i, case in enumerate(cases):
-        try:
-            result = _solve_case(case, default_preset)
-        except CaseError as exc:
-            results.append({"error": f"case {i}: {exc}"})
-            invalid += 1
-            continue
-        entry = result.to_dict()
-        if explain:
-            entry["explanation"] = result.explain()
-        results.append(entry)
+    # Huge inputs overflow in the core's checks before they are rejected: the case's error entry
+    # says so, numpy's RuntimeWarnings on stderr would only be noise.
+    with np.errstate(all="ignore"):
+        for i, case in enumerate(cases):
+            try:
+                result = _solve_case(case, default_preset)
+                entry = result.to_dict()
+                if explain:
+                    entry["explanation"] = result.explain()
+                json.dumps(entry, allow_nan=False)  # a non-finite number fails here, not in the batch
+            except CaseError as exc:
+                results.append({"error": _cut(f"case {i}: {exc}")})
+                invalid += 1
+            except Exception as exc:  # isolation is the point: one case, one error entry
+                results.append({"error": _cut(f"case {i}: could not be solved: {type(exc).__name__}: {exc}")})
+                invalid += 1
+            else:
+                results.append(entry)
     return results, invalid
 
 
 def run(args: argparse.Namespace) -> int:
-    """Read the cases, print the results as JSON; exit status 0 / 1 (invalid cases) / 2 (bad file)."""
+    """Read the cases, print the results as JSON; exit status 0 / 1 (invalid cases) / 2 (bad input)."""
+    name = "<stdin>" if args.cases == "-" else args.cases
     try:
-        if args.cases == "-":
-            cases = json.load(sys.stdin)
-        else:
-            with open(args.cases, encoding="utf-8") as f:
-                cases = json.load(f)
-    except (OSError, json.JSONDecodeError) as exc:
-        print(f"drake-disamb disambiguate: cannot read --cases {args.cases!r}: {exc}", file=sys.stderr)
-        return 2
-    if not isinstance(cases, list):
-        print(
-            f"drake-disamb disambiguate: --cases {args.cases!r}: expected a JSON list of cases, "
-            f"got {type(cases).__name__}",
-            file=sys.stderr,
-        )
+        cases = read_cases(args.cases)
+    except InputError as exc:
+        problem = " ".join(str(exc).split())  # exactly one line
+        print(f"drake-disamb disambiguate: --cases {name!r}: {problem}", file=sys.stderr)
         return 2
     results, invalid = solve_cases(cases, args.preset, args.explain)
     indent = None if args.indent < 0 else args.indent

@@ -77,6 +77,15 @@ FEATURE_NAMES: tuple[str, ...] = ("gamma", "omega", "lambda", "upsilon")
 _MIN_DISPLACEMENT = 1e-12
 """Displacements (m or rad) below this are treated as zero: the gradient is then taken as 0."""
 
+MAX_POSITION = 1e3
+"""Largest accepted absolute coordinate (m) of the end-effector and goal positions of a request:
+far beyond any arm's reach, yet small enough that no distance or potential computed from them
+overflows."""
+
+MAX_GOALS = 1000
+"""Largest accepted number of goals of a request (a request's memory and time grow linearly in it:
+about 12 MB and 20 ms at this bound with the ``mico`` preset)."""
+
 
 # ----------------------------------------------------------------------------------------------
 # Configuration
@@ -488,6 +497,16 @@ def _validate_belief(belief: ArrayLike, n: int) -> NDArray[np.float64]:
     return p / total
 
 
+def _check_positions(a: NDArray[np.float64], name: str) -> None:
+    """``ValueError`` naming the first row of ``a`` (finite, ``(3,)`` or ``(n, 3)``) with an entry
+    beyond :data:`MAX_POSITION`."""
+    if not np.maximum.reduce(np.abs(a), axis=None) <= MAX_POSITION:
+        rows = a.reshape(-1, 3)
+        i = int(np.argmax(np.abs(rows).max(axis=1) > MAX_POSITION))
+        label, row = (name, a) if a.ndim == 1 else (f"{name}[{i}]", rows[i])
+        raise ValueError(f"{label}: expected coordinates within +/-{MAX_POSITION:g} m, got {row.tolist()!r}")
+
+
 def _check_transition_size(P: ArrayLike | None, n: int) -> None:
     """Contents are checked when the config is built (``check_transition``); here only the size."""
     if P is not None and np.shape(P) != (n, n):
@@ -755,12 +774,14 @@ def disambiguate(
 
     Args:
         belief: Current belief ``p(t_a)`` over the ``n`` goals (non-negative, sums to 1).
-        position: End-effector position ``(3,)`` (m, world frame).
-        goal_positions: ``(n, 3)`` goal positions (m).
+        position: End-effector position ``(3,)`` (m, world frame), each coordinate within
+            ``+/- MAX_POSITION`` (1 km).
+        goal_positions: ``(n, 3)`` goal positions (m), same bound, ``1 <= n <= MAX_GOALS`` (1000).
         modes: Control modes, each a list of dimension indices (0 = vx ... 5 = wz); the returned
             mode is an index into this list.
         config: Algorithm parameters (default: the ``mico`` preset).
-        orientation: End-effector orientation ``[qw, qx, qy, qz]`` (default identity).
+        orientation: End-effector orientation ``[qw, qx, qy, qz]`` (default identity); any
+            quaternion whose norm neither vanishes (< 1e-12) nor overflows, normalised here.
         goal_orientations: ``(n, 4)`` goal orientations (default: the end-effector's, i.e. no
             orientation preference between goals).
         current_mode: Index of the mode in use (may be past the end of ``modes``, e.g. the
@@ -768,15 +789,22 @@ def disambiguate(
 
     Returns:
         A :class:`DisambiguationResult`.
+
+    Raises:
+        ValueError: An input out of its bounds, naming the argument and the value.
     """
     cfg = _DEFAULT_CONFIG if config is None else config
     mode_dims = validate_modes(modes)
     x = _check_last(position, 3, "position")
     if x.ndim != 1:
         raise ValueError(f"position: expected 3 numbers, got shape {x.shape}")
+    _check_positions(x, "position")
     gp = _check_last(goal_positions, 3, "goal_positions")
-    if gp.ndim != 2 or gp.shape[0] < 1:
-        raise ValueError(f"goal_positions: expected shape (n, 3) with n >= 1, got {gp.shape}")
+    if gp.ndim != 2 or not 1 <= gp.shape[0] <= MAX_GOALS:
+        raise ValueError(
+            f"goal_positions: expected shape (n, 3) with 1 <= n <= {MAX_GOALS} (MAX_GOALS), got {gp.shape}"
+        )
+    _check_positions(gp, "goal_positions")
     n = gp.shape[0]
     p = _validate_belief(belief, n)
     q = np.array([1.0, 0.0, 0.0, 0.0]) if orientation is None else _check_quat(orientation, "orientation")

@@ -47,7 +47,7 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
     """``x`` as a float array whose last axis has ``size`` entries, all finite."""
     try:
         a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int beyond float range
         raise ValueError(f"{name}: expected an array of numbers, got {x!r}") from exc
     if a.ndim == 0 or a.shape[-1] != size:
         raise ValueError(f"{name}: expected shape (..., {size}), got shape {a.shape}")
@@ -57,11 +57,19 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
 
 
 def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
-    """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised."""
+    """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised.
+
+    A quaternion whose norm is below 1e-12 or overflows (entries beyond about 1e154) is rejected:
+    normalising it would give zeros, which no kernel can use.
+    """
     a = _check_last(q, 4, name)
-    norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
+    with np.errstate(over="ignore"):  # an overflowing norm is rejected below, with its own message
+        norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
     if norm.size and np.minimum.reduce(norm, axis=None) < 1e-12:  # np.any, minus its wrapper
         raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
+    # Finite norms (each below 1.4e154) cannot sum to infinity: one sum checks them all.
+    if not math.isfinite(np.add.reduce(norm, axis=None)):
+        raise ValueError(f"{name}: a quaternion's norm overflows (entries too large), got {a.tolist()!r}")
     return a / norm
 
 
