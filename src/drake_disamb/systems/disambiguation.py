@@ -103,7 +103,7 @@ class DisambiguationSystem(LeafSystem):
         sanitized_input_count (1): served requests so far whose inputs were unusable (from state).
 
     **Unusable inputs.** A belief that is not a probability vector up to scale (a NaN/inf or
-    negative entry, a zero or overflowing sum), a non-finite ``current_mode``, or a pose that is not
+    negative entry, or no positive one), a non-finite ``current_mode``, or a pose that is not
     finite or has an unusable quaternion (:func:`~drake_disamb.systems._sanitized.usable_poses`)
     are detected before the core is called: ``disambiguation_mode`` is then -1 (the mode is kept)
     and, when the interface served such a request, the next update adds one to

@@ -191,11 +191,12 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         - belief
         - g_star
         - p_star
+        - sanitized_input_count
 
     Ports are described in the module docstring: ``u_h`` (6; m/s, rad/s; ``[v; w]`` order),
     ``ee_pose`` (7; m, ``[x, y, z, qw, qx, qy, qz]``), ``goal_poses`` (7 n), ``u_a`` (6 n; only
     evaluated with ``params.agreement``) in; ``belief`` (n), ``g_star`` (1, 0-based index),
-    ``p_star`` (1) out.
+    ``p_star`` (1), ``sanitized_input_count`` (1; ticks with a non-finite ``u_h``) out.
 
     State: continuous ``p`` (n) with time derivative
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
@@ -349,11 +350,13 @@ class RecursiveBayesIntentInference(_DiscreteInference):
         - belief
         - g_star
         - p_star
+        - sanitized_input_count
 
     Ports as in the module docstring (``u_a`` is declared for interchangeability and never read).
     Every ``control_period``: ``p <- normalize(likelihood(u_h | g) * P^T p)``
     (:func:`~drake_disamb.core.inference.bayes_step`), or a reset to the rest state when
-    ``goal_poses`` changed. Discrete state ``[belief (n), goal_poses (7 n)]``.
+    ``goal_poses`` changed. Discrete state ``[belief (n), goal_poses (7 n)]`` (and the
+    sanitised-input count: ticks with a non-finite ``u_h``).
 
     Args:
         n_goals: Number of goals n.
@@ -400,13 +403,15 @@ class MemoryBasedIntentInference(_DiscreteInference):
         - belief
         - g_star
         - p_star
+        - sanitized_input_count
 
     Ports as in the module docstring (``u_h`` and ``u_a`` are declared for interchangeability and
     never read: the method only looks at the end-effector path). Every ``control_period`` the
     move from the previous to the current end-effector position updates the running path cost and
     the belief (:func:`~drake_disamb.core.inference.memory_step`), or the state resets when
     ``goal_poses`` changed (the trial start becomes the current position).
-    Discrete state ``[belief (n), cost (1), x_start (3), x_prev (3), goal_poses (7 n)]`` (m^2, m).
+    Discrete state ``[belief (n), cost (1), x_start (3), x_prev (3), goal_poses (7 n)]`` (m^2, m),
+    and the sanitised-input count: ticks with a non-finite end-effector position (read as no move).
 
     Args:
         n_goals: Number of goals n.
