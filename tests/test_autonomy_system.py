@@ -118,3 +118,21 @@ def test_constructor_validation() -> None:
         PotentialFieldAutonomy(2, config={"max_linear_speed": 0.1})  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="control_period: expected a finite number > 0, got nan"):
         PotentialFieldAutonomy(2, control_period=float("nan"))
+
+
+def test_usable_poses() -> None:
+    from drake_disamb.systems._sanitized import usable_poses
+
+    good = np.array([0.1, -0.2, 0.3, *IDENTITY])
+    assert usable_poses(good, np.tile(good, 3))
+    assert usable_poses(np.array([0, 0, 0, 1e-12, 0, 0, 0]))  # normalised by the core
+    for bad in (
+        [np.nan, 0, 0, *IDENTITY],
+        [0, 0, 0, 1, -np.inf, 0, 0],
+        [0, 0, 0, 0, 0, 0, 0],  # zero quaternion
+        [0, 0, 0, 1e-13, 0, 0, 0],
+        [0, 0, 0, 1e200, 0, 0, 0],  # its norm overflows: normalised, it would be zeros
+        [1e200, 0, 0, *IDENTITY],
+    ):
+        assert not usable_poses(np.asarray(bad, dtype=float)), bad
+        assert not usable_poses(good, np.concatenate((good, bad)).astype(float)), bad

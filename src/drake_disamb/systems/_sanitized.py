@@ -23,7 +23,7 @@ from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 from drake_disamb.core._validation import is_real
 
 __all__ = [
-    "MAX_QUATERNION_ENTRY",
+    "MAX_POSE_ENTRY",
     "MIN_QUATERNION_NORM",
     "SANITIZED_INPUT_COUNT",
     "WARN_INTERVAL",
@@ -37,25 +37,24 @@ SANITIZED_INPUT_COUNT = "sanitized_input_count"
 MIN_QUATERNION_NORM = 1e-12
 """Smallest usable quaternion norm (the core's quaternion check raises below it)."""
 
-MAX_QUATERNION_ENTRY = 1e150
-"""Largest usable ``|q_i|``: beyond it the squared norm can overflow and normalising gives zeros."""
+MAX_POSE_ENTRY = 1e150
+"""Largest usable ``|entry|`` of a pose (m or quaternion units): beyond it a quaternion's squared
+norm can overflow (normalised, it would be zeros) and distances lose all meaning."""
 
 WARN_INTERVAL = 1.0
 """Minimum simulated time (s) between two warnings of one system in one context."""
 
 
 def usable_poses(*poses: NDArray[np.float64]) -> bool:
-    """True if every pose ``[x, y, z, qw, qx, qy, qz]`` (or every row of a flat ``n * 7`` vector) is
-    finite, with a quaternion whose entries are at most :data:`MAX_QUATERNION_ENTRY` in magnitude
-    and whose norm is at least :data:`MIN_QUATERNION_NORM`."""
+    """True if every pose ``[x, y, z, qw, qx, qy, qz]`` (or every row of a flat ``n * 7`` vector)
+    is in range: no NaN, no entry beyond :data:`MAX_POSE_ENTRY` in magnitude (infinities
+    included), and each quaternion's norm at least :data:`MIN_QUATERNION_NORM`."""
     for pose in poses:
-        rows = np.reshape(pose, (-1, 7))
-        if not np.isfinite(rows).all():  # (not all_finite: its sum can overflow, with a warning)
+        # max and min are NaN if any entry is: a comparison with NaN is False.
+        if not (np.maximum.reduce(pose) <= MAX_POSE_ENTRY and np.minimum.reduce(pose) >= -MAX_POSE_ENTRY):
             return False
-        q = rows[:, 3:]
-        if np.abs(q).max() > MAX_QUATERNION_ENTRY:
-            return False
-        if np.add.reduce(q * q, axis=1).min() < MIN_QUATERNION_NORM**2:
+        q = pose.reshape(-1, 7)[:, 3:]
+        if np.minimum.reduce(np.einsum("ij,ij->i", q, q)) < MIN_QUATERNION_NORM**2:
             return False
     return True
 

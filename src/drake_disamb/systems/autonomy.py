@@ -40,8 +40,8 @@ class PotentialFieldAutonomy(LeafSystem):
         sanitized_input_count (1): control ticks so far at which a pose was unusable (see below);
             from state.
 
-    **Unusable poses.** A pose with a NaN or infinite entry, or a quaternion of (near) zero norm
-    or with an entry beyond ``1e150`` (:func:`~drake_disamb.systems._sanitized.usable_poses`,
+    **Unusable poses.** A pose with a NaN or infinite entry, an entry beyond ``1e150``, or a
+    quaternion of (near) zero norm (:func:`~drake_disamb.systems._sanitized.usable_poses`,
     checked before the core is called), gives an all-zero ``u_a`` (the arm is then only driven by
     the user) instead of propagating NaN. Every ``control_period`` (first at t = 0) a discrete
     update checks the inputs again and, if they are unusable, adds one to
