@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
+from pydrake.systems.analysis import Simulator
 
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
 from drake_disamb.core.geometry import quat_from_rotvec
@@ -52,13 +55,60 @@ def test_config_is_used() -> None:
     assert system.HasDirectFeedthrough(0, 0) and system.HasDirectFeedthrough(1, 0)
 
 
-def test_bad_pose_gives_zero_with_warning() -> None:
-    system = PotentialFieldAutonomy(2)
-    goals = [[0.3, 0, 0, *IDENTITY], [0, 0.3, 0, *IDENTITY]]
-    ctx = _context(system, [np.nan, 0, 0, *IDENTITY], goals)
+GOALS_2 = [[0.3, 0, 0, *IDENTITY], [0, 0.3, 0, *IDENTITY]]
+
+
+@pytest.mark.parametrize(
+    "ee_pose, goal_poses",
+    [
+        ([np.nan, 0, 0, *IDENTITY], GOALS_2),
+        ([0, 0, 0, np.inf, 0, 0, 0], GOALS_2),
+        ([0, 0, 0, 1e200, 0, 0, 0], GOALS_2),  # the norm overflows: out of range
+        ([0, 0, 0, *IDENTITY], [[0.3, 0, 0, 0, 0, 0, 0], [0, 0.3, 0, *IDENTITY]]),  # zero quaternion
+    ],
+)
+def test_unusable_pose_gives_zero_and_is_counted(ee_pose, goal_poses) -> None:  # noqa: ANN001
+    system = PotentialFieldAutonomy(2, control_period=0.01)
+    assert system.GetOutputPort("sanitized_input_count").size() == 1
+    simulator = Simulator(system)
+    ctx = simulator.get_mutable_context()
+    system.GetInputPort("ee_pose").FixValue(ctx, np.asarray(ee_pose, dtype=float))
+    system.GetInputPort("goal_poses").FixValue(ctx, np.asarray(goal_poses, dtype=float).ravel())
+    np.testing.assert_array_equal(system.GetOutputPort("u_a").Eval(ctx), np.zeros(12))
+    with pytest.warns(RuntimeWarning, match="u_a set to zero") as record:
+        simulator.AdvanceTo(0.025)  # ticks at 0, 0.01 and 0.02
+    assert len(record) == 1  # rate-limited: one warning per second of simulated time
+    assert system.GetOutputPort("sanitized_input_count").Eval(ctx)[0] == 3
+    np.testing.assert_array_equal(system.GetOutputPort("u_a").Eval(ctx), np.zeros(12))
+    # The count lives in the context: a new one starts at zero and warns again.
+    fresh = _context(system, ee_pose, goal_poses)
+    assert system.GetOutputPort("sanitized_input_count").Eval(fresh)[0] == 0
     with pytest.warns(RuntimeWarning, match="u_a set to zero"):
-        u_a = system.get_output_port(0).Eval(ctx)
-    np.testing.assert_array_equal(u_a, np.zeros(12))
+        Simulator(system, fresh).AdvanceTo(0.005)
+    assert system.GetOutputPort("sanitized_input_count").Eval(fresh)[0] == 1
+
+
+def test_usable_poses_are_not_counted() -> None:
+    system = PotentialFieldAutonomy(2)
+    simulator = Simulator(system, _context(system, [0, 0, 0.2, *IDENTITY], GOALS_2))
+    simulator.AdvanceTo(0.05)
+    assert system.GetOutputPort("sanitized_input_count").Eval(simulator.get_context())[0] == 0
+    assert not system.HasDirectFeedthrough(0, system.GetOutputPort("sanitized_input_count").get_index())
+
+
+@pytest.mark.parametrize("error", [ValueError("goal_quats: expected shape (n, 4)"), RuntimeError("kernel")])
+def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exception) -> None:
+    from drake_disamb.systems import autonomy as module
+
+    def broken(*args: object) -> None:
+        raise error
+
+    system = PotentialFieldAutonomy(2)
+    ctx = _context(system, [0, 0, 0.2, *IDENTITY], GOALS_2)
+    monkeypatch.setattr(module, "potential_field_commands_from_poses", broken)
+    with pytest.raises(type(error), match=re.escape(str(error))):
+        system.GetOutputPort("u_a").Eval(ctx)
+    assert system.GetOutputPort("sanitized_input_count").Eval(ctx)[0] == 0
 
 
 def test_constructor_validation() -> None:
@@ -66,3 +116,23 @@ def test_constructor_validation() -> None:
         PotentialFieldAutonomy(0)
     with pytest.raises(ValueError, match="config"):
         PotentialFieldAutonomy(2, config={"max_linear_speed": 0.1})  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="control_period: expected a finite number > 0, got nan"):
+        PotentialFieldAutonomy(2, control_period=float("nan"))
+
+
+def test_usable_poses() -> None:
+    from drake_disamb.systems._sanitized import usable_poses
+
+    good = np.array([0.1, -0.2, 0.3, *IDENTITY])
+    assert usable_poses(good, np.tile(good, 3))
+    assert usable_poses(np.array([0, 0, 0, 1e-12, 0, 0, 0]))  # normalised by the core
+    for bad in (
+        [np.nan, 0, 0, *IDENTITY],
+        [0, 0, 0, 1, -np.inf, 0, 0],
+        [0, 0, 0, 0, 0, 0, 0],  # zero quaternion
+        [0, 0, 0, 1e-13, 0, 0, 0],
+        [0, 0, 0, 1e200, 0, 0, 0],  # its norm overflows: normalised, it would be zeros
+        [1e200, 0, 0, *IDENTITY],
+    ):
+        assert not usable_poses(np.asarray(bad, dtype=float)), bad
+        assert not usable_poses(good, np.concatenate((good, bad)).astype(float)), bad

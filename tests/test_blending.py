@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -185,15 +187,49 @@ def test_blender_system_speed_limit_and_no_input() -> None:
 
 
 def test_blender_system_nonfinite_inputs_never_reach_the_arm() -> None:
+    from pydrake.systems.analysis import Simulator
+
     from drake_disamb.systems.blending import SharedControlBlender
 
-    blender = SharedControlBlender(2)
+    blender = SharedControlBlender(2, control_period=0.01)
     u_a = np.full((2, 6), np.nan)
     ctx = _blender_context(blender, [np.inf, 0.05, 0, 0, 0, np.nan], [np.nan, 0.2], u_a)
-    with pytest.warns(RuntimeWarning, match="non-finite"):
-        u = blender.GetOutputPort("u").Eval(ctx)
+    u = blender.GetOutputPort("u").Eval(ctx)
     assert np.all(np.isfinite(u))
     np.testing.assert_allclose(u, [0, 0.05, 0, 0, 0, 0])  # belief [0, 0.2] -> g* = 1, p* below rho1
+    count = blender.GetOutputPort("sanitized_input_count")
+    assert count.Eval(ctx)[0] == 0
+    with pytest.warns(RuntimeWarning, match="non-finite input") as record:
+        Simulator(blender, ctx).AdvanceTo(0.035)  # ticks at 0, 0.01, 0.02, 0.03
+    assert len(record) == 1 and count.Eval(ctx)[0] == 4
+    np.testing.assert_allclose(blender.GetOutputPort("u").Eval(ctx), [0, 0.05, 0, 0, 0, 0])
+    # Finite inputs are not counted; a new context starts from zero.
+    fine = _blender_context(blender, np.zeros(6), [0.5, 0.5], np.zeros((2, 6)))
+    Simulator(blender, fine).AdvanceTo(0.035)
+    assert count.Eval(fine)[0] == 0
+    assert not blender.HasDirectFeedthrough(0, count.get_index())
+
+
+@pytest.mark.parametrize("error", [ValueError("u_a: expected shape (2, 6)"), RuntimeError("bug")])
+def test_blender_system_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exception) -> None:
+    from pydrake.systems.analysis import Simulator
+
+    from drake_disamb.systems import blending as module
+
+    def broken(*args: object) -> None:
+        raise error
+
+    blender = module.SharedControlBlender(2)
+    ctx = _blender_context(blender, [0.1, 0, 0, 0, 0, 0], [0.9, 0.1], np.zeros((2, 6)))
+    monkeypatch.setattr(module, "shared_control", broken)
+    with pytest.raises(type(error), match=re.escape(str(error))):
+        blender.GetOutputPort("u").Eval(ctx)
+    ctx = _blender_context(blender, [np.nan, 0, 0, 0, 0, 0], [0.9, 0.1], np.zeros((2, 6)))
+    with pytest.raises(type(error), match=re.escape(str(error))):  # also after sanitising
+        blender.GetOutputPort("alpha").Eval(ctx)
+    with pytest.warns(RuntimeWarning, match="non-finite"):  # the count's update does not need the core
+        Simulator(blender, ctx).AdvanceTo(0.005)
+    assert blender.GetOutputPort("sanitized_input_count").Eval(ctx)[0] == 1
 
 
 def test_blender_rejects_bad_config() -> None:
@@ -203,6 +239,8 @@ def test_blender_rejects_bad_config() -> None:
         SharedControlBlender(3, rho1=0.5, rho2=0.2)
     with pytest.raises(ValueError, match="n_goals"):
         SharedControlBlender(0)
+    with pytest.raises(ValueError, match="control_period: expected a finite number > 0, got -0.01"):
+        SharedControlBlender(2, control_period=-0.01)
 
 
 def test_resolve_rhos_checks_survive_its_cache() -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
@@ -9,7 +11,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from drake_disamb.core.disambiguation import DisambiguationResult, disambiguate, preset
-from drake_disamb.systems.disambiguation import DisambiguationSystem
+from drake_disamb.systems.disambiguation import DisambiguationSystem, LastResult
 
 HEAD_ARRAY_ARM_MODES = [[0], [1], [2], [3], [4], [5]]
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
@@ -75,35 +77,94 @@ def test_last_result_updates_when_request_count_grows() -> None:
     context = _fixed_context(system, [0.5, 0.5], current_mode=0, count=0)
     simulator = Simulator(system, context)
     simulator.AdvanceTo(0.035)
-    assert system.GetOutputPort("last_result").Eval(context) is None
+    assert system.GetOutputPort("last_result").Eval(context) == LastResult(result=None, served=False)
+    assert system.get_last_result(context) is None
     # The interface served a request at the tick t = 0.03 (with belief [0.5, 0.5]) and its count
     # grew; by the next tick the belief has changed: the logged result must be the one served.
     system.GetInputPort("request_count").FixValue(context, [1.0])
     system.GetInputPort("belief").FixValue(context, [0.9, 0.1])
     simulator.AdvanceTo(0.045)
-    result = system.GetOutputPort("last_result").Eval(context)
-    assert isinstance(result, DisambiguationResult)
+    last = system.GetOutputPort("last_result").Eval(context)
+    assert isinstance(last, LastResult) and last.served
+    result = last.result
+    assert isinstance(result, DisambiguationResult) and system.get_last_result(context) is result
     served = disambiguate([0.5, 0.5], EE_POSE[:3], GOAL_POSES[:, :3], HEAD_ARRAY_ARM_MODES, current_mode=0)
     assert result.mode == served.mode == 1
     np.testing.assert_array_equal(result.mode_scores, served.mode_scores)
     # No new request: the result stays, even though the inputs change.
     system.GetInputPort("belief").FixValue(context, [0.3, 0.7])
     simulator.AdvanceTo(0.085)
-    later = system.GetOutputPort("last_result").Eval(context)
+    later = system.get_last_result(context)
     assert later.mode == 1
     np.testing.assert_array_equal(later.mode_scores, served.mode_scores)
 
 
-def test_unusable_inputs_keep_the_mode_with_a_warning() -> None:
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES)
-    context = _fixed_context(system, [np.nan, 0.5])
-    with pytest.warns(UserWarning, match="belief"):
-        assert system.GetOutputPort("disambiguation_mode").Eval(context)[0] == -1.0
-    bad_goal = GOAL_POSES.copy()
-    bad_goal[0, 3:] = 0.0  # zero quaternion
+def _bad_goals(index: tuple[int, int], value: float) -> np.ndarray:
+    goals = GOAL_POSES.copy()
+    goals[index] = value
+    return goals.ravel()
+
+
+UNUSABLE = [
+    ("belief", [np.nan, 0.5]),
+    ("belief", [np.inf, 0.5]),
+    ("belief", [0.5, -0.2]),
+    ("belief", [0.0, 0.0]),
+    ("current_mode", [np.nan]),
+    ("ee_pose", [np.nan, 0.0, 0.1, *IDENTITY]),
+    ("ee_pose", [0.0, 0.0, 0.1, 1e200, 0.0, 0.0, 0.0]),  # the quaternion's norm overflows
+    ("goal_poses", _bad_goals((0, 3), 0.0)),  # zero quaternion (with the other entries 0)
+    ("goal_poses", _bad_goals((1, 0), -np.inf)),
+]
+
+
+@pytest.mark.parametrize("port, value", UNUSABLE)
+def test_unusable_inputs_keep_the_mode_and_are_counted(port: str, value: list[float]) -> None:
+    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.01)
     context = _fixed_context(system, [0.5, 0.5])
-    system.GetInputPort("goal_poses").FixValue(context, bad_goal.ravel())
-    assert system.GetOutputPort("disambiguation_mode").Eval(context)[0] == -1.0
+    system.GetInputPort(port).FixValue(context, np.asarray(value, dtype=float))
+    assert system.GetOutputPort("disambiguation_mode").Eval(context)[0] == -1.0  # no error, no warning
+    count = system.GetOutputPort("sanitized_input_count")
+    simulator = Simulator(system, context)
+    simulator.AdvanceTo(0.015)
+    assert count.Eval(context)[0] == 0  # nothing is counted while no request is served
+    system.GetInputPort("request_count").FixValue(context, [1.0])  # the interface served one at 0.01
+    with pytest.warns(RuntimeWarning, match="request ignored, the mode is kept"):
+        simulator.AdvanceTo(0.025)
+    assert count.Eval(context)[0] == 1
+    assert system.GetOutputPort("last_result").Eval(context) == LastResult(result=None, served=True)
+    system.GetInputPort("request_count").FixValue(context, [2.0])
+    simulator.AdvanceTo(0.035)  # a second one, within a second: counted, not warned again
+    assert count.Eval(context)[0] == 2 and system.get_sanitized_input_count(context) == 2
+    assert count.Eval(_fixed_context(system, [0.5, 0.5]))[0] == 0  # a new context starts from zero
+
+
+def test_a_drifted_belief_is_renormalised() -> None:
+    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES)
+    for belief in ([0.7, 0.7], [1e308, 1e308], [1e-300, 1e-300]):  # the sum of the second overflows
+        context = _fixed_context(system, belief)
+        assert system.GetOutputPort("disambiguation_mode").Eval(context)[0] == 1.0
+
+
+@pytest.mark.parametrize("error", [ValueError("goal_positions: expected shape (n, 3)"), RuntimeError("bug")])
+def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exception) -> None:
+    from drake_disamb.systems import disambiguation as module
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise error
+
+    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.01)
+    context = _fixed_context(system, [0.5, 0.5])
+    simulator = Simulator(system, context)
+    simulator.AdvanceTo(0.015)
+    monkeypatch.setattr(module, "disambiguate", broken)
+    with pytest.raises(type(error), match=re.escape(str(error))):
+        system.GetOutputPort("disambiguation_mode").Eval(context)
+    system.GetInputPort("request_count").FixValue(context, [1.0])
+    simulator.AdvanceTo(0.025)  # the served request is stored; solving it fails on demand
+    with pytest.raises(type(error), match=re.escape(str(error))):
+        system.GetOutputPort("last_result").Eval(context)
+    assert system.GetOutputPort("sanitized_input_count").Eval(context)[0] == 0
 
 
 def test_constructor_validation() -> None:
@@ -147,7 +208,7 @@ def test_interface_switches_mode_in_the_request_period() -> None:
     simulator.AdvanceTo(0.0501)  # just after the tick at t = 0.05
     assert interface.GetOutputPort("mode").Eval(icontext)[0] == 1.0  # switched in that same period
     assert interface.GetOutputPort("request_count").Eval(icontext)[0] == 1.0
-    assert disamb.GetOutputPort("last_result").Eval(dcontext) is None  # logged one period later
+    assert disamb.get_last_result(dcontext) is None  # logged one period later
     simulator.AdvanceTo(0.0601)
-    result = disamb.GetOutputPort("last_result").Eval(dcontext)
+    result = disamb.get_last_result(dcontext)
     assert result.mode == 1 and result.current_mode == 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -190,14 +191,55 @@ def test_belief_stays_on_the_simplex_in_simulation(kind, n, seed, special, on_to
             assert b[g] == p == b.max()
 
 
-def test_non_finite_command_warns_once() -> None:
-    system = RecursiveBayesIntentInference(2)
+@pytest.mark.parametrize("kind", list(SYSTEMS))
+def test_non_finite_input_is_sanitised_and_counted(kind: str) -> None:
+    system = SYSTEMS[kind](2)
+    count = system.GetOutputPort("sanitized_input_count")
     simulator = Simulator(system)
-    fix_inputs(system, simulator.get_mutable_context(), [np.nan, 0, 0, 0, 0, 0], np.zeros(3), np.eye(2, 3))
-    with pytest.warns(RuntimeWarning, match="non-finite human command"):
+    context = simulator.get_mutable_context()
+    u_h, ee = [0.1, 0, 0, 0, 0, 0], np.zeros(3)
+    if kind == "memory":  # it reads the end-effector path, never u_h
+        ee = np.array([np.nan, 0.0, 0.0])
+    else:
+        u_h = [np.nan, 0, 0, 0, 0, np.inf]
+    fix_inputs(system, context, u_h, ee, np.eye(2, 3), np.zeros((2, 6)))
+    assert count.Eval(context)[0] == 0
+    with pytest.warns(RuntimeWarning, match="non-finite") as record:
         simulator.Initialize()
-        simulator.AdvanceTo(0.05)
-    np.testing.assert_allclose(outputs(system, simulator.get_context())[0], [0.5, 0.5])
+        simulator.AdvanceTo(0.045)  # ticks at 0, 0.01, ..., 0.04
+    assert len(record) == 1  # at most once per second of simulated time
+    assert count.Eval(context)[0] == 5
+    b, g, p = outputs(system, context)
+    assert np.all(np.isfinite(b)) and np.all(b >= 0) and abs(b.sum() - 1.0) < 1e-12
+    np.testing.assert_allclose(b, [0.5, 0.5], atol=1e-12)  # read as no command / no move
+    # The count lives in the context: a new one starts at zero, and warns again.
+    fresh = Simulator(system)
+    fix_inputs(system, fresh.get_mutable_context(), u_h, ee, np.eye(2, 3), np.zeros((2, 6)))
+    assert count.Eval(fresh.get_context())[0] == 0
+    with pytest.warns(RuntimeWarning, match="non-finite"):
+        fresh.AdvanceTo(0.005)
+    assert count.Eval(fresh.get_context())[0] == 1
+
+
+@pytest.mark.parametrize(
+    "kind, core", [("dft", "dft_drive"), ("bayes", "bayes_step"), ("memory", "memory_step")]
+)
+@pytest.mark.parametrize("error", [ValueError("x_g: expected shape (n, 3)"), RuntimeError("bug")])
+def test_errors_of_the_core_propagate(
+    monkeypatch: pytest.MonkeyPatch, kind: str, core: str, error: Exception
+) -> None:
+    from drake_disamb.systems import inference as module
+
+    def broken(*args: object) -> None:
+        raise error
+
+    system = SYSTEMS[kind](2)
+    simulator = Simulator(system)
+    fix_inputs(system, simulator.get_mutable_context(), [0.1, 0, 0, 0, 0, 0], np.zeros(3), np.eye(2, 3))
+    simulator.Initialize()
+    monkeypatch.setattr(module, core, broken)
+    with pytest.raises(type(error), match=re.escape(str(error))):
+        simulator.AdvanceTo(0.025)
 
 
 def test_bad_constructor_arguments() -> None:

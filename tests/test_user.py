@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -325,16 +327,57 @@ def test_system_presses_mode_button_once_and_requests_with_belief() -> None:
     assert user.get_user_state(ctx).presses == 5
 
 
-def test_system_bad_inputs_let_go() -> None:
+def _bad(index: int, value: float, array: np.ndarray = EE) -> np.ndarray:
+    out = array.copy().ravel()
+    out[index] = value
+    return out
+
+
+@pytest.mark.parametrize(
+    "port, value",
+    [
+        ("ee_pose", _bad(0, np.nan)),
+        ("ee_pose", _bad(3, np.inf)),
+        ("ee_pose", np.array([0.0, -0.4, 0.3, 0.0, 0.0, 0.0, 0.0])),  # zero quaternion
+        ("goal_poses", _bad(3, 0.0, GOALS)),  # the user's own goal has a zero quaternion
+        ("goal_poses", _bad(10, 1e200, GOALS)),  # another goal's quaternion is out of range
+        ("mode", np.array([np.nan])),
+        ("mode", np.array([1.5])),
+        ("mode", np.array([7.0])),  # the joystick has 5 modes
+        ("stage", np.array([-1.0])),
+    ],
+)
+def test_system_unusable_inputs_let_go_and_are_counted(port: str, value: np.ndarray) -> None:
     from drake_disamb.systems.user import SimulatedUser
 
-    user = SimulatedUser("joystick", 1, 2, NO_REQUESTS)
-    bad = EE.copy()
-    bad[0] = np.nan
-    sim, ctx = _user_context(user, mode=0, ee=bad)
-    with pytest.warns(RuntimeWarning, match="lets go"):
-        sim.AdvanceTo(0.005)
+    user = SimulatedUser("joystick", 0, 2, NO_REQUESTS)
+    sim, ctx = _user_context(user, mode=0)
+    count = user.GetOutputPort("sanitized_input_count")
+    sim.AdvanceTo(0.005)
+    assert np.any(user.get_output_port(0).Eval(ctx) != 0) and count.Eval(ctx)[0] == 0
+    user.GetInputPort(port).FixValue(ctx, value)
+    with pytest.warns(RuntimeWarning, match="lets go") as record:
+        sim.AdvanceTo(0.035)  # three ticks
+    assert len(record) == 1  # at most one warning per second of simulated time
     np.testing.assert_array_equal(user.get_output_port(0).Eval(ctx), np.zeros(4))
+    assert count.Eval(ctx)[0] == 3
+    fresh, fresh_ctx = _user_context(user, mode=0)  # the count lives in the context
+    assert count.Eval(fresh_ctx)[0] == 0
+
+
+@pytest.mark.parametrize("error", [ValueError("ee_pose/goal_pose: expected 7 numbers"), RuntimeError("bug")])
+def test_system_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exception) -> None:
+    from drake_disamb.systems import user as module
+
+    def broken(*args: object) -> None:
+        raise error
+
+    user = module.SimulatedUser("joystick", 0, 2, NO_REQUESTS)
+    sim, ctx = _user_context(user, mode=0)
+    monkeypatch.setattr(module, "user_step", broken)
+    with pytest.raises(type(error), match=re.escape(str(error))):
+        sim.AdvanceTo(0.005)
+    assert user.GetOutputPort("sanitized_input_count").Eval(ctx)[0] == 0
 
 
 def test_system_follows_the_stage_goal_and_lets_go_when_done() -> None:

@@ -213,11 +213,11 @@ def build_shared_control_diagram(
         )
     )
     task.set_name("task")
-    autonomy = builder.AddSystem(PotentialFieldAutonomy(n, scenario.autonomy))
+    autonomy = builder.AddSystem(PotentialFieldAutonomy(n, scenario.autonomy, scenario.control_period))
     autonomy.set_name("autonomy")
     inference = builder.AddSystem(_make_inference(scenario, n))
     inference.set_name("inference")
-    blender = builder.AddSystem(SharedControlBlender(n, scenario.blending))
+    blender = builder.AddSystem(SharedControlBlender(n, scenario.blending, scenario.control_period))
     blender.set_name("blender")
 
     if input_source is None:

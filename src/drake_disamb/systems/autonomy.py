@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
-from pydrake.systems.framework import BasicVector, Context, LeafSystem
+from numpy.typing import NDArray
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
 
+from drake_disamb.core._validation import is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
+from drake_disamb.systems._sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["PotentialFieldAutonomy"]
 
@@ -24,6 +25,7 @@ class PotentialFieldAutonomy(LeafSystem):
         - goal_poses
         output_ports:
         - u_a
+        - sanitized_input_count
 
     Input ports:
         ee_pose (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in the world frame (m; unit
@@ -34,18 +36,32 @@ class PotentialFieldAutonomy(LeafSystem):
         u_a (n * 6): goal i's command in entries ``6 i .. 6 i + 5``, ``[vx, vy, vz, wx, wy, wz]``
             (m/s, rad/s) in the world frame (the paper's order, not Drake's ``[w; v]``); attractor to
             goal i, repellers from the other goals, each part saturated (see ``config``).
-            Direct feedthrough from both inputs (stateless).
+            Direct feedthrough from both inputs only (no state, no time).
+        sanitized_input_count (1): control ticks so far at which a pose was unusable (see below);
+            from state.
 
-    A non-finite or zero-norm pose at run time gives an all-zero ``u_a`` with a warning (the arm is
-    then only driven by the user) instead of propagating NaN.
+    **Unusable poses.** A pose with a NaN or infinite entry, an entry beyond ``1e150``, or a
+    quaternion of (near) zero norm (:func:`~drake_disamb.systems._sanitized.usable_poses`,
+    checked before the core is called), gives an all-zero ``u_a`` (the arm is then only driven by
+    the user) instead of propagating NaN. Every ``control_period`` (first at t = 0) a discrete
+    update checks the inputs again and, if they are unusable, adds one to
+    ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other
+    error of the core propagates.
+
+    State: discrete ``[sanitised-input count]`` and ``[time of the last warning]`` (s), only
+    written at ticks with unusable poses.
     """
 
-    def __init__(self, n_goals: int, config: PotentialFieldConfig | None = None) -> None:
+    def __init__(
+        self, n_goals: int, config: PotentialFieldConfig | None = None, control_period: float = 0.01
+    ) -> None:
         super().__init__()
         if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
             raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
         if config is not None and not isinstance(config, PotentialFieldConfig):
             raise ValueError(f"config: expected a PotentialFieldConfig, got {config!r}")
+        if not (is_real(control_period) and control_period > 0):
+            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
         self.n_goals = int(n_goals)
         self.config = PotentialFieldConfig() if config is None else config
         self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
@@ -57,16 +73,24 @@ class PotentialFieldAutonomy(LeafSystem):
             self._calc_u_a,
             prerequisites_of_calc={self._ee_port.ticket(), self._goal_port.ticket()},
         )
-        self._warned = False
+        self._sanitized = SanitizedInputCounter(self)
+        self.DeclarePeriodicDiscreteUpdateEvent(float(control_period), 0.0, self._check_inputs)
+
+    def _inputs(self, context: Context) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        return self._ee_port.Eval(context), self._goal_port.Eval(context)
 
     def _calc_u_a(self, context: Context, output: BasicVector) -> None:
-        ee = self._ee_port.Eval(context)
-        goals = self._goal_port.Eval(context).reshape(self.n_goals, 7)
-        try:
-            u_a = potential_field_commands_from_poses(ee, goals, self.config)
-        except ValueError as exc:
-            if not self._warned:
-                warnings.warn(f"{self.get_name()}: {exc}; u_a set to zero", RuntimeWarning, stacklevel=2)
-                self._warned = True
-            u_a = np.zeros((self.n_goals, 6))
+        ee, goals = self._inputs(context)
+        if not usable_poses(ee, goals):  # counted and warned by _check_inputs
+            output.SetFromVector(np.zeros(6 * self.n_goals))
+            return
+        u_a = potential_field_commands_from_poses(ee, goals.reshape(self.n_goals, 7), self.config)
         output.SetFromVector(u_a.reshape(-1))
+
+    def _check_inputs(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        ee, goals = self._inputs(context)
+        if usable_poses(ee, goals):
+            return EventStatus.DidNothing()
+        message = f"unusable pose (ee_pose={ee.tolist()}, goal_poses={goals.tolist()}); u_a set to zero"
+        self._sanitized.record(context, discrete_state, message)
+        return EventStatus.Succeeded()

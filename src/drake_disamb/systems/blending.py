@@ -2,15 +2,23 @@
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import NDArray
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
+from pydrake.systems.framework import (
+    BasicVector,
+    Context,
+    DiscreteValues,
+    EventStatus,
+    LeafSystem,
+    ValueProducer,
+)
 
-from drake_disamb.core._validation import all_finite
+from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.blending import BlendingConfig, shared_control
+from drake_disamb.systems._sanitized import SanitizedInputCounter
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 
@@ -37,6 +45,7 @@ class SharedControlBlender(LeafSystem):
         - u
         - alpha
         - g_star
+        - sanitized_input_count
 
     Input ports:
         u_h (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world frame.
@@ -44,11 +53,13 @@ class SharedControlBlender(LeafSystem):
         u_a (n * 6): per-goal autonomy commands, goal i in entries ``6 i .. 6 i + 5``, same order
             and frame as ``u_h``.
 
-    Output ports (direct feedthrough, stateless):
+    Output ports (``u``, ``alpha``, ``g_star``: direct feedthrough from the inputs only, no state):
         u (6): blended, speed-limited command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world
             frame (the paper's order, not Drake's ``[w; v]``).
         alpha (1): the autonomy's share actually applied, in ``[0, rho3]``.
         g_star (1): index of the most likely goal.
+        sanitized_input_count (1): control ticks so far at which an input held a NaN/inf (see
+            below); from state.
 
     The three outputs share one blending step, a cache entry that depends on the three inputs only
     (computed once per change of the inputs, not per output or per integrator stage).
@@ -67,16 +78,27 @@ class SharedControlBlender(LeafSystem):
     paper). Set ``assist_without_input=True`` to reproduce the paper's law literally.
 
     Non-finite inputs never reach the arm: a NaN/inf entry of ``u_h`` or ``u_a`` is read as 0, a
-    non-finite belief as 0 (if nothing finite is left, ``g*`` = 0 with ``alpha`` = 0), with one
-    warning per system.
+    non-finite belief as 0 (if nothing finite is left, ``g*`` = 0 with ``alpha`` = 0). Every
+    ``control_period`` (first at t = 0) a discrete update checks the inputs and, if one holds a
+    NaN/inf, adds one to ``sanitized_input_count`` and warns (at most once per second of simulated
+    time). State: discrete ``[sanitised-input count]`` and ``[time of the last warning]`` (s),
+    written only at such ticks.
     """
 
-    def __init__(self, n_goals: int, config: BlendingConfig | None = None, **overrides: object) -> None:
+    def __init__(
+        self,
+        n_goals: int,
+        config: BlendingConfig | None = None,
+        control_period: float = 0.01,
+        **overrides: object,
+    ) -> None:
         super().__init__()
         if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
             raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
         if config is not None and not isinstance(config, BlendingConfig):
             raise ValueError(f"config: expected a BlendingConfig, got {config!r}")
+        if not (is_real(control_period) and control_period > 0):
+            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
         cfg = BlendingConfig() if config is None else config
         self.config = replace(cfg, **overrides) if overrides else cfg
         self.n_goals = int(n_goals)
@@ -96,22 +118,31 @@ class SharedControlBlender(LeafSystem):
         self.DeclareVectorOutputPort("u", 6, self._calc_u, prerequisites_of_calc=step)
         self.DeclareVectorOutputPort("alpha", 1, self._calc_alpha, prerequisites_of_calc=step)
         self.DeclareVectorOutputPort("g_star", 1, self._calc_g_star, prerequisites_of_calc=step)
-        self._warned = False
+        self._sanitized = SanitizedInputCounter(self)
+        self.DeclarePeriodicDiscreteUpdateEvent(float(control_period), 0.0, self._check_inputs)
 
-    def _compute(self, context: Context) -> tuple[np.ndarray, float, int]:
+    def _inputs(
+        self, context: Context
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         u_h = np.asarray(self._u_h_port.Eval(context), dtype=float)
         p = np.asarray(self._belief_port.Eval(context), dtype=float)
         u_a = np.asarray(self._u_a_port.Eval(context), dtype=float).reshape(self.n_goals, 6)
-        if not all_finite(u_h, p, u_a):
-            if not self._warned:
-                warnings.warn(
-                    f"{self.get_name()}: non-finite input (u_h={u_h.tolist()}, belief={p.tolist()}, "
-                    "u_a has NaN/inf: "
-                    f"{not np.isfinite(u_a).all()}); non-finite entries read as 0",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
-                self._warned = True
+        return u_h, p, u_a
+
+    def _check_inputs(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        u_h, p, u_a = self._inputs(context)
+        if all_finite(u_h, p, u_a):
+            return EventStatus.DidNothing()
+        message = (
+            f"non-finite input (u_h={u_h.tolist()}, belief={p.tolist()}, u_a has NaN/inf: "
+            f"{not np.isfinite(u_a).all()}); non-finite entries read as 0"
+        )
+        self._sanitized.record(context, discrete_state, message)
+        return EventStatus.Succeeded()
+
+    def _compute(self, context: Context) -> tuple[np.ndarray, float, int]:
+        u_h, p, u_a = self._inputs(context)
+        if not all_finite(u_h, p, u_a):  # counted and warned by _check_inputs
             u_h = np.where(np.isfinite(u_h), u_h, 0.0)
             u_a = np.where(np.isfinite(u_a), u_a, 0.0)
             p = np.where(np.isfinite(p), p, 0.0)

@@ -6,7 +6,7 @@ inputs, calls :func:`~drake_disamb.core.disambiguation.disambiguate` and keeps t
 
 from __future__ import annotations
 
-import warnings
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -21,8 +21,9 @@ from drake_disamb.core.disambiguation import (
     disambiguate,
     validate_modes,
 )
+from drake_disamb.systems._sanitized import SanitizedInputCounter, usable_poses
 
-__all__ = ["DisambiguationSystem"]
+__all__ = ["DisambiguationSystem", "LastResult"]
 
 POSE_SIZE = 7
 """A pose on a vector port: ``[x, y, z, qw, qx, qy, qz]``."""
@@ -36,6 +37,28 @@ class _Request:
     ee_pose: NDArray[np.float64]
     goal_poses: NDArray[np.float64]
     current_mode: float
+
+
+@dataclass(frozen=True)
+class LastResult:
+    """The value of the disambiguation system's ``last_result`` port.
+
+    A holder rather than a bare ``DisambiguationResult | None``: an abstract port needs a value
+    of one type from its first allocation on, and newer Drake (1.58) cannot hold ``None`` in a
+    ``Value[object]``.
+
+    Attributes:
+        result: The :class:`~drake_disamb.core.disambiguation.DisambiguationResult` of the last
+            served request, or None before any request or when that request's inputs were
+            unusable (the mode was kept).
+        served: True once a request has been served (``result`` may still be None).
+    """
+
+    result: DisambiguationResult | None = None
+    served: bool = False
+
+
+_NO_REQUEST = LastResult()
 
 
 class DisambiguationSystem(LeafSystem):
@@ -53,6 +76,7 @@ class DisambiguationSystem(LeafSystem):
         output_ports:
         - disambiguation_mode
         - last_result
+        - sanitized_input_count
 
     Input ports:
         belief (n): the current belief over the ``n`` goals (probability vector; renormalised
@@ -66,16 +90,27 @@ class DisambiguationSystem(LeafSystem):
 
     Output ports:
         disambiguation_mode (1): ``m*`` as an index into ``modes``, or -1 when the current mode is
-            kept (ties, or inputs that cannot be used -- with a warning). Computed on demand from
+            kept (ties, or unusable inputs, see below). Computed on demand from
             ``belief``, ``ee_pose``, ``goal_poses`` and ``current_mode`` (direct feedthrough from
             those four, not from ``request_count``): the interface evaluates it only in the update
             in which it sees the request button, and switches mode in that same control period.
-        last_result (abstract): the :class:`~drake_disamb.core.disambiguation.DisambiguationResult`
-            of the last request (scores per dimension and mode, features, the chosen mode), or
-            ``None`` before any request. Computed from state (the inputs of the served request),
-            on demand; treat it as read-only.
+        last_result (abstract): a :class:`LastResult` holding the
+            :class:`~drake_disamb.core.disambiguation.DisambiguationResult` of the last request
+            (scores per dimension and mode, features, the chosen mode), or ``None`` before any
+            request (``served`` False) or if its inputs were unusable. Computed from state (the
+            inputs of the served request), on demand; treat it as read-only.
+            :meth:`get_last_result` returns the result itself.
+        sanitized_input_count (1): served requests so far whose inputs were unusable (from state).
 
-    State: numeric only, two discrete groups updated by a periodic *unrestricted* update every
+    **Unusable inputs.** A belief that is not a probability vector up to scale (a NaN/inf or
+    negative entry, or no positive one), a non-finite ``current_mode``, or a pose that is not
+    finite or has an unusable quaternion (:func:`~drake_disamb.systems._sanitized.usable_poses`)
+    are detected before the core is called: ``disambiguation_mode`` is then -1 (the mode is kept)
+    and, when the interface served such a request, the next update adds one to
+    ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other
+    error of the core propagates out of the port evaluation (and so out of the simulation).
+
+    State: numeric only. Two discrete groups updated by a periodic *unrestricted* update every
     ``control_period`` seconds (first at t = 0; unrestricted so that it runs together with the
     interface's update, from the same pre-update context): the *tick* group ``[request_count seen, has
     snapshot, snapshot]`` and the *served* group ``[has request, request]``, where a snapshot /
@@ -84,7 +119,9 @@ class DisambiguationSystem(LeafSystem):
     served by the interface in the previous tick, so that tick's snapshot -- exactly what the
     interface used -- becomes the served request, and ``last_result`` (Algorithm 1 on it) shows it
     one control period after the request. (No abstract state: Drake copies the whole state at
-    every unrestricted update in the diagram, and numbers copy cheaply.)
+    every unrestricted update in the diagram, and numbers copy cheaply.) Two more groups,
+    ``[sanitised-input count]`` and ``[time of the last warning]`` (s), are written only when an
+    unusable request was served.
 
     The constructor runs one request on a small scene: it loads the core's compiled kernels (a
     fraction of a second, once per process) so that the user's first request in a simulation or a
@@ -114,7 +151,6 @@ class DisambiguationSystem(LeafSystem):
         self.config = DisambiguationConfig() if config is None else config
         if not isinstance(self.config, DisambiguationConfig):
             raise ValueError(f"config: expected a DisambiguationConfig, got {config!r}")
-        self._warned = False
 
         n = self.n_goals
         self._belief = self.DeclareVectorInputPort("belief", n)
@@ -128,7 +164,7 @@ class DisambiguationSystem(LeafSystem):
         # request (0/1), request]. Snapshot and request layouts are those of _pack.
         self._tick_index = self.DeclareDiscreteState(np.zeros(2 + self._snapshot_size))
         self._served_index = self.DeclareDiscreteState(np.zeros(1 + self._snapshot_size))
-        self._memo: tuple[bytes, DisambiguationResult | None] | None = None
+        self._memo: tuple[bytes, LastResult] | None = None
         feedthrough = {
             port.ticket() for port in (self._belief, self._ee_pose, self._goal_poses, self._current_mode)
         }
@@ -137,10 +173,11 @@ class DisambiguationSystem(LeafSystem):
         )
         self.DeclareAbstractOutputPort(
             "last_result",
-            lambda: AbstractValue.Make(None),
+            lambda: AbstractValue.Make(_NO_REQUEST),
             self._calc_last_result,
             prerequisites_of_calc={self.discrete_state_ticket(self._served_index)},
         )
+        self._sanitized = SanitizedInputCounter(self)
         self.DeclarePeriodicUnrestrictedUpdateEvent(control_period, 0.0, self._update)
         # One request on a small scene now, so that the compiled kernels of the core are loaded
         # (a fraction of a second, once per process) before a simulation, not at the user's first
@@ -183,33 +220,53 @@ class DisambiguationSystem(LeafSystem):
             current_mode=float(snapshot[-1]),
         )
 
-    def _solve(self, request: _Request) -> DisambiguationResult | None:
-        """Run the core on one request; unusable inputs give ``None`` (keep the mode) and a warning."""
-        try:
-            p = request.belief
-            if not np.all(np.isfinite(p)) or np.any(p < -1e-9) or np.sum(np.maximum(p, 0.0)) <= 0:
-                raise ValueError(f"belief: expected a probability vector, got {p.tolist()!r}")
-            p = np.maximum(p, 0.0)
-            p = p / p.sum()
-            if not np.isfinite(request.current_mode):
-                raise ValueError(f"current_mode: expected a mode index, got {request.current_mode!r}")
-            current = round(request.current_mode)
-            goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
-            return disambiguate(
-                p,
-                request.ee_pose[:3],
-                goals[:, :3],
-                self.modes,
-                self.config,
-                orientation=request.ee_pose[3:],
-                goal_orientations=goals[:, 3:],
-                current_mode=current if current >= 0 else None,
-            )
-        except ValueError as exc:
-            if not self._warned:
-                warnings.warn(f"DisambiguationSystem: request ignored, the mode is kept: {exc}", stacklevel=2)
-                self._warned = True
+    @staticmethod
+    def _normalised_belief(p: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """``p`` (entries >= -1e-9, any positive scale) as a probability vector, or None if unusable."""
+        if not (np.isfinite(p).all() and p.min() >= -1e-9 and p.max() > 0):
             return None
+        p = np.maximum(p, 0.0) / p.max()  # scaled first: the sum cannot overflow
+        return p / p.sum()
+
+    def _unusable(self, request: _Request) -> str | None:
+        """Why ``request`` cannot be solved (an input out of range), or None if it can."""
+        if self._normalised_belief(request.belief) is None:
+            return f"belief: expected a probability vector, got {request.belief.tolist()!r}"
+        if not math.isfinite(request.current_mode):
+            return f"current_mode: expected a mode index, got {request.current_mode!r}"
+        if not usable_poses(request.ee_pose, request.goal_poses):
+            return (
+                f"ee_pose/goal_poses: expected finite poses with usable quaternions, got "
+                f"{request.ee_pose.tolist()!r} and {request.goal_poses.tolist()!r}"
+            )
+        return None
+
+    def _solve(self, request: _Request) -> DisambiguationResult | None:
+        """Run the core on one request; an unusable one (see :meth:`_unusable`) gives None (keep the
+        mode). Any error of the core propagates."""
+        if self._unusable(request) is not None:
+            return None
+        p = self._normalised_belief(request.belief)
+        current = round(request.current_mode)
+        goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
+        return disambiguate(
+            p,
+            request.ee_pose[:3],
+            goals[:, :3],
+            self.modes,
+            self.config,
+            orientation=request.ee_pose[3:],
+            goal_orientations=goals[:, 3:],
+            current_mode=current if current >= 0 else None,
+        )
+
+    def get_last_result(self, context: Context) -> DisambiguationResult | None:
+        """The result of the last served request in ``context`` (None before any, or if unusable)."""
+        return self.GetOutputPort("last_result").Eval(context).result
+
+    def get_sanitized_input_count(self, context: Context) -> int:
+        """Served requests so far in ``context`` whose inputs were unusable."""
+        return self._sanitized.count(context)
 
     def _calc_mode(self, context: Context, output: BasicVector) -> None:
         result = self._solve(self._read(context))
@@ -218,13 +275,13 @@ class DisambiguationSystem(LeafSystem):
     def _calc_last_result(self, context: Context, output: AbstractValue) -> None:
         served = context.get_discrete_state(self._served_index).get_value()
         if served[0] < 0.5:
-            output.set_value(None)
+            output.set_value(_NO_REQUEST)
             return
         # Algorithm 1 is a pure function of the served request: a one-entry memo keeps a result
         # from being recomputed when the state is rewritten with the same request every tick.
         key = served.tobytes()
         if self._memo is None or self._memo[0] != key:
-            self._memo = (key, self._solve(self._unpack(served[1:])))
+            self._memo = (key, LastResult(self._solve(self._unpack(served[1:])), served=True))
         output.set_value(self._memo[1])
 
     def _update(self, context: Context, state: State) -> EventStatus:
@@ -234,6 +291,10 @@ class DisambiguationSystem(LeafSystem):
             state.get_mutable_discrete_state(self._served_index).SetFromVector(
                 np.concatenate(([1.0], tick[2:]))
             )
+            reason = self._unusable(self._unpack(tick[2:]))
+            if reason is not None:
+                message = f"request ignored, the mode is kept: {reason}"
+                self._sanitized.record(context, state.get_mutable_discrete_state(), message)
         seen = count if np.isfinite(count) else tick[0]
         state.get_mutable_discrete_state(self._tick_index).SetFromVector(
             np.concatenate(([seen, 1.0], self._pack(context)))

@@ -6,7 +6,7 @@ Input ports (vector-valued):
 
 - ``u_h`` (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world frame W, at the
   end-effector origin. This is the paper's order, *not* Drake's ``[w; v]`` spatial-velocity order.
-  A command with a NaN or infinite entry is read as zero (with a warning, once per system).
+  A command with a NaN or infinite entry is read as zero (counted, see ``sanitized_input_count``).
 - ``ee_pose`` (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m; unit quaternion).
   Only the position enters the inference.
 - ``goal_poses`` (7 n): the n goal poses, each ``[x, y, z, qw, qx, qy, qz]``, flattened.
@@ -19,6 +19,11 @@ Output ports (vector-valued, computed from state only: no direct feedthrough):
 - ``belief`` (n): the goal probabilities, a probability vector at every instant.
 - ``g_star`` (1): 0-based index of the most probable goal (first one on ties).
 - ``p_star`` (1): its probability.
+- ``sanitized_input_count`` (1): control ticks so far at which an input the method reads held a
+  NaN/inf and was replaced (``u_h`` for the DFT and Bayes systems, the end-effector position for
+  the memory-based one), each checked by the periodic update; a warning names the system, at most
+  once per second of simulated time. Discrete state ``[count]`` and ``[time of the last
+  warning]`` (s), written only at such ticks.
 
 When ``goal_poses`` differs from the goal set the system last saw (by more than
 ``goal_change_tolerance`` in any entry), the next periodic update resets the belief to the rest
@@ -29,7 +34,6 @@ state over the new set (the multi-step task). The algorithms are the numpy core'
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -58,6 +62,7 @@ from drake_disamb.core.inference import (
     rest_state,
     sanitize_command,
 )
+from drake_disamb.systems._sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
 """Largest ``|sum(p) - 1|`` the DFT system's periodic projection leaves alone (p positive)."""
@@ -103,7 +108,6 @@ class _IntentInferenceBase(LeafSystem):
         self._rest = rest_state(self._n, rest).astype(float)
         self._period = float(control_period)
         self._tol = float(tol)
-        self._warned = False
         self._u_h = self.DeclareVectorInputPort("u_h", 6)
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
@@ -123,22 +127,29 @@ class _IntentInferenceBase(LeafSystem):
         self.DeclareVectorOutputPort("belief", BasicVector(self._n), self._calc_belief, {ticket})
         self.DeclareVectorOutputPort("g_star", BasicVector(1), self._calc_g_star, {ticket})
         self.DeclareVectorOutputPort("p_star", BasicVector(1), self._calc_p_star, {ticket})
+        self._sanitized = SanitizedInputCounter(self)
 
     # -- inputs ---------------------------------------------------------------------------------
 
     def _command(self, context: Context) -> NDArray[np.float64]:
+        """``u_h``, a command with a NaN/inf entry read as zero (counted by :meth:`_count_sanitized`)."""
         u = np.asarray(self._u_h.Eval(context), dtype=float)
-        if not all_finite(u):
-            if not self._warned:
-                warnings.warn(
-                    f"{self.get_name() or type(self).__name__}: non-finite human command "
-                    f"u_h={u.tolist()} read as zero",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
-                self._warned = True
-            u = sanitize_command(u)
-        return u
+        return u if all_finite(u) else sanitize_command(u)
+
+    def _sanitized_input(self, context: Context) -> str | None:
+        """What this tick's inputs held that the method replaces, or None (default: ``u_h``)."""
+        if not self._u_h.HasValue(context):  # e.g. a system driven without a command
+            return None
+        u = np.asarray(self._u_h.Eval(context), dtype=float)
+        return None if all_finite(u) else f"non-finite human command u_h={u.tolist()} read as zero"
+
+    def _count_sanitized(self, context: Context, discrete_state: DiscreteValues) -> bool:
+        """Count (and warn about) a sanitised input of this tick in ``discrete_state``; True if any."""
+        message = self._sanitized_input(context)
+        if message is None:
+            return False
+        self._sanitized.record(context, discrete_state, message)
+        return True
 
     def _position(self, context: Context) -> NDArray[np.float64]:
         return np.asarray(self._ee_pose.Eval(context), dtype=float)[:3]
@@ -180,11 +191,12 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         - belief
         - g_star
         - p_star
+        - sanitized_input_count
 
     Ports are described in the module docstring: ``u_h`` (6; m/s, rad/s; ``[v; w]`` order),
     ``ee_pose`` (7; m, ``[x, y, z, qw, qx, qy, qz]``), ``goal_poses`` (7 n), ``u_a`` (6 n; only
     evaluated with ``params.agreement``) in; ``belief`` (n), ``g_star`` (1, 0-based index),
-    ``p_star`` (1) out.
+    ``p_star`` (1), ``sanitized_input_count`` (1; ticks with a non-finite ``u_h``) out.
 
     State: continuous ``p`` (n) with time derivative
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
@@ -269,6 +281,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         state.get_mutable_discrete_state(self._goals_index).SetFromVector(self._goal_poses_now(context))
 
     def _periodic_update(self, context: Context, state: State) -> EventStatus:
+        counted = self._count_sanitized(context, state.get_mutable_discrete_state())
         goals = self._goal_poses_now(context)
         old = context.get_discrete_state(self._goals_index).CopyToVector()
         if _goals_changed(goals, old, self._tol):
@@ -278,7 +291,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # The usual case: the flow conserves sum(p) up to rounding and keeps p positive. Nothing
         # is written then, so the belief and what depends on it are not recomputed after the tick.
         if np.minimum.reduce(p) > 0.0 and abs(math.fsum(p) - 1.0) <= SIMPLEX_TOLERANCE:
-            return EventStatus.DidNothing()
+            return EventStatus.Succeeded() if counted else EventStatus.DidNothing()
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(normalize_belief(p))
         return EventStatus.Succeeded()
 
@@ -309,6 +322,7 @@ class _DiscreteInference(_IntentInferenceBase):
         discrete_state.get_mutable_vector(self._state_index).SetFromVector(value)
 
     def _periodic_update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        self._count_sanitized(context, discrete_state)
         goals = self._goal_poses_now(context)
         x = context.get_discrete_state(self._state_index).CopyToVector()
         n, k = self._n, self._n_extra
@@ -336,11 +350,13 @@ class RecursiveBayesIntentInference(_DiscreteInference):
         - belief
         - g_star
         - p_star
+        - sanitized_input_count
 
     Ports as in the module docstring (``u_a`` is declared for interchangeability and never read).
     Every ``control_period``: ``p <- normalize(likelihood(u_h | g) * P^T p)``
     (:func:`~drake_disamb.core.inference.bayes_step`), or a reset to the rest state when
-    ``goal_poses`` changed. Discrete state ``[belief (n), goal_poses (7 n)]``.
+    ``goal_poses`` changed. Discrete state ``[belief (n), goal_poses (7 n)]`` (and the
+    sanitised-input count: ticks with a non-finite ``u_h``).
 
     Args:
         n_goals: Number of goals n.
@@ -387,13 +403,15 @@ class MemoryBasedIntentInference(_DiscreteInference):
         - belief
         - g_star
         - p_star
+        - sanitized_input_count
 
     Ports as in the module docstring (``u_h`` and ``u_a`` are declared for interchangeability and
     never read: the method only looks at the end-effector path). Every ``control_period`` the
     move from the previous to the current end-effector position updates the running path cost and
     the belief (:func:`~drake_disamb.core.inference.memory_step`), or the state resets when
     ``goal_poses`` changed (the trial start becomes the current position).
-    Discrete state ``[belief (n), cost (1), x_start (3), x_prev (3), goal_poses (7 n)]`` (m^2, m).
+    Discrete state ``[belief (n), cost (1), x_start (3), x_prev (3), goal_poses (7 n)]`` (m^2, m),
+    and the sanitised-input count: ticks with a non-finite end-effector position (read as no move).
 
     Args:
         n_goals: Number of goals n.
@@ -418,6 +436,10 @@ class MemoryBasedIntentInference(_DiscreteInference):
     def _reset_extra(self, context: Context) -> NDArray[np.float64]:
         x = self._position(context)
         return np.concatenate([[0.0], x, x])
+
+    def _sanitized_input(self, context: Context) -> str | None:
+        x = self._position(context)
+        return None if all_finite(x) else f"non-finite end-effector position {x.tolist()}: no move"
 
     def _step(self, context, belief, extra, x_g):  # noqa: ANN001, ANN202
         cost, x_start, x_prev = extra[0], extra[1:4], extra[4:7]

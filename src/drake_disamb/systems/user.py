@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core._validation import all_finite
 from drake_disamb.core.interfaces import RAW_LAYOUTS, RAW_SIZE, InterfaceConfig
 from drake_disamb.core.user import UserConfig, UserState, user_step
+from drake_disamb.systems._sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["SimulatedUser", "UserConfig"]
 
@@ -31,6 +30,7 @@ class SimulatedUser(LeafSystem):
         - stage
         output_ports:
         - raw
+        - sanitized_input_count
 
     Input ports:
         mode (1): the interface's current mode index.
@@ -48,12 +48,20 @@ class SimulatedUser(LeafSystem):
             array ``[left, right, back, disambiguation_button]``. Button presses last one control
             period and are followed by at least ``config.reaction_time - reaction_time_jitter``
             seconds with everything released.
+        sanitized_input_count (1): updates so far whose inputs were unusable (see below).
 
     State: discrete ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
     progress_mode, progress_since, progress_best, raw (4)]`` and ``raw`` again in a group of its own
     (the state output port ``raw``), updated every ``interface.control_period`` seconds from t = 0
-    (give it the interface's period so each press is seen as exactly one rising edge). At run time
-    a non-finite pose or an invalid mode makes the user let go (raw zeros) with one warning.
+    (give it the interface's period so each press is seen as exactly one rising edge); and
+    ``[sanitised-input count]``, ``[time of the last warning]`` (s).
+
+    **Unusable inputs.** A pose with a NaN/inf entry or an unusable quaternion
+    (:func:`~drake_disamb.systems._sanitized.usable_poses`), a mode that is not an integer index
+    of the interface's modes, or a negative or non-finite stage (checked before the policy is
+    called) make the user let go (raw zeros) for that update, add one to
+    ``sanitized_input_count`` and warn (at most once per second of simulated time). Any other
+    error of the policy propagates.
 
     Attributes:
         interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
@@ -109,8 +117,8 @@ class SimulatedUser(LeafSystem):
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._stage_port = self.DeclareVectorInputPort("stage", 1)
         self.DeclareStateOutputPort("raw", self._raw_index)
+        self._sanitized = SanitizedInputCounter(self)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
-        self._warned = False
 
     @property
     def goal_index(self) -> int:
@@ -137,42 +145,32 @@ class SimulatedUser(LeafSystem):
             self._write(new, discrete_state, state)
             return EventStatus.Succeeded()
         n_modes = len(self.interface.modes)
-        qw, qx, qy, qz = ee[3:].tolist()
         usable = (
             math.isfinite(stage)
             and stage >= 0
             and math.isfinite(mode_value)
             and mode_value == round(mode_value)
             and 0 <= mode_value < n_modes
-            and all_finite(ee, goals)
-            and math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz) > 1e-12
+            and usable_poses(ee, goals)
         )
         if usable:
-            try:
-                new = user_step(
-                    state,
-                    context.get_time(),
-                    int(round(mode_value)),
-                    ee,
-                    goals,
-                    self.goal_indices[int(stage)],
-                    self.interface,
-                    self.config,
-                    belief,
-                )
-            except ValueError as exc:  # e.g. a zero goal quaternion
-                usable = False
-                reason = str(exc)
+            new = user_step(
+                state,
+                context.get_time(),
+                int(round(mode_value)),
+                ee,
+                goals,
+                self.goal_indices[int(stage)],
+                self.interface,
+                self.config,
+                belief,
+            )
         else:
-            reason = f"mode={mode_value!r}, stage={stage!r}, ee_pose={ee.tolist()}"
-        if not usable:
-            if not self._warned:
-                warnings.warn(
-                    f"{self.get_name()}: unusable inputs ({reason}); the user lets go",
-                    RuntimeWarning,
-                    stacklevel=2,
-                )
-                self._warned = True
+            message = (
+                f"unusable inputs (mode={mode_value!r}, stage={stage!r}, ee_pose={ee.tolist()}, "
+                f"goal_poses={goals.tolist()}); the user lets go"
+            )
+            self._sanitized.record(context, discrete_state, message)
             new = replace(state, raw=np.zeros(RAW_SIZE))
         self._write(new, discrete_state, state)
         return EventStatus.Succeeded()
