@@ -47,12 +47,14 @@ LIVE_HELP = {
         "Live: drive from the Meshcat page (click into it first). Hold the Left (+) or Right (-)\n"
         "arrow key to drive the mode's dimension (a tap drives it for 0.6 s); Down switches to the\n"
         "next mode, Space asks the robot for the disambiguating mode. The trial ends at the goal\n"
-        "given by --goal (default 0) or after --duration."
+        "given by --goal (default 0), after --duration, or when you press Ctrl-C here (the metrics,\n"
+        "figure and recording so far are kept)."
     ),
     "joystick": (
         "Live: drive from the Meshcat page (click into it first) or plug in a gamepad. A/D and S/W\n"
         "step the two axes, C centres them, M switches mode, Space asks the robot for the\n"
-        "disambiguating mode. The trial ends at the goal given by --goal (default 0) or after --duration."
+        "disambiguating mode. The trial ends at the goal given by --goal (default 0), after --duration,\n"
+        "or when you press Ctrl-C here (the metrics, figure and recording so far are kept)."
     ),
 }
 """What ``--live`` prints before the trial, per interface."""
@@ -224,6 +226,7 @@ def run(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     if args.live and args.no_meshcat:
         return _error("--live needs Meshcat (drop --no-meshcat)")
+    # First, before the heavy imports and anything is built: a bad folder costs nothing.
     try:
         out = check_output_dir(args.out, "--out")
     except ValueError as exc:
