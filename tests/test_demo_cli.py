@@ -1,7 +1,15 @@
-"""``drake-disamb demo``: argument errors, a headless run, a Meshcat run with its recording, the plot."""
+"""``drake-disamb demo``: argument errors, a headless run, a Meshcat run with its recording, the plot,
+``metrics.json``, an unusable ``--out`` and a run stopped by SIGINT / SIGTERM."""
 
 from __future__ import annotations
 
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +68,15 @@ def test_headless_run_prints_metrics_and_writes_figures(tmp_path: Path, capsys) 
     ):
         assert key in out
     assert "yes" in out
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["interrupted"] is False and metrics["success"] is True
+    assert (metrics["task"], metrics["interface"], metrics["paradigm"]) == (
+        "reaching",
+        "head_array",
+        "disambiguation",
+    )
+    assert metrics["goal"] == [3] and isinstance(metrics["seed"], int)
+    assert f"{metrics['time']:.2f}" in out and str(metrics["button_presses"]) in out
     png = tmp_path / "goal_probabilities.png"
     assert png.stat().st_size > 10_000 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (tmp_path / "diagram.dot").read_text().startswith("digraph")
@@ -93,3 +110,146 @@ def test_plot_rejects_mismatched_shapes(tmp_path: Path) -> None:
         plot_goal_probabilities(np.arange(3), np.ones((4, 2)), tmp_path / "x.png")
     with pytest.raises(ValueError, match="goal_names"):
         plot_goal_probabilities(np.arange(3), np.ones((3, 2)) / 2, tmp_path / "x.png", goal_names=["a"])
+
+
+# ----------------------------------------------------------------------------------------------
+# An unusable --out fails at once; SIGINT / SIGTERM stop the trial and keep its results.
+# ----------------------------------------------------------------------------------------------
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def _cli_process(*argv: str) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    return subprocess.Popen(
+        [sys.executable, "-m", "drake_disamb.cli", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+
+
+def _timed_main(argv: list[str]) -> tuple[int, float]:
+    start = time.perf_counter()
+    code = main(argv)
+    return code, time.perf_counter() - start
+
+
+@pytest.mark.parametrize("kind", ["file", "under_a_file"])
+def test_out_that_is_a_file_fails_before_building(kind: str, tmp_path: Path, capsys) -> None:
+    blocker = tmp_path / "taken"
+    blocker.write_text("not a folder")
+    out = blocker if kind == "file" else blocker / "sub"
+    code, took = _timed_main(["demo", "--no-meshcat", "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and took < 2.0
+    assert err.count("\n") == 1 and "--out" in err and str(out) in err and "Traceback" not in err
+    assert blocker.read_text() == "not a folder"
+
+
+def test_read_only_out_fails_before_building(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "ro"
+    out.mkdir()
+    out.chmod(0o500)
+    try:
+        try:  # root (CI) writes through permission bits: then there is nothing to test here
+            (out / "probe").write_text("x")
+            (out / "probe").unlink()
+            pytest.skip("permission bits do not stop this user from writing (running as root)")
+        except PermissionError:
+            pass
+        code, took = _timed_main(["demo", "--no-meshcat", "--quiet", "--out", str(out / "deeper")])
+        err = capsys.readouterr().err
+        assert code == 2 and took < 2.0
+        assert err.count("\n") == 1 and str(out / "deeper") in err and "Traceback" not in err
+        code, took = _timed_main(["demo", "--no-meshcat", "--quiet", "--out", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and took < 2.0 and "cannot write into the folder" in err
+    finally:
+        out.chmod(0o700)
+
+
+def test_unwritable_out_fails_before_building(tmp_path: Path, capsys, monkeypatch) -> None:
+    """Where permission bits cannot be used (root), a failing probe file stands for a read-only folder."""
+    from drake_disamb.commands import _outputs
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(_outputs.tempfile, "mkstemp", refuse)
+    code, took = _timed_main(["demo", "--no-meshcat", "--quiet", "--out", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and took < 2.0
+    expected = f"--out: cannot write into the folder {tmp_path} (Permission denied)"
+    assert err == f"drake-disamb demo: error: {expected}\n"
+    assert not (tmp_path / "metrics.json").exists()
+
+
+def test_bad_out_subprocess_is_fast_and_one_line(tmp_path: Path) -> None:
+    """The whole process, interpreter start-up included, fails within 2 s and builds nothing."""
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("")
+    start = time.perf_counter()
+    proc = _cli_process("demo", "--no-meshcat", "--out", str(blocker))
+    out, err = proc.communicate(timeout=30)
+    assert time.perf_counter() - start < 2.0
+    assert proc.returncode == 2
+    assert err.strip().splitlines() == [
+        f"drake-disamb demo: error: --out: {blocker} is a file, expected a folder"
+    ]
+    assert out == ""
+
+
+def _wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str]:
+    lines: list[str] = []
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        ready, _, _ = select.select([proc.stdout], [], [], 0.5)
+        if ready:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            lines.append(line)
+            if text in line:
+                return lines
+    proc.kill()
+    err = proc.stderr.read()
+    raise AssertionError(f"no line with {text!r} within {timeout} s; got {lines}, stderr {err}")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_path: Path) -> None:
+    # At half real time the default reaching trial (about 6 s simulated) cannot end by itself.
+    proc = _cli_process(
+        "demo", "--no-meshcat", "--quiet", "--realtime-rate", "0.5", "--duration", "600",
+        "--out", str(tmp_path),
+    )  # fmt: skip
+    try:
+        _wait_for_line(proc, "running the trial", timeout=180)
+        time.sleep(3.0)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert f"stopped by {sig.name}" in out
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["interrupted"] is True and metrics["success"] is False
+    assert 0.5 < metrics["time"] < 6.0 and metrics["task"] == "reaching" and metrics["duration_limit"] == 600
+    png = tmp_path / "goal_probabilities.png"
+    assert png.stat().st_size > 10_000 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(tmp_path.glob(".*tmp*"))
+
+
+def test_stop_request_in_process_keeps_the_partial_trial(tmp_path: Path) -> None:
+    """run_trial's stop_requested: the result covers the trial up to the stop, flagged interrupted."""
+    from drake_disamb.builder import run_trial
+    from drake_disamb.commands.demo import metrics_dict
+    from drake_disamb.scenarios import load_scenario
+
+    result = run_trial(load_scenario("reaching"), progress=False, stop_requested=lambda: True)
+    assert result.interrupted and not result.success and result.time < 0.05
+    assert result.logs["belief"][1].shape[0] >= 1
+    assert json.loads(json.dumps(metrics_dict(result)))["interrupted"] is True

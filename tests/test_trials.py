@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import functools
+import hashlib
 import json
+import time
 from pathlib import Path
 
 import numpy as np
@@ -20,11 +22,13 @@ from drake_disamb.core.trials import (
     Trial,
     authors_dft_params,
     generate_trials,
+    iter_generated_chunks,
     load_trial_mat,
     load_trials,
     replay_trials,
     sample_von_mises_fisher,
     save_trial_mat,
+    score_trial_stream,
     score_trials,
     trial_accuracy,
 )
@@ -112,8 +116,22 @@ def test_vectorised_replay_equals_the_plain_loop() -> None:
 # ----------------------------------------------------------------------------------------------
 
 
+SCORES_500_SEED_2020 = "b30cda6813f0e41e2e75ecd704259843e932bcd3f387f17d77ccb555796f56b2"
+"""sha256 of the per-trial scores of generate_trials(500, seed=2020) before the generator was chunked."""
+
+
+def _digest(scores: dict) -> str:
+    h = hashlib.sha256()
+    for m in METHODS:
+        for k in ("published", "strict"):
+            h.update(np.asarray(scores[m][k], dtype=np.float64).tobytes())
+    return h.hexdigest()
+
+
 def test_generated_trials_reproduce_the_paper(generated_500: list[Trial]) -> None:
     scores = score_trials(generated_500, replay_trials(generated_500))
+    # Chunked seeding keeps the first 500 trials of a seed exactly those of the unchunked generator.
+    assert _digest(scores) == SCORES_500_SEED_2020
     acc = {m: scores[m]["published"].mean() for m in METHODS}
     assert abs(acc["dft"] - PUBLISHED_ACCURACY["dft"]) < 0.03
     assert abs(acc["bayes"] - PUBLISHED_ACCURACY["bayes"]) < 0.03
@@ -322,3 +340,84 @@ def test_cli_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert _cli("--data", str(path.parent), "--quiet") == 2
     assert "missing field 'xg'" in capsys.readouterr().err
     assert _cli("--generate", "0") == 2
+
+
+# ----------------------------------------------------------------------------------------------
+# Streaming (bounded memory) and robustness of the command
+# ----------------------------------------------------------------------------------------------
+
+
+def test_generated_trial_does_not_depend_on_how_many(monkeypatch: pytest.MonkeyPatch) -> None:
+    from drake_disamb.core import trials as trials_module
+
+    monkeypatch.setattr(trials_module, "GENERATOR_CHUNK", 6)
+    many, few = generate_trials(17, seed=12), generate_trials(8, seed=12)
+    assert [len(c) for c in iter_generated_chunks(17, seed=12)] == [6, 6, 5]
+    for a, b in zip(many[:8], few, strict=True):
+        np.testing.assert_array_equal(a.traj, b.traj)
+        np.testing.assert_array_equal(a.u_h, b.u_h)
+        assert a.source == b.source
+    assert many[16].source == "generated(seed=12, trial=16)"
+    assert not np.array_equal(many[0].goals, many[6].goals)  # chunks have their own seeds
+
+
+def test_streamed_scores_equal_the_all_at_once_path(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    from drake_disamb.core import trials as trials_module
+
+    monkeypatch.setattr(trials_module, "GENERATOR_CHUNK", 7)
+    trials = generate_trials(20, seed=6)
+    whole = score_trials(trials, replay_trials(trials))
+    streamed = score_trial_stream(iter_generated_chunks(20, seed=6), keep=15)
+    assert streamed.n_trials == 20 and streamed.example.source == trials[15].source
+    for m in METHODS:
+        for k in ("published", "strict"):
+            np.testing.assert_array_equal(streamed.scores[m][k], whole[m][k])
+    out_json = tmp_path / "s.json"
+    assert _cli("--generate", "20", "--seed", "6", "--json", str(out_json), "--quiet") == 0
+    per_trial = json.loads(out_json.read_text())["per_trial"]
+    for m in METHODS:
+        np.testing.assert_array_equal(np.asarray(per_trial[m]["published"]), whole[m]["published"])
+
+
+def _fake_v73(path: Path) -> Path:
+    """The 128-byte header of a MATLAB v7.3 file (version 0x0200), then the HDF5 signature."""
+    text = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 ."
+    path.write_bytes(text.ljust(116) + bytes(8) + b"\x00\x02IM" + b"\x89HDF\r\n\x1a\n" + bytes(64))
+    return path
+
+
+def test_matlab_v73_file_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _fake_v73(tmp_path / "trajectory_1.mat")
+    with pytest.raises(
+        ValueError, match=r"trajectory_1.mat: MATLAB v7.3 \(HDF5\) .mat files are not supported"
+    ):
+        load_trial_mat(path)
+    assert _cli("--data", str(tmp_path), "--quiet") == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(path) in err and "re-save it as v7" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--generate", "1000000000"], "--generate: expected a number of trials in [1, 1000000]"),
+        (["--generate", "5", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
+        (["--json", "{dir}"], "--json: '{dir}' is a folder, expected a file name"),
+        (["--json", "{file}/r.json"], "{file} is a file, expected a folder"),
+        (["--plot", "{dir}/r.xyz"], "--plot: {dir}/r.xyz: expected a file name ending in one of"),
+        (["--plot", "{file}/r.png"], "{file} is a file, expected a folder"),
+        (["--plot", "{dir}/r.png", "--example", "500"], "--example: expected a trial index in [0, 499]"),
+    ],
+)
+def test_cli_bad_options_fail_before_the_work(
+    argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    fill = {"dir": str(tmp_path), "file": str(blocker)}
+    start = time.perf_counter()
+    assert _cli(*[a.format(**fill) for a in argv], "--quiet") == 2
+    assert time.perf_counter() - start < 2.0  # nothing generated or replayed
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message.format(**fill) in err
+    assert blocker.read_text() == "x"

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -128,6 +129,8 @@ class TrialResult:
         realtime_rate: ``time / wall_time``.
         logs: ``{name: (times (T,), values (T, size))}`` for every logged signal.
         rho1: The assistance threshold used.
+        interrupted: The trial was stopped early by a stop request or ``KeyboardInterrupt``
+            (:func:`run_trial`); the metrics and logs cover the trial up to ``time``.
     """
 
     scenario: Scenario
@@ -151,6 +154,7 @@ class TrialResult:
     realtime_rate: float
     rho1: float
     logs: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = field(repr=False)
+    interrupted: bool = False
 
 
 def _make_inference(scenario: Scenario, n: int) -> System:
@@ -396,6 +400,7 @@ def run_trial(
     stop_at_success: bool = True,
     recording: bool | None = None,
     integrator: str = "runge_kutta2",
+    stop_requested: Callable[[], bool] | None = None,
 ) -> TrialResult:
     """Simulate one trial until the task is done (or ``scenario.duration``).
 
@@ -409,6 +414,10 @@ def run_trial(
             recording is published at the end (:func:`save_recording` writes it to HTML).
         integrator: Drake integrator scheme for the continuous belief (``ResetIntegratorFromFlags``),
             with its maximum step set to the control period.
+        stop_requested: Checked after every simulator step; once it returns True the trial stops
+            there (a signal handler's flag). A ``KeyboardInterrupt`` raised during the simulation
+            stops it the same way. Either way the result has ``interrupted=True`` and holds the
+            metrics, logs and Meshcat recording up to the stop.
     """
     handles = (
         scenario
@@ -440,12 +449,16 @@ def run_trial(
             bar_format="{l_bar}{bar}| {n:.1f}/{total} s",
         )
     last = [0.0]
+    stopped = [False]
 
     def monitor(context) -> EventStatus:
         t = context.get_time()
         if bar is not None and t - last[0] >= 0.25:
             bar.update(t - last[0])
             last[0] = t
+        if stop_requested is not None and stop_requested():
+            stopped[0] = True
+            return EventStatus.ReachedTermination(task, "stop requested")
         if stop_at_success and task.is_done(task.GetMyContextFromRoot(context)):
             return EventStatus.ReachedTermination(task, "task done")
         return EventStatus.DidNothing()
@@ -454,8 +467,11 @@ def run_trial(
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
     start = _time.perf_counter()
-    simulator.Initialize()
-    simulator.AdvanceTo(sc.duration)
+    try:
+        simulator.Initialize()
+        simulator.AdvanceTo(sc.duration)
+    except KeyboardInterrupt:
+        stopped[0] = True
     wall = _time.perf_counter() - start
     if bar is not None:
         bar.close()
@@ -501,6 +517,7 @@ def run_trial(
         realtime_rate=float(t_end / wall) if wall > 0 else float("inf"),
         rho1=rho1,
         logs=logs,
+        interrupted=stopped[0],
     )
 
 
@@ -527,6 +544,7 @@ def write_trial_figures(
     if sc.n_stages > 1:
         names = [" / ".join(handles.goal_names(k)[j] for k in range(sc.n_stages)) for j in range(sc.n_goals)]
     _, uh = result.logs["u_h"]
+    outcome = "interrupted at" if result.interrupted else "success in" if result.success else "failure in"
     written = [
         plot_goal_probabilities(
             t,
@@ -542,7 +560,7 @@ def write_trial_figures(
             intended_goal=sc.user.goals[0] if sc.n_stages == 1 else None,
             title=(
                 f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm: "
-                f"{'success' if result.success else 'failure'} in {result.time:.1f} s"
+                f"{outcome} {result.time:.1f} s"
             ),
         )
     ]

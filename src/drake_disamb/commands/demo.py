@@ -4,6 +4,8 @@ With no arguments: the reaching task, a simulated head-array user, the disambigu
 Prints the Meshcat URL (unless ``--no-meshcat``), runs the trial, prints its metrics (success,
 time, mode switches, disambiguation requests, button presses) and writes into ``--out``:
 
+- ``metrics.json``: the printed metrics, machine-readable, with the scenario's identity (task,
+  interface, paradigm, goals, seed) and ``"interrupted"``;
 - ``goal_probabilities.png``: the goal probabilities over time in the style of the paper's figure
   (threshold rho1 dashed, requests and mode switches marked, non-zero command segments below);
 - ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat);
@@ -12,17 +14,30 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 ``--live`` replaces the simulated user by you: the interface is driven from the Meshcat page
 (:class:`~drake_disamb.systems.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
+
+``--out`` is checked (created if needed, a probe file written and deleted) before anything is
+built. Ctrl-C (SIGINT) or SIGTERM stops the trial between simulator steps; the command then writes
+everything above for the trial so far (``metrics.json`` with ``"interrupted": true``) and exits
+130. That is also how a person ends a ``--live`` trial. A second Ctrl-C quits without waiting.
+
+Exit status: 0 the trial succeeded, 1 it did not, 2 bad arguments or an unusable ``--out``,
+130 stopped by SIGINT or SIGTERM.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
+import math
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+from drake_disamb.commands._outputs import check_output_dir
+from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
 
@@ -32,12 +47,14 @@ LIVE_HELP = {
         "Live: drive from the Meshcat page (click into it first). Hold the Left (+) or Right (-)\n"
         "arrow key to drive the mode's dimension (a tap drives it for 0.6 s); Down switches to the\n"
         "next mode, Space asks the robot for the disambiguating mode. The trial ends at the goal\n"
-        "given by --goal (default 0) or after --duration."
+        "given by --goal (default 0), after --duration, or when you press Ctrl-C here (the metrics,\n"
+        "figure and recording so far are kept)."
     ),
     "joystick": (
         "Live: drive from the Meshcat page (click into it first) or plug in a gamepad. A/D and S/W\n"
         "step the two axes, C centres them, M switches mode, Space asks the robot for the\n"
-        "disambiguating mode. The trial ends at the goal given by --goal (default 0) or after --duration."
+        "disambiguating mode. The trial ends at the goal given by --goal (default 0), after --duration,\n"
+        "or when you press Ctrl-C here (the metrics, figure and recording so far are kept)."
     ),
 }
 """What ``--live`` prints before the trial, per interface."""
@@ -136,12 +153,85 @@ def format_metrics(result) -> str:  # noqa: ANN001 (TrialResult, imported lazily
         ("simulated / wall time (s)", f"{result.time:.2f} / {result.wall_time:.2f}"),
         ("real-time rate", f"{result.realtime_rate:.1f}x"),
     ]
+    if getattr(result, "interrupted", False):
+        rows.append(("interrupted", f"yes, at {result.time:.2f} s"))
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k.ljust(width)}  {v}" for k, v in rows)
 
 
+def _finite_or_none(value: float) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def metrics_dict(result, live: bool = False) -> dict[str, Any]:  # noqa: ANN001 (TrialResult)
+    """The printed metrics as a JSON-ready dict (non-finite numbers become ``None``)."""
+    sc = result.scenario
+    return {
+        "task": sc.task,
+        "interface": sc.interface,
+        "paradigm": sc.paradigm,
+        "goal": list(result.intended_goals),
+        "intended_goal_names": list(result.intended_goal_names),
+        "seed": sc.seed,
+        "duration_limit": sc.duration,
+        "live": bool(live),
+        "interrupted": bool(getattr(result, "interrupted", False)),
+        "success": bool(result.success),
+        "done": bool(result.done),
+        "time": float(result.time),
+        "stage_times": [_finite_or_none(t) for t in result.stage_times],
+        "reached_goals": list(result.reached_goals),
+        "reached_goal_names": list(result.reached_goal_names),
+        "mode_switches": int(result.mode_switches),
+        "disambiguation_requests": int(result.requests),
+        "button_presses": int(result.button_presses),
+        "request_times": [float(t) for t in result.request_times],
+        "mode_switch_times": [float(t) for t in result.mode_switch_times],
+        "mean_alpha": _finite_or_none(result.mean_alpha),
+        "wall_time": float(result.wall_time),
+        "realtime_rate": _finite_or_none(result.realtime_rate),
+    }
+
+
+def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN001 (TrialResult)
+    """Write :func:`metrics_dict` to ``out / "metrics.json"`` (through a temporary file, then renamed)."""
+    path = out / "metrics.json"
+    tmp = out / ".metrics.json.tmp"
+    tmp.write_text(json.dumps(metrics_dict(result, live), indent=2) + "\n", encoding="utf-8")
+    tmp.replace(path)
+    return path
+
+
+def _error(message: object) -> int:
+    print(f"drake-disamb demo: error: {message}", file=sys.stderr)
+    return 2
+
+
 def run(args: argparse.Namespace) -> int:
-    """Run the demo; 0 on a successful trial, 1 on an unsuccessful one, 2 on bad arguments."""
+    """Run the demo: 0 on a successful trial, 1 on an unsuccessful one, 2 on bad arguments or an
+    unusable ``--out``, 130 when stopped by SIGINT or SIGTERM (after writing what it has)."""
+    with StopRequest() as stop:
+        try:
+            return _run(args, stop)
+        except KeyboardInterrupt:
+            print(
+                f"drake-disamb demo: interrupted again ({stop.signal_name or 'SIGINT'}); "
+                f"the files in {args.out} may be incomplete",
+                file=sys.stderr,
+            )
+            return EXIT_INTERRUPTED
+
+
+def _run(args: argparse.Namespace, stop: StopRequest) -> int:
+    if args.live and args.no_meshcat:
+        return _error("--live needs Meshcat (drop --no-meshcat)")
+    # First, before the heavy imports and anything is built: a bad folder costs nothing.
+    try:
+        out = check_output_dir(args.out, "--out")
+    except ValueError as exc:
+        return _error(exc)
+
     from drake_disamb.scenarios import load_scenario, with_overrides
 
     try:
@@ -150,32 +240,21 @@ def run(args: argparse.Namespace) -> int:
             scenario, interface=args.interface, paradigm=args.paradigm, goal=args.goal, seed=args.seed
         )
     except ValueError as exc:
-        print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
-        return 2
-    if args.live and args.no_meshcat:
-        print("drake-disamb demo: error: --live needs Meshcat (drop --no-meshcat)", file=sys.stderr)
-        return 2
+        return _error(exc)
     duration = args.duration if args.duration is not None else (600.0 if args.live else None)
     if duration is not None:
         if not duration > 0:
-            print(
-                f"drake-disamb demo: error: --duration: expected a number > 0, got {duration:g}",
-                file=sys.stderr,
-            )
-            return 2
+            return _error(f"--duration: expected a number > 0, got {duration:g}")
         scenario = dataclasses.replace(scenario, duration=duration)
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     meshcat = None
     if not args.no_meshcat:
         try:
             meshcat = start_meshcat(args)
         except (ValueError, RuntimeError) as exc:
-            print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
-            return 2
+            return _error(exc)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
     source = None
@@ -191,23 +270,33 @@ def run(args: argparse.Namespace) -> int:
     try:
         handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
     except ValueError as exc:
-        print(f"drake-disamb demo: error: {exc}", file=sys.stderr)
-        return 2
+        return _error(exc)
     progress = not args.quiet and sys.stderr.isatty()
+    print(
+        f"running the trial (up to {scenario.duration:g} s simulated); Ctrl-C stops it and keeps the results",
+        flush=True,
+    )
     try:
-        result = run_trial(handles, progress=progress, realtime_rate=realtime)
+        result = run_trial(handles, progress=progress, realtime_rate=realtime, stop_requested=stop)
     finally:
         if source is not None:
             source.remove_controls()
+    if result.interrupted:
+        print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {result.time:.2f} s", flush=True)
     print(format_metrics(result))
-    written = write_trial_figures(result, handles, out)
+    try:
+        written = [write_metrics(result, out, live=args.live)]
+        written += write_trial_figures(result, handles, out)
+    except OSError as exc:
+        return _error(f"--out: writing into {out} failed ({exc})")
     for path in written:
         print(f"wrote {path}")
+    if result.interrupted:
+        return EXIT_INTERRUPTED
     hold = args.hold if args.hold is not None else (5.0 if meshcat is not None else 0.0)
-    if meshcat is not None and hold > 0:
+    if meshcat is not None and hold > 0 and not stop:
         print(f"Meshcat stays up for {hold:g} s at {meshcat.web_url()} (Ctrl-C to quit)", flush=True)
-        try:
-            time.sleep(hold)
-        except KeyboardInterrupt:
-            pass
+        end = time.monotonic() + hold
+        while not stop and time.monotonic() < end:
+            time.sleep(min(0.1, max(0.0, end - time.monotonic())))
     return 0 if result.success else 1

@@ -10,6 +10,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+from drake_disamb.commands._outputs import check_output_file
+from drake_disamb.commands._signals import EXIT_INTERRUPTED
+
+MAX_GENERATED = 1_000_000
+"""Largest ``--generate``: about 1.5 h of work and 48 MB of per-trial scores (more is refused)."""
+
 HELP = "Compare DFT, recursive Bayes and memory-based intent inference on simulated trials."
 
 DESCRIPTION = """\
@@ -22,7 +28,13 @@ or from our seeded generator with the same protocol (--generate N --seed S). The
 authors' discretisation (explicit Euler at each file's delta_t, clip and renormalise) and
 parameters (tau1 = tau2 = 10 s, lambda = 200 I, each trial's transition matrix P).
 
-Exit status: 0 on success, 2 on bad input (missing/malformed files, bad options).
+Trials are streamed in chunks of 500 (generate or load, replay, score, drop), so memory does not
+grow with N; generated trial i depends only on the seed and i (--generate 100 gives the first 100
+trials of --generate 500). --generate takes at most 1000000 trials. MATLAB v7.3 (HDF5) files are
+not supported: re-save them as v7. --json and --plot are checked before any work.
+
+Exit status: 0 on success, 2 on bad input (missing/malformed files, bad options, unusable output
+paths), 1 out of memory, 130 stopped by Ctrl-C.
 """
 
 
@@ -87,8 +99,16 @@ def format_table(summary: dict[str, dict[str, float]], n_trials: int, source: st
     return "\n".join(lines)
 
 
-def plot_comparison(trials, beliefs, scores, example: int, path: str | Path) -> None:  # noqa: ANN001
-    """The paper's inference-comparison figure: accuracy distributions and one example trial."""
+def plot_comparison(trial, beliefs, scores, example: int, path: str | Path) -> None:  # noqa: ANN001
+    """The paper's inference-comparison figure: accuracy distributions and one example trial.
+
+    Args:
+        trial: The example :class:`~drake_disamb.core.trials.Trial` (number ``example``).
+        beliefs: Its beliefs, ``{method: (L + 1, n)}``.
+        scores: Every trial's scores, ``{method: {"published": (N,), "strict": (N,)}}``.
+        example: The example's index (for the title).
+        path: The image file to write.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -98,9 +118,8 @@ def plot_comparison(trials, beliefs, scores, example: int, path: str | Path) -> 
     from drake_disamb.core.trials import METHOD_LABELS, METHODS
     from drake_disamb.plotting import GOAL_COLORS
 
-    if not 0 <= example < len(trials):
-        raise ValueError(f"--example: expected a trial index in [0, {len(trials) - 1}], got {example}")
-    tr = trials[example]
+    n_trials = len(next(iter(scores.values()))["published"])
+    tr = trial
     fig = plt.figure(figsize=(13, 7.5))
     grid = fig.add_gridspec(2, 3, height_ratios=[1.0, 1.0])
     ax = fig.add_subplot(grid[0, :])
@@ -118,12 +137,12 @@ def plot_comparison(trials, beliefs, scores, example: int, path: str | Path) -> 
     ax.set_ylabel("inference accuracy (%)")
     ax.set_ylim(0, 105)
     ax.grid(axis="y", alpha=0.3)
-    ax.set_title(f"Goal inference accuracy over {len(trials)} trials (paper metric and strict metric)")
+    ax.set_title(f"Goal inference accuracy over {n_trials} trials (paper metric and strict metric)")
 
     t = np.arange(tr.n_steps + 1)
     for k, m in enumerate(METHODS):
         axk = fig.add_subplot(grid[1, k])
-        b = beliefs[m][example]
+        b = beliefs[m]
         for g in range(tr.n_goals):
             axk.plot(t, b[:, g], color=GOAL_COLORS[g % len(GOAL_COLORS)], lw=1.5, label=f"goal {g + 1}")
         axk.axvspan(tr.zeroed_start, tr.zeroed_stop - 1, color="0.85", zorder=0, label="zero input")
@@ -143,48 +162,92 @@ def plot_comparison(trials, beliefs, scores, example: int, path: str | Path) -> 
     plt.close(fig)
 
 
+def _check_plot_path(path: str) -> None:
+    """``--plot`` must be writable and name an image format matplotlib can write."""
+    check_output_file(path, "--plot")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if suffix not in formats:
+        got = f".{suffix}" if suffix else "no extension"
+        raise ValueError(
+            f"--plot: {path}: expected a file name ending in one of "
+            f"{', '.join('.' + f for f in sorted(formats))}, got {got}"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
-    """Load or generate the trials, replay, print the table, write --json and --plot."""
-    from drake_disamb.core.trials import generate_trials, load_trials, replay_trials, score_trials
+    """Load or generate the trials, replay, print the table, write --json and --plot.
+
+    0 on success, 2 on bad input, 1 out of memory, 130 on Ctrl-C.
+    """
+    try:
+        return _run(args)
+    except (ValueError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("error: out of memory (fewer trials with --generate or --limit need less)", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _run(args: argparse.Namespace) -> int:
+    from drake_disamb.core.trials import (
+        chunk_seed,
+        iter_generated_chunks,
+        iter_loaded_chunks,
+        score_trial_stream,
+        trial_paths,
+    )
 
     progress = not args.quiet and sys.stderr.isatty()
-    try:
-        if args.generate is not None and args.generate < 1:
-            raise ValueError(f"--generate: expected a positive number of trials, got {args.generate}")
-        if args.limit is not None and args.limit < 1:
-            raise ValueError(f"--limit: expected a positive number of trials, got {args.limit}")
-        start = time.perf_counter()
-        if args.data is not None:
-            trials = load_trials(args.data, limit=args.limit, progress=progress)
-            source = f"published files in {args.data}"
-        else:
-            n = 500 if args.generate is None else args.generate
-            trials = generate_trials(n, seed=args.seed, progress=progress)
-            source = f"generated, seed {args.seed}"
-        if args.plot and not 0 <= args.example < len(trials):
-            raise ValueError(
-                f"--example: expected a trial index in [0, {len(trials) - 1}], got {args.example}"
-            )
-        beliefs = replay_trials(trials, progress=progress)
-        scores = score_trials(trials, beliefs)
-        elapsed = time.perf_counter() - start
-        summary = _summary(scores)
-        print(format_table(summary, len(trials), source))
-        print(f"(loading/generating and replaying took {elapsed:.2f} s)")
-        if args.json:
-            payload = {
-                "methods": summary,
-                "trials": len(trials),
-                "source": source,
-                "per_trial": {m: {k: v.tolist() for k, v in s.items()} for m, s in scores.items()},
-            }
-            Path(args.json).write_text(json.dumps(payload, indent=2, allow_nan=True))
-        if args.plot:
-            plot_comparison(trials, beliefs, scores, args.example, args.plot)
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    if args.generate is not None and not 1 <= args.generate <= MAX_GENERATED:
+        raise ValueError(
+            f"--generate: expected a number of trials in [1, {MAX_GENERATED}], got {args.generate}"
+        )
+    if args.limit is not None and args.limit < 1:
+        raise ValueError(f"--limit: expected a positive number of trials, got {args.limit}")
+    if args.json:
+        check_output_file(args.json, "--json")
+    if args.plot:
+        _check_plot_path(args.plot)
+    start = time.perf_counter()
+    if args.data is not None:
+        files = trial_paths(args.data, limit=args.limit)
+        n = len(files)
+        chunks = iter_loaded_chunks(files, progress=progress)
+        source = f"published files in {args.data}"
+    else:
+        n = 500 if args.generate is None else args.generate
+        try:
+            chunk_seed(args.seed, 0)  # a bad seed is an error before any work
+        except ValueError:
+            raise ValueError(f"--seed: expected an integer >= 0, got {args.seed}") from None
+        chunks = iter_generated_chunks(n, seed=args.seed, progress=progress)
+        source = f"generated, seed {args.seed}"
+    if args.plot and not 0 <= args.example < n:
+        raise ValueError(f"--example: expected a trial index in [0, {n - 1}], got {args.example}")
+    streamed = score_trial_stream(chunks, keep=args.example if args.plot else None, progress=progress)
+    scores, n_trials = streamed.scores, streamed.n_trials
+    elapsed = time.perf_counter() - start
+    summary = _summary(scores)
+    print(format_table(summary, n_trials, source))
+    print(f"(loading/generating and replaying took {elapsed:.2f} s)")
+    if args.json:
+        payload = {
+            "methods": summary,
+            "trials": n_trials,
+            "source": source,
+            "per_trial": {m: {k: v.tolist() for k, v in s.items()} for m, s in scores.items()},
+        }
+        Path(args.json).write_text(json.dumps(payload, indent=2, allow_nan=True))
+    if args.plot:
+        plot_comparison(streamed.example, streamed.example_beliefs, scores, args.example, args.plot)
     return 0

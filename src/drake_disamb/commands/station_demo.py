@@ -1,9 +1,17 @@
-"""``drake-disamb station-demo``: the MICO station tracing a scripted end-effector velocity pattern."""
+"""``drake-disamb station-demo``: the MICO station tracing a scripted end-effector velocity pattern.
+
+Exit status: 0 done, 2 bad arguments (one line on stderr naming the option and value, checked
+before anything is built, ``--out`` included), 130 stopped by Ctrl-C (SIGINT) or SIGTERM, which
+end the simulation between steps and still print where the arm got to.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -11,6 +19,11 @@ from typing import Any
 import numpy as np
 
 from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+from drake_disamb.commands._outputs import check_output_dir
+from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
+
+MIN_TIME_STEP = 1e-3
+"""Smallest ``--time-step`` (s): finer plant steps make a demo take hours for no visible gain."""
 
 HELP = "Drive the simulated MICO through a scripted Cartesian velocity pattern (square, wrist roll, gripper)."
 
@@ -56,15 +69,39 @@ def start_simulation(station: Any, realtime_rate: float = 0.0) -> Any:
     return simulator
 
 
-def run_pattern(station: Any, simulator: Any, duration: float, segments: list[Segment]) -> None:
+def run_pattern(
+    station: Any,
+    simulator: Any,
+    duration: float,
+    segments: list[Segment],
+    stop_requested: Callable[[], bool] | None = None,
+) -> bool:
     """Advance ``simulator`` (whose root system is ``station.diagram``) for ``duration`` s through
-    ``segments``, repeating them as needed; the commands are fixed on the station's input ports."""
+    ``segments``, repeating them as needed; the commands are fixed on the station's input ports.
+
+    ``stop_requested`` is checked after every simulator step (through the simulator's monitor,
+    which this replaces); once it returns True the pattern ends there. Returns True if it was
+    stopped that way, False if it ran the whole ``duration``. The commands are zero afterwards.
+    """
     if not (np.isfinite(duration) and duration >= 0):
         raise ValueError(f"run_pattern.duration: expected a finite number >= 0, got {duration!r}")
+    if stop_requested is not None:
+        from pydrake.systems.framework import EventStatus
+
+        def monitor(context: Any) -> Any:
+            if stop_requested():
+                return EventStatus.ReachedTermination(station.diagram, "stop requested")
+            return EventStatus.DidNothing()
+
+        simulator.set_monitor(monitor)
     ctx = simulator.get_mutable_context()
     t_end = ctx.get_time() + duration
     k = 0
+    stopped = False
     while ctx.get_time() < t_end - 1e-12:
+        if stop_requested is not None and stop_requested():
+            stopped = True
+            break
         seg = segments[k % len(segments)]
         station.input_port("ee_velocity_command").FixValue(ctx, np.asarray(seg.velocity, dtype=float))
         station.input_port("gripper_command").FixValue(ctx, [seg.gripper])
@@ -72,13 +109,17 @@ def run_pattern(station: Any, simulator: Any, duration: float, segments: list[Se
         k += 1
     station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
     station.input_port("gripper_command").FixValue(ctx, [0.0])
+    return stopped
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Register the ``station-demo`` options."""
     parser.add_argument(
         "--duration", type=float, default=13.0, help="simulated seconds (default 13: one pattern)"
     )
-    parser.add_argument("--speed", type=float, default=0.05, help="translation speed, m/s (default 0.05)")
+    parser.add_argument(
+        "--speed", type=float, default=0.05, help="translation speed, m/s, in (0, 0.2] (default 0.05)"
+    )
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (as fast as possible)")
     add_meshcat_arguments(parser)
     parser.add_argument(
@@ -88,35 +129,101 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out", type=Path, default=Path("out/station"), help="folder for the diagram picture"
     )
     parser.add_argument(
-        "--time-step", type=float, default=None, help="plant time step, s (default: StationConfig)"
+        "--time-step",
+        type=float,
+        default=None,
+        help=f"plant time step, s, from {MIN_TIME_STEP:g} to the control period (default: StationConfig)",
     )
 
 
+def _error(message: object) -> int:
+    print(f"drake-disamb station-demo: error: {message}", file=sys.stderr)
+    return 2
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Validate the options (``ValueError`` naming the option and value), without importing Drake."""
+    if not (math.isfinite(args.duration) and args.duration > 0):
+        raise ValueError(f"--duration: expected a positive number of seconds, got {args.duration!r}")
+    if not (math.isfinite(args.hold) and args.hold >= 0):
+        raise ValueError(f"--hold: expected a number of seconds >= 0, got {args.hold!r}")
+    if not (math.isfinite(args.speed) and 0 < args.speed <= 0.2):
+        raise ValueError(f"--speed: expected a number in (0, 0.2] m/s, got {args.speed!r}")
+    if args.meshcat_port is not None and not 0 < args.meshcat_port < 65536:
+        raise ValueError(f"--meshcat-port: expected a port in 1..65535, got {args.meshcat_port}")
+    if args.time_step is not None and not (math.isfinite(args.time_step) and args.time_step >= MIN_TIME_STEP):
+        raise ValueError(
+            f"--time-step: expected a number of seconds >= {MIN_TIME_STEP:g}, got {args.time_step!r}"
+        )
+
+
+def _station_config(time_step: float | None) -> Any:
+    """The StationConfig with ``--time-step`` (at most the control period)."""
+    from drake_disamb.station import StationConfig
+
+    config = StationConfig()
+    if time_step is None:
+        return config
+    if time_step > config.control_period:
+        raise ValueError(
+            f"--time-step: expected at most the control period ({config.control_period:g} s), "
+            f"got {time_step!r}"
+        )
+    return StationConfig(time_step=time_step)
+
+
 def run(args: argparse.Namespace) -> int:
+    """Run the pattern: 0 done, 2 bad arguments, 130 stopped by SIGINT or SIGTERM."""
+    with StopRequest() as stop:
+        try:
+            return _run(args, stop)
+        except KeyboardInterrupt:
+            print(f"drake-disamb station-demo: interrupted ({stop.signal_name or 'SIGINT'})", file=sys.stderr)
+            return EXIT_INTERRUPTED
+
+
+def _run(args: argparse.Namespace, stop: StopRequest) -> int:
+    try:  # the cheap checks first, before Drake is imported
+        _check_arguments(args)
+        segments = pattern(args.speed)
+        out = check_output_dir(args.out, "--out")
+    except ValueError as exc:
+        return _error(exc)
 
     from drake_disamb.diagram_io import write_diagram_graph
-    from drake_disamb.station import StationConfig, build_station
+    from drake_disamb.station import build_station
 
-    if not (np.isfinite(args.duration) and args.duration > 0):
-        raise ValueError(f"--duration: expected a positive number of seconds, got {args.duration!r}")
-    if not (np.isfinite(args.hold) and args.hold >= 0):
-        raise ValueError(f"--hold: expected a number of seconds >= 0, got {args.hold!r}")
-    segments = pattern(args.speed)
-    config = StationConfig() if args.time_step is None else StationConfig(time_step=args.time_step)
+    try:
+        config = _station_config(args.time_step)
+    except ValueError as exc:
+        return _error(exc)
     meshcat = None
     if not args.no_meshcat:
-        meshcat = start_meshcat(args)
+        try:
+            meshcat = start_meshcat(args)
+        except (ValueError, RuntimeError) as exc:
+            return _error(exc)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     station = build_station(config, meshcat=meshcat)
-    written = write_diagram_graph(station.diagram, Path(args.out) / "station")
-    print("diagram: " + ", ".join(str(p) for p in written))
+    try:
+        written = write_diagram_graph(station.diagram, out / "station")
+    except OSError as exc:
+        return _error(f"--out: writing into {out} failed ({exc})")
+    print("diagram: " + ", ".join(str(p) for p in written), flush=True)
 
     simulator = start_simulation(station, realtime_rate=1.0 if meshcat is not None else 0.0)
     ctx = simulator.get_mutable_context()
     p0 = station.output_port("ee_pose").Eval(ctx).copy()
+    t0 = ctx.get_time()
     wall = time.perf_counter()
-    run_pattern(station, simulator, args.duration, segments)
+    try:
+        stopped = run_pattern(station, simulator, args.duration, segments, stop_requested=stop)
+    except KeyboardInterrupt:
+        stopped = True
     wall = time.perf_counter() - wall
+    simulated = ctx.get_time() - t0
+    if stopped:
+        print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {simulated:.2f} s", flush=True)
     p1 = station.output_port("ee_pose").Eval(ctx).copy()
     status = int(station.output_port("ik_status").Eval(ctx)[0])
     np.set_printoptions(precision=4, suppress=True)
@@ -128,8 +235,13 @@ def run(args: argparse.Namespace) -> int:
         f"gripper opening {station.output_port('gripper_opening').Eval(ctx)[0] * 1000:.1f} mm, "
         f"ik_status {status}"
     )
-    print(f"simulated {args.duration:.2f} s in {wall:.2f} s wall: real-time rate {args.duration / wall:.2f}")
-    if meshcat is not None and args.hold > 0:
-        print(f"holding Meshcat for {args.hold:.0f} s ...", flush=True)
-        time.sleep(args.hold)
+    rate = f"{simulated / wall:.2f}" if wall > 0 else "inf"
+    print(f"simulated {simulated:.2f} s in {wall:.2f} s wall: real-time rate {rate}")
+    if stopped:
+        return EXIT_INTERRUPTED
+    if meshcat is not None and args.hold > 0 and not stop:
+        print(f"holding Meshcat for {args.hold:g} s (Ctrl-C to quit) ...", flush=True)
+        end = time.monotonic() + args.hold
+        while not stop and time.monotonic() < end:
+            time.sleep(min(0.1, max(0.0, end - time.monotonic())))
     return 0

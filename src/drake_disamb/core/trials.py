@@ -8,11 +8,16 @@ goal is the true one.
 - :func:`load_trial_mat` / :func:`load_trials` read the authors' ``trajectory_N.mat`` files;
   :func:`save_trial_mat` writes the same format.
 - :func:`generate_trials` draws new trials with the authors' protocol (seeded), returning the
-  same :class:`Trial` structure, so the comparison runs without any external data.
+  same :class:`Trial` structure, so the comparison runs without any external data. It draws them
+  in chunks of :data:`GENERATOR_CHUNK`, each from its own seed, so trial ``i`` depends only on the
+  seed and ``i``; :func:`iter_generated_chunks` yields the chunks one at a time.
 - :func:`replay_trials` runs all three methods over any number of trials in one vectorised
   numpy pass per goal count (trials padded in time), with the authors' discretisation.
 - :func:`score_trials` computes the paper's metric (zeroed stretch counted as correct through a
   sentinel) and the strict metric (zeroed stretch excluded).
+- :func:`score_trial_stream` replays and scores a stream of chunks (generate or load, replay,
+  score, drop), so memory stays flat in the number of trials; the scores are identical to
+  :func:`score_trials` on :func:`replay_trials` of all of them at once.
 
 Conventions: arrays are time-major (``(L + 1, 3)`` positions, ``(L, 3)`` commands; command ``j``
 moves the robot from sample ``j`` to sample ``j + 1``), goal indices are 0-based, and the zeroed
@@ -21,8 +26,9 @@ stretch is the half-open sample range ``[zeroed_start, zeroed_stop)``.
 
 from __future__ import annotations
 
+import math
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -179,6 +185,12 @@ def load_trial_mat(path: str | Path) -> Trial:
         raise ValueError(f"{path}: no such file")
     try:
         data = loadmat(path)
+    except NotImplementedError:
+        # scipy reads MATLAB files up to v7; v7.3 files are HDF5 containers.
+        raise ValueError(
+            f"{path}: MATLAB v7.3 (HDF5) .mat files are not supported; "
+            "re-save it as v7 (in MATLAB: save(filename, '-v7'))"
+        ) from None
     except (MatReadError, ValueError, TypeError, OSError, EOFError, IndexError, KeyError) as exc:
         raise ValueError(f"{path}: not a readable MATLAB .mat file ({exc})") from None
 
@@ -257,17 +269,39 @@ def trial_files(directory: str | Path) -> list[Path]:
     return files
 
 
-def load_trials(path: str | Path, limit: int | None = None, progress: bool = False) -> list[Trial]:
-    """Load every ``.mat`` trial of a folder (natural order), or one file; at most ``limit``."""
-    from tqdm import tqdm
-
+def trial_paths(path: str | Path, limit: int | None = None) -> list[Path]:
+    """The files :func:`load_trials` reads: ``path`` itself if it is a ``.mat`` file, else the
+    folder's ``.mat`` files in natural order; at most ``limit``."""
     path = Path(path)
     files = [path] if path.suffix == ".mat" and not path.is_dir() else trial_files(path)
     if limit is not None:
         if limit < 1:
             raise ValueError(f"limit: expected a positive number of trials, got {limit}")
         files = files[:limit]
+    return files
+
+
+def load_trials(path: str | Path, limit: int | None = None, progress: bool = False) -> list[Trial]:
+    """Load every ``.mat`` trial of a folder (natural order), or one file; at most ``limit``."""
+    from tqdm import tqdm
+
+    files = trial_paths(path, limit)
     return [load_trial_mat(f) for f in tqdm(files, desc="loading", unit="file", disable=not progress)]
+
+
+def iter_loaded_chunks(
+    files: Sequence[str | Path], chunk_size: int = 500, progress: bool = False
+) -> Iterator[list[Trial]]:
+    """Load ``files`` (see :func:`trial_paths`) ``chunk_size`` at a time, one list per chunk."""
+    from tqdm import tqdm
+
+    if not (isinstance(chunk_size, int) and chunk_size >= 1):
+        raise ValueError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+    for lo in range(0, len(files), chunk_size):
+        part = files[lo : lo + chunk_size]
+        chunk = [load_trial_mat(f) for f in tqdm(part, desc="loading", unit="file", disable=not progress)]
+        yield chunk
+        del chunk  # not held while the next chunk loads
 
 
 def save_trial_mat(trial: Trial, path: str | Path) -> None:
@@ -412,28 +446,94 @@ class GeneratorConfig:
                 raise ValueError(f"GeneratorConfig.{name}: expected a positive integer, got {value!r}")
 
 
+GENERATOR_CHUNK = 500
+"""Trials per generator chunk. Chunk ``k`` (trials ``500 k .. 500 k + 499``) is always drawn whole
+from its own seed (:func:`chunk_seed`), so trial ``i`` depends only on the seed and ``i``, never on
+how many trials are asked for, and a stream of chunks gives the same trials as one list."""
+
+
+def chunk_seed(seed: int, chunk: int) -> np.random.SeedSequence:
+    """The seed of generator chunk ``chunk``: ``SeedSequence(seed)`` for chunk 0 (so the first 500
+    trials are those the generator drew from ``default_rng(seed)`` before it was chunked), else its
+    child ``SeedSequence(seed).spawn(chunk + 1)[chunk]``."""
+    if not (isinstance(chunk, int | np.integer) and chunk >= 0):
+        raise ValueError(f"chunk: expected an integer >= 0, got {chunk!r}")
+    try:
+        return np.random.SeedSequence(seed, spawn_key=(int(chunk),) if chunk else ())
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"seed: expected an integer >= 0, got {seed!r} ({exc})") from None
+
+
 def generate_trials(
     n_trials: int, seed: int, config: GeneratorConfig | None = None, progress: bool = False
 ) -> list[Trial]:
     """Draw ``n_trials`` new trials with the authors' protocol, seeded (FACTS section 3).
 
-    All trials are simulated in lock-step (one numpy pass per time step over the trials still
-    running). Per trial: 2-5 goals and a start position uniform in the workspace, ``P`` =
-    row-normalised ``I + U(0,1)/100``, a per-trial dropout rate ``U(0, 1/8)``. Per step: every
-    1-5 steps the current goal is re-drawn from its row of ``P``; the command is a unit vector
-    from a von Mises-Fisher distribution (kappa = 2e5) around the direction to the goal, times
-    1 m/s, zeroed with the dropout rate, with one random component zeroed with 1 % chance; the
-    robot moves by ``u dt + N(0, 0.005^2)`` per axis; the trial ends within 0.01 m of the goal.
-    Afterwards a stretch of up to 201 samples starting in the first half of the trial is zeroed
-    and the robot path re-simulated from the start with fresh noise (``traj_zeroed``), exactly
-    the structure of the published files. The same seed gives the same trials.
+    The trials are the first ``n_trials`` of the seed's sequence: chunk ``k`` of
+    :data:`GENERATOR_CHUNK` trials is drawn whole by :func:`generate_chunk` from
+    :func:`chunk_seed(seed, k) <chunk_seed>` (see :func:`iter_generated_chunks`, which yields the
+    same trials a chunk at a time). The same seed gives the same trials.
+    """
+    return [tr for chunk in iter_generated_chunks(n_trials, seed, config, progress) for tr in chunk]
+
+
+def iter_generated_chunks(
+    n_trials: int, seed: int, config: GeneratorConfig | None = None, progress: bool = False
+) -> Iterator[list[Trial]]:
+    """The first ``n_trials`` trials of ``seed`` as lists of at most :data:`GENERATOR_CHUNK`.
+
+    Only one chunk is alive at a time inside the generator (a consumer that drops each chunk
+    before asking for the next keeps memory flat in ``n_trials``). The last chunk is drawn whole
+    and cut, so trial ``i`` does not depend on ``n_trials``. With more than one chunk, ``progress``
+    shows one bar over all trials instead of the per-chunk bars.
+    """
+    from tqdm import tqdm
+
+    if not (isinstance(n_trials, int | np.integer) and n_trials >= 1):
+        raise ValueError(f"n_trials: expected a positive integer, got {n_trials!r}")
+    n_trials = int(n_trials)
+    cfg = GeneratorConfig() if config is None else config
+    n_chunks = math.ceil(n_trials / GENERATOR_CHUNK)
+    chunk_seed(seed, 0)  # a bad seed fails before any work
+    overall = progress and n_chunks > 1
+    with tqdm(total=n_trials, desc="generating", unit="trial", disable=not overall) as bar:
+        for k in range(n_chunks):
+            first = k * GENERATOR_CHUNK
+            rng = np.random.default_rng(chunk_seed(seed, k))
+            chunk = generate_chunk(GENERATOR_CHUNK, rng, cfg, progress and n_chunks == 1, seed, first)
+            del chunk[n_trials - first :]
+            bar.update(len(chunk))
+            yield chunk
+            del chunk  # not held while the next chunk is drawn
+
+
+def generate_chunk(
+    n_trials: int,
+    rng: np.random.Generator,
+    config: GeneratorConfig | None = None,
+    progress: bool = False,
+    seed: int | None = None,
+    first_index: int = 0,
+) -> list[Trial]:
+    """Draw ``n_trials`` trials from ``rng`` with the authors' protocol (the generator's unit of work).
+
+    ``seed`` and ``first_index`` only label the trials' ``source``. All trials are simulated in
+    lock-step (one numpy pass per time step over the trials still running). Per trial: 2-5 goals
+    and a start position uniform in the workspace, ``P`` = row-normalised ``I + U(0,1)/100``, a
+    per-trial dropout rate ``U(0, 1/8)``. Per step: every 1-5 steps the current goal is re-drawn
+    from its row of ``P``; the command is a unit vector from a von Mises-Fisher distribution
+    (kappa = 2e5) around the direction to the goal, times 1 m/s, zeroed with the dropout rate,
+    with one random component zeroed with 1 % chance; the robot moves by ``u dt + N(0, 0.005^2)``
+    per axis; the trial ends within 0.01 m of the goal. Afterwards a stretch of up to 201 samples
+    starting in the first half of the trial is zeroed and the robot path re-simulated from the
+    start with fresh noise (``traj_zeroed``), exactly the structure of the published files. The
+    same ``rng`` state gives the same trials.
     """
     from tqdm import tqdm
 
     if not (isinstance(n_trials, int | np.integer) and n_trials >= 1):
         raise ValueError(f"n_trials: expected a positive integer, got {n_trials!r}")
     cfg = GeneratorConfig() if config is None else config
-    rng = np.random.default_rng(seed)
     B, nmax = int(n_trials), cfg.max_goals
     ws = np.asarray(cfg.workspace, dtype=float)
     lo, span = ws[:, 0], ws[:, 1] - ws[:, 0]
@@ -514,7 +614,7 @@ def generate_trials(
                 x_start=x_start[b].copy(),
                 traj_raw=traj_raw.copy(),
                 u_h_raw=u_raw.copy(),
-                source=f"generated(seed={seed}, trial={b})",
+                source=f"generated(seed={seed}, trial={first_index + b})",
             )
         )
     return trials
@@ -678,3 +778,56 @@ def score_trials(
         acc = np.array([trial_accuracy(b, tr) for b, tr in zip(per_trial, trials, strict=True)])
         scores[m] = {"published": acc[:, 0], "strict": acc[:, 1]}
     return scores
+
+
+@dataclass
+class StreamScores:
+    """What :func:`score_trial_stream` keeps of a stream of trials.
+
+    Attributes:
+        scores: ``{method: {"published": (N,), "strict": (N,)}}``, as :func:`score_trials`.
+        n_trials: ``N``, the number of trials seen.
+        example: Trial number ``keep`` of the stream (or ``None``).
+        example_beliefs: Its beliefs ``{method: (L + 1, n)}`` (or ``None``).
+    """
+
+    scores: dict[str, dict[str, NDArray[np.float64]]]
+    n_trials: int
+    example: Trial | None = None
+    example_beliefs: dict[str, NDArray[np.float64]] | None = None
+
+
+def score_trial_stream(
+    chunks: Iterable[Sequence[Trial]],
+    params: DFTParams | None = None,
+    methods: Iterable[str] = METHODS,
+    keep: int | None = None,
+    progress: bool = False,
+) -> StreamScores:
+    """Replay and score ``chunks`` of trials one at a time (replay, score, drop).
+
+    Memory is that of one chunk plus 48 bytes of scores per trial. The replay of a trial does not
+    depend on the other trials of its batch (bit for bit), so the scores equal those of
+    :func:`score_trials` on :func:`replay_trials` of all trials at once. Trial number ``keep``
+    (0-based over the whole stream) and its beliefs are kept for a figure.
+    """
+    methods = tuple(methods)
+    parts: dict[str, dict[str, list[NDArray[np.float64]]]] = {
+        m: {"published": [], "strict": []} for m in methods
+    }
+    seen = 0
+    example = example_beliefs = None
+    for chunk in chunks:
+        beliefs = replay_trials(chunk, params, methods, progress=progress)
+        for m, s in score_trials(chunk, beliefs).items():
+            parts[m]["published"].append(s["published"])
+            parts[m]["strict"].append(s["strict"])
+        if keep is not None and seen <= keep < seen + len(chunk):
+            example = chunk[keep - seen]
+            example_beliefs = {m: beliefs[m][keep - seen].copy() for m in methods}
+        seen += len(chunk)
+        del chunk, beliefs  # not held while the next chunk is made
+    if seen == 0:
+        raise ValueError("chunks: nothing to replay (empty stream)")
+    scores = {m: {k: np.concatenate(v) for k, v in d.items()} for m, d in parts.items()}
+    return StreamScores(scores=scores, n_trials=seen, example=example, example_beliefs=example_beliefs)

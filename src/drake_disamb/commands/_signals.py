@@ -1,0 +1,61 @@
+"""Ctrl-C (SIGINT) and SIGTERM as a stop request that a command can finish cleanly.
+
+While a :class:`StopRequest` is installed, the first SIGINT or SIGTERM only sets a flag: the
+simulation loop checks it between steps (``run_trial(stop_requested=...)``, a simulator monitor),
+stops, and the command writes what it has and exits with :data:`EXIT_INTERRUPTED`. A second signal
+raises ``KeyboardInterrupt`` at once, for a user who does not want to wait for the writing.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from types import FrameType, TracebackType
+from typing import Any
+
+EXIT_INTERRUPTED = 130
+"""Exit status of a command stopped by SIGINT or SIGTERM (128 + SIGINT, the shell's convention)."""
+
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class StopRequest:
+    """A context manager that turns SIGINT and SIGTERM into a flag (see the module docstring).
+
+    ``bool(stop)`` / ``stop()`` tell whether a signal arrived; ``stop.signal_name`` names it.
+    Outside the main thread (where Python cannot install handlers) it installs nothing and the
+    flag stays false; the previous handlers are restored on exit.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._previous: dict[int, Any] = {}
+
+    def __call__(self) -> bool:
+        return self.signum is not None
+
+    def __bool__(self) -> bool:
+        return self.signum is not None
+
+    @property
+    def signal_name(self) -> str:
+        """``"SIGINT"``, ``"SIGTERM"`` or ``""`` when no signal arrived."""
+        return "" if self.signum is None else signal.Signals(self.signum).name
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.signum is not None:
+            raise KeyboardInterrupt
+        self.signum = signum
+
+    def __enter__(self) -> StopRequest:
+        if threading.current_thread() is threading.main_thread():
+            for sig in _SIGNALS:
+                self._previous[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+        self._previous.clear()

@@ -1,0 +1,73 @@
+"""``drake-disamb station-demo``: bad arguments are one-line errors (exit 2); SIGINT stops it (exit 130)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from drake_disamb.cli import main
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--duration", "nan"], "--duration: expected a positive number of seconds, got nan"),
+        (["--duration", "-1"], "--duration: expected a positive number"),
+        (["--hold", "inf"], "--hold: expected a number of seconds >= 0, got inf"),
+        (["--speed", "5"], "--speed: expected a number in (0, 0.2] m/s, got 5.0"),
+        (["--speed", "0"], "--speed: expected a number in (0, 0.2]"),
+        (["--time-step", "0.02"], "--time-step: expected at most the control period (0.01 s), got 0.02"),
+        (["--time-step", "1e-9"], "--time-step: expected a number of seconds >= 0.001, got 1e-09"),
+        (["--time-step", "nan"], "--time-step"),
+        (["--meshcat-port", "70000"], "--meshcat-port: expected a port in 1..65535, got 70000"),
+    ],
+)
+def test_bad_arguments_are_one_line_errors(argv: list[str], message: str, tmp_path: Path, capsys) -> None:
+    start = time.perf_counter()
+    assert main(["station-demo", "--no-meshcat", *argv, "--out", str(tmp_path / "o")]) == 2
+    assert time.perf_counter() - start < 2.0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("drake-disamb station-demo: error: ")
+    assert message in err
+    if "0.02" not in argv:  # checked against the station's control period, after --out
+        assert not (tmp_path / "o").exists()  # nothing created before the arguments are checked
+
+
+def test_out_that_is_a_file_is_a_one_line_error(tmp_path: Path, capsys) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["station-demo", "--no-meshcat", "--out", str(blocker)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--out: {blocker} is a file" in err
+
+
+def test_sigint_stops_the_pattern(tmp_path: Path) -> None:
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "drake_disamb.cli", "station-demo", "--no-meshcat", "--duration", "100000",
+         "--out", str(tmp_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )  # fmt: skip
+    try:
+        first = proc.stdout.readline()  # "diagram: ...", printed just before the simulation starts
+        assert first.startswith("diagram:"), (first, proc.stderr.read() if proc.poll() is not None else "")
+        time.sleep(1.5)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    assert "stopped by SIGINT" in out and "final EE displacement" in out
