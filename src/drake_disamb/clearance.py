@@ -83,6 +83,7 @@ def pose_matrix(pose: Sequence[float]) -> NDArray[np.float64]:
 
 @dataclass(frozen=True)
 class _Model:
+    builder: object
     plant: object
     arm_positions: tuple[int, ...]  # indices of the six arm joints in the plant's q
     finger_positions: tuple[int, ...]
@@ -113,7 +114,8 @@ def _model() -> _Model:
     from drake_disamb.paths import MODELS_PACKAGE, mico_directives, models_dir
     from drake_disamb.station import ARM_JOINTS, ARM_MODEL_NAME, FINGER_JOINTS
 
-    plant, scene_graph = AddMultibodyPlantSceneGraph(DiagramBuilder(), 0.0)
+    builder = DiagramBuilder()  # owns the plant: kept in the model
+    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
     parser = Parser(plant)
     parser.package_map().Add(MODELS_PACKAGE, str(models_dir()))
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, parser)
@@ -141,6 +143,7 @@ def _model() -> _Model:
     lower = plant.GetPositionLowerLimits()[list(arm_q)]
     upper = plant.GetPositionUpperLimits()[list(arm_q)]
     return _Model(
+        builder=builder,
         plant=plant,
         arm_positions=arm_q,
         finger_positions=tuple(f.position_start() for f in fingers),

@@ -148,8 +148,11 @@ def _key_value(event: yaml.ScalarEvent) -> Any:
         tag = _resolver.resolve(ScalarNode, event.value, event.implicit)
     if tag == "tag:yaml.org,2002:str":
         return event.value
-    try:
-        return _constructor.construct_object(ScalarNode(tag, event.value))
+    construct = SafeConstructor.yaml_constructors.get(tag)
+    if construct is None:  # an unknown tag: left to the loader to report
+        return (tag, event.value)
+    try:  # the scalar constructors keep no state (construct_object would cache every node)
+        return construct(_constructor, ScalarNode(tag, event.value))
     except (yaml.YAMLError, ValueError, TypeError, OverflowError):  # left to the loader to report
         return (tag, event.value)
 
