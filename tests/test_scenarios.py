@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import copy
 import math
+import re
+import time
 from pathlib import Path
 
 import numpy as np
@@ -216,3 +218,165 @@ def test_default_scenario_object_is_invalid_without_goals() -> None:
 
     with pytest.raises(ValueError, match=r"scenario\.goals: expected at least one goal"):
         validate_scenario(Scenario())
+
+
+# ------------------------------------------------------------------------------------------------
+# Validation that matches the README: trials it lets through can be run (issue 11, item 4)
+# ------------------------------------------------------------------------------------------------
+
+
+def _rejected_fast(data: dict | str, match: str) -> str:
+    """Load ``data`` (plain data or YAML text); it must fail in under 2 s naming ``match``."""
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=match) as err:
+        if isinstance(data, str):
+            scenario_from_yaml(data, "probe.yaml")
+        else:
+            scenario_from_dict(data)
+    assert time.perf_counter() - start < 2.0
+    return str(err.value)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _warm() -> None:
+    """Load both tasks once, so timings measure the checks, not pydrake's first import."""
+    load_scenario("reaching")
+    load_scenario("pouring")
+
+
+def test_table_top_comes_from_the_station_model() -> None:
+    from drake_disamb.clearance import arm_lowest_point, table_top_z
+    from drake_disamb.station import MICO_HOME_Q
+
+    assert table_top_z() == pytest.approx(0.0, abs=1e-12)
+    assert arm_lowest_point(MICO_HOME_Q)[0] > 0.1
+    assert arm_lowest_point(load_scenario("pouring").start_joint_positions)[0] > 0.1
+
+
+def test_goal_under_the_table_is_rejected() -> None:
+    data = _reaching_dict()
+    data["goals"][1]["position"] = [-0.116, -0.579, -0.4]
+    msg = _rejected_fast(data, r"scenario\.goals\[1\]\.position: goal 'green_can' is too low")
+    assert "table top (z = 0 m)" in msg and "got [-0.116, -0.579, -0.4]" in msg
+    # Just above the table, the fingers (2 cm past the end effector) still reach into it.
+    data["goals"][1]["position"] = [-0.116, -0.579, 0.03]
+    _rejected_fast(data, r"scenario\.goals\[1\]\.position: .* mico_link_finger_\w+ would reach z = -0\.0")
+
+
+def test_goal_too_low_for_its_object_is_rejected() -> None:
+    data = _reaching_dict()
+    data["goals"][0]["position"] = [0.328, -0.516, 0.09]  # the red box (top 3 cm under the goal) sinks 1 cm
+    msg = _rejected_fast(data, r"scenario\.goals\[0\]\.position: goal 'red_box' is too low for its object")
+    assert "z = -0.010 m" in msg and "got [0.328, -0.516, 0.09]" in msg
+
+
+def test_carried_object_counts_at_the_goals() -> None:
+    data = yaml.safe_load(embedded_scenario_text("pouring"))
+    data["goals"][2]["position"] = [0.3314, -0.206, 0.045]  # the cup's bottom hangs 4.5 cm under the gripper
+    data["goals"][2]["object"]["offset"] = [0.0043, 0.0246, -0.0225]
+    _rejected_fast(data, r"scenario\.goals\[2\]\.position: goal 'platform_low' is too low: .* carried_object")
+    data["carried_object"] = None  # without the cup the gripper itself is clear
+    scenario_from_dict(data)
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.01, 0.039])
+def test_goals_closer_than_twice_the_tolerance_are_rejected(offset: float) -> None:
+    data = _reaching_dict()
+    twin = copy.deepcopy(data["goals"][0])
+    twin["name"] = "twin"
+    twin["position"][0] += offset
+    data["goals"].append(twin)
+    msg = _rejected_fast(
+        data,
+        r"scenario\.goals\[5\]\.position: goal 'twin' is 0\.0\d\d m from goal 'red_box' "
+        r"\(scenario\.goals\[0\]\)",
+    )
+    assert "at least 0.04 m apart" in msg and "position_tolerance" in msg
+
+
+def test_goal_separation_follows_the_tolerance_and_the_stage() -> None:
+    from drake_disamb.scenarios import SuccessSpec, min_goal_separation
+
+    assert min_goal_separation(SuccessSpec(position_tolerance=0.03)) == pytest.approx(0.06)
+    data = _reaching_dict()
+    twin = copy.deepcopy(data["goals"][0])
+    twin["name"] = "twin"
+    twin["position"][0] += 0.05
+    data["goals"].append(twin)
+    scenario_from_dict(data)  # 5 cm apart: fine at 2 cm tolerance
+    data["success"]["position_tolerance"] = 0.03
+    _rejected_fast(data, r"scenario\.goals\[5\]\.position: .* at least 0\.06 m apart")
+    # Goals of different stages may coincide: only one stage's goals compete.
+    pour = yaml.safe_load(embedded_scenario_text("pouring"))
+    pour["goals"][2]["position"] = pour["goals"][0]["position"]
+    pour["goals"][2]["orientation"] = pour["goals"][0]["orientation"]
+    scenario_from_dict(pour)
+
+
+def test_start_posture_inside_the_table_is_rejected() -> None:
+    text = embedded_scenario_text("reaching").replace(
+        "initial_mode: 0",
+        "initial_mode: 0\nstart_joint_positions: [-1.3837, 0.0972, 5.7374, 2.4721, -1.1269, -0.8566]",
+    )  # the home posture with the shoulder lowered by 1 rad: the gripper dips 3 cm into the table
+    msg = _rejected_fast(
+        text, r"scenario\.start_joint_positions: the start posture puts mico_link_finger_\w+ at z = -0\.03"
+    )
+    assert "got [-1.3837, 0.0972, 5.7374, 2.4721, -1.1269, -0.8566]" in msg
+    data = _reaching_dict()
+    data["start_joint_positions"] = [-1.3837, 1.0972, 0.5, 2.4721, -1.1269, -0.8566]
+    _rejected_fast(
+        data, r"scenario\.start_joint_positions\[2\]: expected an angle within joint 3's limits .* got 0\.5"
+    )
+
+
+def test_start_posture_counts_the_carried_object() -> None:
+    from drake_disamb.clearance import Solid, arm_lowest_point, pose_matrix
+
+    q = load_scenario("pouring").start_joint_positions
+    cup = Solid("cup", "cylinder", (0.035, 0.6), pose_matrix([0.0, 0.0, 0.0, 0.7071, 0.0, 0.7071, 0.0]))
+    low, part = arm_lowest_point(q, [cup])  # a 60 cm cup, upright in the gripper 30 cm above the table
+    assert part == "cup" and low == pytest.approx(0.0, abs=0.01)
+    # The pouring start with the shoulder lowered by 0.64 rad: the fingers stay 7 mm above the table,
+    # the cup (its bottom 4.5 cm under the end effector) goes 2 mm into it.
+    data = yaml.safe_load(embedded_scenario_text("pouring"))
+    data["start_joint_positions"] = [-1.2404, 0.2584, 6.9803, 3.3018, -4.7936, 0.5631]
+    assert arm_lowest_point(data["start_joint_positions"])[0] > 0.005
+    _rejected_fast(
+        data, r"scenario\.start_joint_positions: the start posture puts carried_object at z = -0\.0019"
+    )
+
+
+@pytest.mark.parametrize(
+    ("line", "field", "value"),
+    [
+        ("control_period: 1e-6", "control_period", "1e-06"),
+        ("control_period: 0.0005", "control_period", "0.0005"),
+        ("control_period: 0.2", "control_period", "0.2"),
+        ("control_period: 0.01\nplant_time_step: 1e-9", "plant_time_step", "1e-09"),
+        ("control_period: 0.01\nplant_time_step: 0.0", "plant_time_step", "0.0"),
+    ],
+)
+def test_control_period_and_plant_step_within_1ms_and_100ms(line: str, field: str, value: str) -> None:
+    text = embedded_scenario_text("reaching").replace("control_period: 0.01", line)
+    _rejected_fast(
+        text, rf"scenario\.{field}: expected a finite number in \[0\.001, 0\.1\] s, got {re.escape(value)}$"
+    )
+
+
+def test_period_bounds_are_inclusive() -> None:
+    for period, step in ((0.001, 0.001), (0.1, 0.1), (0.1, 0.001)):
+        data = _reaching_dict()
+        data.update(control_period=period, plant_time_step=step)
+        s = scenario_from_dict(data)
+        assert (s.control_period, s.plant_time_step) == (period, step)
+
+
+def test_too_many_stages_or_goals_fail_before_any_quadratic_work() -> None:
+    from drake_disamb.scenarios import MAX_GOALS
+
+    data = _reaching_dict()
+    data["stages"] = [{"name": f"s{k}"} for k in range(20_000)]
+    _rejected_fast(data, r"scenario\.stages: every stage needs a goal, got 20000 stages for 5 goals")
+    data = _reaching_dict()
+    data["goals"] = [dict(data["goals"][0], name=f"g{k}") for k in range(MAX_GOALS + 1)]
+    _rejected_fast(data, rf"scenario\.goals: expected at most {MAX_GOALS} goals, got {MAX_GOALS + 1}")

@@ -421,6 +421,11 @@ def test_end_effector_state_alone() -> None:
         ({"time_step": 0.0}, "time_step"),
         ({"time_step": float("nan")}, "time_step"),
         ({"control_period": 0.0005}, "control_period"),
+        ({"time_step": 1e-9, "control_period": 1e-9}, "time_step: expected a finite number in"),
+        (
+            {"control_period": 0.5},
+            r"control_period: expected a finite number in \[0\.001, 0\.1\] s, got 0\.5",
+        ),
         ({"home_q": (0.0,) * 5}, "home_q"),
         ({"home_q": (0.0, 1.0, float("nan"), 0, 0, 0)}, "home_q"),
         ({"home_gripper_opening": 0.5}, "home_gripper_opening"),

@@ -12,6 +12,27 @@ empty goal list, a goal outside the arm's reach or a malformed YAML file raises 
 naming the field path and the value, e.g.
 ``scenario.goals[2].position: expected 3 finite numbers, got [0.1, nan, 0.2]``.
 
+Before any of that, the YAML text itself is checked (:mod:`drake_disamb.yaml_safety`): at most
+1 MiB of UTF-8 text (a binary or undecodable file is named as such), nesting at most 32 deep, no
+anchors or aliases, no duplicate keys. Values in error messages are cut before they are formatted.
+
+What :func:`validate_scenario` rejects, beyond types and ranges, so that every trial it lets
+through can be run:
+
+- a ``control_period`` or ``plant_time_step`` outside [1 ms, 100 ms]
+  (:data:`~drake_disamb.core._validation.TIME_STEP_RANGE`), or a plant step above the period;
+- a goal out of the arm's reach (:data:`MICO_REACH` from the shoulder);
+- a goal below the table: with the end effector at the goal pose, the gripper (closed or open) and
+  the carried object must stay :data:`MIN_TABLE_CLEARANCE` above the table top, and the goal's
+  object must not reach below the table top;
+- two goals of one stage closer than twice ``success.position_tolerance``
+  (:func:`min_goal_separation`): closer, a position within the tolerance of both exists, so reaching
+  one can count as reaching the other, and each goal's repeller pushes the arm off the other;
+- start joint angles outside the joint limits, or that put a link, a finger or the carried object
+  less than :data:`MIN_TABLE_CLEARANCE` above the table top (forward kinematics of the station's
+  model, :mod:`drake_disamb.clearance`);
+- more than :data:`MAX_GOALS` goals.
+
 Units are SI; positions are in the MICO base frame W (metres), orientations are unit quaternions
 ``[qw, qx, qy, qz]`` of the end-effector frame in W (Drake's w-first order).
 """
@@ -19,7 +40,7 @@ Units are SI; positions are in the MICO base frame W (metres), orientations are 
 from __future__ import annotations
 
 import dataclasses
-import math
+import re
 import types
 import typing
 from collections.abc import Sequence
@@ -31,11 +52,13 @@ from typing import Any, Literal
 import numpy as np
 import yaml
 
+from drake_disamb.core._validation import TIME_STEP_RANGE, bounded_repr, check_real_range, is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, PRESETS
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
+from drake_disamb.yaml_safety import check_yaml_text, decode_yaml_bytes, read_yaml_file, yaml_error_message
 
 INTERFACES: tuple[str, ...] = ("joystick", "head_array")
 """Interface names accepted by :attr:`Scenario.interface`."""
@@ -57,6 +80,25 @@ MICO_REACH: float = 0.7
 
 MIN_START_CLEARANCE: float = 0.05
 """A goal closer than this (m) to the gripper's start position is rejected: the task would be trivial."""
+
+MIN_TABLE_CLEARANCE: float = 0.005
+"""Height (m) above the table top that the arm, the gripper and the carried object must keep at the
+start posture and at every goal pose."""
+
+MAX_GOALS: int = 100
+"""Most goals a scenario may have (all stages together); the study's tasks have 4 and 5."""
+
+
+def min_goal_separation(success: SuccessSpec) -> float:
+    """Smallest distance (m) allowed between two goal positions of one stage.
+
+    Twice ``success.position_tolerance``: a goal counts as reached within that distance of it, so
+    closer goals share positions that count as reaching both (the belief cannot tell them apart, and
+    each goal's repeller pushes the arm off the other). Orientations do not relax this: the
+    autonomy's repellers act on positions only. For the embedded tasks (tolerance 0.02 m) it is
+    0.04 m; their goals are 0.24 m or more apart.
+    """
+    return 2.0 * success.position_tolerance
 
 
 # ----------------------------------------------------------------------------------------------
@@ -283,14 +325,12 @@ def _unit(q: Sequence[float]) -> list[float]:
 
 
 def _fmt(value: Any) -> str:
-    if isinstance(value, np.ndarray):
-        value = value.tolist()
-    text = repr(value)
-    return text if len(text) <= 200 else text[:197] + "..."
+    """``repr(value)`` cut to 200 characters, never formatting more (see :func:`bounded_repr`)."""
+    return bounded_repr(value, 200)
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
+def _cut(text: str, limit: int = 400) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _convert(tp: Any, value: Any, path: str) -> Any:
@@ -329,7 +369,7 @@ def _convert(tp: Any, value: Any, path: str) -> Any:
             raise ValueError(f"{path}: expected an integer, got {_fmt(value)}")
         return value
     if tp is float:
-        if not _is_number(value) or not math.isfinite(value):
+        if not is_real(value):
             raise ValueError(f"{path}: expected a finite number, got {_fmt(value)}")
         return float(value)
     if tp is str:
@@ -344,7 +384,7 @@ def _convert(tp: Any, value: Any, path: str) -> Any:
     if origin is np.ndarray or tp is np.ndarray:
         try:
             arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             raise ValueError(f"{path}: expected numbers, got {_fmt(value)}") from exc
         if any(isinstance(v, bool) for v in np.asarray(value, dtype=object).ravel()):
             raise ValueError(f"{path}: expected numbers, got {_fmt(value)}")
@@ -364,7 +404,8 @@ def _load_dataclass(cls: Any, data: Any, path: str) -> Any:
     for key in data:
         if key not in fields:
             known = ", ".join(sorted(fields))
-            raise ValueError(f"{path}.{key}: unknown key (known keys of {cls.__name__}: {known})")
+            shown = key if isinstance(key, str) and key.isidentifier() and len(key) <= 60 else _fmt(key)
+            raise ValueError(f"{path}.{_cut(shown, 60)}: unknown key (known keys of {cls.__name__}: {known})")
     kwargs = {}
     for name in fields:
         if name in data:
@@ -381,7 +422,7 @@ def _load_dataclass(cls: Any, data: Any, path: str) -> Any:
     try:
         return cls(**kwargs)
     except ValueError as exc:  # e.g. DFTParams / PotentialFieldConfig self-validation
-        raise ValueError(f"{path}: {exc}") from exc
+        raise ValueError(f"{path}: {_cut(str(exc))}") from exc
 
 
 # ----------------------------------------------------------------------------------------------
@@ -399,7 +440,7 @@ def _check_vec(value: Sequence[float], n: int | tuple[int, ...], path: str) -> n
 
 
 def _check_positive(value: float, path: str, allow_zero: bool = False) -> None:
-    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
+    ok = is_real(value) and (value >= 0 if allow_zero else value > 0)
     if not ok:
         bound = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"{path}: expected a finite number {bound}, got {_fmt(value)}")
@@ -419,29 +460,32 @@ def _check_object(obj: ObjectSpec | CarriedObjectSpec, path: str) -> None:
 def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
     """Check every cross-field constraint of ``scenario``; return it unchanged.
 
+    See the module docstring for what is rejected. The table and start-posture checks use the
+    station's model (:mod:`drake_disamb.clearance`, which imports pydrake).
+
     Raises:
         ValueError: naming the field path (``scenario.goals[2].position`` ...) and the value.
     """
     s = scenario
     if s.interface not in INTERFACES:
-        raise ValueError(f"{name}.interface: expected one of {', '.join(INTERFACES)}, got {s.interface!r}")
+        raise ValueError(
+            f"{name}.interface: expected one of {', '.join(INTERFACES)}, got {_fmt(s.interface)}"
+        )
     if s.paradigm not in PARADIGMS:
-        raise ValueError(f"{name}.paradigm: expected one of {', '.join(PARADIGMS)}, got {s.paradigm!r}")
+        raise ValueError(f"{name}.paradigm: expected one of {', '.join(PARADIGMS)}, got {_fmt(s.paradigm)}")
     if s.inference.method not in INFERENCE_METHODS:
         raise ValueError(
             f"{name}.inference.method: expected one of {', '.join(INFERENCE_METHODS)}, "
-            f"got {s.inference.method!r}"
+            f"got {_fmt(s.inference.method)}"
         )
     if s.disambiguation.preset not in PRESETS:
         raise ValueError(
             f"{name}.disambiguation.preset: expected one of {', '.join(PRESETS)}, "
-            f"got {s.disambiguation.preset!r}"
+            f"got {_fmt(s.disambiguation.preset)}"
         )
-    _check_positive(s.control_period, f"{name}.control_period")
+    check_real_range(s.control_period, f"{name}.control_period", *TIME_STEP_RANGE, unit="s")
+    check_real_range(s.plant_time_step, f"{name}.plant_time_step", *TIME_STEP_RANGE, unit="s")
     _check_positive(s.duration, f"{name}.duration")
-    if s.control_period > 0.1:
-        raise ValueError(f"{name}.control_period: expected at most 0.1 s, got {s.control_period!r}")
-    _check_positive(s.plant_time_step, f"{name}.plant_time_step")
     if s.plant_time_step > s.control_period * (1 + 1e-9):
         raise ValueError(
             f"{name}.plant_time_step: expected at most the control period ({s.control_period!r} s), "
@@ -451,54 +495,91 @@ def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
     _check_positive(s.success.orientation_tolerance, f"{name}.success.orientation_tolerance")
     _check_positive(s.success.hold_time, f"{name}.success.hold_time", allow_zero=True)
     if s.seed < 0:
-        raise ValueError(f"{name}.seed: expected a non-negative integer, got {s.seed!r}")
+        raise ValueError(f"{name}.seed: expected a non-negative integer, got {_fmt(s.seed)}")
     if s.initial_mode < 0:
-        raise ValueError(f"{name}.initial_mode: expected a non-negative mode index, got {s.initial_mode!r}")
+        raise ValueError(
+            f"{name}.initial_mode: expected a non-negative mode index, got {_fmt(s.initial_mode)}"
+        )
     if s.start_joint_positions is not None:
         _check_vec(s.start_joint_positions, 6, f"{name}.start_joint_positions")
 
     if not s.stages:
         raise ValueError(f"{name}.stages: expected at least one stage, got []")
+    if not s.goals:
+        raise ValueError(f"{name}.goals: expected at least one goal, got []")
+    if len(s.goals) > MAX_GOALS:
+        raise ValueError(f"{name}.goals: expected at most {MAX_GOALS} goals, got {len(s.goals)}")
+    if len(s.stages) > len(s.goals):
+        raise ValueError(
+            f"{name}.stages: every stage needs a goal, got {len(s.stages)} stages for {len(s.goals)} goals"
+        )
     for i, stage in enumerate(s.stages):
         if stage.hold_time is not None:
             _check_positive(stage.hold_time, f"{name}.stages[{i}].hold_time", allow_zero=True)
-    if not s.goals:
-        raise ValueError(f"{name}.goals: expected at least one goal, got []")
+    held: list[Any] = []  # the carried object as a clearance.Solid in the end-effector frame
+    if s.carried_object is not None:
+        _check_object(s.carried_object, f"{name}.carried_object")
+        q = _check_vec(s.carried_object.orientation, 4, f"{name}.carried_object.orientation")
+        if np.linalg.norm(q) < 1e-6:
+            raise ValueError(
+                f"{name}.carried_object.orientation: expected a non-zero quaternion, "
+                f"got {_fmt(s.carried_object.orientation)}"
+            )
+        held.append(_solid("carried_object", s.carried_object, [*s.carried_object.offset, *q]))
+
+    from drake_disamb import clearance  # pydrake: imported when a scenario with goals is checked
+
+    table = clearance.table_top_z()
     names: set[str] = set()
     shoulder = np.asarray(MICO_SHOULDER_POSITION)
     for i, g in enumerate(s.goals):
         path = f"{name}.goals[{i}]"
         if g.name in names:
-            raise ValueError(f"{path}.name: duplicate goal name {g.name!r}")
+            raise ValueError(f"{path}.name: duplicate goal name {_fmt(g.name)}")
         names.add(g.name)
         pos = _check_vec(g.position, 3, f"{path}.position")
         q = _check_vec(g.orientation, 4, f"{path}.orientation")
         if np.linalg.norm(q) < 1e-6:
             raise ValueError(f"{path}.orientation: expected a non-zero quaternion, got {_fmt(g.orientation)}")
+        if not 0 <= g.stage < len(s.stages):
+            raise ValueError(
+                f"{path}.stage: expected a stage index in [0, {len(s.stages) - 1}], got {_fmt(g.stage)}"
+            )
+        _check_object(g.object, f"{path}.object")
+        low, part = clearance.gripper_lowest_point([*pos, *q], held)
+        if low < table + MIN_TABLE_CLEARANCE:
+            raise ValueError(
+                f"{path}.position: goal {_fmt(g.name)} is too low: with the end effector there, "
+                f"{part} would reach z = {low:.4f} m, less than {MIN_TABLE_CLEARANCE} m above the table "
+                f"top (z = {table:g} m), got {_fmt(g.position)}"
+            )
+        bottom = clearance.lowest_z(_solid(g.name, g.object, [*(pos + g.object.offset), 1.0, 0.0, 0.0, 0.0]))
+        if bottom < table - 1e-3:
+            raise ValueError(
+                f"{path}.position: goal {_fmt(g.name)} is too low for its object: the {g.object.shape}'s "
+                f"bottom (goal + object.offset {_fmt(g.object.offset)}) would be at z = {bottom:.3f} m, "
+                f"below the table top (z = {table:g} m), got {_fmt(g.position)}"
+            )
         dist = float(np.linalg.norm(pos - shoulder))
         if dist > MICO_REACH:
             raise ValueError(
-                f"{path}.position: goal {g.name!r} is out of the arm's reach: {dist:.3f} m from the "
+                f"{path}.position: goal {_fmt(g.name)} is out of the arm's reach: {dist:.3f} m from the "
                 f"shoulder at {list(MICO_SHOULDER_POSITION)} (reach {MICO_REACH} m), got {_fmt(g.position)}"
             )
-        if not 0 <= g.stage < len(s.stages):
-            raise ValueError(
-                f"{path}.stage: expected a stage index in [0, {len(s.stages) - 1}], got {g.stage!r}"
-            )
-        _check_object(g.object, f"{path}.object")
     counts = [len(s.stage_goals(k)) for k in range(len(s.stages))]
     for k, count in enumerate(counts):
         if count == 0:
-            raise ValueError(f"{name}.stages[{k}]: stage {s.stages[k].name!r} has no goals")
+            raise ValueError(f"{name}.stages[{k}]: stage {_fmt(s.stages[k].name)} has no goals")
         if count != counts[0]:
             raise ValueError(
                 f"{name}.stages[{k}]: every stage needs the same number of goals ({counts[0]} in stage 0), "
                 f"got {count}"
             )
+    _check_separation(s, name)
     try:
         s.blending.rhos(counts[0])
     except ValueError as exc:
-        raise ValueError(f"{name}.blending: {exc}") from exc
+        raise ValueError(f"{name}.blending: {_cut(str(exc))}") from exc
     if len(s.user.goals) != len(s.stages):
         raise ValueError(
             f"{name}.user.goals: expected one intended goal index per stage ({len(s.stages)}), "
@@ -507,7 +588,7 @@ def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
     for k, idx in enumerate(s.user.goals):
         if not 0 <= idx < counts[k]:
             raise ValueError(
-                f"{name}.user.goals[{k}]: expected a goal index in [0, {counts[k] - 1}], got {idx!r}"
+                f"{name}.user.goals[{k}]: expected a goal index in [0, {counts[k] - 1}], got {_fmt(idx)}"
             )
     u = s.user.config
     for user_field, task_field in (
@@ -517,17 +598,57 @@ def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
         if getattr(u, user_field) > getattr(s.success, task_field):
             raise ValueError(
                 f"{name}.user.config.{user_field}: expected at most {name}.success.{task_field} "
-                f"({getattr(s.success, task_field)!r}), got {getattr(u, user_field)!r}"
+                f"({getattr(s.success, task_field)!r}), got {_fmt(getattr(u, user_field))}"
             )
-    if s.carried_object is not None:
-        _check_object(s.carried_object, f"{name}.carried_object")
-        q = _check_vec(s.carried_object.orientation, 4, f"{name}.carried_object.orientation")
-        if np.linalg.norm(q) < 1e-6:
-            raise ValueError(
-                f"{name}.carried_object.orientation: expected a non-zero quaternion, "
-                f"got {_fmt(s.carried_object.orientation)}"
-            )
+    if s.start_joint_positions is not None:
+        _check_start_posture(s.start_joint_positions, held, table, f"{name}.start_joint_positions")
     return s
+
+
+def _solid(label: str, obj: ObjectSpec | CarriedObjectSpec, pose: Sequence[float]) -> Any:
+    """``obj`` as a :class:`drake_disamb.clearance.Solid` at ``pose`` ``[x, y, z, qw, qx, qy, qz]``."""
+    from drake_disamb.clearance import Solid, pose_matrix
+
+    return Solid(label, obj.shape, tuple(obj.size), pose_matrix(pose))
+
+
+def _check_separation(s: Scenario, name: str) -> None:
+    """Reject two goals of one stage closer than :func:`min_goal_separation`."""
+    min_sep = min_goal_separation(s.success)
+    index = {id(g): i for i, g in enumerate(s.goals)}
+    for k in range(len(s.stages)):
+        goals = s.stage_goals(k)
+        pos = np.array([g.position for g in goals], dtype=float)
+        d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=-1)
+        d[np.tril_indices(len(goals))] = np.inf
+        a, b = np.unravel_index(int(np.argmin(d)), d.shape)
+        if d[a, b] < min_sep:
+            ga, gb = goals[a], goals[b]
+            raise ValueError(
+                f"{name}.goals[{index[id(gb)]}].position: goal {_fmt(gb.name)} is {d[a, b]:.3f} m from goal "
+                f"{_fmt(ga.name)} ({name}.goals[{index[id(ga)]}]) of the same stage; goals must be at least "
+                f"{min_sep:g} m apart (twice {name}.success.position_tolerance: closer goals share positions "
+                f"that count as reaching both), got {_fmt(gb.position)}"
+            )
+
+
+def _check_start_posture(q: Sequence[float], held: Sequence[Any], table: float, path: str) -> None:
+    """Reject start joint angles outside the joint limits or that put the arm into the table."""
+    from drake_disamb import clearance
+
+    lower, upper = clearance.arm_joint_limits()
+    for k, (v, lo, hi) in enumerate(zip(q, lower, upper, strict=True)):
+        if not lo <= v <= hi:
+            raise ValueError(
+                f"{path}[{k}]: expected an angle within joint {k + 1}'s limits [{lo:.4f}, {hi:.4f}] rad, "
+                f"got {_fmt(v)}"
+            )
+    low, part = clearance.arm_lowest_point(q, held)
+    if low < table + MIN_TABLE_CLEARANCE:
+        raise ValueError(
+            f"{path}: the start posture puts {part} at z = {low:.4f} m, less than {MIN_TABLE_CLEARANCE} m "
+            f"above the table top (z = {table:g} m), got {_fmt(list(q))}"
+        )
 
 
 def check_start_clearance(scenario: Scenario, start_position: Sequence[float]) -> None:
@@ -562,21 +683,46 @@ def scenario_from_dict(data: Any, name: str = "scenario") -> Scenario:
     return validate_scenario(_load_dataclass(Scenario, data, name), name)
 
 
-def scenario_from_yaml(text: str, source: str = "<string>") -> Scenario:
-    """Parse YAML ``text`` into a validated :class:`Scenario`.
+class _YamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
+    """PyYAML's safe loader (libyaml's parser when there is one) with two changes.
+
+    A number written with an exponent but no dot (``1e-6``) is a float, as in YAML 1.2 and in
+    Drake's YAML reader (YAML 1.1 reads it as a string). A scalar the constructor cannot convert
+    (a date such as ``2020-13-45``) is reported with its line instead of a bare ``ValueError``.
+    """
+
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        try:
+            return super().construct_object(node, deep)
+        except (ValueError, TypeError, OverflowError) as exc:
+            raise yaml.constructor.ConstructorError(
+                None, None, _cut(str(exc), 200), node.start_mark
+            ) from None
+
+
+_YamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
+
+
+def scenario_from_yaml(text: str | bytes, source: str = "<string>") -> Scenario:
+    """Parse YAML ``text`` (or UTF-8 bytes) into a validated :class:`Scenario`.
+
+    The text is first checked by :func:`drake_disamb.yaml_safety.check_yaml_text` (size, nesting,
+    anchors and aliases, duplicate keys), then loaded with PyYAML's safe loader.
 
     Raises:
-        ValueError: on malformed YAML (naming ``source`` and the line) or any invalid field.
+        ValueError: on malformed or unsafe YAML (naming ``source`` and the line) or any invalid field.
     """
+    if isinstance(text, bytes | bytearray):
+        text = decode_yaml_bytes(bytes(text), source)
+    check_yaml_text(text, source, root="scenario")
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_YamlLoader)  # noqa: S506 (a safe loader)
     except yaml.YAMLError as exc:
-        where = ""
-        mark = getattr(exc, "problem_mark", None)
-        if mark is not None:
-            where = f" at line {mark.line + 1}, column {mark.column + 1}"
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ValueError(f"{source}: malformed YAML{where}: {problem}") from exc
+        raise ValueError(yaml_error_message(exc, source)) from None
     if data is None:
         raise ValueError(f"{source}: empty YAML document, expected a scenario mapping")
     return scenario_from_dict(data, "scenario")
@@ -604,8 +750,8 @@ def load_scenario(path_or_name: str | Path) -> Scenario:
             f"task: expected one of {', '.join(EMBEDDED_TASKS)} or a YAML path, got {text_name!r}"
         )
     if not path.is_file():
-        raise ValueError(f"task: no such scenario file: {text_name!r}")
-    return scenario_from_yaml(path.read_text(encoding="utf-8"), str(path))
+        raise ValueError(f"task: no such scenario file: {_fmt(text_name)}")
+    return scenario_from_yaml(read_yaml_file(path), str(path))
 
 
 def with_overrides(

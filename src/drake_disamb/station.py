@@ -95,7 +95,7 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.primitives import MatrixGain, Multiplexer
 
-from drake_disamb.core._validation import all_finite
+from drake_disamb.core._validation import TIME_STEP_RANGE, all_finite, check_real_range
 from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
 from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
 
@@ -229,6 +229,7 @@ class StationConfig:
             tests pass unchanged at 2, 5 and 10 ms) while costing a fifth of a 2 ms plant. Choose
             a smaller step (e.g. 0.001) to resolve contact with the table or objects more finely.
         control_period: Period of the differential IK and gripper integrators (s), 0.01 = 100 Hz.
+            Both it and ``time_step`` must lie in [1 ms, 100 ms] (``TIME_STEP_RANGE``).
         home_q: Initial arm joint angles (rad, DH); must be inside the joint limits.
         home_gripper_opening: Initial distance between the fingertips (m).
         joint_velocity_limits: Per-joint speed limits for the IK (rad/s); ``None`` takes the
@@ -285,6 +286,8 @@ class StationConfig:
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{o}.{name}: expected a finite positive number, got {v!r}")
+        for name in ("time_step", "control_period"):
+            check_real_range(getattr(self, name), f"{o}.{name}", *TIME_STEP_RANGE, unit="s")
         if self.control_period < self.time_step * (1 - 1e-9):
             raise ValueError(
                 f"{o}.control_period: must be >= time_step ({self.time_step}), got {self.control_period!r}"
