@@ -214,14 +214,19 @@ def test_workspace_bound_stops_along_the_command() -> None:
     J, _, _ = _jacobian([1.7, 1.4, 1.1, 0.9, 0.6, 0.3], seed=6)
     solver = VelocityIkSolver(LIMITS, DT)
     V = np.array([0.05, 0.0, -0.1, 0.0, 0.0, 0.0])
-    lower = np.array([-np.inf, -np.inf, -0.02, -np.inf, -np.inf, -np.inf])  # near the floor
-    sol = solver.solve(J, V, Q_MID, np.linalg.solve(J, V), lower)
+    rows = np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])  # the vertical speed
+    sol = solver.solve(J, V, Q_MID, np.linalg.solve(J, V), rows, np.array([-0.02]))  # near the floor
     assert sol.status == IkStatus.WORKSPACE
     assert sol.alpha == pytest.approx(0.2)
     _assert_along(J, sol.v, V)
-    lower[2] = 0.0  # on the floor: downward commands stop, upward ones are free
-    assert solver.solve(J, V, Q_MID, np.zeros(6), lower).alpha == 0.0
-    assert solver.solve(J, -V, Q_MID, np.zeros(6), lower).status in (IkStatus.OK, IkStatus.LIMITED)
+    on_floor = np.array([0.0])  # downward commands stop, upward ones are free
+    assert solver.solve(J, V, Q_MID, np.zeros(6), rows, on_floor).alpha == 0.0
+    assert solver.solve(J, -V, Q_MID, np.zeros(6), rows, on_floor).status in (IkStatus.OK, IkStatus.LIMITED)
+    # A point 0.1 m off the origin along x goes down when turning about y: the turn is slowed too.
+    rows = np.array([[0.0, 0.0, 1.0, 0.0, -0.1, 0.0]])
+    W = np.array([0.0, 0.0, 0.0, 0.0, 0.5, 0.0])
+    sol = solver.solve(J, W, Q_MID, np.linalg.solve(J, W), rows, np.array([-0.01]))
+    assert sol.status == IkStatus.WORKSPACE and sol.alpha == pytest.approx(0.2)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.systems.analysis import Simulator
 
+from drake_disamb.clearance import gripper_lowest_point
 from drake_disamb.station import MICO_HOME_Q, IkStatus, StationConfig, build_station
 
 DT = 0.01
@@ -115,7 +116,7 @@ def _check(result: dict, V: np.ndarray, where: str) -> None:
     assert result["off_rotation"] <= OFF_ROTATION, (where, result["off_rotation"])
     # Achieved where the arm can; where it cannot, the status says so from the start.
     first_second = result["statuses"][: int(round(1.0 / DT))]
-    speed = float(np.max(np.abs(V)))
+    speed = float(np.linalg.norm(V[:3]) if V[:3].any() else np.linalg.norm(V[3:]))  # progress's unit
     if all(s == IkStatus.OK for s in first_second[10:]):  # after the 0.1 s ramp
         assert result["progress_1s"] >= 0.8 * speed * 1.0, (where, result["progress_1s"])
     else:
@@ -144,8 +145,8 @@ def test_home_commands_are_achieved() -> None:
     for axis in range(6):
         V = np.zeros(6)
         V[axis] = 0.1 if axis < 3 else 0.2
-        result = rig.run(V, 1.0)
-        assert result["progress"] >= 0.8 * V[axis], (axis, result["progress"])
+        result = rig.run(V, 0.5)
+        assert result["progress"] >= 0.6 * V[axis] * 0.5, (axis, result["progress"])  # ramps included
 
 
 def test_pure_rotation_does_not_translate() -> None:
@@ -159,8 +160,8 @@ def test_pure_rotation_does_not_translate() -> None:
 def test_floor_stops_a_downward_command() -> None:
     rig = Hold(POSTURES["home"])
     result = rig.run(np.array([0, 0, -0.1, 0, 0, 0.0]), 6.0)
-    z = rig.station.output_port("ee_pose").Eval(rig.ctx)[2]
-    assert rig.station.config.ee_min_height - 0.005 <= z <= rig.station.config.ee_min_height + 0.01
+    lowest = gripper_lowest_point(rig.station.output_port("ee_pose").Eval(rig.ctx))[0]
+    assert 0.0 < lowest <= rig.station.config.table_clearance + 0.01
     assert result["statuses"][-1] == IkStatus.WORKSPACE
     assert result["off_total"] <= OFF_TOTAL
 
@@ -179,21 +180,26 @@ def _random_posture(rng: np.random.Generator) -> tuple[float, ...] | None:
     full = plant.GetPositions(ctx)
     full[:6] = q
     plant.SetPositions(ctx, full)
-    lowest = min(
-        plant.EvalBodyPoseInWorld(ctx, plant.get_body(b)).translation()[2]
+    moving = [
+        plant.get_body(b)
         for b in plant.GetBodyIndices(plant.GetModelInstanceByName("mico"))
-    )
+        if plant.get_body(b).name() not in ("mico_link_base", "mico_link_1")  # fixed near z = 0
+    ]
+    lowest = min(plant.EvalBodyPoseInWorld(ctx, body).translation()[2] for body in moving)
     z = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(ctx).translation()[2]
     return tuple(q.tolist()) if z > 0.12 and lowest > 0.08 else None
 
 
-@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**31 - 1))
 def test_random_postures_and_twists_move_only_along_the_command(seed: int) -> None:
     rng = np.random.default_rng(seed)
     home_q = None
-    while home_q is None:
+    for _ in range(200):
         home_q = _random_posture(rng)
+        if home_q is not None:
+            break
+    assert home_q is not None, "no posture above the table in 200 draws"
     direction = rng.normal(size=6)
     direction[rng.random(6) < 0.4] = 0.0  # some components zero: mixed and pure commands
     if not direction.any():

@@ -218,6 +218,32 @@ def _gripper_in_ee() -> tuple[Solid, ...]:
     return tuple(out)
 
 
+def gripper_points_in_ee(attached: Sequence[Solid] = ()) -> NDArray[np.float64]:
+    """Points (k, 3) in the end-effector frame whose convex hull holds the gripper (closed and fully
+    open) and the ``attached`` solids: every box's corners, every cylinder's two rims (8 points
+    each, on a circumscribed octagon), every sphere's circumscribed cube. The lowest of them is at
+    most the gripper's true lowest point: a floor on them keeps the gripper itself above it."""
+    out = []
+    for s in (*_gripper_in_ee(), *attached):
+        if s.shape == "box":
+            half = np.asarray(s.size, dtype=float) / 2
+            local = (
+                np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=float) * half
+            )
+        elif s.shape == "cylinder":
+            r = s.size[0] / math.cos(math.pi / 8)
+            ang = np.arange(8) * math.pi / 4
+            ring = np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1)
+            local = np.concatenate(
+                [np.hstack([ring, np.full((8, 1), z)]) for z in (-s.size[1] / 2, s.size[1] / 2)]
+            )
+        else:  # sphere
+            r = s.size[0]
+            local = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=float) * r
+        out.append(local @ s.X[:3, :3].T + s.X[:3, 3])
+    return np.concatenate(out)
+
+
 def gripper_lowest_point(pose: Sequence[float], attached: Sequence[Solid] = ()) -> tuple[float, str]:
     """Lowest z (m, in W) of the gripper with the end effector at ``pose`` ``[x, y, z, qw, qx, qy, qz]``.
 
@@ -238,6 +264,7 @@ __all__ = [
     "arm_joint_limits",
     "arm_lowest_point",
     "gripper_lowest_point",
+    "gripper_points_in_ee",
     "highest_z",
     "lowest_z",
     "pose_matrix",

@@ -88,9 +88,10 @@ class IkStatus(IntEnum):
     """The command was tracked at (at least ``limited_alpha`` of) full speed; a zero command holds
     the arm still."""
     STOPPED = 1
-    """Less than ``stopped_alpha`` of the command can be achieved along it, and every joint moves at
-    less than that fraction of its speed limit (a joint on its limit, an exact singularity, or a direction no joint motion
-    produces): the end effector stays still, apart from the bounded null-space pull."""
+    """Less than ``stopped_alpha`` of the command can be achieved along it, and every joint moves
+    at less than that fraction of its speed limit (a joint on its limit, an exact singularity, or
+    a direction no joint motion produces): the end effector stays still, apart from the bounded
+    null-space pull."""
     INVALID_COMMAND = 2
     """The command had a NaN or infinite entry and was replaced by zero."""
     LIMITED = 3
@@ -256,7 +257,8 @@ def velocity_bounds(
     """The box ``[lo, hi]`` of joint velocities allowed for one step of length ``dt``.
 
     It is the intersection of the position bounds, the velocity bounds (``speed_factor`` times
-    ``limits.velocity``) and the acceleration bounds (``|v - v_prev| <= acceleration * dt``). The
+    ``limits.velocity``; a joint already faster than that slows to it at its acceleration limit)
+    and the acceleration bounds (``|v - v_prev| <= acceleration * dt``). The
     position bounds brake: towards a limit a joint may go no faster than it can still stop on it at
     its acceleration limit (``v <= -a dt / 2 + sqrt((a dt / 2)^2 + 2 a d)`` for a distance ``d``),
     and never past it (``q + v dt`` inside ``[lower, upper]``). Where the acceleration interval
@@ -275,11 +277,20 @@ def velocity_bounds(
 
 
 def _position_velocity_bounds(
-    q: NDArray[np.float64], dt: float, limits: JointLimits, speed_factor: float
+    q: NDArray[np.float64],
+    dt: float,
+    limits: JointLimits,
+    speed_factor: float,
+    v_prev: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The braking position bounds and the velocity bounds (no acceleration bounds). They hold 0
-    when ``q`` is inside its limits; outside them ``lo = hi`` points back inside."""
+    when ``q`` is inside its limits; outside them ``lo = hi`` points back inside. The reduced
+    speed limit ``speed_factor * velocity`` is soft: a joint faster than it (``v_prev``) slows
+    down to it at its acceleration limit, not in one step."""
     vmax = limits.velocity * speed_factor
+    if speed_factor < 1.0 and v_prev is not None:
+        ramp = np.abs(v_prev) - np.minimum(limits.acceleration, 1e12) * dt
+        vmax = np.minimum(limits.velocity, np.maximum(vmax, ramp))
     ad = np.minimum(limits.acceleration, 1e12) * dt * 0.5
     up = np.maximum(limits.upper - q, 0.0)
     down = np.maximum(q - limits.lower, 0.0)
@@ -303,7 +314,7 @@ def _bounds(
     limits: JointLimits,
     speed_factor: float = 1.0,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    lo_pv, hi_pv = _position_velocity_bounds(q, dt, limits, speed_factor)
+    lo_pv, hi_pv = _position_velocity_bounds(q, dt, limits, speed_factor, v_prev)
     da = limits.acceleration * dt
     lo = np.maximum(lo_pv, v_prev - da)
     hi = np.minimum(hi_pv, v_prev + da)
@@ -342,19 +353,12 @@ def _speed_interval(
     return t_lo, max(t_hi, t_lo), j_lo, j_hi
 
 
-def _twist_cap(
-    d: NDArray[np.float64], lower: NDArray[np.float64] | None, upper: NDArray[np.float64] | None
-) -> float:
-    """Largest ``t >= 0`` with ``lower <= t d <= upper`` row by row (bounds excluding 0 count as 0)."""
-    t = math.inf
-    lo = None if lower is None else np.minimum(lower, 0.0)
-    hi = None if upper is None else np.maximum(upper, 0.0)
-    for i, d_i in enumerate(d.tolist()):
-        if d_i > 0.0 and hi is not None:
-            t = min(t, float(hi[i]) / d_i)
-        elif d_i < 0.0 and lo is not None:
-            t = min(t, float(lo[i]) / d_i)
-    return t
+def _task_cap(rate: NDArray[np.float64], lower: NDArray[np.float64]) -> float:
+    """Largest ``t >= 0`` with ``t * rate >= lower`` row by row (a bound above 0 counts as 0)."""
+    down = rate < 0.0
+    if not down.any():
+        return math.inf
+    return float(np.min(np.minimum(lower[down], 0.0) / rate[down]))
 
 
 class VelocityIkSolver:
@@ -403,16 +407,17 @@ class VelocityIkSolver:
         V: NDArray[np.float64],
         q: NDArray[np.float64],
         v_prev: NDArray[np.float64],
-        twist_lower: NDArray[np.float64] | None = None,
-        twist_upper: NDArray[np.float64] | None = None,
+        task_rows: NDArray[np.float64] | None = None,
+        task_lower: NDArray[np.float64] | None = None,
     ) -> IkSolution:
         """One step: ``J`` (m, n), ``V`` (m,), ``q`` and ``v_prev`` (n,), all finite (unchecked).
 
-        ``twist_lower`` / ``twist_upper`` (m,), optional, bound the end-effector twist ``J v`` row by
-        row (e.g. a floor: the vertical speed may not go below ``-brake(height above it)``); ``-inf``
-        / ``inf`` for no bound. A bound that excludes zero is taken as zero (the command stops
-        rather than being pushed). Like the joint limits, they only shorten the step along the
-        command: a step they limit is reported ``WORKSPACE``.
+        ``task_rows`` (k, m) and ``task_lower`` (k,), optional, are workspace bounds on the
+        end-effector twist: ``task_rows @ (J v) >= task_lower`` (e.g. a floor: row i gives the
+        vertical speed of a gripper point, bounded below by ``-(its height above the floor) / tau``).
+        A bound above zero is taken as zero (the command stops rather than being pushed). Like the
+        joint limits they only shorten the step along the command: a step they limit is reported
+        ``WORKSPACE``.
         """
         n = self._n
         scale = float(np.max(np.abs(V))) if V.size else 0.0
@@ -424,14 +429,95 @@ class VelocityIkSolver:
         factor = 1.0
         if sigma_min < params.singular_threshold:
             factor = max(params.singular_speed_floor, sigma_min / params.singular_threshold)
-        lo, hi = _bounds(q, v_prev, self.dt, self.limits, factor)
         t_cap = scale
-        if twist_lower is not None or twist_upper is not None:
-            t_cap = min(scale, _twist_cap(d, twist_lower, twist_upper))
-        sol = self._along_line(J, d, scale, t_cap, v_dir, v_null, q, v_prev, lo, hi, sigma_min, factor)
-        if t_cap < scale and sol.status != IkStatus.OK and sol.alpha * scale >= t_cap * (1 - 1e-9):
+        if task_rows is not None and task_lower is not None and len(task_lower):
+            t_cap = min(scale, _task_cap(task_rows @ d, task_lower))
+        if v_dir is None:  # the command's direction is out of reach: refuse it, hold still
+            v = self._fit_pull(np.zeros(n), v_null, q, v_prev)
+            return self._solution(J, d, scale, v, sigma_min, (), factor)
+        t, limiting = self._speed_along(v_dir, q, v_prev, min(scale, t_cap), factor)
+        v = self._fit_pull(t * v_dir, v_null, q, v_prev)
+        sol = self._solution(J, d, scale, v, sigma_min, limiting, factor)
+        if t_cap < scale and sol.status != IkStatus.OK and t >= t_cap * (1 - 1e-9):
             return IkSolution(sol.v, IkStatus.WORKSPACE, sol.alpha, sol.error, sol.sigma_min, ())
         return sol
+
+    def _speed_along(
+        self,
+        v_dir: NDArray[np.float64],
+        q: NDArray[np.float64],
+        v_prev: NDArray[np.float64],
+        t_max: float,
+        factor: float,
+    ) -> tuple[float, tuple[int, ...]]:
+        """The speed ``t`` in ``[0, t_max]`` along the joint direction ``v_dir`` (module docstring).
+
+        Everything is worked out on the line itself, so the joints slow down together: the line
+        can decelerate by ``a_t dt`` per step, ``a_t = min_j acceleration_j / |v_dir_j|``, and it
+        brakes for the nearest position limit, and for the reduced speed near a singularity, at
+        that rate. Hard bounds: the velocity limits, the position limits (never crossed) and
+        ``t_max``. Soft ones, given up only to the hard ones: the acceleration bounds, the braking
+        and the reduced speed.
+        """
+        lim, dt = self.limits, self.dt
+        mag = np.abs(v_dir)
+        moving = mag > 0.0
+        if not moving.any():
+            return t_max, ()
+        acc = np.minimum(lim.acceleration, 1e12)
+        a_t = float(np.min(acc[moving] / mag[moving]))  # the line's acceleration limit (t units)
+        # Hard: velocity limits and landing on (never crossing) a position limit.
+        room = np.where(v_dir > 0, lim.upper - q, q - lim.lower)  # distance to the limit ahead
+        room = np.maximum(room, 0.0)
+        with np.errstate(divide="ignore"):
+            hard_j = np.where(
+                moving, np.minimum(lim.velocity, room / dt) / np.where(moving, mag, 1.0), np.inf
+            )
+        j_hard = int(np.argmin(hard_j))
+        t_hard = min(t_max, float(hard_j[j_hard]))
+        # Soft: brake for the nearest limit at the line's deceleration, and the reduced speed near a
+        # singularity, reached at that deceleration from the current speed along the line.
+        with np.errstate(divide="ignore"):
+            room_t = np.where(moving, room / np.where(moving, mag, 1.0), np.inf)
+        j_brake = int(np.argmin(room_t))
+        half = 0.5 * a_t * dt
+        t_brake = math.sqrt(half * half + 2.0 * a_t * float(room_t[j_brake])) - half
+        t_prev = max(0.0, float(v_prev @ v_dir) / float(v_dir @ v_dir))
+        t_factor = math.inf
+        if factor < 1.0:
+            t_factor = max(factor * float(np.min(lim.velocity[moving] / mag[moving])), t_prev - a_t * dt)
+        t_soft = min(t_brake, t_factor)
+        t = min(t_hard, t_soft)
+        # Acceleration: stay within each joint's bound of its previous velocity where the line can.
+        acc_interval = _speed_interval(np.zeros(self._n), v_dir, v_prev - acc * dt, v_prev + acc * dt)
+        if acc_interval is not None:
+            t = min(max(t, acc_interval[0]), acc_interval[1])
+        else:  # no point of the line is within reach: the nearest one (weighted) to v_prev
+            w = self._accel_weight
+            t = min(t, max(0.0, float((v_dir * w) @ v_prev) / float((v_dir * w) @ v_dir)))
+        t = max(0.0, min(t, t_hard))
+        if t >= t_max * (1 - 1e-12):
+            return t, ()
+        if t >= t_hard * (1 - 1e-9):
+            return t, (j_hard,)
+        return t, (j_brake,) if t >= t_brake * (1 - 1e-9) else ()
+
+    def _fit_pull(
+        self,
+        v: NDArray[np.float64],
+        v_null: NDArray[np.float64],
+        q: NDArray[np.float64],
+        v_prev: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """``v`` plus as much of the null-space pull as fits every joint bound (it never costs the
+        command its speed or direction)."""
+        if not v_null.any():
+            return v
+        lo, hi = _bounds(q, v_prev, self.dt, self.limits)
+        interval = _speed_interval(v, v_null, lo, hi)
+        if interval is None or interval[0] > 1.0:
+            return v
+        return v + min(1.0, interval[1]) * v_null
 
     def _decompose(
         self, J: NDArray[np.float64], d: NDArray[np.float64], q: NDArray[np.float64]
@@ -457,49 +543,6 @@ class VelocityIkSolver:
             N = Wt[r:]
             v_null = N.T @ (w * (N @ (self.params.nominal_gain * (self.q_nominal - q))))
         return v_dir, v_null, sigma_min
-
-    def _along_line(
-        self,
-        J: NDArray[np.float64],
-        d: NDArray[np.float64],
-        scale: float,
-        t_cap: float,
-        v_dir: NDArray[np.float64] | None,
-        v_null: NDArray[np.float64],
-        q: NDArray[np.float64],
-        v_prev: NDArray[np.float64],
-        lo: NDArray[np.float64],
-        hi: NDArray[np.float64],
-        sigma_min: float,
-        factor: float,
-    ) -> IkSolution:
-        """The fastest point ``base + t v_dir`` (t <= scale) inside the bounds (module docstring)."""
-        n = self._n
-        lo_pv, hi_pv = _position_velocity_bounds(q, self.dt, self.limits, factor)
-        # The pull alone, shrunk into the box (it must never cost the command its direction).
-        base = np.zeros(n)
-        if v_null.any():
-            pull = _speed_interval(np.zeros(n), v_null, lo, hi)
-            if pull is not None and pull[0] <= 1.0:
-                base = min(1.0, pull[1]) * v_null
-        if v_dir is None:  # the command's direction is out of reach: refuse it, hold still
-            v = base if _speed_interval(base, np.zeros(n), lo, hi) is not None else np.zeros(n)
-            return self._solution(J, d, scale, v, sigma_min, (), factor)
-        interval = _speed_interval(base, v_dir, lo, hi)
-        if interval is not None and interval[0] <= t_cap:
-            t = min(t_cap, interval[1])
-            limiting = () if t >= scale or t >= t_cap else (interval[3],)
-            return self._solution(J, d, scale, base + t * v_dir, sigma_min, limiting, factor)
-        # No allowed point of the line meets the acceleration bounds: keep the direction (and the
-        # workspace cap), give those up; take the point nearest the previous velocity.
-        interval = _speed_interval(np.zeros(n), v_dir, lo_pv, hi_pv)
-        t_max = min(t_cap, interval[1]) if interval is not None else 0.0
-        w = self._accel_weight
-        t = float((v_dir * w) @ v_prev) / float((v_dir * w) @ v_dir)
-        t = min(max(t, 0.0), t_max)
-        outside = np.flatnonzero((t * v_dir < lo) | (t * v_dir > hi))
-        limiting = () if t >= scale else tuple(int(j) for j in outside)
-        return self._solution(J, d, scale, t * v_dir, sigma_min, limiting, factor)
 
     def _solution(
         self,

@@ -95,6 +95,7 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.primitives import MatrixGain, Multiplexer
 
+from drake_disamb.clearance import Solid, gripper_points_in_ee, table_top_z
 from drake_disamb.core._validation import TIME_STEP_RANGE, all_finite, check_real_range
 from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
 from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
@@ -242,11 +243,12 @@ class StationConfig:
             0.17 s, the joint speeds of a 0.1 m/s command in about 0.06 s), keeps the physical
             arm's lag during a ramp from moving the end effector off the command by more than
             about 0.5 cm/s; at 20 rad/s^2 that transient reached 1.7 cm/s.
-        ee_min_height: Floor (m) for the end-effector origin above the table top (z = 0): a command
-            that would take it lower is slowed along its own direction and stops there (status
-            ``WORKSPACE``), instead of pushing the gripper into the table. The fingertips reach
-            2 cm past the origin when the gripper points down; the default leaves 2 cm more.
-            ``None`` disables the floor.
+        table_clearance: Floor (m) above the table top (z = 0) for every point of the gripper
+            (link 6 and both fingers, open or closed, plus a held cup): a command that would take
+            any of them lower, by translating or by turning, is slowed along its own direction
+            and stops there (status ``WORKSPACE``) instead of pushing the gripper into the table.
+            The default equals the scenario validation's ``MIN_TABLE_CLEARANCE`` (5 mm), so
+            every goal that validation accepts is above the floor. ``None`` disables the floor.
         nominal_posture: Posture (rad) the IK pulls towards in the null space of the task; ``None``
             uses ``home_q``.
         nominal_posture_gain: Gain (1/s) of that pull.
@@ -267,7 +269,7 @@ class StationConfig:
     home_gripper_opening: float = 0.08
     joint_velocity_limits: tuple[float, ...] | None = None
     joint_acceleration_limits: tuple[float, ...] = (5.0,) * 6
-    ee_min_height: float | None = 0.04
+    table_clearance: float | None = 0.005
     nominal_posture: tuple[float, ...] | None = None
     nominal_posture_gain: float = 0.5
     kp: tuple[float, ...] = (300.0, 300.0, 300.0, 60.0, 60.0, 60.0)
@@ -305,13 +307,13 @@ class StationConfig:
                 if name == "joint_velocity_limits" and np.any(arr <= 0):
                     raise ValueError(f"{o}.{name}: expected positive numbers, got {arr.tolist()}")
                 object.__setattr__(self, name, tuple(arr.tolist()))
-        if self.ee_min_height is not None and not (
-            isinstance(self.ee_min_height, int | float)
-            and not isinstance(self.ee_min_height, bool)
-            and -1.0 <= self.ee_min_height <= 1.0
+        if self.table_clearance is not None and not (
+            isinstance(self.table_clearance, int | float)
+            and not isinstance(self.table_clearance, bool)
+            and 0.0 <= self.table_clearance <= 0.5
         ):
             raise ValueError(
-                f"{o}.ee_min_height: expected None or a number in [-1, 1] m, got {self.ee_min_height!r}"
+                f"{o}.table_clearance: expected None or a number in [0, 0.5] m, got {self.table_clearance!r}"
             )
         for name in ("joint_acceleration_limits", "kp", "kd"):
             arr = _finite_vector(o, name, getattr(self, name), 6)
@@ -399,7 +401,8 @@ class DifferentialIKIntegrator(LeafSystem):
     Every ``control_period`` it (1) reads ``ee_velocity_command`` (paper order), (2) computes the
     Jacobian of ``mico_end_effector`` at the integrated set point q_d (rows in the paper's order)
     and solves :meth:`drake_disamb.ik.VelocityIkSolver.solve` there, with the joint position,
-    velocity and acceleration limits and the floor ``StationConfig.ee_min_height``, (3) sets
+    velocity and acceleration limits and the floor ``StationConfig.table_clearance`` under every
+    point of the gripper, (3) sets
     ``v_d`` to the solution and integrates ``q_d += v_d * period`` (inside the joint limits by
     construction; clamped against rounding).
 
@@ -433,6 +436,7 @@ class DifferentialIKIntegrator(LeafSystem):
         control_plant: MultibodyPlant,
         config: StationConfig,
         arm_instance: ModelInstanceIndex | None = None,
+        held_objects: Sequence[SceneObject] = (),
     ) -> None:
         super().__init__()
         self._plant = control_plant
@@ -469,9 +473,14 @@ class DifferentialIKIntegrator(LeafSystem):
             )
         nominal = np.array(config.nominal_posture) if config.nominal_posture is not None else home
 
-        self._floor = config.ee_min_height
+        self._floor = None if config.table_clearance is None else table_top_z() + config.table_clearance
         self._floor_time_constant = max(0.1, self._period)
-        self._twist_lower = np.full(6, -np.inf)
+        held = [
+            Solid(o.name, o.shape, tuple(o.size), o.transform().GetAsMatrix4())
+            for o in held_objects
+            if o.attached_to_gripper
+        ]
+        self._gripper_points = gripper_points_in_ee(held)
         self._ik = VelocityIkSolver(
             JointLimits(lower, upper, vmax, amax),
             self._period,
@@ -517,13 +526,22 @@ class DifferentialIKIntegrator(LeafSystem):
         J = plant.CalcJacobianSpatialVelocity(
             ctx, JacobianWrtVariable.kV, self._frame_E, np.zeros(3), self._world, self._world
         )[:, self._v_idx]
-        twist_lower = None
-        if self._floor is not None and V[2] < 0.0:
-            # The floor: approach it no faster than exponentially (time constant 0.1 s), stop on it.
-            z = self._frame_E.CalcPoseInWorld(ctx).translation()[2]
-            twist_lower = self._twist_lower
-            twist_lower[2] = -max(z - self._floor, 0.0) / self._floor_time_constant
-        solution = self._ik.solve(J[[3, 4, 5, 0, 1, 2]], V, q, v_prev, twist_lower)  # paper order [v; w]
+        rows = lower = None
+        if self._floor is not None:
+            X_WE = self._frame_E.CalcPoseInWorld(ctx)
+            r_W = self._gripper_points @ X_WE.rotation().matrix().T  # from the EE origin, in W
+            height = X_WE.translation()[2] + r_W[:, 2] - self._floor
+            near = height < 0.2  # the points that could reach the floor within this step
+            if near.any():
+                # Vertical speed of point i: vz + wx r_y - wy r_x (paper order [v; w]); it may not
+                # be below -height / tau: the floor is approached exponentially and never crossed.
+                r = r_W[near]
+                rows = np.zeros((r.shape[0], 6))
+                rows[:, 2] = 1.0
+                rows[:, 3] = r[:, 1]
+                rows[:, 4] = -r[:, 0]
+                lower = -np.maximum(height[near], 0.0) / self._floor_time_constant
+        solution = self._ik.solve(J[[3, 4, 5, 0, 1, 2]], V, q, v_prev, rows, lower)  # paper order [v; w]
         return solution.v, solution.status
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
@@ -863,7 +881,9 @@ def build_station(
     for sys in (arm_state, finger_state, gripper_opening):
         builder.Connect(mico_state, sys.get_input_port())
 
-    diff_ik = builder.AddNamedSystem("diff_ik", DifferentialIKIntegrator(control_plant, config, control_arm))
+    diff_ik = builder.AddNamedSystem(
+        "diff_ik", DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects)
+    )
     gripper = builder.AddNamedSystem(
         "gripper_integrator",
         GripperOpeningIntegrator(
