@@ -16,12 +16,11 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from pydrake.common.eigen_geometry import Quaternion
-from pydrake.math import RotationMatrix
-from pydrake.systems.analysis import Simulator
 
 from drake_disamb.clearance import gripper_lowest_point
-from drake_disamb.station import MICO_HOME_Q, IkStatus, StationConfig, build_station
+from drake_disamb.safety import CommandHold as Hold
+from drake_disamb.safety import HoldResult
+from drake_disamb.station import MICO_HOME_Q, IkStatus
 
 DT = 0.01
 OFF_TOTAL = 0.02  # m, motion outside the commanded direction over the whole hold
@@ -52,73 +51,15 @@ COMMANDS = [(axis, speed) for axis in range(3) for speed in (0.1, -0.1)] + [
 ]
 
 
-def _rotation(p: np.ndarray) -> RotationMatrix:
-    return RotationMatrix(Quaternion(p[3:] / np.linalg.norm(p[3:])))
-
-
-class Hold:
-    """Holds one command on a station and measures the end effector's motion off it, each step."""
-
-    def __init__(self, home_q: tuple[float, ...]) -> None:
-        self.station = build_station(StationConfig(home_q=home_q))
-        self.sim = Simulator(self.station.diagram)
-        self.ctx = self.sim.get_mutable_context()
-        self.station.input_port("gripper_command").FixValue(self.ctx, [0.0])
-        self.station.input_port("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
-        self.sim.Initialize()
-        self.start = self.ctx.Clone()
-
-    def run(self, V: np.ndarray, duration: float) -> dict:
-        self.ctx.SetTimeStateAndParametersFrom(self.start)
-        self.sim.Initialize()
-        self.station.input_port("ee_velocity_command").FixValue(self.ctx, V)
-        pose = self.station.output_port("ee_pose")
-        status = self.station.output_port("ik_status")
-        v, w = V[:3], V[3:]
-        e_v = v / np.linalg.norm(v) if v.any() else np.zeros(3)
-        e_w = w / np.linalg.norm(w) if w.any() else np.zeros(3)
-        p_prev = np.array(pose.Eval(self.ctx))
-        p0 = p_prev.copy()
-        off_total = off_speed = off_rot = progress = progress_1s = 0.0
-        statuses: list[IkStatus] = []
-        t0 = self.ctx.get_time()
-        for k in range(int(round(duration / DT))):
-            self.sim.AdvanceTo(t0 + (k + 1) * DT)
-            p = np.array(pose.Eval(self.ctx))
-            dp = p[:3] - p_prev[:3]
-            along = max(0.0, float(dp @ e_v))
-            off = float(np.linalg.norm(dp - along * e_v))
-            aa = _rotation(p).multiply(_rotation(p_prev).inverse()).ToAngleAxis()
-            dth = aa.axis() * aa.angle()
-            turn = max(0.0, float(dth @ e_w))
-            off_total += off
-            off_speed = max(off_speed, off / DT)
-            off_rot += float(np.linalg.norm(dth - turn * e_w))
-            progress += along if v.any() else turn
-            if k < round(1.0 / DT):
-                progress_1s = progress
-            statuses.append(IkStatus(int(status.Eval(self.ctx)[0])))
-            p_prev = p
-        return {
-            "off_total": off_total,
-            "off_speed": off_speed,
-            "off_rotation": off_rot,
-            "progress": progress,
-            "progress_1s": progress_1s,
-            "statuses": statuses,
-            "displacement": float(np.linalg.norm(p[:3] - p0[:3])),
-        }
-
-
-def _check(result: dict, V: np.ndarray, where: str) -> None:
-    assert result["off_total"] <= OFF_TOTAL, (where, result["off_total"])
-    assert result["off_speed"] <= OFF_SPEED, (where, result["off_speed"])
-    assert result["off_rotation"] <= OFF_ROTATION, (where, result["off_rotation"])
+def _check(result: HoldResult, V: np.ndarray, where: str) -> None:
+    assert result.off_total <= OFF_TOTAL, (where, result.off_total)
+    assert result.off_speed <= OFF_SPEED, (where, result.off_speed)
+    assert result.off_rotation <= OFF_ROTATION, (where, result.off_rotation)
     # Achieved where the arm can; where it cannot, the status says so from the start.
-    first_second = result["statuses"][: int(round(1.0 / DT))]
+    first_second = result.statuses[: int(round(1.0 / DT))]
     speed = float(np.linalg.norm(V[:3]) if V[:3].any() else np.linalg.norm(V[3:]))  # progress's unit
     if all(s == IkStatus.OK for s in first_second[10:]):  # after the 0.1 s ramp
-        assert result["progress_1s"] >= 0.8 * speed * 1.0, (where, result["progress_1s"])
+        assert result.progress_1s >= 0.8 * speed * 1.0, (where, result.progress_1s)
     else:
         assert any(s != IkStatus.OK for s in first_second), where
 
@@ -146,7 +87,7 @@ def test_home_commands_are_achieved() -> None:
         V = np.zeros(6)
         V[axis] = 0.1 if axis < 3 else 0.2
         result = rig.run(V, 0.5)
-        assert result["progress"] >= 0.6 * V[axis] * 0.5, (axis, result["progress"])  # ramps included
+        assert result.progress >= 0.6 * V[axis] * 0.5, (axis, result.progress)  # ramps included
 
 
 def test_pure_rotation_does_not_translate() -> None:
@@ -154,7 +95,7 @@ def test_pure_rotation_does_not_translate() -> None:
     rig = Hold(POSTURES["home"])
     for V in ([0, 0, 0, 0.2, 0, 0], [0, 0, 0, 0, 0, 0.67]):
         result = rig.run(np.array(V, dtype=float), 20.0 if V[5] else 10.0)
-        assert result["displacement"] <= OFF_TOTAL, (V, result["displacement"])
+        assert result.displacement <= OFF_TOTAL, (V, result.displacement)
 
 
 def test_floor_stops_a_downward_command() -> None:
@@ -162,8 +103,8 @@ def test_floor_stops_a_downward_command() -> None:
     result = rig.run(np.array([0, 0, -0.1, 0, 0, 0.0]), 6.0)
     lowest = gripper_lowest_point(rig.station.output_port("ee_pose").Eval(rig.ctx))[0]
     assert 0.0 < lowest <= rig.station.config.table_clearance + 0.01
-    assert result["statuses"][-1] == IkStatus.WORKSPACE
-    assert result["off_total"] <= OFF_TOTAL
+    assert result.statuses[-1] == IkStatus.WORKSPACE
+    assert result.off_total <= OFF_TOTAL
 
 
 _RANDOM_RIG: dict[str, Hold] = {}
@@ -207,4 +148,4 @@ def test_random_postures_and_twists_move_only_along_the_command(seed: int) -> No
     V = direction / np.linalg.norm(direction) * np.array([0.1] * 3 + [0.5] * 3)
     result = Hold(home_q).run(V, 3.0)
     _check(result, V, f"seed {seed}, q0 {np.round(home_q, 3).tolist()}, V {np.round(V, 3).tolist()}")
-    assert math.isfinite(result["off_total"])
+    assert math.isfinite(result.off_total)
