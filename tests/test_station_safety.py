@@ -149,3 +149,17 @@ def test_random_postures_and_twists_move_only_along_the_command(seed: int) -> No
     result = Hold(home_q).run(V, 3.0)
     _check(result, V, f"seed {seed}, q0 {np.round(home_q, 3).tolist()}, V {np.round(V, 3).tolist()}")
     assert math.isfinite(result.off_total)
+
+
+def test_huge_finite_command_is_slowed_along_it_without_warnings() -> None:
+    """The issue's probe: commands near 1e308 gave about 200 numpy overflow warnings per second."""
+    import warnings  # noqa: PLC0415
+
+    rig = Hold(POSTURES["home"])
+    V = np.array([1.7e308, 1.7e308, 0.0, 0.0, 0.0, 1.7e308])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any warning fails the test
+        result = rig.run(V, 2.0)
+    assert result.off_total <= OFF_TOTAL and result.off_speed <= OFF_SPEED
+    assert result.progress > 0.1  # moved, at the joints' limits, along the command
+    assert IkStatus.LIMITED in result.statuses

@@ -84,7 +84,8 @@ class CommandHold:
         self.station.input_port("ee_velocity_command").FixValue(self.ctx, V)
         pose = self.station.output_port("ee_pose")
         status = self.station.output_port("ik_status")
-        v, w = V[:3], V[3:]
+        scale = float(np.max(np.abs(V))) or 1.0
+        v, w = V[:3] / scale, V[3:] / scale  # directions only: no overflow for a huge command
         e_v = v / np.linalg.norm(v) if v.any() else np.zeros(3)
         e_w = w / np.linalg.norm(w) if w.any() else np.zeros(3)
         p_prev = np.array(pose.Eval(self.ctx))
