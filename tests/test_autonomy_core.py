@@ -126,13 +126,13 @@ def test_shape_validation() -> None:
 
 def test_rotational_part_needs_neither_positions_nor_repellers() -> None:
     """The disambiguation's agreement term uses only u_a[..., 3:6], computed by the rotation kernel."""
-    from drake_disamb.core.autonomy import _potential_field_rotation
+    from drake_disamb.core.autonomy import potential_field_rotation
 
     rng = np.random.default_rng(3)
     cfg = PotentialFieldConfig(repeller_gain=0.01, repeller_radius=0.5, max_angular_speed=0.3)
     _, _, goals, goal_quats = _random_scene(rng, 4)
     quats = quat_from_rotvec(rng.normal(scale=1.5, size=(7, 3)))
-    w = _potential_field_rotation(quats, goal_quats, cfg)
+    w = potential_field_rotation(quats, goal_quats, cfg)
     assert w.shape == (7, 4, 3)
     for b in range(7):
         for position in (goals[0], rng.uniform(-1, 1, 3)):  # on a goal (repellers) or anywhere

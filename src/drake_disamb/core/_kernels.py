@@ -4,7 +4,7 @@ Every algorithm of the core exists once. Where numpy's cost per call would domin
 per row, run every control tick or hundreds of times per disambiguation request) that one
 implementation is a kernel here, and the array function of the algorithm's module (inference,
 geometry, autonomy, blending) broadcasts, validates and lays out rows, then calls it. Kernels
-loop over C-ordered rows (``geometry._as_rows``) and address them by index (``a[r, j]``, not a
+loop over C-ordered rows (``rows.as_rows``) and address them by index (``a[r, j]``, not a
 row view ``a[r]``: a view costs more than a row's arithmetic).
 
 They live in one file on purpose: numba's on-disk cache (``cache=True``) is keyed on the file of

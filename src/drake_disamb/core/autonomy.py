@@ -28,7 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _field_rows
 from drake_disamb.core._validation import all_finite, check_real_fields
-from drake_disamb.core.geometry import _as_rows, _batch_shape, _check_last, _check_quat, _shared_rows
+from drake_disamb.core.geometry import check_vectors, normalized_quaternions
+from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
@@ -86,13 +87,13 @@ def _field(
     shapes = [quat.shape[:-1], goal_quats.shape[:-2]]
     if translation:
         shapes += [position.shape[:-1], goal_positions.shape[:-2]]
-    batch = _batch_shape(*shapes)
+    batch = batch_shape(*shapes)
     out = np.empty((math.prod(batch), n, 6 if translation else 3))
     _field_rows(
-        _as_rows(position, batch, (3,)) if translation else np.empty((0, 3)),
-        _as_rows(quat, batch, (4,)),
-        _shared_rows(goal_positions, batch, (n, 3)) if translation else np.empty((0, n, 3)),
-        _shared_rows(goal_quats, batch, (n, 4)),
+        as_rows(position, batch, (3,)) if translation else np.empty((0, 3)),
+        as_rows(quat, batch, (4,)),
+        shared_rows(goal_positions, batch, (n, 3)) if translation else np.empty((0, n, 3)),
+        shared_rows(goal_quats, batch, (n, 4)),
         float(config.attractor_gain_translation),
         float(config.attractor_gain_rotation),
         float(config.repeller_gain),
@@ -106,7 +107,7 @@ def _field(
     return out.reshape(*batch, n, out.shape[-1])
 
 
-def _potential_field_rotation(
+def potential_field_rotation(
     quat: NDArray[np.float64], goal_quats: NDArray[np.float64], config: PotentialFieldConfig
 ) -> NDArray[np.float64]:
     """Rotational part ``w_i`` of the per-goal commands, ``(..., n, 3)`` (rad/s, saturated).
@@ -150,10 +151,10 @@ def potential_field_commands(
     saturated. Never NaN (see the module docstring for the degenerate cases).
     """
     cfg = PotentialFieldConfig() if config is None else config
-    p = _check_last(position, 3, "position")
-    q = _check_quat(quat, "quat")
-    gp = _check_last(goal_positions, 3, "goal_positions")
-    gq = _check_quat(goal_quats, "goal_quats")
+    p = check_vectors(position, 3, "position")
+    q = normalized_quaternions(quat, "quat")
+    gp = check_vectors(goal_positions, 3, "goal_positions")
+    gq = normalized_quaternions(goal_quats, "goal_quats")
     if gp.ndim < 2 or gq.ndim < 2:
         raise ValueError(
             "goal_positions/goal_quats: expected shapes (..., n, 3) and (..., n, 4), "
@@ -182,6 +183,6 @@ def potential_field_commands_from_poses(
         name = "quat" if not all_finite(ee_pose) else "goal_quats"
         bad = ee_pose if name == "quat" else goal_poses
         raise ValueError(f"{name}: expected finite poses, got {bad.tolist()!r}")
-    q = _check_quat(ee_pose[3:], "quat")
-    gq = _check_quat(goal_poses[:, 3:], "goal_quats")
+    q = normalized_quaternions(ee_pose[3:], "quat")
+    gq = normalized_quaternions(goal_poses[:, 3:], "goal_quats")
     return _potential_field_commands(ee_pose[:3], q, goal_poses[:, :3], gq, config)

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _alpha_rows, _blend_rows, _has_input_rows, _shared_control_rows
 from drake_disamb.core._validation import check_real_fields, is_real
-from drake_disamb.core.geometry import _as_rows, _batch_shape
+from drake_disamb.core.rows import as_rows, batch_shape
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -107,9 +107,9 @@ def blend(u_h: ArrayLike, u_a: ArrayLike, alpha: ArrayLike) -> NDArray[np.float6
     if not np.logical_and.reduce((a >= 0.0) & (a <= 1.0), axis=None):  # np.all, minus its wrapper
         raise ValueError(f"alpha: expected numbers in [0, 1], got {a.tolist()!r}")
     uh, ua = _commands(u_h, "u_h"), _commands(u_a, "u_a")
-    batch = _batch_shape(uh.shape[:-1], ua.shape[:-1], a.shape)
+    batch = batch_shape(uh.shape[:-1], ua.shape[:-1], a.shape)
     out = np.empty((math.prod(batch), 6))
-    rows = (_as_rows(uh, batch, (6,)), _as_rows(ua, batch, (6,)), _as_rows(a, batch, ()))
+    rows = (as_rows(uh, batch, (6,)), as_rows(ua, batch, (6,)), as_rows(a, batch, ()))
     _blend_rows(*rows, np.inf, np.inf, out)
     return out.reshape(*batch, 6)
 
@@ -120,7 +120,7 @@ def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float)
     Each part keeps its direction; a part already within its limit is unchanged.
     """
     v = _commands(u, "u")
-    rows = _as_rows(v, v.shape[:-1], (6,))
+    rows = as_rows(v, v.shape[:-1], (6,))
     out = np.empty_like(rows)
     # The blending kernel's own limits on a blend with alpha = 0 (the command itself): one limiter.
     _blend_rows(rows, rows, np.zeros(rows.shape[0]), float(max_linear_speed), float(max_angular_speed), out)
@@ -130,7 +130,7 @@ def clamp_speed(u: ArrayLike, max_linear_speed: float, max_angular_speed: float)
 def has_input(u_h: ArrayLike, tolerance: float = NO_INPUT_TOLERANCE) -> NDArray[np.bool_] | bool:
     """True where the human command has any entry larger than ``tolerance`` in magnitude."""
     u = np.asarray(u_h, dtype=float)
-    rows = _as_rows(u, u.shape[:-1], u.shape[-1:])
+    rows = as_rows(u, u.shape[:-1], u.shape[-1:])
     out = np.empty(rows.shape[0], dtype=np.bool_)
     _has_input_rows(rows, float(tolerance), out)
     return bool(out[0]) if u.ndim == 1 else out.reshape(u.shape[:-1])
@@ -206,13 +206,13 @@ def shared_control(
         )
     n = p.shape[-1]
     r1, r2, r3 = config.rhos(n)
-    batch = _batch_shape(uh.shape[:-1], p.shape[:-1], ua.shape[:-2])
+    batch = batch_shape(uh.shape[:-1], p.shape[:-1], ua.shape[:-2])
     size = math.prod(batch)
     u, alpha, g_star = np.empty((size, 6)), np.empty(size), np.empty(size, dtype=np.int64)
     _shared_control_rows(
-        _as_rows(uh, batch, (6,)),
-        _as_rows(p, batch, (n,)),
-        _as_rows(ua, batch, (n, 6)),
+        as_rows(uh, batch, (6,)),
+        as_rows(p, batch, (n,)),
+        as_rows(ua, batch, (n, 6)),
         r1,
         r2,
         r3,

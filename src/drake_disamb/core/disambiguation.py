@@ -45,13 +45,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._validation import check_real_fields, is_real
-from drake_disamb.core.autonomy import PotentialFieldConfig, _potential_field_rotation
+from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_rotation
 from drake_disamb.core.geometry import (
-    _check_last,
-    _check_quat,
-    _orientation_error,
-    _quat_from_rotvec,
-    _quat_multiply,
+    check_vectors,
+    normalized_quaternions,
+    orientation_error_unchecked,
+    quat_from_rotvec_unchecked,
+    quat_multiply_unchecked,
 )
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
@@ -488,7 +488,7 @@ def _membership(modes: tuple[tuple[int, ...], ...], dimensions: tuple[int, ...])
 
 
 def _validate_belief(belief: ArrayLike, n: int) -> NDArray[np.float64]:
-    p = _check_last(belief, n, "belief")
+    p = check_vectors(belief, n, "belief")
     if p.ndim != 1:
         raise ValueError(f"belief: expected a vector of {n} probabilities, got shape {p.shape}")
     total = p.sum()
@@ -528,11 +528,6 @@ def _probe_commands(
     return np.stack((plus, -plus))
 
 
-def probe_commands(config: DisambiguationConfig) -> NDArray[np.float64]:
-    """The ``2 n_k`` probe twists, shape ``(2, n_k, 6)``: row 0 ``+s e_k``, row 1 ``-s e_k``."""
-    return _probe_commands(config.dimensions, config.probe_speed_translation, config.probe_speed_rotation)
-
-
 def _frozen(a: NDArray[np.float64]) -> NDArray[np.float64]:
     a.setflags(write=False)
     return a
@@ -553,7 +548,7 @@ class _ProbePlan:
         rot_left: ``(4, steps_c, n_rot, 4)``: the orientation of each rotational probe after
             ``s`` steps is ``exp(s w dt) (x) q``; the Hamilton product is linear in its right
             factor, so ``rot_left @ q`` gives all of them (quaternion components first, for
-            ``s < steps_c``). Built with ``_quat_multiply`` on the basis quaternions; one
+            ``s < steps_c``). Built with ``quat_multiply_unchecked`` on the basis quaternions; one
             matrix-vector product per request.
         displacement: ``(2, n_k)`` displacement along ``k`` between ``t_b`` and ``t_c``: the
             position component ``(s_c - s_b) v_k dt`` (m), or the angle about axis ``k`` of
@@ -583,12 +578,12 @@ def _probe_plan(
     # Pose after s steps of a constant world-frame twist: x + s v dt, exp(s w dt) (x) q.
     offsets = steps * (U[:, :3] * delta_t)  # (nc + 1, P, 3)
     rotational = np.flatnonzero(np.any(U[:, 3:] != 0.0, axis=1))
-    rot_quats = _quat_from_rotvec(steps * (U[rotational, 3:] * delta_t))  # (nc + 1, n_rot, 4)
+    rot_quats = quat_from_rotvec_unchecked(steps * (U[rotational, 3:] * delta_t))  # (nc + 1, n_rot, 4)
     dims = np.tile(np.asarray(dimensions), 2)
     disp = np.empty(n_probe)
     trans = dims < 3
     disp[trans] = (offsets[steps_c] - offsets[steps_b])[trans, dims[trans]]
-    rot_err = _orientation_error(rot_quats[steps_b], rot_quats[steps_c])  # (n_rot, 3)
+    rot_err = orientation_error_unchecked(rot_quats[steps_b], rot_quats[steps_c])  # (n_rot, 3)
     disp[rotational] = rot_err[np.arange(rotational.size), dims[rotational] - 3]
     return _ProbePlan(
         commands=_frozen(U),
@@ -597,7 +592,7 @@ def _probe_plan(
         # [c, s, r, j] = component c of rot_quats[s, r] (x) e_j
         rot_left=_frozen(
             np.ascontiguousarray(
-                _quat_multiply(rot_quats[:steps_c, :, None, :], np.eye(4)).transpose(3, 0, 1, 2)
+                quat_multiply_unchecked(rot_quats[:steps_c, :, None, :], np.eye(4)).transpose(3, 0, 1, 2)
             )
         ),
         displacement=_frozen(disp.reshape(2, -1)),
@@ -678,7 +673,7 @@ def forward_projection(
             n_t = n_k - plan.n_rot // 2  # rotational dimensions come last (ascending order)
             if plan.n_rot:
                 Q = (plan.rot_left @ orientation).transpose(1, 2, 0)  # (nc, n_rot, 4)
-                W = _potential_field_rotation(Q, goal_orientations, config.potential_field)
+                W = potential_field_rotation(Q, goal_orientations, config.potential_field)
                 UA[:, :, n_t:, :, 3:] = W.reshape(nc, 2, -1, n, 3)  # n_rot = the (2, n_rot / 2) grid
             UA = UA.reshape(nc, n_probe, n, 6)
         drive = dft_drive(U, X, goal_positions, config.dft, UA)  # (nc, P, n)
@@ -795,11 +790,11 @@ def disambiguate(
     """
     cfg = _DEFAULT_CONFIG if config is None else config
     mode_dims = validate_modes(modes)
-    x = _check_last(position, 3, "position")
+    x = check_vectors(position, 3, "position")
     if x.ndim != 1:
         raise ValueError(f"position: expected 3 numbers, got shape {x.shape}")
     _check_positions(x, "position")
-    gp = _check_last(goal_positions, 3, "goal_positions")
+    gp = check_vectors(goal_positions, 3, "goal_positions")
     if gp.ndim != 2 or not 1 <= gp.shape[0] <= MAX_GOALS:
         raise ValueError(
             f"goal_positions: expected shape (n, 3) with 1 <= n <= {MAX_GOALS} (MAX_GOALS), got {gp.shape}"
@@ -807,13 +802,17 @@ def disambiguate(
     _check_positions(gp, "goal_positions")
     n = gp.shape[0]
     p = _validate_belief(belief, n)
-    q = np.array([1.0, 0.0, 0.0, 0.0]) if orientation is None else _check_quat(orientation, "orientation")
+    q = (
+        np.array([1.0, 0.0, 0.0, 0.0])
+        if orientation is None
+        else normalized_quaternions(orientation, "orientation")
+    )
     if q.ndim != 1:
         raise ValueError(f"orientation: expected 4 numbers, got shape {q.shape}")
     if goal_orientations is None:
         gq = np.broadcast_to(q, (n, 4))
     else:
-        gq = _check_quat(goal_orientations, "goal_orientations")
+        gq = normalized_quaternions(goal_orientations, "goal_orientations")
         if gq.shape != (n, 4):
             raise ValueError(f"goal_orientations: expected shape ({n}, 4), got {gq.shape}")
     if current_mode is not None and (

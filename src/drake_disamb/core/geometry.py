@@ -11,8 +11,10 @@ Conventions (see CONTRIBUTING.md):
 - Twists are in the paper's order ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world frame.
 
 Public functions validate their inputs and raise ``ValueError`` naming the argument and the
-offending shape or value. The underscore-prefixed helpers skip validation; they are used inside
-vectorised loops (the disambiguation forward projection) whose inputs were validated once.
+offending shape or value (:func:`check_vectors` and :func:`normalized_quaternions` are those
+checks, for the other core modules too). The ``*_unchecked`` variants skip validation; they are
+used inside vectorised loops (the disambiguation forward projection) whose inputs were validated
+once. The row layout of the compiled kernels is :mod:`drake_disamb.core.rows`.
 
 The Hamilton product and the rotation vector are written once, as scalar functions compiled with
 numba (``_qmul`` and ``_rotvec`` in :mod:`drake_disamb.core._kernels`); the array functions here,
@@ -23,7 +25,6 @@ would dominate.
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -37,13 +38,14 @@ from drake_disamb.core._kernels import (
     _rotvec_rows,
 )
 from drake_disamb.core._validation import all_finite
+from drake_disamb.core.rows import as_rows, batch_shape
 
 # ----------------------------------------------------------------------------------------------
 # Validation
 # ----------------------------------------------------------------------------------------------
 
 
-def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
+def check_vectors(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
     """``x`` as a float array whose last axis has ``size`` entries, all finite."""
     try:
         a = np.asarray(x, dtype=float)
@@ -56,13 +58,13 @@ def _check_last(x: ArrayLike, size: int, name: str) -> NDArray[np.float64]:
     return a
 
 
-def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
+def normalized_quaternions(q: ArrayLike, name: str) -> NDArray[np.float64]:
     """``q`` validated as quaternions (shape ``(..., 4)``, finite, non-zero) and normalised.
 
     A quaternion whose norm is below 1e-12 or overflows (entries beyond about 1e154) is rejected:
     normalising it would give zeros, which no kernel can use.
     """
-    a = _check_last(q, 4, name)
+    a = check_vectors(q, 4, name)
     with np.errstate(over="ignore"):  # an overflowing norm is rejected below, with its own message
         norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
     if norm.size and np.minimum.reduce(norm, axis=None) < 1e-12:  # np.any, minus its wrapper
@@ -78,12 +80,6 @@ def _check_quat(q: ArrayLike, name: str) -> NDArray[np.float64]:
 # ----------------------------------------------------------------------------------------------
 
 
-@functools.lru_cache(maxsize=256)
-def _batch_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:
-    """``np.broadcast_shapes`` (pure Python, slow next to a small step), memoised on the shapes."""
-    return np.broadcast_shapes(*shapes)
-
-
 def _norm3(v: NDArray[np.float64]) -> NDArray[np.float64]:
     """Euclidean norm over a last axis of length 3, keepdims (component arithmetic: numpy's
     reductions over a short last axis are several times slower)."""
@@ -91,37 +87,18 @@ def _norm3(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.sqrt(x * x + y * y + z * z)
 
 
-def _as_rows(a: NDArray[np.float64], batch: tuple[int, ...], tail: tuple[int, ...]) -> NDArray[np.float64]:
-    """``a`` broadcast to ``batch + tail`` as a C-ordered ``(B, *tail)`` array (the layout of the
-    compiled row kernels; no copy when ``a`` already is one)."""
-    full = (*batch, *tail)
-    if a.shape != full:
-        a = np.broadcast_to(a, full)
-    return np.ascontiguousarray(a.reshape(-1, *tail))
-
-
-def _shared_rows(
-    a: NDArray[np.float64], batch: tuple[int, ...], tail: tuple[int, ...]
-) -> NDArray[np.float64]:
-    """As :func:`_as_rows`, but an ``a`` without batch axes stays one row ``(1, *tail)`` that a
-    kernel reads for every row (row index ``r if a.shape[0] > 1 else 0``)."""
-    if a.ndim == len(tail):
-        return np.ascontiguousarray(a[None])
-    return _as_rows(a, batch, tail)
-
-
 _QUAT_CONJUGATE_SIGNS = np.array([1.0, -1.0, -1.0, -1.0])
 
 
 def _binary_rows(kernel, a: NDArray[np.float64], b: NDArray[np.float64], width: int) -> NDArray[np.float64]:
     """Run a row kernel on ``a`` and ``b`` (``(..., 4)`` each, broadcasting): ``(..., width)``."""
-    batch = _batch_shape(a.shape[:-1], b.shape[:-1])
+    batch = batch_shape(a.shape[:-1], b.shape[:-1])
     out = np.empty((math.prod(batch), width))
-    kernel(_as_rows(a, batch, (4,)), _as_rows(b, batch, (4,)), out)
+    kernel(as_rows(a, batch, (4,)), as_rows(b, batch, (4,)), out)
     return out.reshape(*batch, width)
 
 
-def _quat_multiply(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[np.float64]:
+def quat_multiply_unchecked(q1: NDArray[np.float64], q2: NDArray[np.float64]) -> NDArray[np.float64]:
     """Hamilton product ``q1 (x) q2``, broadcasting (float arrays, unchecked)."""
     return _binary_rows(_quat_multiply_rows, q1, q2, 4)
 
@@ -130,7 +107,7 @@ def _quat_conjugate(q: NDArray[np.float64]) -> NDArray[np.float64]:
     return q * _QUAT_CONJUGATE_SIGNS
 
 
-def _quat_from_rotvec(rv: NDArray[np.float64]) -> NDArray[np.float64]:
+def quat_from_rotvec_unchecked(rv: NDArray[np.float64]) -> NDArray[np.float64]:
     angle = _norm3(rv)
     half = 0.5 * angle
     small = angle < _SMALL_ANGLE
@@ -144,11 +121,13 @@ def _quat_to_rotvec(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """Rotation vector of unit quaternions, shortest path (angle in [0, pi])."""
     batch = q.shape[:-1]
     out = np.empty((math.prod(batch), 3))
-    _rotvec_rows(_as_rows(q, batch, (4,)), out)
+    _rotvec_rows(as_rows(q, batch, (4,)), out)
     return out.reshape(*batch, 3)
 
 
-def _orientation_error(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -> NDArray[np.float64]:
+def orientation_error_unchecked(
+    q_from: NDArray[np.float64], q_to: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """``rotvec(q_to (x) conj(q_from))``, broadcasting (unit quaternions, unchecked)."""
     return _binary_rows(_orientation_error_rows, q_from, q_to, 3)
 
@@ -160,24 +139,24 @@ def _orientation_error(q_from: NDArray[np.float64], q_to: NDArray[np.float64]) -
 
 def quat_normalize(q: ArrayLike) -> NDArray[np.float64]:
     """Unit quaternions ``q / |q|``, shape ``(..., 4)``. A zero quaternion is a ``ValueError``."""
-    return _check_quat(q, "q")
+    return normalized_quaternions(q, "q")
 
 
 def quat_multiply(q1: ArrayLike, q2: ArrayLike) -> NDArray[np.float64]:
     """Hamilton product ``q1 (x) q2`` (apply ``q2`` first, then ``q1``), broadcasting."""
-    a = _check_last(q1, 4, "q1")
-    b = _check_last(q2, 4, "q2")
-    return _quat_multiply(a, b)
+    a = check_vectors(q1, 4, "q1")
+    b = check_vectors(q2, 4, "q2")
+    return quat_multiply_unchecked(a, b)
 
 
 def quat_conjugate(q: ArrayLike) -> NDArray[np.float64]:
     """Conjugate ``[qw, -qx, -qy, -qz]`` (the inverse of a unit quaternion)."""
-    return _quat_conjugate(_check_last(q, 4, "q"))
+    return _quat_conjugate(check_vectors(q, 4, "q"))
 
 
 def quat_from_rotvec(rotvec: ArrayLike) -> NDArray[np.float64]:
     """Unit quaternion of a rotation vector (axis * angle, rad), shape ``(..., 3) -> (..., 4)``."""
-    return _quat_from_rotvec(_check_last(rotvec, 3, "rotvec"))
+    return quat_from_rotvec_unchecked(check_vectors(rotvec, 3, "rotvec"))
 
 
 def quat_to_rotvec(q: ArrayLike) -> NDArray[np.float64]:
@@ -185,12 +164,12 @@ def quat_to_rotvec(q: ArrayLike) -> NDArray[np.float64]:
 
     ``q`` and ``-q`` give the same result (the shortest rotation); ``q`` need not be unit.
     """
-    return _quat_to_rotvec(_check_quat(q, "q"))
+    return _quat_to_rotvec(normalized_quaternions(q, "q"))
 
 
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
     """Rotation matrix ``R`` (``(..., 3, 3)``) with ``R @ v`` rotating ``v`` by ``q``."""
-    u = _check_quat(q, "q")
+    u = normalized_quaternions(q, "q")
     w, x, y, z = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
     rows = (
         (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
@@ -206,7 +185,9 @@ def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]
     The shortest rotation: ``|r| <= pi``, and ``q_to`` and ``-q_to`` give the same ``r``. Driving
     an orientation with angular velocity ``k * r`` (world frame) moves it towards ``q_to``.
     """
-    return _orientation_error(_check_quat(q_from, "q_from"), _check_quat(q_to, "q_to"))
+    return orientation_error_unchecked(
+        normalized_quaternions(q_from, "q_from"), normalized_quaternions(q_to, "q_to")
+    )
 
 
 def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -237,7 +218,7 @@ def _integrate_pose(
     position: NDArray[np.float64], quat: NDArray[np.float64], twist_vw: NDArray[np.float64], dt: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     new_position = position + twist_vw[..., :3] * dt
-    new_quat = _quat_multiply(_quat_from_rotvec(twist_vw[..., 3:6] * dt), quat)
+    new_quat = quat_multiply_unchecked(quat_from_rotvec_unchecked(twist_vw[..., 3:6] * dt), quat)
     w, x, y, z = new_quat[..., 0:1], new_quat[..., 1:2], new_quat[..., 2:3], new_quat[..., 3:4]
     new_quat = new_quat / np.sqrt(w * w + x * x + y * y + z * z)
     return new_position, new_quat
@@ -259,8 +240,8 @@ def integrate_pose(
     """
     if not (np.isfinite(dt) and dt >= 0):
         raise ValueError(f"dt: expected a finite number >= 0, got {dt!r}")
-    p = _check_last(position, 3, "position")
-    q = _check_quat(quat, "quat")
-    t = _check_last(twist_vw, 6, "twist_vw")
+    p = check_vectors(position, 3, "position")
+    q = normalized_quaternions(quat, "quat")
+    t = check_vectors(twist_vw, 6, "twist_vw")
     new_position, new_quat = _integrate_pose(p, q, t, float(dt))
     return new_position, new_quat

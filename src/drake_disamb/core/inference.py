@@ -54,7 +54,7 @@ from drake_disamb.core._kernels import (
     _normalize_rows,
     _xi_rows,
 )
-from drake_disamb.core.geometry import _as_rows, _batch_shape, _shared_rows
+from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
 
 TINY = np.finfo(float).tiny
 """Smallest positive normal double: what the authors' code clips non-positive entries to."""
@@ -91,10 +91,11 @@ class DFTParams:
             the rest state (the task prior) while the user gives no input.
         euler_equivalent_step: ``None`` (default): :func:`dft_mass_conserving_rhs` is the paper's
             continuous flow. A step ``h`` (s): the flow's rate is scaled by
-            ``log(1 + h S) / (h S)`` with ``S = sum(f(p))`` (which does not depend on ``p``), so
-            that integrating it over ``h`` with the inputs held reproduces the authors'
-            "Euler step of ``h``, then renormalise" (exactly for ``P = I``, up to
-            ``O(h^2 / tau1^2)`` otherwise). Use it to compare a continuous-time system with a
+            ``log((1 + h S) / (1 - h / tau1)) / (h D)`` with ``S = sum(f(p))`` (which does not depend
+            on a normalised ``p``) and ``D = S + 1 / tau1``, so that integrating it over ``h``
+            with the inputs held reproduces the authors' "Euler step of ``h``, then renormalise"
+            (exactly for ``P = I``, up to ``O(h^2 / tau1^2)`` otherwise; the kernel is
+            ``_kernels._euler_rate_factor``). Use it to compare a continuous-time system with a
             replay at the data's ``delta_t``; the fixed points are unchanged.
     """
 
@@ -333,13 +334,13 @@ def dft_xi(
         if u_a.ndim < 2 or u_a.shape[-2:] != (n, 6):
             raise ValueError(f"u_a: expected shape (..., {n}, 6), got {u_a.shape}")
         shapes.append(u_a.shape[:-2])
-    batch = _batch_shape(*shapes)
+    batch = batch_shape(*shapes)
     xi = np.empty((math.prod(batch), n))
     _xi_rows(
-        _as_rows(u, batch, u.shape[-1:]),
-        _as_rows(x_r, batch, (3,)),
-        _shared_rows(x_g, batch, (n, 3)),
-        _as_rows(u_a, batch, (n, 6)) if agree else np.empty((0, n, 6)),
+        as_rows(u, batch, u.shape[-1:]),
+        as_rows(x_r, batch, (3,)),
+        shared_rows(x_g, batch, (n, 3)),
+        as_rows(u_a, batch, (n, 6)) if agree else np.empty((0, n, 6)),
         params.directedness,
         agree,
         params.proximity,
@@ -498,14 +499,14 @@ class _BeliefRows:
             P = np.asarray(P, dtype=float)
             if P.shape[-2:] != (n, n):
                 raise ValueError(f"DFTParams.transition: expected ({n}, {n}) matrices, got shape {P.shape}")
-        batch = _batch_shape(
+        batch = batch_shape(
             p.shape[:-1], drive.shape[len(lead) : -1], dt.shape[:-1], () if P is None else P.shape[:-2]
         )
         self.batch, self.n, self.steps = batch, n, lead[0] if rollout else 1
-        self.p = _as_rows(p, batch, (n,))
-        self.drive = _as_rows(drive, (*lead, *batch), (n,))
-        self.P = np.empty((0, n, n)) if P is None else _shared_rows(P, batch, (n, n))
-        self.dt = dt.reshape(1) if dt.ndim == 0 else _as_rows(dt, batch, (1,)).reshape(-1)
+        self.p = as_rows(p, batch, (n,))
+        self.drive = as_rows(drive, (*lead, *batch), (n,))
+        self.P = np.empty((0, n, n)) if P is None else shared_rows(P, batch, (n, n))
+        self.dt = dt.reshape(1) if dt.ndim == 0 else as_rows(dt, batch, (1,)).reshape(-1)
 
 
 def dft_euler_step(

@@ -141,10 +141,6 @@ class InterfaceSystem(LeafSystem):
     def _read_state(self, context: Context) -> InterfaceState:
         return InterfaceState.from_vector(context.get_discrete_state(self._state_index).get_value())
 
-    def get_interface_state(self, context: Context) -> InterfaceState:
-        """The interface's state in ``context`` as a core :class:`InterfaceState`."""
-        return self._read_state(context)
-
     def set_mode(self, context: Context, mode: int) -> None:
         """Set the current mode in ``context`` (e.g. a randomised initial mode)."""
         if not (isinstance(mode, int | np.integer) and 0 <= mode < len(self.modes)):

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
 
 from drake_disamb.core.geometry import pose_errors
@@ -140,10 +140,6 @@ class TaskManager(LeafSystem):
     def n_stages(self) -> int:
         """Number of stages."""
         return self._n_stages
-
-    def goal_poses_of_stage(self, stage: int) -> NDArray[np.float64]:
-        """``(n, 7)`` goal poses of ``stage`` (normalised quaternions)."""
-        return self._goal_sets[stage].copy()
 
     # -- state access -------------------------------------------------------------------------
 
