@@ -31,7 +31,15 @@ from collections import defaultdict
 from collections.abc import Callable
 from typing import Any
 
-CALLBACK_PREFIXES = ("_calc", "_update", "_initialize", "_reset_update", "_periodic_update", "DoCalc")
+CALLBACK_PREFIXES = (
+    "_calc",
+    "_update",
+    "_initialize",
+    "_reset_update",
+    "_periodic_update",
+    "_check",
+    "DoCalc",
+)
 """Methods of the project's LeafSystems that Drake calls back (by naming convention)."""
 
 
@@ -43,7 +51,7 @@ class _ExclusiveTimer:
         self.calls: dict[str, int] = defaultdict(int)
         self._stack: list[list[float]] = []  # [start, time of timed children]
 
-    def wrap(self, label: Callable[[Any], str], func: Callable[..., Any]) -> Callable[..., Any]:
+    def wrap(self, label: Callable[[Any, str], str], func: Callable[..., Any]) -> Callable[..., Any]:
         @functools.wraps(func)
         def timed(system: Any, *args: Any, **kwargs: Any) -> Any:
             frame = [time.perf_counter(), 0.0]
@@ -53,7 +61,7 @@ class _ExclusiveTimer:
             finally:
                 elapsed = time.perf_counter() - frame[0]
                 self._stack.pop()
-                name = label(system)
+                name = label(system, func.__name__)
                 self.time[name] += elapsed - frame[1]
                 self.calls[name] += 1
                 if self._stack:
@@ -79,12 +87,14 @@ def _project_system_classes() -> list[type]:
     return classes
 
 
-def _instrument(timer: _ExclusiveTimer) -> Callable[[], None]:
-    """Wrap the callbacks of the project's system classes (before any system is built); returns undo."""
+def _instrument(timer: _ExclusiveTimer, by_method: bool = False) -> Callable[[], None]:
+    """Wrap the callbacks of the project's system classes (before any system is built); returns undo.
+    Labels are system names, or ``system.method`` with ``by_method``."""
     originals: list[tuple[type, str, Any]] = []
 
-    def label(system: Any) -> str:
-        return system.get_name() or type(system).__name__
+    def label(system: Any, method: str) -> str:
+        name = system.get_name() or type(system).__name__
+        return f"{name}.{method}" if by_method else name
 
     for cls in _project_system_classes():
         for name, value in list(vars(cls).items()):
@@ -111,6 +121,7 @@ def main() -> None:
     parser.add_argument("--task", default="reaching", help="scenario name (default: reaching)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs (default: 3)")
     parser.add_argument("--no-breakdown", action="store_true", help="skip the per-system breakdown run")
+    parser.add_argument("--by-method", action="store_true", help="break down per callback, not per system")
     args = parser.parse_args()
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial
@@ -145,7 +156,7 @@ def main() -> None:
         return
 
     timer = _ExclusiveTimer()
-    undo = _instrument(timer)
+    undo = _instrument(timer, args.by_method)
     try:
         handles = build_shared_control_diagram(scenario)
         result = run_trial(handles, progress=False)
@@ -158,12 +169,13 @@ def main() -> None:
         f"\nper-system breakdown (instrumented run: rate {result.realtime_rate:.2f}, "
         f"{wall / ticks * 1e6:.0f} us wall per {scenario.control_period * 1e3:.0f} ms tick)"
     )
-    print(f"{'system':28s} {'calls/tick':>10s} {'us/tick':>9s} {'share':>7s}")
+    print(f"{'system':40s} {'calls/tick':>10s} {'us/tick':>9s} {'share':>7s}")
     rows = sorted(timer.time.items(), key=lambda kv: -kv[1])
     rows.append(("Drake C++ and framework", wall - python))
     for name, seconds in rows:
         calls = f"{timer.calls[name] / ticks:10.2f}" if name in timer.calls else f"{'':10s}"
-        print(f"{name:28s} {calls} {seconds / ticks * 1e6:9.1f} {seconds / wall * 100:6.1f}%")
+        print(f"{name:40s} {calls} {seconds / ticks * 1e6:9.1f} {seconds / wall * 100:6.1f}%")
+    print(f"callbacks per tick: {sum(timer.calls.values()) / ticks:.1f}")
 
 
 if __name__ == "__main__":
