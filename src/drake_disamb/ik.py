@@ -394,6 +394,12 @@ class VelocityIkSolver:
         self.q_nominal = None if q_nominal is None else _vector("VelocityIkSolver.q_nominal", q_nominal, n)
         self._n = n
         self._accel_weight = 1.0 / np.minimum(limits.acceleration, 1e12) ** 2
+        # The limits as Python floats, for the per-joint loops of a step.
+        self._lower = limits.lower.tolist()
+        self._upper = limits.upper.tolist()
+        self._vmax = limits.velocity.tolist()
+        self._acc = np.minimum(limits.acceleration, 1e12).tolist()
+        self._weight = self._accel_weight.tolist()
 
     def bounds(
         self, q: NDArray[np.float64], v_prev: NDArray[np.float64]
@@ -459,48 +465,74 @@ class VelocityIkSolver:
         ``t_max``. Soft ones, given up only to the hard ones: the acceleration bounds, the braking
         and the reduced speed.
         """
-        lim, dt = self.limits, self.dt
-        mag = np.abs(v_dir)
-        moving = mag > 0.0
-        if not moving.any():
+        dt = self.dt
+        # Plain float loops: for a handful of joints they are several times faster than numpy.
+        a_t = math.inf  # the line's acceleration limit (t units)
+        t_hard, j_hard = math.inf, -1  # velocity limits, and landing on (never crossing) a limit
+        room_min, j_brake = math.inf, -1  # the nearest position limit ahead, in t units
+        v_over = math.inf  # the speed limit in t units (for the reduced speed near a singularity)
+        t_acc_lo, t_acc_hi = 0.0, math.inf  # within each joint's acceleration bound of v_prev
+        vv = vp = ww = wp = 0.0  # v_dir.v_dir, v_dir.v_prev and their acceleration-weighted forms
+        acc_ok = True
+        for j, (d_j, q_j, p_j, lo_j, hi_j, vmax_j, a_j, w_j) in enumerate(self._joint_rows(v_dir, q, v_prev)):
+            vv += d_j * d_j
+            vp += d_j * p_j
+            ww += d_j * d_j * w_j
+            wp += d_j * p_j * w_j
+            da = a_j * dt
+            if d_j == 0.0:
+                if abs(p_j) > da:  # this joint cannot stop within the step: no point of the line fits
+                    acc_ok = False
+                continue
+            mag = abs(d_j)
+            a_t = min(a_t, a_j / mag)
+            room = max((hi_j - q_j) if d_j > 0.0 else (q_j - lo_j), 0.0)
+            hard = min(vmax_j, room / dt) / mag
+            if hard < t_hard:
+                t_hard, j_hard = hard, j
+            if room / mag < room_min:
+                room_min, j_brake = room / mag, j
+            v_over = min(v_over, vmax_j / mag)
+            lo_t, hi_t = (p_j - da) / d_j, (p_j + da) / d_j
+            if d_j < 0.0:
+                lo_t, hi_t = hi_t, lo_t
+            t_acc_lo, t_acc_hi = max(t_acc_lo, lo_t), min(t_acc_hi, hi_t)
+        if j_hard < 0:
             return t_max, ()
-        acc = np.minimum(lim.acceleration, 1e12)
-        a_t = float(np.min(acc[moving] / mag[moving]))  # the line's acceleration limit (t units)
-        # Hard: velocity limits and landing on (never crossing) a position limit.
-        room = np.where(v_dir > 0, lim.upper - q, q - lim.lower)  # distance to the limit ahead
-        room = np.maximum(room, 0.0)
-        with np.errstate(divide="ignore"):
-            hard_j = np.where(
-                moving, np.minimum(lim.velocity, room / dt) / np.where(moving, mag, 1.0), np.inf
-            )
-        j_hard = int(np.argmin(hard_j))
-        t_hard = min(t_max, float(hard_j[j_hard]))
+        t_hard = min(t_max, t_hard)
         # Soft: brake for the nearest limit at the line's deceleration, and the reduced speed near a
         # singularity, reached at that deceleration from the current speed along the line.
-        with np.errstate(divide="ignore"):
-            room_t = np.where(moving, room / np.where(moving, mag, 1.0), np.inf)
-        j_brake = int(np.argmin(room_t))
         half = 0.5 * a_t * dt
-        t_brake = math.sqrt(half * half + 2.0 * a_t * float(room_t[j_brake])) - half
-        t_prev = max(0.0, float(v_prev @ v_dir) / float(v_dir @ v_dir))
-        t_factor = math.inf
-        if factor < 1.0:
-            t_factor = max(factor * float(np.min(lim.velocity[moving] / mag[moving])), t_prev - a_t * dt)
-        t_soft = min(t_brake, t_factor)
-        t = min(t_hard, t_soft)
+        t_brake = math.sqrt(half * half + 2.0 * a_t * room_min) - half
+        t_prev = max(0.0, vp / vv)
+        t_factor = max(factor * v_over, t_prev - a_t * dt) if factor < 1.0 else math.inf
+        t = min(t_hard, t_brake, t_factor)
         # Acceleration: stay within each joint's bound of its previous velocity where the line can.
-        acc_interval = _speed_interval(np.zeros(self._n), v_dir, v_prev - acc * dt, v_prev + acc * dt)
-        if acc_interval is not None:
-            t = min(max(t, acc_interval[0]), acc_interval[1])
+        if acc_ok and t_acc_lo <= t_acc_hi + 1e-12 * max(1.0, t_acc_lo):
+            t = min(max(t, t_acc_lo), t_acc_hi)
         else:  # no point of the line is within reach: the nearest one (weighted) to v_prev
-            w = self._accel_weight
-            t = min(t, max(0.0, float((v_dir * w) @ v_prev) / float((v_dir * w) @ v_dir)))
+            t = min(t, max(0.0, wp / ww))
         t = max(0.0, min(t, t_hard))
         if t >= t_max * (1 - 1e-12):
             return t, ()
         if t >= t_hard * (1 - 1e-9):
             return t, (j_hard,)
         return t, (j_brake,) if t >= t_brake * (1 - 1e-9) else ()
+
+    def _joint_rows(
+        self, v_dir: NDArray[np.float64], q: NDArray[np.float64], v_prev: NDArray[np.float64]
+    ) -> zip:
+        return zip(
+            v_dir.tolist(),
+            q.tolist(),
+            v_prev.tolist(),
+            self._lower,
+            self._upper,
+            self._vmax,
+            self._acc,
+            self._weight,
+            strict=True,
+        )
 
     def _fit_pull(
         self,
@@ -524,10 +556,14 @@ class VelocityIkSolver:
     ) -> tuple[NDArray[np.float64] | None, NDArray[np.float64], float]:
         """The exact joint direction for ``d`` (None when ``d`` leaves J's span), the null-space
         pull, and the smallest of J's ``min(m, n)`` singular values."""
-        U, sigma, Wt = np.linalg.svd(J, full_matrices=True)
-        n = J.shape[1]
-        sigma_min = float(sigma[-1]) if sigma.size else 0.0
+        m, n = J.shape
         thr = self.params.null_threshold
+        if m == n:  # the common case: a square J well away from an exact singularity
+            sigma = np.linalg.svd(J, compute_uv=False)
+            if sigma[-1] > thr:  # no null space: the exact inverse, no pull
+                return np.linalg.solve(J, d), np.zeros(n), float(sigma[-1])
+        U, sigma, Wt = np.linalg.svd(J, full_matrices=True)
+        sigma_min = float(sigma[-1]) if sigma.size else 0.0
         r = int(np.count_nonzero(sigma > thr))
         c = U[:, :r].T @ d
         outside = d - U[:, :r] @ c
