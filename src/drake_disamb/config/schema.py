@@ -40,6 +40,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
+from drake_disamb.config.checks import schema_fields
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, PRESETS
@@ -375,24 +376,16 @@ class Scenario:
         return self.success.hold_time if h is None else h
 
 
-def drake_fields(value: Any) -> list[str] | None:
-    """Field names of a Drake config struct (``SimulatorConfig``...), or ``None`` for anything else."""
-    fields = getattr(type(value), "__fields__", None)
-    return None if fields is None or dataclasses.is_dataclass(value) else [f.name for f in fields]
-
-
 def to_plain(value: Any) -> Any:
     """Plain data (dicts, lists, numbers, strings) of a scenario or any part of it.
 
     The same tree :func:`pydrake.common.yaml.yaml_dump_typed` writes, with ``None`` kept.
     """
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.name: to_plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
-    names = drake_fields(value)
-    if names is not None:
-        return {name: getattr(value, name) for name in names}
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, list | tuple):
         return [to_plain(v) for v in value]
-    return value
+    fields = None if isinstance(value, type) else schema_fields(type(value))
+    if fields is None:
+        return value
+    return {name: to_plain(getattr(value, name)) for name, _, _ in fields}
