@@ -17,6 +17,7 @@ interface, inference, autonomy, blending, disambiguation, task manager) and thei
 from __future__ import annotations
 
 import argparse
+import copy
 import cProfile
 import dataclasses
 import io
@@ -30,15 +31,15 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
-from drake_disamb.builder import build_shared_control_diagram, run_trial, scene_objects, station_config
-from drake_disamb.scenarios import Scenario, load_scenario, with_overrides
+from drake_disamb.builder import build_shared_control_diagram, run_trial
+from drake_disamb.config import Scenario, load_scenario, resolve_scenario, with_overrides
 from drake_disamb.station import build_station
 
 
 def station_floor(scenario: Scenario, times: np.ndarray, u: np.ndarray) -> tuple[float, float]:
     """``(wall rate, cpu rate)`` of the station alone replaying the command ``u`` (T, 6) at ``times``."""
     builder = DiagramBuilder()
-    station = build_station(station_config(scenario), scene_objects(scenario), builder=builder)
+    station = build_station(resolve_scenario(scenario).station, builder=builder)
     command = PiecewisePolynomial.ZeroOrderHold(times, u.T)
     source = builder.AddSystem(TrajectorySource(command))
     builder.Connect(source.get_output_port(), station.input_port("ee_velocity_command"))
@@ -57,7 +58,9 @@ def measure(
 ) -> tuple[float, float, str, tuple[float, float]]:
     """``(wall rate, cpu rate, profile table, station floor rates)`` of ``seconds`` of the reaching loop."""
     scenario = with_overrides(load_scenario("reaching"), interface=interface)
-    scenario = dataclasses.replace(scenario, duration=seconds, plant_time_step=time_step)
+    plant_config = copy.copy(scenario.plant_config)
+    plant_config.time_step = time_step
+    scenario = dataclasses.replace(scenario, duration=seconds, plant_config=plant_config)
     # Warm-up: a short trial of the same scenario first, so that the measured one runs at its
     # steady rate (numba loads its compiled kernels on their first call, about a second).
     run_trial(build_shared_control_diagram(dataclasses.replace(scenario, duration=0.2)), progress=False)

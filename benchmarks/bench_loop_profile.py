@@ -125,13 +125,14 @@ def main() -> None:
     args = parser.parse_args()
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial
-    from drake_disamb.scenarios import load_scenario
+    from drake_disamb.config import load_scenario
 
     scenario = load_scenario(args.task)
     print(
         f"task {args.task}: interface {scenario.interface}, paradigm {scenario.paradigm}, "
         f"inference {scenario.inference.method}, control period {scenario.control_period} s, "
-        f"plant step {scenario.plant_time_step} s, no Meshcat"
+        f"plant step {scenario.plant_config.time_step} s, "
+        f"integrator {scenario.simulator_config.integration_scheme}, no Meshcat"
     )
     # Warm-up (not timed): numba loads its compiled kernels on their first call, about a second.
     run_trial(build_shared_control_diagram(dataclasses.replace(scenario, duration=0.2)), progress=False)

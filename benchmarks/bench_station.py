@@ -14,12 +14,12 @@ import numpy as np
 from _host import HostMeter
 
 from drake_disamb.commands.station_demo import pattern, run_pattern, start_simulation
-from drake_disamb.station import StationConfig, build_station
+from drake_disamb.station import StationConfig, build_station, default_plant_config
 
 
 def measure(seconds: float, time_step: float) -> tuple[float, float, float]:
     """(wall s, cpu s, EE path length m) for ``seconds`` of the station-demo pattern."""
-    station = build_station(StationConfig(time_step=time_step))
+    station = build_station(StationConfig(plant_config=default_plant_config(time_step)))
     simulator = start_simulation(station)
     ctx = simulator.get_mutable_context()
     p0 = station.output_port("ee_pose").Eval(ctx).copy()

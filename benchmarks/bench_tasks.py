@@ -20,7 +20,7 @@ import statistics
 import time
 
 from drake_disamb.builder import run_trial
-from drake_disamb.scenarios import load_scenario, with_overrides
+from drake_disamb.config import load_scenario, with_overrides
 
 
 def goal_choices(task: str) -> list[list[int]]:

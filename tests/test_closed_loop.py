@@ -14,8 +14,8 @@ import pytest
 from pydrake.systems.framework import LeafSystem
 
 from drake_disamb.builder import TrialResult, build_shared_control_diagram, run_trial
+from drake_disamb.config import load_scenario, with_overrides
 from drake_disamb.core.geometry import quat_to_matrix
-from drake_disamb.scenarios import load_scenario, with_overrides
 
 
 @functools.cache
@@ -159,7 +159,8 @@ def test_nan_input_never_reaches_the_arm() -> None:
 
 @pytest.mark.parametrize("method", ["bayes", "memory"])
 def test_baseline_inference_methods_build_and_run(method: str) -> None:
-    s = load_scenario("reaching")
+    paradigm = "manual" if method == "memory" else "disambiguation"  # memory has no forward projection
+    s = with_overrides(load_scenario("reaching"), paradigm=paradigm)
     s = dataclasses.replace(s, inference=dataclasses.replace(s.inference, method=method), duration=0.5)
     r = run_trial(s, progress=False)
     _, belief = r.logs["belief"]

@@ -44,7 +44,7 @@ def test_malformed_yaml_exits_2(tmp_path: Path, capsys) -> None:
 
 
 def test_goal_on_the_start_position_exits_2(tmp_path: Path, capsys) -> None:
-    from drake_disamb.scenarios import embedded_scenario_text
+    from drake_disamb.config import embedded_scenario_text
 
     text = embedded_scenario_text("reaching").replace(
         "position: [0.328, -0.516, 0.100]", "position: [0.0, -0.35, 0.3]"
@@ -247,7 +247,7 @@ def test_stop_request_in_process_keeps_the_partial_trial(tmp_path: Path) -> None
     """run_trial's stop_requested: the result covers the trial up to the stop, flagged interrupted."""
     from drake_disamb.builder import run_trial
     from drake_disamb.commands.demo import metrics_dict
-    from drake_disamb.scenarios import load_scenario
+    from drake_disamb.config import load_scenario
 
     result = run_trial(load_scenario("reaching"), progress=False, stop_requested=lambda: True)
     assert result.interrupted and not result.success and result.time < 0.05

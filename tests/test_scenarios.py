@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
-from drake_disamb.core.geometry import orientation_error
-from drake_disamb.scenarios import (
+from drake_disamb.config import (
     MICO_REACH,
     MICO_SHOULDER_POSITION,
     Scenario,
@@ -25,6 +24,7 @@ from drake_disamb.scenarios import (
     scenario_to_dict,
     with_overrides,
 )
+from drake_disamb.core.geometry import orientation_error
 
 FACTS_REACHING = [
     (0.328, -0.516, 0.100),
@@ -214,7 +214,7 @@ def test_start_clearance() -> None:
 
 
 def test_default_scenario_object_is_invalid_without_goals() -> None:
-    from drake_disamb.scenarios import validate_scenario
+    from drake_disamb.config import validate_scenario
 
     with pytest.raises(ValueError, match=r"scenario\.goals: expected at least one goal"):
         validate_scenario(Scenario())
@@ -295,7 +295,7 @@ def test_goals_closer_than_twice_the_tolerance_are_rejected(offset: float) -> No
 
 
 def test_goal_separation_follows_the_tolerance_and_the_stage() -> None:
-    from drake_disamb.scenarios import SuccessSpec, min_goal_separation
+    from drake_disamb.config import SuccessSpec, min_goal_separation
 
     assert min_goal_separation(SuccessSpec(position_tolerance=0.03)) == pytest.approx(0.06)
     data = _reaching_dict()
@@ -352,12 +352,14 @@ def test_start_posture_counts_the_carried_object() -> None:
         ("control_period: 1e-6", "control_period", "1e-06"),
         ("control_period: 0.0005", "control_period", "0.0005"),
         ("control_period: 0.2", "control_period", "0.2"),
-        ("control_period: 0.01\nplant_time_step: 1e-9", "plant_time_step", "1e-09"),
-        ("control_period: 0.01\nplant_time_step: 0.0", "plant_time_step", "0.0"),
+        ("control_period: 0.01\nplant_config: {time_step: 1e-9}", "plant_config.time_step", "1e-09"),
+        ("control_period: 0.01\nplant_config: {time_step: 0.0}", "plant_config.time_step", "0.0"),
     ],
 )
 def test_control_period_and_plant_step_within_1ms_and_100ms(line: str, field: str, value: str) -> None:
     text = embedded_scenario_text("reaching").replace("control_period: 0.01", line)
+    if "plant_config: {" in line:  # replaces the task's own plant_config
+        text = re.sub(r"\nplant_config:\n(  .*\n)+", "\n", text)
     _rejected_fast(
         text, rf"scenario\.{field}: expected a finite number in \[0\.001, 0\.1\] s, got {re.escape(value)}$"
     )
@@ -366,13 +368,13 @@ def test_control_period_and_plant_step_within_1ms_and_100ms(line: str, field: st
 def test_period_bounds_are_inclusive() -> None:
     for period, step in ((0.001, 0.001), (0.1, 0.1), (0.1, 0.001)):
         data = _reaching_dict()
-        data.update(control_period=period, plant_time_step=step)
+        data.update(control_period=period, plant_config={"time_step": step})
         s = scenario_from_dict(data)
-        assert (s.control_period, s.plant_time_step) == (period, step)
+        assert (s.control_period, s.plant_config.time_step) == (period, step)
 
 
 def test_too_many_stages_or_goals_fail_before_any_quadratic_work() -> None:
-    from drake_disamb.scenarios import MAX_GOALS
+    from drake_disamb.config import MAX_GOALS
 
     data = _reaching_dict()
     data["stages"] = [{"name": f"s{k}"} for k in range(20_000)]

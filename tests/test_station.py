@@ -10,6 +10,7 @@ import pytest
 from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.math import SpatialVelocity
+from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
@@ -27,6 +28,7 @@ from drake_disamb.station import (
     SceneObject,
     StationConfig,
     build_station,
+    default_plant_config,
 )
 
 
@@ -418,10 +420,13 @@ def test_end_effector_state_alone() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "field"),
     [
-        ({"time_step": 0.0}, "time_step"),
-        ({"time_step": float("nan")}, "time_step"),
+        ({"plant_config": default_plant_config(0.0)}, "plant_config.time_step"),
+        ({"plant_config": default_plant_config(float("nan"))}, "plant_config.time_step"),
         ({"control_period": 0.0005}, "control_period"),
-        ({"time_step": 1e-9, "control_period": 1e-9}, "time_step: expected a finite number in"),
+        (
+            {"plant_config": default_plant_config(1e-9), "control_period": 1e-9},
+            "plant_config.time_step: expected a finite number in",
+        ),
         (
             {"control_period": 0.5},
             r"control_period: expected a finite number in \[0\.001, 0\.1\] s, got 0\.5",
@@ -435,7 +440,14 @@ def test_end_effector_state_alone() -> None:
         ({"finger_kd": -1.0}, "finger_kd"),
         ({"nominal_posture_gain": -0.1}, "nominal_posture_gain"),
         ({"limited_alpha": 1.5}, "limited_alpha"),
-        ({"contact_model": "magic"}, "contact_model"),
+        (
+            {"plant_config": MultibodyPlantConfig(time_step=0.01, contact_model="magic")},
+            "plant_config.contact_model",
+        ),
+        (
+            {"plant_config": MultibodyPlantConfig(time_step=0.01, discrete_contact_approximation="tamsi")},
+            "plant_config.discrete_contact_approximation: expected one of sap",
+        ),
         ({"scene_objects": ("cup",)}, "scene_objects"),
     ],
 )

@@ -8,8 +8,8 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
+from drake_disamb.config import load_scenario
 from drake_disamb.core.geometry import quat_from_rotvec, quat_multiply
-from drake_disamb.scenarios import load_scenario
 from drake_disamb.systems.task import TaskManager, pose_errors
 
 STAGE_A = np.array([[0.3, -0.5, 0.1, 1, 0, 0, 0], [-0.3, -0.5, 0.1, 1, 0, 0, 0]], dtype=float)

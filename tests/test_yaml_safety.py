@@ -12,8 +12,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from drake_disamb.core._validation import bounded_repr, check_real_range, is_real
-from drake_disamb.scenarios import (
+from drake_disamb.config import (
     EMBEDDED_TASKS,
     Scenario,
     embedded_scenario_text,
@@ -21,6 +20,7 @@ from drake_disamb.scenarios import (
     scenario_from_dict,
     scenario_from_yaml,
 )
+from drake_disamb.core._validation import bounded_repr, check_real_range, is_real
 from drake_disamb.yaml_safety import (
     MAX_YAML_BYTES,
     MAX_YAML_DEPTH,
@@ -324,7 +324,7 @@ def _sections(data: dict) -> list[tuple[dict, list[str]]]:
     """Mappings of a scenario's plain data, each with the keys its dataclass accepts."""
     import dataclasses
 
-    from drake_disamb.scenarios import GoalSpec, ObjectSpec, SuccessSpec, UserSpec
+    from drake_disamb.config import GoalSpec, ObjectSpec, SuccessSpec, UserSpec
 
     def keys(cls: type) -> list[str]:
         return [f.name for f in dataclasses.fields(cls)]

@@ -1,4 +1,4 @@
-"""One function that assembles every shared-control diagram from a :class:`~drake_disamb.scenarios.Scenario`.
+"""One function that assembles every shared-control diagram from a :class:`~drake_disamb.config.Scenario`.
 
 :func:`build_shared_control_diagram` wires (paper Figure "exp_block_diagram")::
 
@@ -15,19 +15,19 @@
 
 The interface, user, autonomy, blender, disambiguation and task manager tick every
 ``scenario.control_period`` (100 Hz by default, the MICO's Cartesian velocity interface); the DFT
-belief is continuous state, integrated between ticks; the arm is the station's discrete plant.
-:func:`run_trial` simulates one trial until the task is done or the time limit, and returns a
-:class:`TrialResult` with the metrics of the paper (success, time, mode switches, requests,
-button presses) and the logs.
+belief is continuous state, integrated between ticks by the integrator of the scenario's
+``simulator_config``; the arm is the station's discrete plant (``plant_config``). Every system's
+config comes from :func:`~drake_disamb.config.resolve_scenario`. :func:`run_trial` simulates one
+trial until the task is done or the time limit, and returns a :class:`TrialResult` with the metrics
+of the paper (success, time, mode switches, requests, button presses) and the logs.
 
 Belief slot ``i`` in stage ``k`` is goal ``i`` of :meth:`Scenario.stage_goals(k)
-<drake_disamb.scenarios.Scenario.stage_goals>`; the simulated user gets one intended goal per
+<drake_disamb.config.Scenario.stage_goals>`; the simulated user gets one intended goal per
 stage and the task manager's ``stage``.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -37,13 +37,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import ResetIntegratorFromFlags, Simulator
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder, EventStatus, System
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
-from drake_disamb.core.disambiguation import preset as disambiguation_preset
-from drake_disamb.core.interfaces import InterfaceConfig
-from drake_disamb.scenarios import Scenario, check_start_clearance, validate_scenario
+from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import DisambiguationSystem
@@ -70,6 +68,7 @@ class SharedControlDiagram:
     Attributes:
         diagram: The built Diagram.
         scenario: The scenario it was built from.
+        config: The frozen configs resolved from it.
         plant: The station's MultibodyPlant.
         station: The :class:`drake_disamb.station.Station` handle (embedded build).
         systems: Named subsystems: ``user`` (or the given input source), ``interface``,
@@ -83,6 +82,7 @@ class SharedControlDiagram:
 
     diagram: Diagram
     scenario: Scenario
+    config: TrialConfig
     plant: Any
     station: Any
     systems: dict[str, System]
@@ -157,15 +157,15 @@ class TrialResult:
     interrupted: bool = False
 
 
-def _make_inference(scenario: Scenario, n: int) -> System:
+def _make_inference(config: TrialConfig, control_period: float) -> System:
     from drake_disamb.systems import inference as inf
 
-    method = scenario.inference.method
-    if method == "dft":
-        return inf.FieldTheoreticIntentInference(n, scenario.inference.dft, scenario.control_period)
-    if method == "bayes":
-        return inf.RecursiveBayesIntentInference(n, control_period=scenario.control_period)
-    return inf.MemoryBasedIntentInference(n, control_period=scenario.control_period)
+    n = config.n_goals
+    if config.inference_method == "dft":
+        return inf.FieldTheoreticIntentInference(n, config.dft, control_period)
+    if config.inference_method == "bayes":  # sigma and transition: the forward projection's too
+        return inf.RecursiveBayesIntentInference(n, control_period=control_period)
+    return inf.MemoryBasedIntentInference(n, control_period=control_period)
 
 
 def build_shared_control_diagram(
@@ -176,7 +176,7 @@ def build_shared_control_diagram(
     """Assemble the full shared-control diagram of ``scenario``.
 
     Args:
-        scenario: A validated scenario (it is validated again here).
+        scenario: The scenario (checked and resolved here, :func:`~drake_disamb.config.resolve_scenario`).
         meshcat: If given, the arm, table and objects are drawn, plus the goal probabilities, the
             active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
         input_source: A system with one 4-vector output port ``raw`` to drive the interface
@@ -187,25 +187,16 @@ def build_shared_control_diagram(
     """
     from drake_disamb.station import build_station
 
-    validate_scenario(scenario)
-    n = scenario.n_goals
+    config = resolve_scenario(scenario)
+    n = config.n_goals
     builder = DiagramBuilder()
 
-    station = build_station(
-        station_config(scenario), scene_objects(scenario), meshcat=meshcat, builder=builder
-    )
+    station = build_station(config.station, meshcat=meshcat, builder=builder)
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])
 
-    interface_config = InterfaceConfig(
-        kind=scenario.interface, control_period=scenario.control_period, initial_mode=scenario.initial_mode
-    )
-    interface = builder.AddSystem(make_interface(interface_config))
+    interface = builder.AddSystem(make_interface(config.interface))
     modes = [list(m) for m in interface.modes]
-    rho1, _, _ = scenario.blending.rhos(n)
-    user_config = dataclasses.replace(scenario.user.config, seed=scenario.seed, rho1=rho1)
-    if scenario.paradigm == "manual":
-        user_config = dataclasses.replace(user_config, request_at_start=False, request_when_unhelped_for=None)
 
     task = builder.AddSystem(
         TaskManager(
@@ -217,15 +208,15 @@ def build_shared_control_diagram(
         )
     )
     task.set_name("task")
-    autonomy = builder.AddSystem(PotentialFieldAutonomy(n, scenario.autonomy, scenario.control_period))
+    autonomy = builder.AddSystem(PotentialFieldAutonomy(n, config.autonomy, scenario.control_period))
     autonomy.set_name("autonomy")
-    inference = builder.AddSystem(_make_inference(scenario, n))
+    inference = builder.AddSystem(_make_inference(config, scenario.control_period))
     inference.set_name("inference")
-    blender = builder.AddSystem(SharedControlBlender(n, scenario.blending, scenario.control_period))
+    blender = builder.AddSystem(SharedControlBlender(n, config.blending, scenario.control_period))
     blender.set_name("blender")
 
     if input_source is None:
-        user = builder.AddSystem(SimulatedUser(interface_config, list(scenario.user.goals), n, user_config))
+        user = builder.AddSystem(SimulatedUser(config.interface, list(scenario.user.goals), n, config.user))
         user.set_name("user")
         builder.Connect(interface.GetOutputPort("mode"), user.GetInputPort("mode"))
     else:
@@ -236,7 +227,7 @@ def build_shared_control_diagram(
 
     # The control loop (every scenario.control_period, 10 ms by default) sees the end-effector pose
     # sampled at its ticks (as the MICO's Cartesian interface reports it); this also keeps plant
-    # steps finer than the control period (scenario.plant_time_step, by default equal to it) and the
+    # steps finer than the control period (scenario.plant_config.time_step, by default equal to it) and the
     # belief integrator's stages from re-evaluating the autonomy and the belief's inputs between ticks.
     sampler = builder.AddSystem(ZeroOrderHold(scenario.control_period, 7))
     sampler.set_name("ee_pose_sampler")
@@ -271,15 +262,11 @@ def build_shared_control_diagram(
         "diff_ik": station.diff_ik,
         "ee_pose_sampler": sampler,
     }
-    if scenario.paradigm == "disambiguation":
-        config = disambiguation_preset(scenario.disambiguation.preset)
-        if scenario.disambiguation.preset == "mico":
-            # The forward projection must run the live inference's update and autonomy.
-            config = dataclasses.replace(
-                config, dft=scenario.inference.dft, potential_field=scenario.autonomy
-            )
+    if config.disambiguation is not None:  # the preset's probing, the live inference's update
         disamb = builder.AddSystem(
-            DisambiguationSystem(n, interface.arm_modes, config, control_period=scenario.control_period)
+            DisambiguationSystem(
+                n, interface.arm_modes, config.disambiguation, control_period=scenario.control_period
+            )
         )
         disamb.set_name("disambiguation")
         builder.Connect(inference.GetOutputPort("belief"), disamb.GetInputPort("belief"))
@@ -316,6 +303,7 @@ def build_shared_control_diagram(
     return SharedControlDiagram(
         diagram=diagram,
         scenario=scenario,
+        config=config,
         plant=plant,
         station=station,
         systems=systems,
@@ -325,19 +313,6 @@ def build_shared_control_diagram(
     )
 
 
-def station_config(scenario: Scenario) -> Any:
-    """The :class:`~drake_disamb.station.StationConfig` of ``scenario`` (periods, start posture)."""
-    from drake_disamb.station import StationConfig
-
-    kwargs: dict[str, Any] = {
-        "control_period": scenario.control_period,
-        "time_step": scenario.plant_time_step,
-    }
-    if scenario.start_joint_positions is not None:
-        kwargs["home_q"] = tuple(scenario.start_joint_positions)
-    return StationConfig(**kwargs)
-
-
 def start_ee_pose(station: Any) -> NDArray[np.float64]:
     """``[x, y, z, qw, qx, qy, qz]`` of the end effector in the station's default (start) state."""
     from drake_disamb.station import EE_FRAME
@@ -345,38 +320,6 @@ def start_ee_pose(station: Any) -> NDArray[np.float64]:
     plant = station.plant
     X = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(plant.CreateDefaultContext())
     return np.concatenate((X.translation(), X.rotation().ToQuaternion().wxyz()))
-
-
-def scene_objects(scenario: Scenario) -> list[Any]:
-    """The station's scene objects: one per goal (at the goal plus its offset) and the carried one."""
-    from drake_disamb.station import SceneObject
-
-    objects = []
-    for g in scenario.goals:
-        o = g.object
-        centre = np.asarray(g.position) + np.asarray(o.offset)
-        objects.append(
-            SceneObject(
-                name=g.name,
-                shape=o.shape,
-                size=tuple(o.size),
-                pose=(*centre.tolist(), 1.0, 0.0, 0.0, 0.0),
-                rgba=tuple(o.color),
-            )
-        )
-    if scenario.carried_object is not None:
-        c = scenario.carried_object
-        objects.append(
-            SceneObject(
-                name="carried_object",
-                shape=c.shape,
-                size=tuple(c.size),
-                pose=(*c.offset, *c.orientation),
-                rgba=tuple(c.color),
-                attached_to_gripper=True,
-            )
-        )
-    return objects
 
 
 # ----------------------------------------------------------------------------------------------
@@ -396,10 +339,9 @@ def run_trial(
     scenario: Scenario | SharedControlDiagram,
     meshcat: Meshcat | None = None,
     progress: bool = True,
-    realtime_rate: float = 0.0,
+    realtime_rate: float | None = None,
     stop_at_success: bool = True,
     recording: bool | None = None,
-    integrator: str = "runge_kutta2",
     stop_requested: Callable[[], bool] | None = None,
 ) -> TrialResult:
     """Simulate one trial until the task is done (or ``scenario.duration``).
@@ -408,12 +350,11 @@ def run_trial(
         scenario: A scenario (a diagram is built for it) or a built :class:`SharedControlDiagram`.
         meshcat: Meshcat for a scenario argument (ignored for a built diagram, which has its own).
         progress: Show a tqdm progress bar of simulated time.
-        realtime_rate: Target real-time rate (0 = as fast as possible).
+        realtime_rate: Target real-time rate (0 = as fast as possible); ``None`` keeps the
+            scenario's ``simulator_config.target_realtime_rate``.
         stop_at_success: Stop once every stage is done (else run to ``scenario.duration``).
         recording: Record the Meshcat animation (default: whenever there is Meshcat). The
             recording is published at the end (:func:`save_recording` writes it to HTML).
-        integrator: Drake integrator scheme for the continuous belief (``ResetIntegratorFromFlags``),
-            with its maximum step set to the control period.
         stop_requested: Checked after every simulator step; once it returns True the trial stops
             there (a signal handler's flag). A ``KeyboardInterrupt`` raised during the simulation
             stops it the same way. Either way the result has ``interrupted=True`` and holds the
@@ -428,11 +369,9 @@ def run_trial(
     meshcat = handles.meshcat
     record = (meshcat is not None) if recording is None else (recording and meshcat is not None)
     simulator = Simulator(handles.diagram)
-    # The belief's inputs are held between control ticks (ee_pose sampled, u_h from interface
-    # state), so its ODE is smooth between ticks: a fixed-step RK2 at the control period is
-    # accurate (the inference re-projects p onto the simplex every tick anyway).
-    ResetIntegratorFromFlags(simulator, integrator, sc.control_period)
-    simulator.set_target_realtime_rate(realtime_rate)
+    ApplySimulatorConfig(handles.config.simulator, simulator)  # the integrator of the continuous belief
+    if realtime_rate is not None:
+        simulator.set_target_realtime_rate(realtime_rate)
     root = simulator.get_mutable_context()
     handles.initialize(root)
     task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
@@ -494,7 +433,7 @@ def run_trial(
     _, alpha = logs["alpha"]
     commanding = np.any(np.abs(uh) > 1e-9, axis=1)
     mean_alpha = float(np.mean(alpha[commanding, 0])) if np.any(commanding) else 0.0
-    rho1 = sc.blending.rhos(sc.n_goals)[0]
+    rho1 = handles.config.rhos[0]
     return TrialResult(
         scenario=sc,
         success=bool(success),

@@ -1,6 +1,6 @@
 """Clearance of the MICO above its table, from the station's own model (forward kinematics in Drake).
 
-The scenario validation (:func:`drake_disamb.scenarios.validate_scenario`) asks two questions that
+The scenario validation (:func:`drake_disamb.config.validation.check_scenario`) asks two questions that
 need the arm's geometry: does a start posture keep every link and finger above the table top, and
 does the gripper, placed at a goal pose, stay above it? Both are answered here with the model the
 station simulates (``models/mico/mico_on_table.dmd.yaml``: our MICO URDF and the table), parsed

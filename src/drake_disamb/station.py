@@ -46,6 +46,7 @@ wrong length cannot reach the station: Drake rejects it where it enters (``FixVa
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 import warnings
@@ -218,19 +219,61 @@ class SceneObject:
         return SpatialInertia.SolidSphereWithMass(self.mass, self.size[0])
 
 
+def default_plant_config(time_step: float = 0.01) -> MultibodyPlantConfig:
+    """The station's MultibodyPlantConfig: discrete steps of ``time_step`` (s), SAP (it integrates the
+    joint-actuator PD implicitly) and point contact (the fast choice); Drake's defaults otherwise."""
+    return MultibodyPlantConfig(
+        time_step=time_step, discrete_contact_approximation="sap", contact_model="point"
+    )
+
+
+PLANT_CONFIG_CHOICES: dict[str, tuple[str, ...]] = {
+    "contact_model": ("point", "hydroelastic", "hydroelastic_with_fallback"),
+    "discrete_contact_approximation": ("sap", "similar", "lagged"),
+    "contact_surface_representation": ("triangle", "polygon"),
+}
+"""Accepted values of the MultibodyPlantConfig's string fields. The discrete contact approximation
+must be one of SAP's: only SAP evaluates the joint actuators' PD controllers the station uses."""
+
+
+def check_plant_config(config: MultibodyPlantConfig, path: str) -> None:
+    """Raise ``ValueError`` naming ``path.<field>`` and the value unless the station can use ``config``.
+
+    The plant is discrete, ``time_step`` in [1 ms, 100 ms] (``TIME_STEP_RANGE``); the string
+    fields take the values of :data:`PLANT_CONFIG_CHOICES`; the tolerances are finite and positive
+    (``sap_near_rigid_threshold`` may be 0).
+    """
+    check_real_range(config.time_step, f"{path}.time_step", *TIME_STEP_RANGE, unit="s")
+    for name, choices in PLANT_CONFIG_CHOICES.items():
+        value = getattr(config, name)
+        if value not in choices:
+            raise ValueError(f"{path}.{name}: expected one of {', '.join(choices)}, got {value!r}")
+    for name in ("penetration_allowance", "stiction_tolerance"):
+        value = getattr(config, name)
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{path}.{name}: expected a finite number > 0, got {value!r}")
+    if not (math.isfinite(config.sap_near_rigid_threshold) and config.sap_near_rigid_threshold >= 0):
+        raise ValueError(
+            f"{path}.sap_near_rigid_threshold: expected a finite number >= 0, "
+            f"got {config.sap_near_rigid_threshold!r}"
+        )
+
+
 @dataclass(frozen=True)
 class StationConfig:
     """Settings of the station (SI units).
 
     Attributes:
-        time_step: MultibodyPlant discrete step (s). The default, 0.01 s, equals the default
-            ``control_period``: the arm receives new joint set points only once per control tick,
-            and SAP integrates the joint-actuator PD implicitly (stable at large steps), so one
-            physics step per tick tracks the set points as well as finer steps do (the station's
-            tests pass unchanged at 2, 5 and 10 ms) while costing a fifth of a 2 ms plant. Choose
-            a smaller step (e.g. 0.001) to resolve contact with the table or objects more finely.
+        plant_config: Drake's ``MultibodyPlantConfig`` of the arm's plant (checked by
+            :func:`check_plant_config`; the default is :func:`default_plant_config`). Its
+            ``time_step`` (s) defaults to 0.01 s, the default ``control_period``: the arm receives
+            new joint set points only once per control tick, and SAP integrates the joint-actuator
+            PD implicitly (stable at large steps), so one physics step per tick tracks the set
+            points as well as finer steps do (the station's tests pass unchanged at 2, 5 and 10 ms)
+            while costing a fifth of a 2 ms plant. Choose a smaller step (e.g. 0.001) to resolve
+            contact with the table or objects more finely.
         control_period: Period of the differential IK and gripper integrators (s), 0.01 = 100 Hz.
-            Both it and ``time_step`` must lie in [1 ms, 100 ms] (``TIME_STEP_RANGE``).
+            Both it and ``plant_config.time_step`` must lie in [1 ms, 100 ms] (``TIME_STEP_RANGE``).
         home_q: Initial arm joint angles (rad, DH); must be inside the joint limits.
         home_gripper_opening: Initial distance between the fingertips (m).
         joint_velocity_limits: Per-joint speed limits for the IK (rad/s); ``None`` takes the
@@ -258,12 +301,11 @@ class StationConfig:
             measured joint angles, it is reset to them (status ``RESEEDED``).
         limited_alpha: Report ``LIMITED`` (or ``SINGULAR``) when the IK achieves less than this
             fraction of the command along it, or misses it by more than ``1 - limited_alpha``.
-        contact_model: MultibodyPlant contact model (``"point"`` is the fast choice).
         warn_interval: Minimum simulated time (s) between two warnings about bad commands.
         scene_objects: Objects to add (in addition to those passed to :func:`build_station`).
     """
 
-    time_step: float = 0.01
+    plant_config: MultibodyPlantConfig = field(default_factory=default_plant_config)
     control_period: float = 0.01
     home_q: tuple[float, ...] = tuple(MICO_HOME_Q.tolist())
     home_gripper_opening: float = 0.08
@@ -278,21 +320,25 @@ class StationConfig:
     finger_kd: float = 20.0
     reseed_tolerance: float = 0.15
     limited_alpha: float = 0.95
-    contact_model: str = "point"
     warn_interval: float = 1.0
     scene_objects: tuple[SceneObject, ...] = field(default=())
 
     def __post_init__(self) -> None:
         o = "StationConfig"
-        for name in ("time_step", "control_period", "warn_interval", "reseed_tolerance"):
+        for name in ("control_period", "warn_interval", "reseed_tolerance"):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{o}.{name}: expected a finite positive number, got {v!r}")
-        for name in ("time_step", "control_period"):
-            check_real_range(getattr(self, name), f"{o}.{name}", *TIME_STEP_RANGE, unit="s")
-        if self.control_period < self.time_step * (1 - 1e-9):
+        if not isinstance(self.plant_config, MultibodyPlantConfig):
+            raise ValueError(f"{o}.plant_config: expected a MultibodyPlantConfig, got {self.plant_config!r}")
+        object.__setattr__(self, "plant_config", copy.copy(self.plant_config))  # not the caller's object
+        check_plant_config(self.plant_config, f"{o}.plant_config")
+        check_real_range(self.control_period, f"{o}.control_period", *TIME_STEP_RANGE, unit="s")
+        time_step = self.plant_config.time_step
+        if self.control_period < time_step * (1 - 1e-9):
             raise ValueError(
-                f"{o}.control_period: must be >= time_step ({self.time_step}), got {self.control_period!r}"
+                f"{o}.control_period: must be >= plant_config.time_step ({time_step}), "
+                f"got {self.control_period!r}"
             )
         object.__setattr__(self, "home_q", tuple(_finite_vector(o, "home_q", self.home_q, 6).tolist()))
         if not (0.0 <= self.home_gripper_opening <= FINGER_MAX_OPENING):
@@ -330,11 +376,6 @@ class StationConfig:
             )
         if not (0 < self.limited_alpha <= 1):
             raise ValueError(f"{o}.limited_alpha: expected a number in (0, 1], got {self.limited_alpha!r}")
-        if self.contact_model not in ("point", "hydroelastic", "hydroelastic_with_fallback"):
-            raise ValueError(
-                f"{o}.contact_model: expected 'point', 'hydroelastic' or 'hydroelastic_with_fallback', "
-                f"got {self.contact_model!r}"
-            )
         objs = tuple(self.scene_objects)
         for k, obj in enumerate(objs):
             if not isinstance(obj, SceneObject):
@@ -815,12 +856,7 @@ def build_station(
     if builder is None:
         builder = DiagramBuilder()
 
-    plant_config = MultibodyPlantConfig(
-        time_step=config.time_step,
-        discrete_contact_approximation="sap",
-        contact_model=config.contact_model,
-    )
-    plant, scene_graph = AddMultibodyPlant(plant_config, builder)
+    plant, scene_graph = AddMultibodyPlant(config.plant_config, builder)
     parser = _parser(plant)
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, parser)
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)

@@ -15,6 +15,10 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 (:class:`~drake_disamb.systems.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
+``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
+every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
+same scenario. Nothing is run and ``--out`` is not touched.
+
 ``--out`` is checked (created if needed, a probe file written and deleted) before anything is
 built. Ctrl-C (SIGINT) or SIGTERM stops the trial between simulator steps; the command then writes
 everything above for the trial so far (``metrics.json`` with ``"interrupted": true``) and exits
@@ -127,6 +131,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="simulated-time limit in s (default: the scenario's, 600 with --live)",
     )
+    parser.add_argument(
+        "--dump-scenario",
+        action="store_true",
+        help="print the resolved scenario (with the options above) as YAML and exit without running",
+    )
 
 
 def format_metrics(result) -> str:  # noqa: ANN001 (TrialResult, imported lazily)
@@ -223,7 +232,31 @@ def run(args: argparse.Namespace) -> int:
             return EXIT_INTERRUPTED
 
 
+def _scenario(args: argparse.Namespace) -> Any:
+    """The scenario of ``--task`` with the command-line options applied (raises ``ValueError``)."""
+    from drake_disamb.config import load_scenario, with_overrides
+
+    scenario = load_scenario(args.task)
+    scenario = with_overrides(
+        scenario, interface=args.interface, paradigm=args.paradigm, goal=args.goal, seed=args.seed
+    )
+    duration = args.duration if args.duration is not None else (600.0 if args.live else None)
+    if duration is not None:
+        if not duration > 0:
+            raise ValueError(f"--duration: expected a number > 0, got {duration:g}")
+        scenario = dataclasses.replace(scenario, duration=duration)
+    return scenario
+
+
 def _run(args: argparse.Namespace, stop: StopRequest) -> int:
+    if args.dump_scenario:
+        from drake_disamb.config import dump_scenario
+
+        try:
+            print(dump_scenario(_scenario(args)), end="")
+        except ValueError as exc:
+            return _error(exc)
+        return 0
     if args.live and args.no_meshcat:
         return _error("--live needs Meshcat (drop --no-meshcat)")
     # First, before the heavy imports and anything is built: a bad folder costs nothing.
@@ -231,21 +264,10 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         out = check_output_dir(args.out, "--out")
     except ValueError as exc:
         return _error(exc)
-
-    from drake_disamb.scenarios import load_scenario, with_overrides
-
     try:
-        scenario = load_scenario(args.task)
-        scenario = with_overrides(
-            scenario, interface=args.interface, paradigm=args.paradigm, goal=args.goal, seed=args.seed
-        )
+        scenario = _scenario(args)
     except ValueError as exc:
         return _error(exc)
-    duration = args.duration if args.duration is not None else (600.0 if args.live else None)
-    if duration is not None:
-        if not duration > 0:
-            return _error(f"--duration: expected a number > 0, got {duration:g}")
-        scenario = dataclasses.replace(scenario, duration=duration)
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
 

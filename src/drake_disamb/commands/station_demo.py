@@ -159,7 +159,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def _station_config(time_step: float | None) -> Any:
     """The StationConfig with ``--time-step`` (at most the control period)."""
-    from drake_disamb.station import StationConfig
+    from drake_disamb.station import StationConfig, default_plant_config
 
     config = StationConfig()
     if time_step is None:
@@ -169,7 +169,7 @@ def _station_config(time_step: float | None) -> Any:
             f"--time-step: expected at most the control period ({config.control_period:g} s), "
             f"got {time_step!r}"
         )
-    return StationConfig(time_step=time_step)
+    return StationConfig(plant_config=default_plant_config(time_step))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,1 +1,1 @@
-"""Embedded task scenarios (YAML package data), loaded by :func:`drake_disamb.scenarios.load_scenario`."""
+"""Embedded task scenarios (YAML package data), loaded by :func:`drake_disamb.config.load_scenario`."""

@@ -1,0 +1,95 @@
+"""Scenarios in Drake's style: typed dataclasses loaded with Drake's YAML loader, checked once and
+resolved into the frozen configs the core and the systems use.
+
+- :mod:`~drake_disamb.config.schema`: :class:`Scenario` and its parts, nesting Drake's
+  ``SimulatorConfig`` (``simulator_config``) and ``MultibodyPlantConfig`` (``plant_config``);
+- :mod:`~drake_disamb.config.yaml_io`: :func:`load_scenario` (embedded task name or YAML path),
+  :func:`dump_scenario`, :func:`with_overrides`; the raw text is checked
+  (:mod:`drake_disamb.yaml_safety`) before ``yaml_load_typed`` reads it;
+- :mod:`~drake_disamb.config.checks`: the strict type check of plain data that Drake's loader lacks;
+- :mod:`~drake_disamb.config.validation`: every other check, with messages naming the field path
+  and the value;
+- :mod:`~drake_disamb.config.resolve`: :func:`resolve_scenario`, the one place a scenario becomes
+  a :class:`TrialConfig` (rho thresholds, shared DFT parameters and potential field, the user's,
+  interface's, station's and simulator's configs).
+
+Two scenarios are embedded as package data (``drake_disamb/tasks/reaching.yaml`` and
+``pouring.yaml``); ``drake-disamb demo --dump-scenario`` prints any scenario fully written out.
+"""
+
+from drake_disamb.config.resolve import TrialConfig, resolve_scenario, scene_objects, validate_scenario
+from drake_disamb.config.schema import (
+    INFERENCE_METHODS,
+    INTERFACES,
+    MAX_GOALS,
+    PARADIGMS,
+    BlendingSpec,
+    CarriedObjectSpec,
+    DFTSpec,
+    DisambiguationSpec,
+    GoalSpec,
+    InferenceSpec,
+    ObjectSpec,
+    PotentialFieldSpec,
+    Scenario,
+    StageSpec,
+    SuccessSpec,
+    UserBehaviorSpec,
+    UserSpec,
+)
+from drake_disamb.config.validation import (
+    MICO_REACH,
+    MICO_SHOULDER_POSITION,
+    MIN_START_CLEARANCE,
+    MIN_TABLE_CLEARANCE,
+    check_start_clearance,
+    min_goal_separation,
+)
+from drake_disamb.config.yaml_io import (
+    EMBEDDED_TASKS,
+    dump_scenario,
+    embedded_scenario_text,
+    load_scenario,
+    scenario_from_dict,
+    scenario_from_yaml,
+    scenario_to_dict,
+    with_overrides,
+)
+
+__all__ = [
+    "EMBEDDED_TASKS",
+    "INFERENCE_METHODS",
+    "INTERFACES",
+    "MAX_GOALS",
+    "MICO_REACH",
+    "MICO_SHOULDER_POSITION",
+    "MIN_START_CLEARANCE",
+    "MIN_TABLE_CLEARANCE",
+    "PARADIGMS",
+    "BlendingSpec",
+    "CarriedObjectSpec",
+    "DFTSpec",
+    "DisambiguationSpec",
+    "GoalSpec",
+    "InferenceSpec",
+    "ObjectSpec",
+    "PotentialFieldSpec",
+    "Scenario",
+    "StageSpec",
+    "SuccessSpec",
+    "TrialConfig",
+    "UserBehaviorSpec",
+    "UserSpec",
+    "check_start_clearance",
+    "dump_scenario",
+    "embedded_scenario_text",
+    "load_scenario",
+    "min_goal_separation",
+    "resolve_scenario",
+    "scenario_from_dict",
+    "scenario_from_yaml",
+    "scenario_to_dict",
+    "scene_objects",
+    "validate_scenario",
+    "with_overrides",
+]

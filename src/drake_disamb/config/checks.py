@@ -1,0 +1,128 @@
+"""The strict check of plain scenario data against the schema, run before Drake's YAML loader.
+
+:func:`pydrake.common.yaml.yaml_load_typed` builds the dataclasses but trusts its input more than a
+file from a user should be trusted: a string loads into a ``list[float]`` as its characters
+(``"123"`` becomes ``[1.0, 2.0, 3.0]``), a quoted ``"0.5"`` or ``"nan"`` loads as a number, a
+number where a mapping belongs fails on an ``assert``, and its errors name the leaf field
+(``'x'``) but not where it is. :func:`check_data` walks the parsed data alongside the same
+dataclasses first and raises ``ValueError`` naming the field path and the value, e.g.
+``scenario.goals[2].position: expected 3 finite numbers, got [0.1, nan, 0.2]``. Data that passes
+loads without an error from Drake.
+
+The same walk checks a scenario built in code (on :func:`~drake_disamb.config.schema.to_plain`
+of it), so a field changed with ``dataclasses.replace`` is checked like one read from a file.
+
+What it accepts: a ``float`` is a finite real number (an integer too, never a bool); an ``int``
+an integer (not a bool); a ``bool`` true or false; a ``str`` a string (one of the field's
+``choices``, when it has them); a ``list`` a list (of one of the field's ``size`` lengths and at
+most ``max_items`` long, when given); ``X | None`` also ``None``; a dataclass or Drake struct a
+mapping with no unknown key and every ``required`` key. Values in messages are cut
+(:func:`~drake_disamb.core._validation.bounded_repr`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+import types
+import typing
+from typing import Any
+
+from drake_disamb.core._validation import bounded_repr, is_real
+
+
+def fmt(value: Any) -> str:
+    """``repr(value)`` cut to 200 characters, never formatting more (see :func:`bounded_repr`)."""
+    return bounded_repr(value, 200)
+
+
+def cut(text: str, limit: int = 400) -> str:
+    """``text`` cut to ``limit`` characters."""
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def schema_fields(schema: type) -> list[tuple[str, Any, dict[str, Any]]] | None:
+    """``(name, type, check metadata)`` of each field of a dataclass or Drake struct, else ``None``."""
+    if dataclasses.is_dataclass(schema):
+        return [(f.name, f.type, dict(f.metadata.get("check", {}))) for f in dataclasses.fields(schema)]
+    drake = getattr(schema, "__fields__", None)
+    return None if drake is None else [(f.name, f.type, {}) for f in drake]
+
+
+def _is_integer(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def _check_list(item: Any, data: Any, path: str, meta: dict[str, Any]) -> None:
+    sizes = meta.get("size")
+    if item is float and sizes is not None:  # a vector: one message for its type, length and entries
+        if not isinstance(data, list) or len(data) not in sizes or not all(is_real(v) for v in data):
+            what = " or ".join(str(n) for n in sizes)
+            raise ValueError(f"{path}: expected {what} finite numbers, got {fmt(data)}")
+        return
+    if not isinstance(data, list):
+        raise ValueError(f"{path}: expected a list, got {fmt(data)}")
+    if sizes is not None and len(data) not in sizes:
+        raise ValueError(f"{path}: expected {' or '.join(map(str, sizes))} items, got {len(data)}")
+    if "max_items" in meta and len(data) > meta["max_items"]:
+        raise ValueError(f"{path}: expected at most {meta['max_items']} items, got {len(data)}")
+    for i, value in enumerate(data):
+        check_data(item, value, f"{path}[{i}]")
+
+
+def check_data(schema: Any, data: Any, path: str, meta: dict[str, Any] | None = None) -> None:
+    """Raise ``ValueError`` at the first place where plain ``data`` does not fit type ``schema``.
+
+    Args:
+        schema: A field type of the scenario schema (a dataclass, a Drake struct, ``list[...]``,
+            ``X | None``, ``float``, ``int``, ``bool`` or ``str``).
+        data: Plain data (as parsed from YAML).
+        path: Where ``data`` is, for messages (``"scenario"``, ``"scenario.goals[2]"``).
+        meta: The field's check metadata (``required``, ``choices``, ``size``, ``max_items``).
+    """
+    meta = meta or {}
+    origin = typing.get_origin(schema)
+    if origin in (typing.Union, types.UnionType):  # the schema's unions are all X | None
+        if data is None:
+            return
+        (schema,) = [a for a in typing.get_args(schema) if a is not type(None)]
+        origin = typing.get_origin(schema)
+    if origin is list:
+        _check_list(typing.get_args(schema)[0], data, path, meta)
+    elif schema is float:
+        if not is_real(data):
+            raise ValueError(f"{path}: expected a finite number, got {fmt(data)}")
+    elif schema is int:
+        if not _is_integer(data):
+            raise ValueError(f"{path}: expected an integer, got {fmt(data)}")
+    elif schema is bool:
+        if not isinstance(data, bool):
+            raise ValueError(f"{path}: expected true or false, got {fmt(data)}")
+    elif schema is str:
+        if not isinstance(data, str):
+            raise ValueError(f"{path}: expected a string, got {fmt(data)}")
+        if "choices" in meta and data not in meta["choices"]:
+            raise ValueError(f"{path}: expected one of {', '.join(meta['choices'])}, got {fmt(data)}")
+    else:
+        _check_mapping(schema, data, path)
+
+
+def _check_mapping(schema: type, data: Any, path: str) -> None:
+    fields = schema_fields(schema)
+    if fields is None:  # pragma: no cover (a programming error in the schema)
+        raise TypeError(f"{path}: unsupported field type {schema!r}")
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a mapping of {schema.__name__} fields, got {fmt(data)}")
+    names = {name for name, _, _ in fields}
+    for key in data:
+        if key not in names:
+            shown = key if isinstance(key, str) and key.isidentifier() and len(key) <= 60 else fmt(key)
+            known = ", ".join(sorted(names))
+            raise ValueError(
+                f"{path}.{cut(shown, 60)}: unknown key (known keys of {schema.__name__}: {known})"
+            )
+    for name, tp, meta in fields:
+        if name in data:
+            check_data(tp, data[name], f"{path}.{name}", meta)
+        elif meta.get("required"):
+            raise ValueError(f"{path}.{name}: required field missing")

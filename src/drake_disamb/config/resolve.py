@@ -1,0 +1,211 @@
+"""The one place where a scenario becomes the frozen configs that the core and the systems use.
+
+:func:`resolve_scenario` checks the scenario (:func:`~drake_disamb.config.validation.check_scenario`)
+and returns a :class:`TrialConfig`:
+
+- the blending thresholds ``(rho1, rho2, rho3)``, resolved once for the scenario's number of goals
+  (:func:`~drake_disamb.core.blending.resolve_rhos`, the paper's ``1.2 / n`` and ``1.4 / n`` where
+  the scenario leaves them out): the blender gets them written out, the simulated user its
+  ``rho1``, the trial result reports ``rho1``;
+- the DFT parameters and the potential field, one instance each, shared by the live inference,
+  the autonomy and the disambiguation's forward projection. Whatever the preset, the projection
+  runs the live belief update: the preset fixes how it probes (dimensions, probe speeds, step,
+  horizons, weights), and its method, DFT parameters and potential field are replaced by the
+  scenario's. The ``memory`` method has no forward projection, so the disambiguation paradigm
+  refuses it;
+- the simulated user's config (its seed is the scenario's; in the manual paradigm it never asks
+  for disambiguation), the interface's, the station's (Drake's ``MultibodyPlantConfig``, the start
+  posture and the scene objects) and Drake's ``SimulatorConfig``.
+
+An error from a core config's own checks is raised as a ``ValueError`` that names the scenario
+field first, e.g. ``scenario.inference.dft: DFTParams.tau1 must be a finite positive number, got -1.0``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+import numpy as np
+
+from drake_disamb.config.checks import cut, fmt
+from drake_disamb.config.schema import Scenario
+from drake_disamb.config.validation import check_scenario
+from drake_disamb.core.autonomy import PotentialFieldConfig
+from drake_disamb.core.blending import BlendingConfig, resolve_rhos
+from drake_disamb.core.disambiguation import DisambiguationConfig, preset
+from drake_disamb.core.inference import DFTParams
+from drake_disamb.core.interfaces import InterfaceConfig
+from drake_disamb.core.user import UserConfig
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class TrialConfig:
+    """The frozen configs of one trial, resolved from a scenario by :func:`resolve_scenario`.
+
+    Attributes:
+        n_goals: Goals per stage (the size of the belief).
+        rhos: The blending thresholds ``(rho1, rho2, rho3)`` for ``n_goals``.
+        blending: The blender's config, ``rho1`` and ``rho2`` written out.
+        autonomy: The potential field of the autonomy, the live inference's agreement term and the
+            forward projection.
+        inference_method: ``"dft"``, ``"bayes"`` or ``"memory"``.
+        dft: The DFT parameters of the live inference and of the forward projection.
+        disambiguation: The forward projection's config (``None`` in the manual paradigm): the
+            preset's probing with the live inference's method, ``dft`` and ``autonomy``.
+        user: The simulated user's config (seed and ``rho1`` set).
+        interface: The interface's config.
+        station: The station's config (plant config, control period, start posture, scene objects).
+        simulator: Drake's ``SimulatorConfig`` for ``ApplySimulatorConfig`` (a copy).
+    """
+
+    n_goals: int
+    rhos: tuple[float, float, float]
+    blending: BlendingConfig
+    autonomy: PotentialFieldConfig
+    inference_method: str
+    dft: DFTParams
+    disambiguation: DisambiguationConfig | None
+    user: UserConfig
+    interface: InterfaceConfig
+    station: Any
+    simulator: Any
+
+
+def _named(path: str, make: Callable[[], T]) -> T:
+    """``make()``, with a ``ValueError`` from a core config's checks prefixed by the scenario field."""
+    try:
+        return make()
+    except ValueError as exc:
+        raise ValueError(f"{path}: {cut(str(exc))}") from exc
+
+
+def _check_dft_sizes(dft: DFTParams, n: int, path: str) -> None:
+    if dft.transition is not None and np.shape(dft.transition) != (n, n):
+        raise ValueError(
+            f"{path}.transition: expected a {n} x {n} matrix (one row per goal), got {fmt(dft.transition)}"
+        )
+    if dft.rest is not None and np.shape(dft.rest) != (n,):
+        raise ValueError(f"{path}.rest: expected {n} probabilities (one per goal), got {fmt(dft.rest)}")
+
+
+def projection_config(
+    preset_name: str, method: str, dft: DFTParams, autonomy: PotentialFieldConfig, path: str = "scenario"
+) -> DisambiguationConfig:
+    """The forward projection's config: preset ``preset_name``'s probing, the live belief update.
+
+    Raises:
+        ValueError: for the ``memory`` method, which has no forward projection.
+    """
+    if method == "memory":
+        raise ValueError(
+            f"{path}.inference.method: the disambiguation paradigm projects the belief forward with the "
+            f"live inference's update, which exists for 'dft' and 'bayes' (use the manual paradigm), "
+            f"got 'memory'"
+        )
+    return _named(
+        f"{path}.disambiguation",
+        lambda: dataclasses.replace(preset(preset_name), inference=method, dft=dft, potential_field=autonomy),
+    )
+
+
+def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
+    """Check ``scenario`` and build its frozen configs (see the module docstring).
+
+    Raises:
+        ValueError: naming the field path (``scenario.blending``, ``scenario.goals[2].position``...)
+            and the value.
+    """
+    from drake_disamb.station import StationConfig
+
+    s = scenario
+    check_scenario(s, name)
+    n = s.n_goals
+    blending = _named(f"{name}.blending", s.blending.to_config)
+    rhos = _named(f"{name}.blending", lambda: resolve_rhos(n, blending.rho1, blending.rho2, blending.rho3))
+    blending = dataclasses.replace(blending, rho1=rhos[0], rho2=rhos[1])
+    autonomy = _named(f"{name}.autonomy", s.autonomy.to_config)
+    dft = _named(f"{name}.inference.dft", s.inference.dft.to_config)
+    _check_dft_sizes(dft, n, f"{name}.inference.dft")
+    user = _named(f"{name}.user.config", lambda: s.user.config.to_config(seed=s.seed, rho1=rhos[0]))
+    disambiguation = None
+    if s.paradigm == "manual":
+        user = dataclasses.replace(user, request_at_start=False, request_when_unhelped_for=None)
+    else:
+        disambiguation = projection_config(s.disambiguation.preset, s.inference.method, dft, autonomy, name)
+    interface = _named(
+        f"{name}.initial_mode",
+        lambda: InterfaceConfig(
+            kind=s.interface, control_period=s.control_period, initial_mode=s.initial_mode
+        ),
+    )
+    home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
+    station = _named(
+        name,
+        lambda: StationConfig(
+            plant_config=s.plant_config,
+            control_period=s.control_period,
+            scene_objects=tuple(scene_objects(s)),
+            **home,
+        ),
+    )
+    return TrialConfig(
+        n_goals=n,
+        rhos=rhos,
+        blending=blending,
+        autonomy=autonomy,
+        inference_method=s.inference.method,
+        dft=dft,
+        disambiguation=disambiguation,
+        user=user,
+        interface=interface,
+        station=station,
+        simulator=copy.copy(s.simulator_config),
+    )
+
+
+def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
+    """Check ``scenario`` as :func:`resolve_scenario` does; return it unchanged.
+
+    Raises:
+        ValueError: naming the field path and the value.
+    """
+    resolve_scenario(scenario, name)
+    return scenario
+
+
+def scene_objects(scenario: Scenario) -> list[Any]:
+    """The station's scene objects: one per goal (at the goal plus its offset) and the carried one."""
+    from drake_disamb.station import SceneObject
+
+    objects = []
+    for g in scenario.goals:
+        o = g.object
+        centre = np.asarray(g.position) + np.asarray(o.offset)
+        objects.append(
+            SceneObject(
+                name=g.name,
+                shape=o.shape,
+                size=tuple(o.size),
+                pose=(*centre.tolist(), 1.0, 0.0, 0.0, 0.0),
+                rgba=tuple(o.color),
+            )
+        )
+    if scenario.carried_object is not None:
+        c = scenario.carried_object
+        objects.append(
+            SceneObject(
+                name="carried_object",
+                shape=c.shape,
+                size=tuple(c.size),
+                pose=(*c.offset, *c.orientation),
+                rgba=tuple(c.color),
+                attached_to_gripper=True,
+            )
+        )
+    return objects

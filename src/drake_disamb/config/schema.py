@@ -1,0 +1,391 @@
+"""The scenario schema: dataclasses read by Drake's YAML loader, nesting Drake's own config structs.
+
+A :class:`Scenario` describes one shared-control trial: the task's goals (grouped in stages for
+multi-step tasks), the interface and mode-switching paradigm, the settings of every component
+(inference, disambiguation, blending, autonomy, simulated user), the control rate, Drake's
+``SimulatorConfig`` (``simulator_config``) and ``MultibodyPlantConfig`` (``plant_config``) with
+Drake's own field names, the success tolerance and the seed.
+
+The classes are what :func:`pydrake.common.yaml.yaml_load_typed` fills in and
+:func:`~pydrake.common.yaml.yaml_dump_typed` writes out, so they follow its rules: plain mutable
+dataclasses whose every field has a default, with types it understands (``str``, ``int``,
+``float``, ``bool``, ``list[...]``, ``X | None``, nested dataclasses and Drake's structs). This
+module has no ``from __future__ import annotations``: the loader reads each field's type from
+``dataclasses.fields()`` and needs real types, not strings. An optional field's default is
+always ``None``: Drake's dump leaves a ``None`` out, and a key left out keeps the default.
+
+The settings of the core algorithms are the core's own frozen configs (``DFTParams``,
+``BlendingConfig``, ``PotentialFieldConfig``, ``UserConfig``). Their scenario forms
+(:class:`DFTSpec`, :class:`BlendingSpec`, :class:`PotentialFieldSpec`, :class:`UserBehaviorSpec`)
+are made from them field by field (:func:`_spec_class`), so a field is declared once, in the core;
+the field meanings are documented there. :func:`drake_disamb.config.resolve.resolve_scenario`
+turns a scenario into the frozen configs.
+
+Metadata on a field tells :func:`drake_disamb.config.checks.check_data` more than its type:
+``required`` (the key must be written), ``choices`` (accepted strings), ``size`` (accepted list
+lengths) and ``max_items``.
+
+Units are SI; positions are in the MICO base frame W (metres), orientations are unit quaternions
+``[qw, qx, qy, qz]`` of the end-effector frame in W (Drake's w-first order).
+"""
+
+import copy
+import dataclasses
+import functools
+import typing
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydrake.multibody.plant import MultibodyPlantConfig
+from pydrake.systems.analysis import SimulatorConfig
+
+from drake_disamb.config.checks import schema_fields
+from drake_disamb.core.autonomy import PotentialFieldConfig
+from drake_disamb.core.blending import BlendingConfig
+from drake_disamb.core.disambiguation import MICO_DFT, PRESETS
+from drake_disamb.core.inference import DFTParams
+from drake_disamb.core.user import UserConfig
+from drake_disamb.station import default_plant_config
+
+INTERFACES: tuple[str, ...] = ("joystick", "head_array")
+"""Interface names accepted by :attr:`Scenario.interface`."""
+
+PARADIGMS: tuple[str, ...] = ("manual", "disambiguation")
+"""Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
+
+INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
+"""Intent-inference methods accepted by :attr:`InferenceSpec.method`."""
+
+SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
+"""Object shapes; their ``size`` has 3, 2 and 1 entries (:data:`SHAPE_SIZES`)."""
+
+SHAPE_SIZES: dict[str, int] = {"box": 3, "cylinder": 2, "sphere": 1}
+"""Entries of an object's ``size`` per shape."""
+
+MAX_GOALS: int = 100
+"""Most goals a scenario may have (all stages together); the study's tasks have 4 and 5."""
+
+
+def _meta(**kwargs: Any) -> dict[str, Any]:
+    return {"check": kwargs}
+
+
+def _spec_class(
+    config_type: type,
+    name: str,
+    defaults: Any,
+    *,
+    types: dict[str, Any] | None = None,
+    exclude: tuple[str, ...] = (),
+    doc: str,
+) -> type:
+    """A mutable dataclass with the fields of the frozen core config ``config_type``.
+
+    Defaults are those of the instance ``defaults``; ``types`` replaces a field's type by one Drake's
+    loader reads (a numpy matrix as ``list[list[float]]``); ``exclude`` leaves fields out (the
+    resolver sets them). ``spec.to_config(**extra)`` builds the frozen config (lists become arrays).
+    """
+    hints = typing.get_type_hints(config_type)
+    types = types or {}
+    fields = []
+    for f in dataclasses.fields(config_type):
+        if f.name in exclude:
+            continue
+        tp = types.get(f.name, hints[f.name])
+        value = getattr(defaults, f.name)
+        if value is not None and type(None) in typing.get_args(tp):  # programming error, at import
+            raise TypeError(f"{name}.{f.name}: an optional field needs the default None, got {value!r}")
+        fields.append((f.name, tp, field(default_factory=functools.partial(copy.deepcopy, value))))
+
+    def to_config(self: Any, **extra: Any) -> Any:
+        values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        values = {k: np.asarray(v, dtype=float) if isinstance(v, list) else v for k, v in values.items()}
+        return config_type(**values, **extra)
+
+    cls = dataclasses.make_dataclass(name, fields, namespace={"to_config": to_config, "__doc__": doc})
+    cls.__module__ = __name__
+    return cls
+
+
+DFTSpec = _spec_class(
+    DFTParams,
+    "DFTSpec",
+    MICO_DFT,
+    types={"lam": float, "transition": list[list[float]] | None, "rest": list[float] | None},
+    doc="""The field-theoretic update's parameters: the fields of
+    :class:`drake_disamb.core.inference.DFTParams`, defaults those of the ``mico`` preset
+    (:data:`~drake_disamb.core.disambiguation.MICO_DFT`). ``lam`` is a scalar gain here.""",
+)
+BlendingSpec = _spec_class(
+    BlendingConfig,
+    "BlendingSpec",
+    BlendingConfig(),
+    doc="""The blender's settings: the fields of :class:`drake_disamb.core.blending.BlendingConfig`
+    (``rho1`` and ``rho2`` left out are the paper's ``1.2 / n`` and ``1.4 / n`` for ``n`` goals).""",
+)
+PotentialFieldSpec = _spec_class(
+    PotentialFieldConfig,
+    "PotentialFieldSpec",
+    PotentialFieldConfig(),
+    doc="""The autonomy's gains and limits: the fields of
+    :class:`drake_disamb.core.autonomy.PotentialFieldConfig`.""",
+)
+UserBehaviorSpec = _spec_class(
+    UserConfig,
+    "UserBehaviorSpec",
+    UserConfig(stall_time=None, request_when_unhelped_for=None),
+    exclude=("rho1", "seed"),
+    doc="""The simulated user's behaviour: the fields of :class:`drake_disamb.core.user.UserConfig`
+    but ``seed`` and ``rho1``, which the resolver sets from :attr:`Scenario.seed` and the blending
+    thresholds. ``stall_time`` and ``request_when_unhelped_for`` are off when left out (the
+    embedded tasks set 2 s and 3 s).""",
+)
+
+
+@dataclass
+class ObjectSpec:
+    """The object drawn (and placed in the scene) at a goal.
+
+    Attributes:
+        shape: ``"box"``, ``"cylinder"`` or ``"sphere"``.
+        size: Box: ``[lx, ly, lz]``; cylinder: ``[radius, length]`` (axis along z of W);
+            sphere: ``[radius]`` (m).
+        color: ``[r, g, b, a]`` in ``[0, 1]``.
+        offset: Object centre minus goal position (m, in W). A reaching goal sits at the object
+            (offset 0); a pour pose sits above its container (negative z offset).
+    """
+
+    shape: str = field(default="box", metadata=_meta(choices=SHAPES))
+    size: list[float] = field(default_factory=lambda: [0.05, 0.05, 0.05], metadata=_meta(size=(1, 2, 3)))
+    color: list[float] = field(default_factory=lambda: [0.6, 0.6, 0.6, 1.0], metadata=_meta(size=(4,)))
+    offset: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0], metadata=_meta(size=(3,)))
+
+
+@dataclass
+class GoalSpec:
+    """One goal pose of the end effector, and the object that marks it.
+
+    Attributes:
+        name: Unique name (used in plots and logs); required.
+        position: ``[x, y, z]`` (m, in W); required.
+        orientation: ``[qw, qx, qy, qz]`` of the end-effector frame in W (normalised where used).
+        stage: Index into :attr:`Scenario.stages` of the stage whose goal set holds this goal.
+        object: What to draw at the goal.
+    """
+
+    name: str = field(default="", metadata=_meta(required=True))
+    position: list[float] = field(default_factory=list, metadata=_meta(required=True, size=(3,)))
+    orientation: list[float] = field(default_factory=lambda: [1.0, 0.0, 0.0, 0.0], metadata=_meta(size=(4,)))
+    stage: int = 0
+    object: ObjectSpec = field(default_factory=ObjectSpec)
+
+
+@dataclass
+class StageSpec:
+    """One step of a multi-step task.
+
+    Attributes:
+        name: Stage name (e.g. ``"pour"``, ``"place"``).
+        hold_time: How long (s) the end effector must stay at a goal to complete the stage;
+            ``None`` uses :attr:`SuccessSpec.hold_time`.
+    """
+
+    name: str = "reach"
+    hold_time: float | None = None
+
+
+@dataclass
+class SuccessSpec:
+    """When a goal counts as reached: within both tolerances, continuously for ``hold_time``.
+
+    Attributes:
+        position_tolerance: Distance (m) between the end-effector origin and the goal position.
+        orientation_tolerance: Angle (rad) of the rotation between the end-effector and goal
+            orientations.
+        hold_time: Time (s) the end effector must stay within both tolerances.
+    """
+
+    position_tolerance: float = 0.02
+    orientation_tolerance: float = 0.15
+    hold_time: float = 0.3
+
+
+@dataclass
+class InferenceSpec:
+    """Intent inference.
+
+    Attributes:
+        method: ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
+        dft: Parameters of the field-theoretic update (default the ``mico`` preset's). The
+            disambiguation's forward projection runs the same update with the same parameters.
+    """
+
+    method: str = field(default="dft", metadata=_meta(choices=INFERENCE_METHODS))
+    dft: DFTSpec = field(default_factory=DFTSpec)
+
+
+@dataclass
+class DisambiguationSpec:
+    """Disambiguation (Algorithm 1).
+
+    Attributes:
+        preset: Name of a preset in :mod:`drake_disamb.core.disambiguation` (``"mico"`` or
+            ``"authors-r3"``). The preset says how the projection probes (dimensions, probe
+            speeds, step and horizons, weights). The belief update it projects with is always the
+            live one: the method and DFT parameters of :attr:`Scenario.inference` and the
+            potential field of :attr:`Scenario.autonomy` replace the preset's own.
+    """
+
+    preset: str = field(default="mico", metadata=_meta(choices=PRESETS))
+
+
+@dataclass
+class UserSpec:
+    """The simulated user.
+
+    Attributes:
+        goals: Intended goal per stage: an index into that stage's goal list (the goals of the
+            stage in the order they appear in :attr:`Scenario.goals`).
+        config: The user's behaviour. Its success tolerances must not exceed the task's
+            (:class:`SuccessSpec`): the user stops commanding once it believes it has arrived.
+    """
+
+    goals: list[int] = field(default_factory=lambda: [0], metadata=_meta(max_items=MAX_GOALS))
+    config: UserBehaviorSpec = field(default_factory=UserBehaviorSpec)
+
+
+@dataclass
+class CarriedObjectSpec:
+    """An object held in the gripper from the start of the trial (e.g. the cup when pouring).
+
+    Attributes:
+        shape, size, color: As in :class:`ObjectSpec`.
+        offset: Object centre in the end-effector frame (m).
+        orientation: ``[qw, qx, qy, qz]`` of the object in the end-effector frame. The default
+            turns a cylinder's axis (its z) onto the end-effector x axis: with the gripper's
+            approach axis horizontal and its fingers closing horizontally, the cup stands upright.
+    """
+
+    shape: str = field(default="cylinder", metadata=_meta(choices=SHAPES))
+    size: list[float] = field(default_factory=lambda: [0.035, 0.09], metadata=_meta(size=(1, 2, 3)))
+    color: list[float] = field(default_factory=lambda: [0.9, 0.9, 0.95, 1.0], metadata=_meta(size=(4,)))
+    offset: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0], metadata=_meta(size=(3,)))
+    orientation: list[float] = field(
+        default_factory=lambda: [0.7071067811865476, 0.0, 0.7071067811865476, 0.0], metadata=_meta(size=(4,))
+    )
+
+
+def default_simulator_config() -> SimulatorConfig:
+    """The trials' simulator: fixed-step RK2 with 10 ms steps.
+
+    The belief's inputs are held between control ticks (the end-effector pose is sampled, ``u_h``
+    comes from the interface's state), so its ODE is smooth between ticks: a fixed step at the
+    control period is accurate (the inference re-projects the belief onto the simplex every tick).
+    """
+    return SimulatorConfig(integration_scheme="runge_kutta2", max_step_size=0.01, use_error_control=False)
+
+
+@dataclass(eq=False)
+class Scenario:
+    """One shared-control trial, in the style of Drake's typed scenario structs.
+
+    Attributes:
+        task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
+        description: Free text.
+        interface: ``"joystick"`` or ``"head_array"``.
+        paradigm: ``"manual"`` or ``"disambiguation"``.
+        inference, disambiguation, blending, autonomy, user: Component settings.
+        control_period: Period (s) of the control loop (interface, autonomy, blending,
+            differential IK); 0.01 s = 100 Hz, the MICO's Cartesian velocity interface.
+        simulator_config: Drake's ``SimulatorConfig`` (``ApplySimulatorConfig``): the integrator
+            of the continuous belief (default :func:`default_simulator_config`, RK2 at 10 ms).
+        plant_config: Drake's ``MultibodyPlantConfig`` of the arm (SAP, joint PD). Its
+            ``time_step`` (s, in [1 ms, 100 ms] and at most the control period) defaults to the
+            control period: the arm only receives new set points every control tick, the PD is
+            integrated implicitly, and the loop runs about 8 times faster than with a 1 ms plant
+            (``benchmarks/bench_loop.py`` prints both); 0.001 resolves contact finer.
+        duration: Simulated-time limit (s) of a trial.
+        success: Success tolerance.
+        seed: Seed of every random draw in the trial.
+        initial_mode: Index into the interface's mode list of the mode at the start.
+        start_joint_positions: The arm's 6 joint angles (rad) at the start; ``None`` means the
+            station's home configuration.
+        goals: Every goal of every stage.
+        stages: The task's stages, in order (one for single-step tasks). Every stage has the
+            same number of goals: the goal set switches when a stage completes.
+        carried_object: An object held in the gripper from the start, or ``None``.
+
+    Two scenarios are equal when their plain data (:func:`to_plain`) is: Drake's structs have no
+    ``==`` of their own.
+    """
+
+    task: str = "reaching"
+    description: str = ""
+    interface: str = field(default="head_array", metadata=_meta(choices=INTERFACES))
+    paradigm: str = field(default="disambiguation", metadata=_meta(choices=PARADIGMS))
+    inference: InferenceSpec = field(default_factory=InferenceSpec)
+    disambiguation: DisambiguationSpec = field(default_factory=DisambiguationSpec)
+    blending: BlendingSpec = field(default_factory=BlendingSpec)
+    autonomy: PotentialFieldSpec = field(default_factory=PotentialFieldSpec)
+    user: UserSpec = field(default_factory=UserSpec)
+    control_period: float = 0.01
+    simulator_config: SimulatorConfig = field(default_factory=default_simulator_config)
+    plant_config: MultibodyPlantConfig = field(default_factory=default_plant_config)
+    duration: float = 60.0
+    success: SuccessSpec = field(default_factory=SuccessSpec)
+    seed: int = 0
+    initial_mode: int = 0
+    start_joint_positions: list[float] | None = field(default=None, metadata=_meta(size=(6,)))
+    goals: list[GoalSpec] = field(default_factory=list)
+    stages: list[StageSpec] = field(default_factory=lambda: [StageSpec()])
+    carried_object: CarriedObjectSpec | None = None
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scenario):
+            return NotImplemented
+        return to_plain(self) == to_plain(other)
+
+    # -- derived views -------------------------------------------------------------------------
+
+    @property
+    def n_stages(self) -> int:
+        """Number of stages."""
+        return len(self.stages)
+
+    def stage_goals(self, stage: int) -> list[GoalSpec]:
+        """The goals of ``stage``, in the order they appear in :attr:`goals`."""
+        return [g for g in self.goals if g.stage == stage]
+
+    @property
+    def n_goals(self) -> int:
+        """Number of goals per stage (the size of the belief)."""
+        return len(self.stage_goals(0))
+
+    def stage_goal_poses(self, stage: int) -> np.ndarray:
+        """``(n_goals, 7)`` array of ``[x, y, z, qw, qx, qy, qz]`` for ``stage`` (unit quaternions)."""
+        rows = [
+            [*g.position, *(np.asarray(g.orientation, dtype=float) / np.linalg.norm(g.orientation))]
+            for g in self.stage_goals(stage)
+        ]
+        return np.array(rows, dtype=float).reshape(-1, 7)
+
+    def hold_time(self, stage: int) -> float:
+        """Hold time (s) of ``stage``."""
+        h = self.stages[stage].hold_time
+        return self.success.hold_time if h is None else h
+
+
+def to_plain(value: Any) -> Any:
+    """Plain data (dicts, lists, numbers, strings) of a scenario or any part of it.
+
+    The same tree :func:`pydrake.common.yaml.yaml_dump_typed` writes, with ``None`` kept.
+    """
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, list | tuple):
+        return [to_plain(v) for v in value]
+    fields = None if isinstance(value, type) else schema_fields(type(value))
+    if fields is None:
+        return value
+    return {name: to_plain(getattr(value, name)) for name, _, _ in fields}
