@@ -39,12 +39,12 @@ from drake_disamb.station import build_station
 def station_floor(scenario: Scenario, times: np.ndarray, u: np.ndarray) -> tuple[float, float]:
     """``(wall rate, cpu rate)`` of the station alone replaying the command ``u`` (T, 6) at ``times``."""
     builder = DiagramBuilder()
-    station = build_station(resolve_scenario(scenario).station, builder=builder)
+    station = builder.AddSystem(build_station(resolve_scenario(scenario).station).diagram)
     command = PiecewisePolynomial.ZeroOrderHold(times, u.T)
     source = builder.AddSystem(TrajectorySource(command))
-    builder.Connect(source.get_output_port(), station.input_port("ee_velocity_command"))
+    builder.Connect(source.get_output_port(), station.GetInputPort("ee_velocity_command"))
     gripper = builder.AddSystem(ConstantVectorSource([0.0]))
-    builder.Connect(gripper.get_output_port(), station.input_port("gripper_command"))
+    builder.Connect(gripper.get_output_port(), station.GetInputPort("gripper_command"))
     simulator = Simulator(builder.Build())
     simulator.Initialize()
     wall, cpu = time.perf_counter(), time.process_time()

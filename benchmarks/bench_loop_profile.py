@@ -72,7 +72,7 @@ class _ExclusiveTimer:
 
 def _project_system_classes() -> list[type]:
     """Every LeafSystem class of the project that the shared-control diagram may contain."""
-    from drake_disamb import station
+    from drake_disamb.station import systems as station
     from drake_disamb.systems import autonomy, blending, disambiguation, inference, interfaces, task, user
 
     classes = []

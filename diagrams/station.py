@@ -25,9 +25,9 @@ def main(argv: list[str]) -> int:
     station = build_station()
     simulator = start_simulation(station)
     ctx = simulator.get_mutable_context()
-    p0 = station.output_port("ee_pose").Eval(ctx).copy()
+    p0 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
     run_pattern(station, simulator, 2.0, pattern())
-    p1 = station.output_port("ee_pose").Eval(ctx)
+    p1 = station.diagram.GetOutputPort("ee_pose").Eval(ctx)
     print(f"EE moved {np.round(p1[:3] - p0[:3], 4)} m in 2 s of the pattern")
     for path in write_diagram_graph(station.diagram, args.out / "station", max_depth=args.max_depth):
         print(f"wrote {path}")

@@ -17,13 +17,20 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from drake_disamb.station import (
+    ARM_JOINTS,
+    FINGER_JOINTS,
     FINGER_MAX_OPENING,
+    IK_Q_D,
+    IK_V_D,
+    MICO_HOME_GRIPPER_OPENING,
     MICO_HOME_Q,
     STATION_INPUTS,
     STATION_OUTPUTS,
     DifferentialIKIntegrator,
     EndEffectorState,
+    GripperIntegratorState,
     GripperOpeningIntegrator,
+    IkIntegratorState,
     IkStatus,
     SceneObject,
     StationConfig,
@@ -61,16 +68,18 @@ class Rig:
         self.sim.Initialize()
 
     def command(self, V) -> None:
-        self.station.input_port("ee_velocity_command").FixValue(self.ctx, np.asarray(V, dtype=float))
+        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(
+            self.ctx, np.asarray(V, dtype=float)
+        )
 
     def gripper(self, speed: float) -> None:
-        self.station.input_port("gripper_command").FixValue(self.ctx, [speed])
+        self.station.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [speed])
 
     def advance(self, dt: float) -> None:
         self.sim.AdvanceTo(self.ctx.get_time() + dt)
 
     def out(self, name: str) -> np.ndarray:
-        return np.array(self.station.output_port(name).Eval(self.ctx), copy=True)
+        return np.array(self.station.diagram.GetOutputPort(name).Eval(self.ctx), copy=True)
 
     def status(self) -> IkStatus:
         return IkStatus(int(self.out("ik_status")[0]))
@@ -281,7 +290,7 @@ def test_wrong_length_command_is_rejected(home: Rig) -> None:
     with pytest.raises(RuntimeError, match="size=6"):
         home.command(np.zeros(5))
     with pytest.raises(RuntimeError, match="size=1"):
-        home.station.input_port("gripper_command").FixValue(home.ctx, [0.0, 0.0])
+        home.station.diagram.GetInputPort("gripper_command").FixValue(home.ctx, [0.0, 0.0])
     home.advance(0.2)  # the previous (zero) commands are still in place
     assert np.allclose(home.out("arm_joint_state"), x0, atol=1e-4)
     assert home.status() == IkStatus.OK
@@ -334,20 +343,22 @@ def test_scene_objects_and_attached_cup() -> None:
     X_WC = st.plant.GetBodyByName("cup").EvalPoseInWorld(pc)
     assert np.allclose((X_WE.inverse() @ X_WC).translation(), [0, 0, -0.01], atol=1e-9)
     assert rig.out("ee_pose")[0] - p0[0] == pytest.approx(0.05, abs=3e-3)
-    query = st.output_port("query_object").Eval(rig.ctx)
+    query = st.diagram.GetOutputPort("query_object").Eval(rig.ctx)
     names = {query.inspector().GetName(g) for g in query.inspector().GetAllGeometryIds()}
     assert any("cup" in n for n in names) and any("shelf" in n for n in names)
 
 
 def test_embedded_in_a_bigger_diagram() -> None:
     builder = DiagramBuilder()
-    st = build_station(builder=builder)
-    assert st.diagram is None
+    st = build_station()
+    station = builder.AddSystem(st.diagram)
+    assert station.GetSubsystemByName("diff_ik") is st.diff_ik  # the documented names reach inside
+    assert station.GetSubsystemByName("plant") is st.plant
     src = builder.AddSystem(ConstantVectorSource([0.0, 0.0, 0.05, 0.0, 0.0, 0.0]))
     grip = builder.AddSystem(ConstantVectorSource([0.0]))
-    builder.Connect(src.get_output_port(), st.input_port("ee_velocity_command"))
-    builder.Connect(grip.get_output_port(), st.input_port("gripper_command"))
-    builder.ExportOutput(st.output_port("ee_pose"), "pose")
+    builder.Connect(src.get_output_port(), station.GetInputPort("ee_velocity_command"))
+    builder.Connect(grip.get_output_port(), station.GetInputPort("gripper_command"))
+    builder.ExportOutput(station.GetOutputPort("ee_pose"), "pose")
     diagram = builder.Build()
     sim = Simulator(diagram)
     sim.Initialize()
@@ -355,6 +366,8 @@ def test_embedded_in_a_bigger_diagram() -> None:
     sim.AdvanceTo(0.4)
     p1 = diagram.GetOutputPort("pose").Eval(sim.get_context())
     assert p1[2] - p0[2] == pytest.approx(0.05 * 0.4, abs=3e-3)
+    q = st.plant.GetPositions(st.plant_context(sim.get_context()), st.arm)  # from the outer root
+    assert q[0] != MICO_HOME_Q[0] and q.size == 8
 
 
 # ----------------------------------------------------------------------------------------------
@@ -383,6 +396,37 @@ def test_diff_ik_integrator_alone(rig: Rig) -> None:
     with pytest.warns(RuntimeWarning):
         x2 = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
     assert np.allclose(x2[:6], x[:6]) and np.all(x2[6:12] == 0) and x2[12] == IkStatus.INVALID_COMMAND
+
+
+def test_integrator_state_layouts(rig: Rig) -> None:
+    x = rig.station.diff_ik.CreateDefaultContext().get_discrete_state_vector().CopyToVector()
+    view = IkIntegratorState(x)
+    assert len(IkIntegratorState.get_fields()) == x.size == 13
+    assert np.array_equal(view[IK_Q_D], MICO_HOME_Q) and not view[IK_V_D].any()
+    assert view.mico_joint_1_q_d == MICO_HOME_Q[0] and view.status == IkStatus.OK
+    y = rig.station.gripper.CreateDefaultContext().get_discrete_state_vector().CopyToVector()
+    assert (
+        GripperIntegratorState(y).opening == MICO_HOME_GRIPPER_OPENING
+        and GripperIntegratorState(y).speed == 0
+    )
+
+
+def test_home_posture_is_the_model_directives() -> None:
+    """MICO_HOME_Q and the home opening are the directives' default_joint_positions, as Drake parses them."""
+    from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
+    from pydrake.multibody.plant import MultibodyPlant
+
+    from drake_disamb.paths import MODELS_PACKAGE, mico_directives, models_dir
+
+    plant = MultibodyPlant(0.0)
+    parser = Parser(plant)
+    parser.package_map().Add(MODELS_PACKAGE, str(models_dir()))
+    ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, parser)
+    plant.Finalize()
+    q = {n: plant.GetJointByName(n).default_positions()[0] for n in ARM_JOINTS + FINGER_JOINTS}
+    assert np.array_equal([q[n] for n in ARM_JOINTS], MICO_HOME_Q)
+    assert sum(q[n] for n in FINGER_JOINTS) == pytest.approx(MICO_HOME_GRIPPER_OPENING)
+    assert StationConfig().home_q == tuple(MICO_HOME_Q)
 
 
 def test_gripper_integrator_alone() -> None:

@@ -101,7 +101,7 @@ def test_pure_rotation_does_not_translate() -> None:
 def test_floor_stops_a_downward_command() -> None:
     rig = Hold(POSTURES["home"])
     result = rig.run(np.array([0, 0, -0.1, 0, 0, 0.0]), 6.0)
-    lowest = gripper_lowest_point(rig.station.output_port("ee_pose").Eval(rig.ctx))[0]
+    lowest = gripper_lowest_point(rig.station.diagram.GetOutputPort("ee_pose").Eval(rig.ctx))[0]
     assert 0.0 < lowest <= rig.station.config.table_clearance + 0.01
     assert result.statuses[-1] == IkStatus.WORKSPACE
     assert result.off_total <= OFF_TOTAL

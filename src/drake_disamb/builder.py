@@ -70,7 +70,8 @@ class SharedControlDiagram:
         scenario: The scenario it was built from.
         config: The frozen configs resolved from it.
         plant: The station's MultibodyPlant.
-        station: The :class:`drake_disamb.station.Station` handle (embedded build).
+        station: The :class:`drake_disamb.station.Station` handle; its diagram is the subsystem
+            ``"station"`` of ``diagram``.
         systems: Named subsystems: ``user`` (or the given input source), ``interface``,
             ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation paradigm
             only), ``task``, ``ee_pose_sampler``, ``diff_ik`` (the station's), ``visualizer``
@@ -95,8 +96,8 @@ class SharedControlDiagram:
 
         The sampler (a ZeroOrderHold) would otherwise output zeros until its first tick.
         """
-        port = self.station.output_port("ee_pose")
-        station_pose = port.Eval(port.get_system().GetMyContextFromRoot(root_context))
+        station = self.station.diagram
+        station_pose = station.GetOutputPort("ee_pose").Eval(station.GetMyContextFromRoot(root_context))
         sampler = self.systems["ee_pose_sampler"]
         sampler.GetMyMutableContextFromRoot(root_context).SetDiscreteState(np.asarray(station_pose))
 
@@ -191,7 +192,8 @@ def build_shared_control_diagram(
     n = config.n_goals
     builder = DiagramBuilder()
 
-    station = build_station(config.station, meshcat=meshcat, builder=builder)
+    station = build_station(config.station, meshcat=meshcat)
+    builder.AddSystem(station.diagram)
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])
 
@@ -231,7 +233,7 @@ def build_shared_control_diagram(
     # belief integrator's stages from re-evaluating the autonomy and the belief's inputs between ticks.
     sampler = builder.AddSystem(ZeroOrderHold(scenario.control_period, 7))
     sampler.set_name("ee_pose_sampler")
-    builder.Connect(station.output_port("ee_pose"), sampler.get_input_port())
+    builder.Connect(station.diagram.GetOutputPort("ee_pose"), sampler.get_input_port())
     ee_pose = sampler.get_output_port()
     goal_poses = task.GetOutputPort("goal_poses")
     builder.Connect(ee_pose, task.GetInputPort("ee_pose"))
@@ -249,8 +251,10 @@ def build_shared_control_diagram(
     builder.Connect(autonomy.GetOutputPort("u_a"), inference.GetInputPort("u_a"))
     builder.Connect(autonomy.GetOutputPort("u_a"), blender.GetInputPort("u_a"))
     builder.Connect(inference.GetOutputPort("belief"), blender.GetInputPort("belief"))
-    builder.Connect(blender.GetOutputPort("u"), station.input_port("ee_velocity_command"))
-    builder.Connect(interface.GetOutputPort("gripper_command"), station.input_port("gripper_command"))
+    builder.Connect(blender.GetOutputPort("u"), station.diagram.GetInputPort("ee_velocity_command"))
+    builder.Connect(
+        interface.GetOutputPort("gripper_command"), station.diagram.GetInputPort("gripper_command")
+    )
 
     systems: dict[str, System] = {
         "user": user,
@@ -286,14 +290,15 @@ def build_shared_control_diagram(
         vis.set_name("visualizer")
         builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
         builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
-        builder.Connect(station.output_port("ee_pose"), vis.GetInputPort("ee_pose"))
+        builder.Connect(station.diagram.GetOutputPort("ee_pose"), vis.GetInputPort("ee_pose"))
         builder.Connect(interface.GetOutputPort("mode"), vis.GetInputPort("mode"))
         builder.Connect(blender.GetOutputPort("alpha"), vis.GetInputPort("alpha"))
         systems["visualizer"] = vis
 
     loggers: dict[str, VectorLogSink] = {}
     for name, sys_name, port in LOGGED_SIGNALS:
-        source = station.output_port(port) if sys_name == "station" else systems[sys_name].GetOutputPort(port)
+        system = station.diagram if sys_name == "station" else systems[sys_name]
+        source = system.GetOutputPort(port)
         logger = LogVectorOutput(source, builder, scenario.control_period)
         logger.set_name(f"log_{name}")
         loggers[name] = logger

@@ -71,8 +71,8 @@ class CommandHold:
         self.station = build_station(config)
         self.sim = Simulator(self.station.diagram)
         self.ctx = self.sim.get_mutable_context()
-        self.station.input_port("gripper_command").FixValue(self.ctx, [0.0])
-        self.station.input_port("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
+        self.station.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [0.0])
+        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
         self.sim.Initialize()
         self._start = self.ctx.Clone()
 
@@ -81,9 +81,9 @@ class CommandHold:
         self.ctx.SetTimeStateAndParametersFrom(self._start)
         self.sim.Initialize()
         V = np.asarray(V, dtype=float)
-        self.station.input_port("ee_velocity_command").FixValue(self.ctx, V)
-        pose = self.station.output_port("ee_pose")
-        status = self.station.output_port("ik_status")
+        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, V)
+        pose = self.station.diagram.GetOutputPort("ee_pose")
+        status = self.station.diagram.GetOutputPort("ik_status")
         scale = float(np.max(np.abs(V))) or 1.0
         v, w = V[:3] / scale, V[3:] / scale  # directions only: no overflow for a huge command
         e_v = v / np.linalg.norm(v) if v.any() else np.zeros(3)

@@ -63,8 +63,8 @@ def start_simulation(station: Any, realtime_rate: float = 0.0) -> Any:
     simulator = Simulator(station.diagram)
     simulator.set_target_realtime_rate(realtime_rate)
     ctx = simulator.get_mutable_context()
-    station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
-    station.input_port("gripper_command").FixValue(ctx, [0.0])
+    station.diagram.GetInputPort("ee_velocity_command").FixValue(ctx, np.zeros(6))
+    station.diagram.GetInputPort("gripper_command").FixValue(ctx, [0.0])
     simulator.Initialize()
     return simulator
 
@@ -103,12 +103,14 @@ def run_pattern(
             stopped = True
             break
         seg = segments[k % len(segments)]
-        station.input_port("ee_velocity_command").FixValue(ctx, np.asarray(seg.velocity, dtype=float))
-        station.input_port("gripper_command").FixValue(ctx, [seg.gripper])
+        station.diagram.GetInputPort("ee_velocity_command").FixValue(
+            ctx, np.asarray(seg.velocity, dtype=float)
+        )
+        station.diagram.GetInputPort("gripper_command").FixValue(ctx, [seg.gripper])
         simulator.AdvanceTo(min(t_end, ctx.get_time() + seg.duration))
         k += 1
-    station.input_port("ee_velocity_command").FixValue(ctx, np.zeros(6))
-    station.input_port("gripper_command").FixValue(ctx, [0.0])
+    station.diagram.GetInputPort("ee_velocity_command").FixValue(ctx, np.zeros(6))
+    station.diagram.GetInputPort("gripper_command").FixValue(ctx, [0.0])
     return stopped
 
 
@@ -213,7 +215,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
 
     simulator = start_simulation(station, realtime_rate=1.0 if meshcat is not None else 0.0)
     ctx = simulator.get_mutable_context()
-    p0 = station.output_port("ee_pose").Eval(ctx).copy()
+    p0 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
     t0 = ctx.get_time()
     wall = time.perf_counter()
     try:
@@ -224,15 +226,15 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     simulated = ctx.get_time() - t0
     if stopped:
         print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {simulated:.2f} s", flush=True)
-    p1 = station.output_port("ee_pose").Eval(ctx).copy()
-    status = int(station.output_port("ik_status").Eval(ctx)[0])
+    p1 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
+    status = int(station.diagram.GetOutputPort("ik_status").Eval(ctx)[0])
     np.set_printoptions(precision=4, suppress=True)
     print(f"start EE position  {p0[:3]} m, final {p1[:3]} m")
     print(
         f"final EE displacement {p1[:3] - p0[:3]} m (|d| = {np.linalg.norm(p1[:3] - p0[:3]) * 1000:.1f} mm)"
     )
     print(
-        f"gripper opening {station.output_port('gripper_opening').Eval(ctx)[0] * 1000:.1f} mm, "
+        f"gripper opening {station.diagram.GetOutputPort('gripper_opening').Eval(ctx)[0] * 1000:.1f} mm, "
         f"ik_status {status}"
     )
     rate = f"{simulated / wall:.2f}" if wall > 0 else "inf"

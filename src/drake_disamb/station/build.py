@@ -1,0 +1,354 @@
+"""Assembly of the MICO station: :func:`build_station` returns one Diagram with named exported ports
+(Drake's ``MakeHardwareStation(scenario, meshcat)`` pattern) and a :class:`Station` handle on it.
+
+Inside the diagram (subsystem names in quotes; see ``diagrams/station.py`` for the picture)::
+
+    ee_velocity_command ─▶ "diff_ik" ──────────────▶ "arm_set_point_demux" ──┐  q_d, v_d (6 + 6)
+    gripper_command ─────▶ "gripper_integrator" ──▶ "finger_set_point_demux" ┤  q_d, v_d (2 + 2)
+                                                                            ▼
+                             "desired_state_mux" [q_d; v_d] (joint order) ─▶ "desired_state_to_actuators"
+                                                                            ▼  desired state
+    "gravity_compensation" ─▶ "gravity_to_actuation" ─▶ "plant" (discrete, SAP, gravity on;
+     (InverseDynamics on the          actuation             joint-actuator PD tracks the
+      control plant) ▲                                      desired state) ──▶ "scene_graph"
+                     └──────────────── state ◀────────────────┘
+    "plant" state ─▶ "arm_joint_state", "finger_state" ─▶ "gripper_opening"; body poses ─▶ "ee_state"
+
+The selector gains come from Drake (``MultibodyPlant.MakeStateSelectorMatrix``,
+``MakeActuatorSelectorMatrix``, ``MakeActuationMatrixPseudoinverse``); the set points are split and
+regrouped by ``Demultiplexer`` / ``Multiplexer``. The home posture is the model directives'
+``default_joint_positions``; ``StationConfig.home_q`` / ``home_gripper_opening`` are applied over it
+with ``Joint.set_default_positions`` (a no-op with the defaults, which are read from the directives).
+
+How to use it::
+
+    station = build_station(config, scene_objects, meshcat)
+    builder.AddSystem(station.diagram)                  # or Simulator(station.diagram) on its own
+    builder.Connect(blender.GetOutputPort("u"), station.diagram.GetInputPort("ee_velocity_command"))
+
+Reaching inside: the :class:`Station` handle holds the plant, the scene graph, the control plant
+and the integrators; from the diagram alone, ``GetSubsystemByName`` with the names above gives the
+same systems (``"plant"``, ``"scene_graph"``, ``"diff_ik"``, ``"gripper_integrator"``, and
+``diff_ik.control_plant()``). A subsystem's context inside any enclosing root context is
+``system.GetMyContextFromRoot(root_context)`` (:meth:`Station.plant_context` for the plant).
+
+Station ports (velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``, not Drake's
+``[w; v]``; W is the world frame, which coincides with ``mico_link_base``):
+
+- input ``ee_velocity_command`` (6): desired spatial velocity of ``mico_end_effector``, m/s and
+  rad/s, expressed in W, taken at the end-effector origin.
+- input ``gripper_command`` (1): finger opening speed, m/s; positive opens.
+- output ``ee_pose`` (7): ``[x, y, z, qw, qx, qy, qz]`` of ``mico_end_effector`` in W (m).
+- output ``ee_velocity`` (6): measured spatial velocity of ``mico_end_effector`` (paper order, W, m/s, rad/s).
+- output ``arm_joint_state`` (12): measured arm joint positions (rad, the DH angles) then velocities (rad/s).
+- output ``gripper_opening`` (1): distance between the fingertip pads, m.
+- output ``ik_status`` (1): an :class:`~drake_disamb.ik.IkStatus` code of the last control step.
+- output ``query_object``: the SceneGraph query object (abstract).
+
+Both inputs must be connected (or fixed) before simulating. Bad run-time commands: a NaN or
+infinite entry in ``ee_velocity_command`` or ``gripper_command`` is treated as a zero command, with
+a ``RuntimeWarning`` at most once per ``StationConfig.warn_interval`` seconds of simulated time;
+``ik_status`` reports ``INVALID_COMMAND`` (2) for the arm. A vector of the wrong length cannot reach
+the station: Drake rejects it where it enters (``FixValue`` or ``DiagramBuilder.Connect`` raise), so
+the station's state is untouched.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.geometry import CollisionFilterDeclaration, Meshcat, Role, SceneGraph
+from pydrake.math import RigidTransform
+from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
+from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import Frame, JointActuatorIndex, ModelInstanceIndex, PdControllerGains
+from pydrake.systems.controllers import InverseDynamics
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder
+from pydrake.systems.primitives import Demultiplexer, MatrixGain, Multiplexer
+
+from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
+from drake_disamb.station.config import (
+    ARM_JOINTS,
+    ARM_MODEL_NAME,
+    BASE_FRAME,
+    EE_FRAME,
+    FINGER_JOINTS,
+    FINGER_MAX_OPENING,
+    SceneObject,
+    StationConfig,
+)
+from drake_disamb.station.systems import DifferentialIKIntegrator, EndEffectorState, GripperOpeningIntegrator
+
+STATION_INPUTS: tuple[str, ...] = ("ee_velocity_command", "gripper_command")
+"""Names of the station diagram's exported input ports."""
+STATION_OUTPUTS: tuple[str, ...] = (
+    "ee_pose",
+    "ee_velocity",
+    "arm_joint_state",
+    "gripper_opening",
+    "ik_status",
+    "query_object",
+)
+"""Names of the station diagram's exported output ports."""
+
+
+@dataclass(frozen=True)
+class Station:
+    """A built station: its Diagram and typed handles on the systems inside it.
+
+    Attributes:
+        diagram: The station Diagram (named ``"station"``) with the exported ports
+            :data:`STATION_INPUTS` and :data:`STATION_OUTPUTS`; add it to a builder, or simulate it
+            on its own.
+        plant: The simulated MultibodyPlant (subsystem ``"plant"``: discrete, SAP, gravity on).
+        scene_graph: Its SceneGraph (subsystem ``"scene_graph"``).
+        arm: Model instance of the MICO (arm and gripper) in ``plant``.
+        control_plant: Arm-only continuous plant (plus objects held in the gripper) that the
+            differential IK and the gravity compensation compute on; not a subsystem.
+        diff_ik: The :class:`DifferentialIKIntegrator` (subsystem ``"diff_ik"``).
+        gripper: The :class:`GripperOpeningIntegrator` (subsystem ``"gripper_integrator"``).
+        config: The configuration used.
+        scene_objects: All scene objects added (the config's first).
+        meshcat: The Meshcat instance the station draws into, if any.
+    """
+
+    diagram: Diagram
+    plant: MultibodyPlant
+    scene_graph: SceneGraph
+    arm: ModelInstanceIndex
+    control_plant: MultibodyPlant
+    diff_ik: DifferentialIKIntegrator
+    gripper: GripperOpeningIntegrator
+    config: StationConfig
+    scene_objects: tuple[SceneObject, ...]
+    meshcat: Meshcat | None = None
+
+    def plant_context(self, root_context: Context) -> Context:
+        """The plant's context inside ``root_context`` (the station's or any enclosing diagram's)."""
+        return self.plant.GetMyContextFromRoot(root_context)
+
+
+def _parser(plant: MultibodyPlant) -> Parser:
+    parser = Parser(plant)
+    parser.package_map().Add(MODELS_PACKAGE, str(models_dir()))
+    return parser
+
+
+def _add_objects(
+    plant: MultibodyPlant, objects: Iterable[SceneObject], ee_frame: Frame, only_attached: bool
+) -> None:
+    instance = None
+    for obj in objects:
+        if only_attached and not obj.attached_to_gripper:
+            continue
+        if instance is None:
+            instance = plant.AddModelInstance("scene_objects")
+        body = plant.AddRigidBody(obj.name, instance, obj.spatial_inertia())
+        if plant.geometry_source_is_registered():
+            shape = obj.drake_shape()
+            plant.RegisterVisualGeometry(
+                body, RigidTransform(), shape, f"{obj.name}_visual", np.array(obj.rgba)
+            )
+            plant.RegisterCollisionGeometry(
+                body, RigidTransform(), shape, f"{obj.name}_collision", CoulombFriction(0.6, 0.5)
+            )
+        parent = ee_frame if obj.attached_to_gripper else plant.world_frame()
+        plant.WeldFrames(parent, body.body_frame(), obj.transform())
+
+
+def _make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
+    plant = MultibodyPlant(time_step=0.0)
+    (arm,) = _parser(plant).AddModels(str(mico_urdf()))
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(BASE_FRAME, arm))
+    _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
+    plant.Finalize()
+    return plant, arm
+
+
+def _check_same_layout(plant: MultibodyPlant, control_plant: MultibodyPlant) -> None:
+    """The control plant's state and actuation vectors must be the plant's, entry for entry.
+
+    The gravity compensation reads the plant's state as the control plant's and its actuation goes
+    back into the plant's; both hold when nothing but the MICO moves (the table and every scene
+    object are welded) and both plants parse the same URDF.
+    """
+
+    def layout(p: MultibodyPlant) -> tuple:
+        joints = [p.GetJointByName(name) for name in ARM_JOINTS + FINGER_JOINTS]
+        actuated = [p.get_joint_actuator(a).joint().name() for a in p.GetJointActuatorIndices()]
+        return (
+            p.num_positions(),
+            p.num_velocities(),
+            [(j.position_start(), j.velocity_start()) for j in joints],
+            actuated,
+        )
+
+    if layout(plant) != layout(control_plant):
+        raise RuntimeError(
+            "station: the control plant's state or actuation layout differs from the plant's: "
+            f"{layout(control_plant)} vs {layout(plant)}"
+        )
+
+
+def build_station(
+    config: StationConfig | None = None,
+    scene_objects: Iterable[SceneObject] = (),
+    meshcat: Meshcat | None = None,
+) -> Station:
+    """Build the MICO station Diagram (see the module docstring for its ports and subsystems).
+
+    Args:
+        config: Station settings; ``None`` uses the defaults.
+        scene_objects: Objects added after ``config.scene_objects``; names must be unique.
+        meshcat: When given, a MeshcatVisualizer (illustration role, prefix ``station``) inside the
+            station draws the scene into it.
+
+    Returns:
+        The :class:`Station`: ``station.diagram`` plus typed handles on its systems.
+
+    Raises:
+        ValueError: a scene object that is not a :class:`SceneObject`, a duplicate object name, or
+            ``config.home_q`` outside the joint limits.
+    """
+    config = config or StationConfig()
+    objects = tuple(config.scene_objects) + tuple(scene_objects)
+    names = [o.name for o in objects]
+    for k, obj in enumerate(objects):
+        if not isinstance(obj, SceneObject):
+            raise ValueError(f"build_station.scene_objects[{k}]: expected a SceneObject, got {obj!r}")
+        if names.count(obj.name) > 1:
+            raise ValueError(f"build_station.scene_objects: duplicate name {obj.name!r}")
+    builder = DiagramBuilder()
+
+    plant, scene_graph = AddMultibodyPlant(config.plant_config, builder)
+    ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, _parser(plant))
+    arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
+    ee_frame = plant.GetFrameByName(EE_FRAME, arm)
+    _add_objects(plant, objects, ee_frame, only_attached=False)
+
+    # The directives set the home posture; the config's values go over it (the same by default).
+    for name, q in zip(ARM_JOINTS, config.home_q, strict=True):
+        plant.GetJointByName(name, arm).set_default_positions([q])
+    for name in FINGER_JOINTS:  # inner faces at +/- q: each finger at half the opening
+        plant.GetJointByName(name, arm).set_default_positions([config.home_gripper_opening / 2])
+
+    # Joint-actuator PD (evaluated implicitly by SAP) on every arm and finger actuator.
+    gains = {name: (kp, kd) for name, kp, kd in zip(ARM_JOINTS, config.kp, config.kd, strict=True)}
+    gains.update({name: (config.finger_kp, config.finger_kd) for name in FINGER_JOINTS})
+    for a in range(plant.num_actuators()):  # GetJointActuatorIndices() needs a finalized plant
+        actuator = plant.get_joint_actuator(JointActuatorIndex(a))
+        if actuator.model_instance() == arm:
+            kp, kd = gains[actuator.joint().name()]
+            actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
+    plant.Finalize()
+
+    # Arm + attached objects never collide with each other (the arm's own links are adjacent or
+    # far apart; self-contact would only cost time).
+    arm_bodies = [plant.get_body(b) for b in plant.GetBodyIndices(arm)]
+    arm_bodies += [plant.GetBodyByName(o.name) for o in objects if o.attached_to_gripper]
+    scene_graph.collision_filter_manager().Apply(
+        CollisionFilterDeclaration().ExcludeWithin(plant.CollectRegisteredGeometries(arm_bodies))
+    )
+
+    control_plant, control_arm = _make_control_plant(objects)
+    _check_same_layout(plant, control_plant)
+    arm_joints = [plant.GetJointByName(name, arm).index() for name in ARM_JOINTS]
+    finger_joints = [plant.GetJointByName(name, arm).index() for name in FINGER_JOINTS]
+    state = plant.get_state_output_port()
+
+    # Measured signals: [q; v] of the arm's and the fingers' joints, and the opening q_l + q_r.
+    arm_state = builder.AddNamedSystem(
+        "arm_joint_state", MatrixGain(plant.MakeStateSelectorMatrix(arm_joints))
+    )
+    finger_state = builder.AddNamedSystem(
+        "finger_state", MatrixGain(plant.MakeStateSelectorMatrix(finger_joints))
+    )
+    gripper_opening = builder.AddNamedSystem("gripper_opening", MatrixGain(np.array([[1.0, 1.0, 0.0, 0.0]])))
+    builder.Connect(state, arm_state.get_input_port())
+    builder.Connect(state, finger_state.get_input_port())
+    builder.Connect(finger_state.get_output_port(), gripper_opening.get_input_port())
+
+    diff_ik = builder.AddNamedSystem(
+        "diff_ik", DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects)
+    )
+    gripper = builder.AddNamedSystem(
+        "gripper_integrator",
+        GripperOpeningIntegrator(
+            config.control_period, FINGER_MAX_OPENING, config.home_gripper_opening, config.warn_interval
+        ),
+    )
+    builder.Connect(arm_state.get_output_port(), diff_ik.GetInputPort("arm_joint_state"))
+    builder.Connect(finger_state.get_output_port(), gripper.GetInputPort("finger_state"))
+
+    # Desired state: the set points regrouped as [q_d; v_d] in ARM_JOINTS + FINGER_JOINTS order,
+    # then mapped to the plant's actuator order (each actuator drives one of those joints).
+    arm_split = builder.AddNamedSystem("arm_set_point_demux", Demultiplexer([6, 6]))
+    finger_split = builder.AddNamedSystem("finger_set_point_demux", Demultiplexer([2, 2]))
+    mux = builder.AddNamedSystem("desired_state_mux", Multiplexer([6, 2, 6, 2]))
+    builder.Connect(diff_ik.GetOutputPort("desired_state"), arm_split.get_input_port())
+    builder.Connect(gripper.GetOutputPort("finger_desired_state"), finger_split.get_input_port())
+    for k, port in enumerate(
+        (arm_split.get_output_port(0), finger_split.get_output_port(0))
+        + (arm_split.get_output_port(1), finger_split.get_output_port(1))
+    ):
+        builder.Connect(port, mux.get_input_port(k))
+    if plant.num_actuators() != plant.num_actuators(arm):  # pragma: no cover (objects are welded)
+        raise RuntimeError("station: only the MICO may have actuators")
+    S = plant.MakeActuatorSelectorMatrix(arm_joints + finger_joints)  # u = S u_joints
+    zeros = np.zeros_like(S)
+    to_actuators = builder.AddNamedSystem(
+        "desired_state_to_actuators", MatrixGain(np.block([[S, zeros], [zeros, S]]))
+    )
+    builder.Connect(mux.get_output_port(), to_actuators.get_input_port())
+    builder.Connect(to_actuators.get_output_port(), plant.get_desired_state_input_port(arm))
+
+    # Gravity compensation feed-forward, computed on the control plant from the measured state.
+    gravity = builder.AddNamedSystem(
+        "gravity_compensation",
+        InverseDynamics(control_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation),
+    )
+    builder.Connect(state, gravity.get_input_port_estimated_state())
+    gravity_to_u = builder.AddNamedSystem(
+        "gravity_to_actuation", MatrixGain(control_plant.MakeActuationMatrixPseudoinverse().toarray())
+    )
+    builder.Connect(gravity.get_output_port_generalized_force(), gravity_to_u.get_input_port())
+    builder.Connect(gravity_to_u.get_output_port(), plant.get_actuation_input_port(arm))
+
+    ee_state = builder.AddNamedSystem("ee_state", EndEffectorState(int(ee_frame.body().index())))
+    builder.Connect(plant.get_body_poses_output_port(), ee_state.GetInputPort("body_poses"))
+    builder.Connect(
+        plant.get_body_spatial_velocities_output_port(), ee_state.GetInputPort("body_spatial_velocities")
+    )
+
+    if meshcat is not None:
+        from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams
+
+        MeshcatVisualizer.AddToBuilder(
+            builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration, prefix="station")
+        )
+
+    builder.ExportInput(diff_ik.GetInputPort("ee_velocity_command"), "ee_velocity_command")
+    builder.ExportInput(gripper.GetInputPort("gripper_command"), "gripper_command")
+    builder.ExportOutput(ee_state.GetOutputPort("ee_pose"), "ee_pose")
+    builder.ExportOutput(ee_state.GetOutputPort("ee_velocity"), "ee_velocity")
+    builder.ExportOutput(arm_state.get_output_port(), "arm_joint_state")
+    builder.ExportOutput(gripper_opening.get_output_port(), "gripper_opening")
+    builder.ExportOutput(diff_ik.GetOutputPort("ik_status"), "ik_status")
+    builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
+    diagram = builder.Build()
+    diagram.set_name("station")
+
+    return Station(
+        diagram=diagram,
+        plant=plant,
+        scene_graph=scene_graph,
+        arm=arm,
+        control_plant=control_plant,
+        diff_ik=diff_ik,
+        gripper=gripper,
+        config=config,
+        scene_objects=objects,
+        meshcat=meshcat,
+    )
