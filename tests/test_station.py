@@ -380,7 +380,8 @@ def test_diff_ik_integrator_alone(rig: Rig) -> None:
     sys.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
     # Small enough that the first step from rest meets the acceleration limits at full speed.
     sys.GetInputPort("ee_velocity_command").FixValue(ctx, [0.0, 0.0, 0.0, 0.0, 0.0, 0.02])
-    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    update = sys.EvalUniquePeriodicDiscreteUpdate(ctx)
+    x = np.concatenate([update.get_vector(0).get_value(), update.get_vector(1).get_value()])
     q1, v1, status = x[:6], x[6:12], x[12]
     assert status == IkStatus.OK
     assert np.allclose(q1, MICO_HOME_Q + v1 * config.control_period)
@@ -388,22 +389,26 @@ def test_diff_ik_integrator_alone(rig: Rig) -> None:
     J = _arm_jacobian(rig, MICO_HOME_Q)
     assert np.allclose(J @ v1, [0, 0, 0.02, 0, 0, 0], atol=1e-6)  # Drake order [w; v]
     # The output ports expose the state.
-    ctx.SetDiscreteState(x)
+    ctx.SetDiscreteState(0, x[:12])
+    ctx.SetDiscreteState(1, x[12:])
     assert np.allclose(sys.GetOutputPort("desired_state").Eval(ctx), x[:12])
     assert sys.GetOutputPort("ik_status").Eval(ctx)[0] == 0
     # Invalid command: zero velocity, status 2.
     sys.GetInputPort("ee_velocity_command").FixValue(ctx, [np.inf, 0, 0, 0, 0, 0])
     with pytest.warns(RuntimeWarning):
-        x2 = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+        update = sys.EvalUniquePeriodicDiscreteUpdate(ctx)
+        x2 = np.concatenate([update.get_vector(0).get_value(), update.get_vector(1).get_value()])
     assert np.allclose(x2[:6], x[:6]) and np.all(x2[6:12] == 0) and x2[12] == IkStatus.INVALID_COMMAND
 
 
 def test_integrator_state_layouts(rig: Rig) -> None:
-    x = rig.station.diff_ik.CreateDefaultContext().get_discrete_state_vector().CopyToVector()
+    ik_context = rig.station.diff_ik.CreateDefaultContext()
+    x = ik_context.get_discrete_state(0).CopyToVector()
     view = IkIntegratorState(x)
-    assert len(IkIntegratorState.get_fields()) == x.size == 13
+    assert len(IkIntegratorState.get_fields()) == x.size == 12
     assert np.array_equal(view[IK_Q_D], MICO_HOME_Q) and not view[IK_V_D].any()
-    assert view.mico_joint_1_q_d == MICO_HOME_Q[0] and view.status == IkStatus.OK
+    assert view.mico_joint_1_q_d == MICO_HOME_Q[0]
+    assert ik_context.get_discrete_state(1).CopyToVector().tolist() == [IkStatus.OK]
     y = rig.station.gripper.CreateDefaultContext().get_discrete_state_vector().CopyToVector()
     assert (
         GripperIntegratorState(y).opening == MICO_HOME_GRIPPER_OPENING

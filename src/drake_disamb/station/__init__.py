@@ -35,7 +35,6 @@ from drake_disamb.station.config import (
 )
 from drake_disamb.station.systems import (
     IK_Q_D,
-    IK_SET_POINT,
     IK_V_D,
     DifferentialIKIntegrator,
     EndEffectorState,
@@ -52,7 +51,6 @@ __all__ = [
     "FINGER_JOINTS",
     "FINGER_MAX_OPENING",
     "IK_Q_D",
-    "IK_SET_POINT",
     "IK_V_D",
     "MICO_HOME_GRIPPER_OPENING",
     "MICO_HOME_Q",

@@ -39,16 +39,14 @@ from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
 from drake_disamb.station.config import ARM_JOINTS, ARM_MODEL_NAME, EE_FRAME, SceneObject, StationConfig
 
 IkIntegratorState = namedview(
-    "IkIntegratorState",
-    [f"{j}_q_d" for j in ARM_JOINTS] + [f"{j}_v_d" for j in ARM_JOINTS] + ["status"],
+    "IkIntegratorState", [f"{j}_q_d" for j in ARM_JOINTS] + [f"{j}_v_d" for j in ARM_JOINTS]
 )
-"""Layout of :class:`DifferentialIKIntegrator`'s discrete state (13): the set point ``q_d`` (rad,
-fields ``mico_joint_1_q_d`` ...), its velocity ``v_d`` (rad/s, ``mico_joint_1_v_d`` ...) and the
-:class:`~drake_disamb.ik.IkStatus` code ``status`` of the last step; the slices :data:`IK_Q_D`,
-:data:`IK_V_D` and :data:`IK_SET_POINT` (both, the ``desired_state`` output) take the vectors."""
+"""Layout of :class:`DifferentialIKIntegrator`'s set-point state group (12), its ``desired_state``
+output: the set point ``q_d`` (rad, fields ``mico_joint_1_q_d`` ...) and its velocity ``v_d``
+(rad/s, ``mico_joint_1_v_d`` ...); the slices :data:`IK_Q_D` and :data:`IK_V_D` take the vectors.
+The :class:`~drake_disamb.ik.IkStatus` code of the last step is a second group of its own."""
 IK_Q_D = slice(0, 6)
 IK_V_D = slice(6, 12)
-IK_SET_POINT = slice(0, 12)
 
 GripperIntegratorState = namedview("GripperIntegratorState", ["opening", "speed"])
 """Layout of :class:`GripperOpeningIntegrator`'s discrete state: desired opening (m) and its rate (m/s)."""
@@ -81,13 +79,12 @@ def _read_command(port: InputPort, context: Context, size: int) -> tuple[NDArray
     return value, True
 
 
-def _ik_state(q: NDArray[np.float64], v: NDArray[np.float64], status: IkStatus) -> NDArray[np.float64]:
-    """The :data:`IkIntegratorState` vector of set point ``q``, velocity ``v`` and ``status``."""
+def _set_point(q: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The :data:`IkIntegratorState` vector of set point ``q`` and velocity ``v``."""
     x = np.empty(len(IkIntegratorState.get_fields()))
     view = IkIntegratorState(x)
     view[IK_Q_D] = q
     view[IK_V_D] = v
-    view.status = float(status)
     return x
 
 
@@ -124,7 +121,8 @@ class DifferentialIKIntegrator(LeafSystem):
     - ik_status (1): IkStatus code of the last control step
     @endsystem
 
-    Discrete state: one group ``[q_d (6), v_d (6), status (1)]``, laid out as :data:`IkIntegratorState`.
+    Discrete state: two groups, the set point ``[q_d (6), v_d (6)]`` (:data:`IkIntegratorState`) and
+    ``[status (1)]``; both outputs are state output ports (no Python callback to read them).
     """
 
     def __init__(
@@ -184,12 +182,12 @@ class DifferentialIKIntegrator(LeafSystem):
             nominal,
         )
 
-        self._state = self.DeclareDiscreteState(_ik_state(home, np.zeros(6), IkStatus.OK))
+        self._state = self.DeclareDiscreteState(_set_point(home, np.zeros(6)))
+        self._status = self.DeclareDiscreteState([float(IkStatus.OK)])
         self._command_port = self.DeclareVectorInputPort("ee_velocity_command", 6)
         self._measured_port = self.DeclareVectorInputPort("arm_joint_state", 12)
-        ticket = {self.discrete_state_ticket(self._state)}
-        self.DeclareVectorOutputPort("desired_state", 12, self._calc_desired, prerequisites_of_calc=ticket)
-        self.DeclareVectorOutputPort("ik_status", 1, self._calc_status, prerequisites_of_calc=ticket)
+        self.DeclareStateOutputPort("desired_state", self._state)
+        self.DeclareStateOutputPort("ik_status", self._status)
         self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
 
@@ -202,18 +200,13 @@ class DifferentialIKIntegrator(LeafSystem):
         """Lower and upper joint limits (rad) the integrator respects."""
         return self._lower.copy(), self._upper.copy()
 
-    def _calc_desired(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(context.get_discrete_state(self._state).get_value()[IK_SET_POINT])
-
-    def _calc_status(self, context: Context, output: BasicVector) -> None:
-        output.SetAtIndex(0, IkIntegratorState(context.get_discrete_state(self._state).get_value()).status)
-
     def _initialize(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         meas = np.asarray(self._measured_port.Eval(context), dtype=float)
         x = discrete_state.get_mutable_vector(self._state)
         if meas.size == 12 and np.all(np.isfinite(meas[:6])):
             q = np.clip(meas[:6], self._lower, self._upper)
-            x.SetFromVector(_ik_state(q, np.zeros(6), IkStatus.OK))
+            x.SetFromVector(_set_point(q, np.zeros(6)))
+            discrete_state.get_mutable_vector(self._status).SetAtIndex(0, float(IkStatus.OK))
         return EventStatus.Succeeded()
 
     def _solve(self, q: NDArray[np.float64], v_prev: NDArray[np.float64], V: NDArray[np.float64]):
@@ -267,7 +260,8 @@ class DifferentialIKIntegrator(LeafSystem):
             v, status = self._solve(q, v_prev, V)
         # np.clip without its Python-level dispatch (the same values, NaN propagating alike).
         q_next = np.minimum(np.maximum(q + v * self._period, self._lower), self._upper)
-        discrete_state.get_mutable_vector(self._state).SetFromVector(_ik_state(q_next, v, status))
+        discrete_state.get_mutable_vector(self._state).SetFromVector(_set_point(q_next, v))
+        discrete_state.get_mutable_vector(self._status).SetAtIndex(0, float(status))
         return EventStatus.Succeeded()
 
 
