@@ -24,6 +24,7 @@ def _reaching(interface: str, goal: int) -> TrialResult:
     return run_trial(scenario, progress=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("interface", ["head_array", "joystick"])
 @pytest.mark.parametrize("goal", [0, 1, 2, 3, 4])
 def test_reaching_every_goal(interface: str, goal: int) -> None:
@@ -70,6 +71,7 @@ def _pouring(interface: str, goals: tuple[int, int]) -> TrialResult:
     return run_trial(scenario, progress=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("interface", "goals"),
     [

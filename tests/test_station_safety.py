@@ -69,6 +69,7 @@ def hold(request: pytest.FixtureRequest) -> tuple[str, Hold]:
     return request.param, Hold(POSTURES[request.param])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("axis", "speed"), COMMANDS, ids=[f"{'xyz'[a % 3]}{'vw'[a // 3]}{s:+}" for a, s in COMMANDS]
 )
@@ -131,6 +132,7 @@ def _random_posture(rng: np.random.Generator) -> tuple[float, ...] | None:
     return tuple(q.tolist()) if z > 0.12 and lowest > 0.08 else None
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**31 - 1))
 def test_random_postures_and_twists_move_only_along_the_command(seed: int) -> None:
