@@ -293,10 +293,15 @@ def build_shared_control_diagram(
         systems["disambiguation"] = disamb
 
     if meshcat is not None:
-        from drake_disamb.systems.visualization import SharedControlVisualizer
+        from drake_disamb.clearance import table_top_z
+        from drake_disamb.systems import visualization
 
-        vis = builder.AddSystem(SharedControlVisualizer(meshcat, n, modes))
+        vis = builder.AddSystem(visualization.visualizer_for_scenario(meshcat, scenario, modes))
         vis.set_name("visualizer")
+        if vis.HasInputPort("stage"):
+            builder.Connect(task.GetOutputPort("stage"), vis.GetInputPort("stage"))
+        bounds = visualization.illustration_bounds(plant, station.scene_graph)
+        visualization.frame_workspace(meshcat, *bounds, work_height=table_top_z())
         builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
         builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
         builder.Connect(station.output_port("ee_pose"), vis.GetInputPort("ee_pose"))
@@ -521,11 +526,19 @@ def run_trial(
     )
 
 
-def save_recording(meshcat: Meshcat, path: str | Path) -> Path:
-    """Write Meshcat's current scene and published recording as a self-contained HTML file."""
+def save_recording(meshcat: Meshcat, path: str | Path, legend: Any = None, title: str = "") -> Path:
+    """Write Meshcat's current scene and published recording as a self-contained HTML file.
+
+    ``legend`` (rows of :func:`drake_disamb.display.legend_rows`) is laid over the page, headed by
+    ``title``: Meshcat's HTML leaves out the control panel where a live page shows it."""
+    from drake_disamb.display import add_legend_to_html
+
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(meshcat.StaticHtml(), encoding="utf-8")
+    page = meshcat.StaticHtml()
+    if legend:
+        page = add_legend_to_html(page, legend, title)
+    out.write_text(page, encoding="utf-8")
     return out
 
 
@@ -534,38 +547,16 @@ def write_trial_figures(
 ) -> list[Path]:
     """Write the goal-probability figure, the Meshcat recording (if any) and the diagram picture."""
     from drake_disamb.diagram_io import write_diagram_graph
-    from drake_disamb.plotting import plot_goal_probabilities
+    from drake_disamb.display import legend_rows
+    from drake_disamb.plotting import write_trial_figure
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     sc = result.scenario
-    t, belief = result.logs["belief"]
-    names = handles.goal_names(0)
-    if sc.n_stages > 1:
-        names = [" / ".join(handles.goal_names(k)[j] for k in range(sc.n_stages)) for j in range(sc.n_goals)]
-    _, uh = result.logs["u_h"]
-    outcome = "interrupted at" if result.interrupted else "success in" if result.success else "failure in"
-    written = [
-        plot_goal_probabilities(
-            t,
-            belief,
-            out / "goal_probabilities.png",
-            rho1=result.rho1,
-            goal_names=names,
-            request_times=result.request_times,
-            mode_switch_times=result.mode_switch_times,
-            command_times=t,
-            commands=uh,
-            stage_times=result.stage_times if sc.n_stages > 1 else (),
-            intended_goal=sc.user.goals[0] if sc.n_stages == 1 else None,
-            title=(
-                f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm: "
-                f"{outcome} {result.time:.1f} s"
-            ),
-        )
-    ]
+    written = [write_trial_figure(result, out / "goal_probabilities.png")]
     if handles.meshcat is not None:
-        written.append(save_recording(handles.meshcat, out / "recording.html"))
+        title = f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm"
+        written.append(save_recording(handles.meshcat, out / "recording.html", legend_rows(sc), title))
     written.extend(Path(p) for p in _as_list(write_diagram_graph(handles.diagram, out / "diagram")))
     return written
 
