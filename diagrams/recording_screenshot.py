@@ -113,7 +113,7 @@ def screenshot(
     """
     chromium, driver_path = chromium_paths()
     if chromium is None or driver_path is None:
-        raise RuntimeError("needs the chromium and chromedriver executables (Debian: chromium chromium-driver)")
+        raise RuntimeError("needs the chromium and chromedriver executables (Debian: chromium-driver)")
     try:
         from selenium import webdriver
         from selenium.webdriver.chrome.options import Options
@@ -155,7 +155,7 @@ def screenshot(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--task", default="reaching", help="embedded task or scenario YAML (default reaching)")
+    parser.add_argument("--task", default="reaching", help="task name or scenario YAML (default: reaching)")
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "recording.png", help="PNG to write")
     parser.add_argument("--at", type=float, default=0.6, help="moment shown, as a fraction of the trial")
     args = parser.parse_args(argv)
