@@ -65,10 +65,12 @@ def test_figure_lines_and_meshcat_spheres_have_the_objects_colours(trial) -> Non
             for level in range(COLOR_LEVELS):
                 assert fake.colors[f"{ROOT}/goals/g{i}/s/c{k}/level{level}"][:3] == pytest.approx(rgb)
     assert (sc.n_stages > 1) == vis.HasInputPort("stage")
-    # The legend rows in the control panel: the intended goal first and bold, swatches in colour.
-    intended = sc.stage_goals(0)[sc.user.goals[0]]
-    assert f"intended goal: {intended.name}</b>" in fake.buttons[0]
-    assert css_color(intended.object.color) in fake.buttons[0]
+    # The legend rows in the control panel: each stage's intended goal bold, swatches in colour.
+    marked = [row for row in fake.buttons if "<b>intended" in row]
+    assert len(marked) == sc.n_stages
+    for k, row in enumerate(marked):
+        intended = sc.stage_goals(k)[sc.user.goals[k]]
+        assert row.endswith(f": {intended.name}</b>") and css_color(intended.object.color) in row
 
 
 def test_the_builder_gives_the_visualizer_the_objects_colours() -> None:

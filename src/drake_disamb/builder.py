@@ -43,6 +43,7 @@ from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrder
 
 from drake_disamb.core.disambiguation import preset as disambiguation_preset
 from drake_disamb.core.interfaces import InterfaceConfig
+from drake_disamb.progress import SimulationProgress
 from drake_disamb.scenarios import Scenario, check_start_clearance, validate_scenario
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
@@ -400,7 +401,7 @@ def _log(
 def run_trial(
     scenario: Scenario | SharedControlDiagram,
     meshcat: Meshcat | None = None,
-    progress: bool = True,
+    progress: bool | SimulationProgress = True,
     realtime_rate: float = 0.0,
     stop_at_success: bool = True,
     recording: bool | None = None,
@@ -412,7 +413,10 @@ def run_trial(
     Args:
         scenario: A scenario (a diagram is built for it) or a built :class:`SharedControlDiagram`.
         meshcat: Meshcat for a scenario argument (ignored for a built diagram, which has its own).
-        progress: Show a tqdm progress bar of simulated time.
+        progress: Show the simulated time while running: ``True`` makes a
+            :class:`~drake_disamb.progress.SimulationProgress` on stderr (an in-place line on a
+            terminal, a line per second of wall time elsewhere); pass one to choose its stream
+            (it is closed at the end); ``False`` shows nothing.
         realtime_rate: Target real-time rate (0 = as fast as possible).
         stop_at_success: Stop once every stage is done (else run to ``scenario.duration``).
         recording: Record the Meshcat animation (default: whenever there is Meshcat). The
@@ -443,24 +447,12 @@ def run_trial(
     task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
     task_context = task.GetMyContextFromRoot(root)
 
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=round(sc.duration, 2),
-            unit="sim s",
-            leave=False,
-            bar_format="{l_bar}{bar}| {n:.1f}/{total} s",
-        )
-    last = [0.0]
+    bar = SimulationProgress(sc.duration) if progress is True else (progress or None)
     stopped = [False]
 
     def monitor(context) -> EventStatus:
-        t = context.get_time()
-        if bar is not None and t - last[0] >= 0.25:
-            bar.update(t - last[0])
-            last[0] = t
+        if bar is not None:
+            bar.update(context.get_time())
         if stop_requested is not None and stop_requested():
             stopped[0] = True
             return EventStatus.ReachedTermination(task, "stop requested")

@@ -24,14 +24,17 @@ from typing import Any
 
 import numpy as np
 
-SPHERE_TEXT = "sphere at each goal: its size and opacity grow with the goal's probability"
-AXES_TEXT = (
-    "at the gripper: the active control mode (arrow = translation, ring = rotation; red/green/blue = "
-    "x/y/z, like the world axes at the arm's base; yellow ball = gripper)"
+EXPLANATIONS = (
+    "sphere size, opacity: goal probability",
+    "at the gripper: the active mode",
+    "arrow = translate, ring = rotate",
+    "red, green, blue = x, y, z",
+    "yellow ball: the gripper mode",
+    "pink bar: alpha, the robot's share",
+    "grey sleeve: alpha = 1",
 )
-ALPHA_TEXT = "pink bar: alpha, the robot's share of the command (grey sleeve = full share, alpha = 1)"
-EXPLANATIONS = (SPHERE_TEXT, AXES_TEXT, ALPHA_TEXT)
-"""What the Meshcat legend says about the spheres, the mode axes and the alpha bar."""
+"""What the Meshcat legend says about the spheres, the mode axes and the alpha bar (short lines: the
+control panel is narrow)."""
 
 
 @dataclass(frozen=True)
@@ -86,16 +89,17 @@ def legend_rows(scenario: Any) -> list[LegendRow]:
     """
     colors = goal_colors(scenario)
     rows: list[LegendRow] = []
+    multi = scenario.n_stages > 1
     for k in range(scenario.n_stages):
         goals = scenario.stage_goals(k)
         intended = int(scenario.user.goals[k])
-        prefix = f"stage {k + 1} ({scenario.stages[k].name}): " if scenario.n_stages > 1 else ""
-        rows.append(
-            LegendRow(f"{prefix}intended goal: {goals[intended].name}", colors[k][intended][:3], True)
-        )
-        others = [i for i in range(len(goals)) if i != intended]
-        for i in others:
-            rows.append(LegendRow(f"other goal: {goals[i].name}", colors[k][i][:3]))
+        if multi:
+            rows.append(LegendRow(f"stage {k + 1}, {scenario.stages[k].name}:"))
+        word = "" if multi else " goal"
+        rows.append(LegendRow(f"intended{word}: {goals[intended].name}", colors[k][intended][:3], True))
+        for i in range(len(goals)):
+            if i != intended:
+                rows.append(LegendRow(f"other{word}: {goals[i].name}", colors[k][i][:3]))
     rows.extend(LegendRow(text) for text in EXPLANATIONS)
     return rows
 

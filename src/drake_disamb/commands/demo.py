@@ -35,7 +35,14 @@ import time
 from pathlib import Path
 from typing import Any
 
-from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+from drake_disamb.commands._first_run import announce_kernel_compilation
+from drake_disamb.commands._meshcat import (
+    WAIT_FOR_BROWSER,
+    add_meshcat_arguments,
+    add_wait_argument,
+    start_meshcat,
+    wait_for_browser,
+)
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 
@@ -99,6 +106,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (no recording)")
     add_meshcat_arguments(parser)
+    add_wait_argument(parser)
     parser.add_argument(
         "--out", type=Path, default=Path("out/demo"), help="output folder (default: out/demo)"
     )
@@ -114,7 +122,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="target real-time rate with Meshcat (default 1.0; 0 = as fast as possible)",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--quiet", action="store_true", help="no progress display")
     parser.add_argument(
         "--live",
         action="store_true",
@@ -203,6 +211,37 @@ def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN00
     return path
 
 
+def _say(line: str) -> None:
+    print(line, flush=True)
+
+
+WARM_UP = 0.05
+"""Simulated seconds of a headless trial run before a watched one, to have its kernels ready (the
+simulated user asks for disambiguation at the start, so the first ticks use them all)."""
+
+
+def _waits_for_browser(args: argparse.Namespace) -> bool:
+    """Whether the demo waits for a browser: with Meshcat, from a terminal, without ``--no-wait``."""
+    return not (args.no_meshcat or args.no_wait) and sys.stdin.isatty()
+
+
+def _show_url(meshcat: Any, args: argparse.Namespace, stop: StopRequest) -> None:
+    """Print the Meshcat URL (once) and, from a terminal, wait for a browser to open it."""
+    url = meshcat.web_url()
+    if not _waits_for_browser(args):
+        print(f"Meshcat: {url} (open it in a browser to watch)", flush=True)
+        return
+    print(
+        f"Meshcat: {url}\nopen it in a browser: the trial starts when the page is open "
+        f"(waiting up to {WAIT_FOR_BROWSER:g} s; --no-wait starts at once)",
+        flush=True,
+    )
+    if wait_for_browser(meshcat, WAIT_FOR_BROWSER, stop=lambda: bool(stop)):
+        print("the page is open", flush=True)
+    elif not stop:
+        print(f"no browser opened the page within {WAIT_FOR_BROWSER:g} s: starting anyway", flush=True)
+
+
 def _error(message: object) -> int:
     print(f"drake-disamb demo: error: {message}", file=sys.stderr)
     return 2
@@ -248,6 +287,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         scenario = dataclasses.replace(scenario, duration=duration)
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
+    from drake_disamb.progress import SimulationProgress
 
     meshcat = None
     if not args.no_meshcat:
@@ -255,7 +295,6 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             meshcat = start_meshcat(args)
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
-        print(f"Meshcat: {meshcat.web_url()}", flush=True)
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
     source = None
     if args.live:
@@ -266,18 +305,27 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         source = MeshcatLiveInput(meshcat, interface)
         source.set_name("live_input")
         realtime = args.realtime_rate if args.realtime_rate is not None else 1.0
+    watched = meshcat is not None and (args.live or _waits_for_browser(args))
+    with announce_kernel_compilation(_say):
+        try:
+            handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
+        except ValueError as exc:
+            return _error(exc)
+        if watched:
+            # Someone will watch from the first tick: compile (or load) every kernel now, not then.
+            run_trial(dataclasses.replace(scenario, duration=WARM_UP), progress=False)
+    if meshcat is not None:
+        _show_url(meshcat, args, stop)
+    if args.live:
         print(LIVE_HELP[scenario.interface], flush=True)
-    try:
-        handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
-    except ValueError as exc:
-        return _error(exc)
-    progress = not args.quiet and sys.stderr.isatty()
     print(
         f"running the trial (up to {scenario.duration:g} s simulated); Ctrl-C stops it and keeps the results",
         flush=True,
     )
+    progress = False if args.quiet else SimulationProgress(scenario.duration)
     try:
-        result = run_trial(handles, progress=progress, realtime_rate=realtime, stop_requested=stop)
+        with announce_kernel_compilation(progress.write if progress else _say):
+            result = run_trial(handles, progress=progress, realtime_rate=realtime, stop_requested=stop)
     finally:
         if source is not None:
             source.remove_controls()
