@@ -119,10 +119,19 @@ def _demo(tmp_path: Path, *extra: str) -> int:
     return main([*argv, "--out", str(tmp_path), *extra])
 
 
+class _Script(io.StringIO):
+    def isatty(self) -> bool:
+        return False
+
+
 def test_the_url_is_printed_once(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], caplog: pytest.LogCaptureFixture
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    caplog: pytest.LogCaptureFixture,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     caplog.set_level(logging.INFO)
+    monkeypatch.setattr("sys.stdin", _Script())
     assert _demo(tmp_path) == 1  # 0.3 s is too short to succeed
     out, err = capsys.readouterr()
     assert out.count("http://localhost:") == 1 and "http://localhost:" not in err
@@ -173,3 +182,29 @@ def test_no_browser_within_the_timeout_starts_anyway(
     out = capsys.readouterr().out
     assert "no browser opened the page within 0.2 s: starting anyway" in out
     assert np.isfinite(float(out.split("completion time (s)")[1].split("stopped at ")[1].split(")")[0]))
+
+
+def test_from_a_script_the_demo_runs_straight_through(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No --hold or --realtime-rate given: no waiting, no holding, as fast as possible."""
+    from drake_disamb import builder
+
+    rates: list[float] = []
+    real_run_trial = builder.run_trial
+
+    def recording_run_trial(handles, *args, **kwargs):  # noqa: ANN001, ANN202
+        rates.append(kwargs["realtime_rate"])
+        return real_run_trial(handles, *args, **kwargs)
+
+    monkeypatch.setattr(builder, "run_trial", recording_run_trial)
+    monkeypatch.setattr("sys.stdin", _Script())
+    assert main(["demo", "--quiet", "--duration", "0.5", "--out", str(tmp_path)]) == 1
+    out = capsys.readouterr().out
+    assert rates == [0.0] and "stays up" not in out and "waiting" not in out
+    monkeypatch.setattr("sys.stdin", _Terminal())
+    assert (
+        main(["demo", "--quiet", "--duration", "0.5", "--no-wait", "--hold", "0", "--out", str(tmp_path)])
+        == 1
+    )
+    assert rates[-1] == 1.0  # from a terminal, with Meshcat: real time

@@ -7,13 +7,20 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 - ``metrics.json``: the printed metrics, machine-readable, with the scenario's identity (task,
   interface, paradigm, goals, seed) and ``"interrupted"``;
 - ``goal_probabilities.png``: the goal probabilities over time in the style of the paper's figure
-  (threshold rho1 dashed, requests and mode switches marked, non-zero command segments below);
+  (each goal in its object's colour, threshold rho1 dashed; requests, mode switches and non-zero
+  command stretches in a strip below; the end of the trial and stage changes marked; a caption);
 - ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat);
 - ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
 
 ``--live`` replaces the simulated user by you: the interface is driven from the Meshcat page
 (:class:`~drake_disamb.systems.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
+
+Run from a terminal with Meshcat, the demo first compiles what it needs (announced on a first run),
+prints the URL and waits up to 30 s for a browser to open it (``--no-wait`` starts at once), runs
+at real time and keeps Meshcat up 5 s afterwards. Run from a script (standard input not a
+terminal) it prints the URL, does not wait or hold, and runs as fast as it can; the recording
+replays in simulated time either way.
 
 ``--out`` is checked (created if needed, a probe file written and deleted) before anything is
 built. Ctrl-C (SIGINT) or SIGTERM stops the trial between simulator steps; the command then writes
@@ -114,13 +121,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--hold",
         type=_nonnegative_float,
         default=None,
-        help="seconds to keep Meshcat serving after the trial (default: 5 with Meshcat, 0 without)",
+        help="seconds Meshcat keeps serving after the trial (default: 5 with Meshcat in a terminal, else 0)",
     )
     parser.add_argument(
         "--realtime-rate",
         type=_nonnegative_float,
         default=None,
-        help="target real-time rate with Meshcat (default 1.0; 0 = as fast as possible)",
+        help="target real-time rate (default: 1 with Meshcat from a terminal, else 0 = as fast as possible)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress display")
     parser.add_argument(
@@ -220,9 +227,19 @@ WARM_UP = 0.05
 simulated user asks for disambiguation at the start, so the first ticks use them all)."""
 
 
+def _attended() -> bool:
+    """Whether a person runs the command from a terminal (standard input is one); from a script
+    the demo neither waits for a browser nor holds Meshcat, and runs as fast as it can."""
+    isatty = getattr(sys.stdin, "isatty", None)
+    try:
+        return bool(isatty and isatty())
+    except (OSError, ValueError):  # a closed or detached stdin
+        return False
+
+
 def _waits_for_browser(args: argparse.Namespace) -> bool:
     """Whether the demo waits for a browser: with Meshcat, from a terminal, without ``--no-wait``."""
-    return not (args.no_meshcat or args.no_wait) and sys.stdin.isatty()
+    return not (args.no_meshcat or args.no_wait) and _attended()
 
 
 def _show_url(meshcat: Any, args: argparse.Namespace, stop: StopRequest) -> None:
@@ -295,7 +312,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             meshcat = start_meshcat(args)
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
-    realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
+    watching = meshcat is not None and _attended()  # someone at a terminal may watch the page
+    realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if watching else 0.0)
     source = None
     if args.live:
         from drake_disamb.core.interfaces import InterfaceConfig
@@ -341,9 +359,9 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         print(f"wrote {path}")
     if result.interrupted:
         return EXIT_INTERRUPTED
-    hold = args.hold if args.hold is not None else (5.0 if meshcat is not None else 0.0)
+    hold = args.hold if args.hold is not None else (5.0 if watching else 0.0)
     if meshcat is not None and hold > 0 and not stop:
-        print(f"Meshcat stays up for {hold:g} s at {meshcat.web_url()} (Ctrl-C to quit)", flush=True)
+        print(f"Meshcat stays up for {hold:g} s (Ctrl-C to quit)", flush=True)
         end = time.monotonic() + hold
         while not stop and time.monotonic() < end:
             time.sleep(min(0.1, max(0.0, end - time.monotonic())))
