@@ -10,7 +10,7 @@ extra), moves the recording to a moment of the trial, saves a PNG and prints wha
 - the colour of every goal's probability sphere next to its object's colour;
 - the legend's text.
 
-    python diagrams/recording_screenshot.py                      # -> docs/recording.png
+    python diagrams/recording_screenshot.py    # from the repository root: writes docs/recording.png
     python diagrams/recording_screenshot.py --task pouring --out out/pouring.png --at 0.3
 
 No network: Chromium is started with its background services off and an empty profile.
@@ -26,8 +26,6 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
-
-REPO = Path(__file__).resolve().parents[1]
 
 CHROMIUM_FLAGS = (
     "--headless=new",
@@ -156,7 +154,7 @@ def screenshot(
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--task", default="reaching", help="task name or scenario YAML (default: reaching)")
-    parser.add_argument("--out", type=Path, default=REPO / "docs" / "recording.png", help="PNG to write")
+    parser.add_argument("--out", type=Path, default=Path("docs/recording.png"), help="PNG to write")
     parser.add_argument("--at", type=float, default=0.6, help="moment shown, as a fraction of the trial")
     args = parser.parse_args(argv)
     from drake_disamb.display import goal_colors

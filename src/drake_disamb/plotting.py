@@ -213,7 +213,7 @@ def goal_probability_figure(
         if starts[k] < t1:
             for a in (ax, strip):
                 a.axvline(
-                    starts[k], color="k", ls=":", lw=1.1, label="next stage" if a is ax and k == 1 else None
+                    starts[k], color="k", ls=":", lw=1.1, label="stage change" if a is ax and k == 1 else None
                 )
     if n_stages > 1 and stage_names:
         for k in range(n_stages):
@@ -237,14 +237,14 @@ def goal_probability_figure(
     strip.grid(axis="x", alpha=0.25)
     strip.set_xlabel("time (s)")
 
-    ax.set_ylim(-0.02, 1.02 if not (n_stages > 1 and stage_names) else 1.02)
+    ax.set_ylim(-0.02, 1.02)
     # A little room on both sides, so that an event at t = 0 and the end line show in full.
     t_last = max(t1, float(end_time)) if end_time is not None and np.isfinite(end_time) else t1
     pad = 0.015 * max(t_last - t0, 1e-3)
     ax.set_xlim(t0 - pad, t_last + pad)
     ax.set_ylabel("goal probability")
     if title:
-        ax.set_title(title, pad=14 if n_stages > 1 and stage_names else 6)
+        ax.set_title(title, pad=16 if n_stages > 1 and stage_names else 6)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     ax.grid(alpha=0.25)
     right = 0.72
@@ -254,7 +254,8 @@ def goal_probability_figure(
         lines = wrapped.count("\n") + 1
         bottom = 0.11 + 0.035 * lines
         fig.text(0.02, 0.015, wrapped, fontsize=7.5, va="bottom", ha="left", color="0.2")
-    fig.subplots_adjust(left=0.11, right=right, top=0.92, bottom=bottom)
+    top = 0.88 if n_stages > 1 and stage_names else 0.92
+    fig.subplots_adjust(left=0.11, right=right, top=top, bottom=bottom)
     return fig
 
 
