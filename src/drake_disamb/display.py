@@ -135,9 +135,10 @@ def add_legend_to_html(page: str, rows: Sequence[LegendRow], title: str = "") ->
 def belief_caption(scenario: Any) -> str:
     """The figure's caption: which line is the intended goal, and why the belief relaxes.
 
-    With the field-theoretic inference (the default) a goal's probability is pulled back toward
-    uniform (1/n) by the DFT's decay term whenever the user's command does not point at that
-    goal: while the user pauses, switches modes or only rotates the gripper.
+    With the field-theoretic inference (the default) the belief rises for the goals the user's
+    command points at and otherwise decays toward uniform (1/n each): while the user pauses,
+    switches modes or moves along one axis that points at several goals alike, the intended goal's
+    probability falls back.
     """
     intended = [scenario.stage_goals(k)[int(g)].name for k, g in enumerate(scenario.user.goals)]
     n = scenario.n_goals
@@ -151,9 +152,10 @@ def belief_caption(scenario: Any) -> str:
     dft = scenario.inference.dft
     held = ""
     if dft.proximity:
-        held = f"; goals within {dft.R:g} m of the gripper are held up (proximity term)"
+        held = f"; goals within {dft.R:g} m of the gripper keep a share (proximity term)"
     return (
-        f"{first}\nWhen the user's command stops pointing at a goal (a pause, a mode switch, a pure "
-        f"rotation), the DFT's decay pulls the belief back toward uniform (1/{n} each) with time "
-        f"constant tau1 = {dft.tau1:g} s{held}."
+        f"{first}\nThe DFT belief rises for the goals the current command points at and otherwise decays "
+        f"toward uniform (1/{n} each, time constant tau1 = {dft.tau1:g} s): while the user pauses, switches "
+        f"modes or moves along one axis that points at several goals alike, the intended goal's "
+        f"probability falls back{held}."
     )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import sys
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -51,6 +52,16 @@ def _drake_info_held_back() -> Iterator[None]:
         yield
     finally:
         logger.setLevel(level)
+
+
+def attended() -> bool:
+    """Whether a person runs the command from a terminal (standard input is one). From a script
+    the commands neither wait for a browser nor hold Meshcat, and run as fast as they can."""
+    isatty = getattr(sys.stdin, "isatty", None)
+    try:
+        return bool(isatty and isatty())
+    except (OSError, ValueError):  # a closed or detached stdin
+        return False
 
 
 WAIT_FOR_BROWSER = 30.0

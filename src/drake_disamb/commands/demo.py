@@ -47,6 +47,7 @@ from drake_disamb.commands._meshcat import (
     WAIT_FOR_BROWSER,
     add_meshcat_arguments,
     add_wait_argument,
+    attended,
     start_meshcat,
     wait_for_browser,
 )
@@ -227,19 +228,9 @@ WARM_UP = 0.05
 simulated user asks for disambiguation at the start, so the first ticks use them all)."""
 
 
-def _attended() -> bool:
-    """Whether a person runs the command from a terminal (standard input is one); from a script
-    the demo neither waits for a browser nor holds Meshcat, and runs as fast as it can."""
-    isatty = getattr(sys.stdin, "isatty", None)
-    try:
-        return bool(isatty and isatty())
-    except (OSError, ValueError):  # a closed or detached stdin
-        return False
-
-
 def _waits_for_browser(args: argparse.Namespace) -> bool:
     """Whether the demo waits for a browser: with Meshcat, from a terminal, without ``--no-wait``."""
-    return not (args.no_meshcat or args.no_wait) and _attended()
+    return not (args.no_meshcat or args.no_wait) and attended()
 
 
 def _show_url(meshcat: Any, args: argparse.Namespace, stop: StopRequest) -> None:
@@ -312,7 +303,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             meshcat = start_meshcat(args)
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
-    watching = meshcat is not None and _attended()  # someone at a terminal may watch the page
+    watching = meshcat is not None and attended()  # someone at a terminal may watch the page
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if watching else 0.0)
     source = None
     if args.live:
