@@ -208,6 +208,13 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             return _error(exc)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     station = build_station(config, meshcat=meshcat)
+    if meshcat is not None:
+        from drake_disamb.clearance import table_top_z
+        from drake_disamb.systems.visualization import frame_workspace, illustration_bounds
+
+        frame_workspace(
+            meshcat, *illustration_bounds(station.plant, station.scene_graph), work_height=table_top_z()
+        )
     try:
         written = write_diagram_graph(station.diagram, out / "station")
     except OSError as exc:
