@@ -179,7 +179,7 @@ def test_outcome_labels() -> None:
 def test_caption_and_legend_texts() -> None:
     sc = load_scenario("reaching")
     caption = belief_caption(sc)
-    assert "Thick line: the intended goal (red_box)" in caption and "(1/5 each)" in caption
+    assert "Thick line: the intended goal (red_box)" in caption and "uniform (1/5 each" in caption
     rows = legend_rows(sc)
     assert rows[0].text == "intended goal: red_box" and rows[0].bold
     assert [r.text for r in rows[1:5]] == [f"other goal: {g.name}" for g in sc.goals[1:]]
