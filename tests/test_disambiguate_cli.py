@@ -99,13 +99,53 @@ def test_invalid_cases_get_errors_in_place(tmp_path: Path, capsys: pytest.Captur
         assert results[i]["error"].startswith(f"case {i}: field '{field}'"), results[i]["error"]
 
 
-def test_explain(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code = _run(tmp_path, [ROTATION_SCENE], "--explain")
+def test_explain_prints_the_explanations_only(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = _run(tmp_path, [ROTATION_SCENE, dict(ROTATION_SCENE, position=[0, 0])], "--explain")
     out = capsys.readouterr()
-    assert code == 0
-    result = json.loads(out.out)[0]
-    assert "Chose mode 2 {wx, wz}" in result["explanation"]
-    assert "--- case 0 ---" in out.err and "Chose mode 2" in out.err
+    assert code == 1 and out.err == ""
+    lines = out.out.splitlines()
+    assert lines[0] == "case 0:" and lines[1].startswith("  Chose mode 2 {wx, wz}")
+    assert "case 1:\n  error: field 'position': expected 3 numbers" in out.out
+    assert "{" not in out.out.replace("{wx", "").replace("{vx", "").replace("{wy", "")  # no JSON
+
+
+def test_json_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "sub" / "modes.json"
+    assert _run(tmp_path, [ROTATION_SCENE, Y_SCENE], "--json", str(target)) == 0
+    out = capsys.readouterr()
+    assert out.out == "" and out.err == f"wrote {target}\n"
+    results = json.loads(target.read_text())
+    assert [r["mode"] for r in results] == [2, 1] and "explanation" not in results[0]
+    # With --explain: the explanations on stdout, the JSON (with them) in the file.
+    assert _run(tmp_path, [ROTATION_SCENE], "--explain", "--json", str(target)) == 0
+    out = capsys.readouterr()
+    assert out.out.startswith("case 0:\n  Chose mode 2")
+    assert json.loads(target.read_text())[0]["explanation"].startswith("Chose mode 2")
+
+
+def test_unwritable_json_file_exits_2_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "a_file").write_text("x")
+    assert _run(tmp_path, "not even a list", "--json", str(tmp_path / "a_file" / "modes.json")) == 2
+    out = capsys.readouterr()
+    assert out.out == "" and out.err.count("\n") == 1 and "--json" in out.err
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_the_example_files(capsys: pytest.CaptureFixture[str]) -> None:
+    """``examples/disambiguate_cases.json`` is all valid; ``disambiguate_errors.json`` shows the
+    per-case errors around one valid case (as the README says)."""
+    parser = argparse.ArgumentParser()
+    command.add_arguments(parser)
+    assert command.run(parser.parse_args(["--cases", str(EXAMPLES / "disambiguate_cases.json")])) == 0
+    assert all("error" not in r for r in json.loads(capsys.readouterr().out))
+    assert command.run(parser.parse_args(["--cases", str(EXAMPLES / "disambiguate_errors.json")])) == 1
+    results = json.loads(capsys.readouterr().out)
+    assert "error" not in results[0] and all("error" in r for r in results[1:])
+    assert [r["error"].split("'")[1] for r in results[1:]] == ["position", "modes", "speed"]
 
 
 def test_default_preset_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -259,12 +299,16 @@ def test_a_failure_inside_one_case_is_that_cases_error(
         dict(Y_SCENE, position=[0.25, 0, 0.1]),
         Y_SCENE,
     ]
-    code, out, err, _ = _run_raw(tmp_path, json.dumps(cases).encode(), capsys, "--explain")
+    report = tmp_path / "results.json"
+    code, out, err, _ = _run_raw(
+        tmp_path, json.dumps(cases).encode(), capsys, "--explain", "--json", str(report)
+    )
     assert code == 1
-    results = json.loads(out)
+    results = json.loads(report.read_text())
     assert results[1] == {"error": "case 1: could not be solved: ZeroDivisionError: division by zero"}
     assert results[2]["error"].startswith("case 2: could not be solved: ValueError: Out of range float")
     assert results[0]["mode"] == results[3]["mode"] == 1
+    assert "case 1:\n  error: could not be solved: ZeroDivisionError" in out
     assert "Traceback" not in err
 
 

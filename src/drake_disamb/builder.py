@@ -42,6 +42,7 @@ from pydrake.systems.framework import Context, Diagram, DiagramBuilder, EventSta
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
+from drake_disamb.progress import SimulationProgress
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import DisambiguationSystem
@@ -284,10 +285,15 @@ def build_shared_control_diagram(
         systems["disambiguation"] = disamb
 
     if meshcat is not None:
-        from drake_disamb.systems.visualization import SharedControlVisualizer
+        from drake_disamb.clearance import table_top_z
+        from drake_disamb.systems import visualization
 
-        vis = builder.AddSystem(SharedControlVisualizer(meshcat, n, modes))
+        vis = builder.AddSystem(visualization.visualizer_for_scenario(meshcat, scenario, modes))
         vis.set_name("visualizer")
+        if vis.HasInputPort("stage"):
+            builder.Connect(task.GetOutputPort("stage"), vis.GetInputPort("stage"))
+        bounds = visualization.illustration_bounds(plant, station.scene_graph)
+        visualization.frame_workspace(meshcat, *bounds, work_height=table_top_z())
         builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
         builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
         builder.Connect(station.diagram.GetOutputPort("ee_pose"), vis.GetInputPort("ee_pose"))
@@ -343,7 +349,7 @@ def _log(
 def run_trial(
     scenario: Scenario | SharedControlDiagram,
     meshcat: Meshcat | None = None,
-    progress: bool = True,
+    progress: bool | SimulationProgress = True,
     realtime_rate: float | None = None,
     stop_at_success: bool = True,
     recording: bool | None = None,
@@ -354,7 +360,10 @@ def run_trial(
     Args:
         scenario: A scenario (a diagram is built for it) or a built :class:`SharedControlDiagram`.
         meshcat: Meshcat for a scenario argument (ignored for a built diagram, which has its own).
-        progress: Show a tqdm progress bar of simulated time.
+        progress: Show the simulated time while running: ``True`` makes a
+            :class:`~drake_disamb.progress.SimulationProgress` on stderr (an in-place line on a
+            terminal, a line per second of wall time elsewhere); pass one to choose its stream
+            (it is closed at the end); ``False`` shows nothing.
         realtime_rate: Target real-time rate (0 = as fast as possible); ``None`` keeps the
             scenario's ``simulator_config.target_realtime_rate``.
         stop_at_success: Stop once every stage is done (else run to ``scenario.duration``).
@@ -382,24 +391,12 @@ def run_trial(
     task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
     task_context = task.GetMyContextFromRoot(root)
 
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(
-            total=round(sc.duration, 2),
-            unit="sim s",
-            leave=False,
-            bar_format="{l_bar}{bar}| {n:.1f}/{total} s",
-        )
-    last = [0.0]
+    bar = SimulationProgress(sc.duration) if progress is True else (progress or None)
     stopped = [False]
 
     def monitor(context) -> EventStatus:
-        t = context.get_time()
-        if bar is not None and t - last[0] >= 0.25:
-            bar.update(t - last[0])
-            last[0] = t
+        if bar is not None:
+            bar.update(context.get_time())
         if stop_requested is not None and stop_requested():
             stopped[0] = True
             return EventStatus.ReachedTermination(task, "stop requested")
@@ -465,11 +462,19 @@ def run_trial(
     )
 
 
-def save_recording(meshcat: Meshcat, path: str | Path) -> Path:
-    """Write Meshcat's current scene and published recording as a self-contained HTML file."""
+def save_recording(meshcat: Meshcat, path: str | Path, legend: Any = None, title: str = "") -> Path:
+    """Write Meshcat's current scene and published recording as a self-contained HTML file.
+
+    ``legend`` (rows of :func:`drake_disamb.display.legend_rows`) is laid over the page, headed by
+    ``title``: Meshcat's HTML leaves out the control panel where a live page shows it."""
+    from drake_disamb.display import add_legend_to_html
+
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(meshcat.StaticHtml(), encoding="utf-8")
+    page = meshcat.StaticHtml()
+    if legend:
+        page = add_legend_to_html(page, legend, title)
+    out.write_text(page, encoding="utf-8")
     return out
 
 
@@ -478,38 +483,16 @@ def write_trial_figures(
 ) -> list[Path]:
     """Write the goal-probability figure, the Meshcat recording (if any) and the diagram picture."""
     from drake_disamb.diagram_io import write_diagram_graph
-    from drake_disamb.plotting import plot_goal_probabilities
+    from drake_disamb.display import legend_rows
+    from drake_disamb.plotting import write_trial_figure
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     sc = result.scenario
-    t, belief = result.logs["belief"]
-    names = handles.goal_names(0)
-    if sc.n_stages > 1:
-        names = [" / ".join(handles.goal_names(k)[j] for k in range(sc.n_stages)) for j in range(sc.n_goals)]
-    _, uh = result.logs["u_h"]
-    outcome = "interrupted at" if result.interrupted else "success in" if result.success else "failure in"
-    written = [
-        plot_goal_probabilities(
-            t,
-            belief,
-            out / "goal_probabilities.png",
-            rho1=result.rho1,
-            goal_names=names,
-            request_times=result.request_times,
-            mode_switch_times=result.mode_switch_times,
-            command_times=t,
-            commands=uh,
-            stage_times=result.stage_times if sc.n_stages > 1 else (),
-            intended_goal=sc.user.goals[0] if sc.n_stages == 1 else None,
-            title=(
-                f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm: "
-                f"{outcome} {result.time:.1f} s"
-            ),
-        )
-    ]
+    written = [write_trial_figure(result, out / "goal_probabilities.png")]
     if handles.meshcat is not None:
-        written.append(save_recording(handles.meshcat, out / "recording.html"))
+        title = f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm"
+        written.append(save_recording(handles.meshcat, out / "recording.html", legend_rows(sc), title))
     written.extend(Path(p) for p in _as_list(write_diagram_graph(handles.diagram, out / "diagram")))
     return written
 

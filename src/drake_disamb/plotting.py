@@ -3,17 +3,23 @@
 The paper's figure shows the time evolution of the goal probabilities with the minimum threshold
 for robot assistance (grey dashed line, ``rho1``), disambiguation requests and manual mode
 switches (red dots) and indications of non-zero human control commands (black segments below the
-plotted data). :func:`plot_goal_probabilities` draws the same, and marks stage changes of a
-multi-step task with vertical dotted lines.
+plotted data). :func:`goal_probability_figure` draws the same in two panels on one time axis: the
+probabilities on top (each goal in its own colour, the intended goal thicker and named so in the
+legend), and below them a strip with the requests, the mode switches and the stretches of
+non-zero command. Vertical lines mark the stage changes of a multi-step task and the end of the
+trial (goal reached, time limit or interruption); an optional caption explains the picture.
+:func:`plot_goal_probabilities` writes that figure to a file.
 """
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 GOAL_COLORS = (
     "#1f77b4",
@@ -25,7 +31,9 @@ GOAL_COLORS = (
     "#e377c2",
     "#7f7f7f",
 )
-"""Line colours of goals 0, 1, ... (matplotlib's tab10, as in the Meshcat display)."""
+"""Default line colours of goals 0, 1, ... (matplotlib's tab10) when no colours are given (the
+published trials' goals have no objects); a trial's figure uses its objects' colours
+(:func:`drake_disamb.display.goal_colors`)."""
 
 
 def nonzero_segments(
@@ -59,39 +67,83 @@ def nonzero_segments(
     return segments
 
 
-def plot_goal_probabilities(
+def _per_stage(items: Sequence[Any], nested: bool, n_stages: int, n: int, what: str) -> list[list[Any]]:
+    """``items`` (``n`` entries, or when ``nested`` one list of ``n`` per stage) as per-stage lists."""
+    if nested:
+        if len(items) != n_stages or any(len(v) != n for v in items):
+            raise ValueError(f"{what}: expected {n_stages} lists (one per stage) of {n}, got {list(items)!r}")
+        return [list(v) for v in items]
+    if len(items) != n:
+        raise ValueError(f"{what}: expected {n} entries, got {len(items)}")
+    return [list(items)] * n_stages
+
+
+RESET_WINDOW = 10
+"""Samples after a stage change searched for the belief's reset (see :func:`_reset_index`)."""
+
+
+def _reset_index(t: NDArray[np.float64], p: NDArray[np.float64], change: float) -> int:
+    """Index of the first sample of the belief after its reset at a stage change at ``change`` (s):
+    the sample after the largest jump among the :data:`RESET_WINDOW` samples from ``change`` on."""
+    i0 = int(np.searchsorted(t, change))
+    i1 = min(i0 + RESET_WINDOW, len(t))
+    if i1 - i0 < 2:
+        return min(i0, len(t))
+    jumps = np.nan_to_num(np.abs(np.diff(p[i0:i1], axis=0)).sum(axis=1))
+    return i0 + 1 + int(np.argmax(jumps))
+
+
+def _is_color(c: Any) -> bool:
+    return isinstance(c, str) or (np.ndim(c) == 1 and len(c) in (3, 4))
+
+
+def goal_probability_figure(
     times: ArrayLike,
     belief: ArrayLike,
-    path: str | Path,
     *,
     rho1: float | None = None,
-    goal_names: Sequence[str] | None = None,
+    goal_names: Sequence[str] | Sequence[Sequence[str]] | None = None,
+    goal_colors: Sequence[Any] | None = None,
     request_times: Sequence[float] = (),
     mode_switch_times: Sequence[float] = (),
     command_times: ArrayLike | None = None,
     commands: ArrayLike | None = None,
     stage_times: Sequence[float] = (),
-    intended_goal: int | None = None,
+    stage_names: Sequence[str] = (),
+    intended_goal: int | Sequence[int] | None = None,
+    end_time: float | None = None,
+    end_label: str = "end of trial",
     title: str = "",
-) -> Path:
-    """Write the goal-probability figure of one trial to ``path`` (PNG, PDF, SVG ...).
+    caption: str = "",
+) -> Any:
+    """The goal-probability figure of one trial (a matplotlib ``Figure``; the caller closes it).
 
     Args:
         times: ``(T,)`` sample times (s) of the belief.
-        belief: ``(T, n)`` goal probabilities.
-        path: Output file; its parent directory is created.
+        belief: ``(T, n)`` goal probabilities; slot ``i`` is goal ``i`` of the current stage.
         rho1: The assistance threshold drawn as a grey dashed line (omitted when ``None``).
-        goal_names: Legend labels, one per goal (default ``g0, g1, ...``).
-        request_times: Times (s) of disambiguation requests (red dots).
-        mode_switch_times: Times (s) of manual mode switches (red open circles).
+        goal_names: Legend labels: ``n`` names, or one list of ``n`` per stage (default
+            ``g0, g1, ...``).
+        goal_colors: Line colours ``(r, g, b[, a])`` in [0, 1] (or matplotlib colours): ``n``, or
+            one list of ``n`` per stage (default :data:`GOAL_COLORS`). Slot ``i`` is drawn in
+            stage ``k``'s colour ``i`` while stage ``k`` runs.
+        request_times: Times (s) of disambiguation requests (red dots in the bottom strip).
+        mode_switch_times: Times (s) of manual mode switches (red open circles in the strip).
         command_times, commands: ``(T_u,)`` and ``(T_u, d)`` human commands: their non-zero
-            stretches are drawn as black segments below the data.
-        stage_times: Times (s) at which a stage of a multi-step task completed (dotted lines).
-        intended_goal: Index of the user's goal: its line is drawn thicker.
+            stretches are black bars in the strip.
+        stage_times: Completion time (s) of each stage of a multi-step task (NaN if not
+            completed); the number of stages is ``len(stage_times)`` (at least 1). The changes
+            between stages are dotted vertical lines.
+        stage_names: Names of the stages, written at the top of each stage's stretch.
+        intended_goal: The user's goal index (every stage) or one per stage: its line is thicker and
+            its legend entry says "intended".
+        end_time, end_label: A solid vertical line at ``end_time`` (s), labelled ``end_label``
+            (e.g. "goal reached"); none when ``end_time`` is ``None``.
         title: Figure title.
+        caption: Text under the figure (wrapped; newlines start new paragraphs).
 
-    Returns:
-        The path written.
+    Raises:
+        ValueError: shapes or counts that do not match.
     """
     import matplotlib
 
@@ -103,64 +155,180 @@ def plot_goal_probabilities(
     if p.ndim != 2 or p.shape[0] != t.shape[0]:
         raise ValueError(f"belief: expected shape ({t.shape[0]}, n) matching times, got {p.shape}")
     n = p.shape[1]
-    names = [f"g{i}" for i in range(n)] if goal_names is None else list(goal_names)
-    if len(names) != n:
-        raise ValueError(f"goal_names: expected {n} names, got {len(names)}")
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    n_stages = max(1, len(stage_times))
+    names_in = [f"g{i}" for i in range(n)] if goal_names is None else list(goal_names)
+    names = _per_stage(
+        names_in, bool(names_in) and not isinstance(names_in[0], str), n_stages, n, "goal_names"
+    )
+    colors_in = (
+        [GOAL_COLORS[i % len(GOAL_COLORS)] for i in range(n)] if goal_colors is None else list(goal_colors)
+    )
+    colors = _per_stage(
+        colors_in, bool(colors_in) and not _is_color(colors_in[0]), n_stages, n, "goal_colors"
+    )
+    colors = [
+        [c if isinstance(c, str) else tuple(float(x) for x in c[:3]) for c in stage] for stage in colors
+    ]
+    if intended_goal is None:
+        intended: list[int | None] = [None] * n_stages
+    elif isinstance(intended_goal, int | np.integer):
+        intended = [int(intended_goal)] * n_stages
+    else:
+        intended = [int(g) for g in intended_goal]
+        if len(intended) != n_stages:
+            raise ValueError(f"intended_goal: expected {n_stages} indices (one per stage), got {intended}")
 
-    fig, ax = plt.subplots(figsize=(8.0, 3.6), dpi=120)
-    for i in range(n):
-        lw = 2.6 if intended_goal == i else 1.5
-        ax.plot(t, p[:, i], color=GOAL_COLORS[i % len(GOAL_COLORS)], lw=lw, label=names[i])
+    t0 = float(t[0]) if len(t) else 0.0
+    t1 = float(t[-1]) if len(t) else 1.0
+    # Stage k runs from the end of stage k - 1 to its own end (or the end of the data).
+    ends = [float(x) if np.isfinite(x) else np.inf for x in stage_times] or [np.inf]
+    starts = [t0] + [min(e, t1) for e in ends[:-1]]
+
+    fig, (ax, strip) = plt.subplots(
+        2,
+        1,
+        sharex=True,
+        figsize=(9.0, 4.9 if caption else 4.4),
+        dpi=120,
+        gridspec_kw={"height_ratios": [4.0, 1.25], "hspace": 0.08},
+    )
+    # The belief refers to a stage's goals from its reset on (a tick or two after the stage
+    # changed): each stage's lines start at the sample after the largest jump of the belief within
+    # RESET_WINDOW samples of the change, so no line joins two goal sets.
+    first = [0] + [_reset_index(t, p, starts[k]) for k in range(1, n_stages)]
+    for k in range(n_stages):
+        if k > 0 and starts[k] >= t1:
+            break  # the trial ended before this stage
+        stop = first[k + 1] if k + 1 < n_stages and starts[k + 1] < t1 else len(t)
+        seg = slice(first[k], stop)
+        for i in range(n):
+            mine = intended[k] == i
+            label = names[k][i] + (" (intended)" if mine else "")
+            if n_stages > 1 and stage_names:
+                label = f"{stage_names[k]}: {label}"
+            ax.plot(t[seg], p[seg, i], color=colors[k][i], lw=2.8 if mine else 1.4, label=label)
     if rho1 is not None:
         ax.axhline(rho1, color="0.5", ls="--", lw=1.2, label=r"$\rho_1$ (assistance threshold)")
-    event_y = 1.04
-    if len(request_times):
-        ax.plot(
-            request_times,
-            np.full(len(request_times), event_y),
-            "o",
-            color="red",
-            ms=6,
-            label="disambiguation request",
-            clip_on=False,
-        )
-    if len(mode_switch_times):
-        ax.plot(
-            mode_switch_times,
-            np.full(len(mode_switch_times), event_y),
-            "o",
-            mfc="none",
-            mec="red",
-            ms=6,
-            label="manual mode switch",
-            clip_on=False,
-        )
-    for k, ts in enumerate(stage_times):
-        if np.isfinite(ts):
-            ax.axvline(ts, color="k", ls=":", lw=1.0, label="stage complete" if k == 0 else None)
-    seg_y = -0.06
+    for k in range(1, n_stages):
+        if starts[k] < t1:
+            for a in (ax, strip):
+                a.axvline(
+                    starts[k], color="k", ls=":", lw=1.1, label="stage change" if a is ax and k == 1 else None
+                )
+    if n_stages > 1 and stage_names:
+        for k in range(n_stages):
+            if starts[k] < t1 or k == 0:
+                ax.text(starts[k], 1.045, f" {k + 1}: {stage_names[k]}", fontsize=8, va="bottom", ha="left")
+    if end_time is not None and np.isfinite(end_time):
+        for a in (ax, strip):
+            a.axvline(end_time, color="0.15", lw=1.6, label=end_label if a is ax else None)
+
+    # Bottom strip: one row per kind of event, on the same time axis.
+    rows = ("$u_h \\neq 0$", "mode switch", "request")
     if command_times is not None and commands is not None:
-        for j, (a, b) in enumerate(nonzero_segments(command_times, commands)):
-            ax.plot(
-                [a, b],
-                [seg_y, seg_y],
-                color="k",
-                lw=4,
-                solid_capstyle="butt",
-                label="non-zero $u_h$" if j == 0 else None,
-                clip_on=False,
-            )
-    ax.set_ylim(-0.1, 1.08)
-    ax.set_xlim(float(t[0]) if len(t) else 0.0, float(t[-1]) if len(t) else 1.0)
-    ax.set_xlabel("time (s)")
+        for a, b in nonzero_segments(command_times, commands):
+            strip.plot([a, b], [0, 0], color="k", lw=5, solid_capstyle="butt")
+    if len(mode_switch_times):
+        strip.plot(mode_switch_times, np.ones(len(mode_switch_times)), "o", mfc="none", mec="red", ms=6)
+    if len(request_times):
+        strip.plot(request_times, np.full(len(request_times), 2.0), "o", color="red", ms=6)
+    strip.set_yticks(range(len(rows)), rows, fontsize=8)
+    strip.set_ylim(-0.7, 2.7)
+    strip.grid(axis="x", alpha=0.25)
+    strip.set_xlabel("time (s)")
+
+    ax.set_ylim(-0.02, 1.02)
+    # A little room on both sides, so that an event at t = 0 and the end line show in full.
+    t_last = max(t1, float(end_time)) if end_time is not None and np.isfinite(end_time) else t1
+    pad = 0.015 * max(t_last - t0, 1e-3)
+    ax.set_xlim(t0 - pad, t_last + pad)
     ax.set_ylabel("goal probability")
     if title:
-        ax.set_title(title)
-    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
+        ax.set_title(title, pad=16 if n_stages > 1 and stage_names else 6)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     ax.grid(alpha=0.25)
-    fig.tight_layout()
-    fig.savefig(out)
-    plt.close(fig)
+    right = 0.72
+    bottom = 0.12
+    if caption:
+        wrapped = "\n".join(textwrap.fill(par, 140) for par in caption.split("\n"))
+        lines = wrapped.count("\n") + 1
+        bottom = 0.11 + 0.035 * lines
+        fig.text(0.02, 0.015, wrapped, fontsize=7.5, va="bottom", ha="left", color="0.2")
+    top = 0.88 if n_stages > 1 and stage_names else 0.92
+    fig.subplots_adjust(left=0.11, right=right, top=top, bottom=bottom)
+    return fig
+
+
+def plot_goal_probabilities(times: ArrayLike, belief: ArrayLike, path: str | Path, **kwargs: Any) -> Path:
+    """Write :func:`goal_probability_figure` (same arguments) to ``path`` (PNG, PDF, SVG ...).
+
+    Args:
+        times, belief, kwargs: As for :func:`goal_probability_figure`.
+        path: Output file; its parent directory is created.
+
+    Returns:
+        The path written.
+    """
+    return _save(goal_probability_figure(times, belief, **kwargs), path)
+
+
+def trial_outcome(result: Any) -> str:
+    """How a trial ended, for labels: "interrupted", "goal reached", "other goal reached" or
+    "time limit" (``result`` is a :class:`~drake_disamb.builder.TrialResult`)."""
+    if getattr(result, "interrupted", False):
+        return "interrupted"
+    if result.done:
+        return "goal reached" if result.success else "other goal reached"
+    return "time limit"
+
+
+def trial_figure(result: Any) -> Any:
+    """:func:`goal_probability_figure` of a :class:`~drake_disamb.builder.TrialResult`: its goals
+    in their objects' colours, the intended goal(s), stage changes, the end of the trial and the
+    caption of :func:`drake_disamb.display.belief_caption`."""
+    from drake_disamb.display import belief_caption, goal_colors
+
+    sc = result.scenario
+    t, belief = result.logs["belief"]
+    _, uh = result.logs["u_h"]
+    names = [[g.name for g in sc.stage_goals(k)] for k in range(sc.n_stages)]
+    colors = goal_colors(sc)
+    multi = sc.n_stages > 1
+    outcome = trial_outcome(result)
+    return goal_probability_figure(
+        t,
+        belief,
+        rho1=result.rho1,
+        goal_names=names if multi else names[0],
+        goal_colors=colors if multi else colors[0],
+        request_times=result.request_times,
+        mode_switch_times=result.mode_switch_times,
+        command_times=t,
+        commands=uh,
+        stage_times=result.stage_times if multi else (),
+        stage_names=[s.name for s in sc.stages] if multi else (),
+        intended_goal=list(sc.user.goals) if multi else sc.user.goals[0],
+        end_time=result.time,
+        end_label=f"{outcome} ({result.time:.1f} s)",
+        title=f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm: "
+        f"{outcome} at {result.time:.1f} s",
+        caption=belief_caption(sc),
+    )
+
+
+def write_trial_figure(result: Any, path: str | Path) -> Path:
+    """Write :func:`trial_figure` to ``path`` (its parent directory is created)."""
+    return _save(trial_figure(result), path)
+
+
+def _save(fig: Any, path: str | Path) -> Path:
+    """Write ``fig`` to ``path`` (parent directory created) and close it."""
+    import matplotlib.pyplot as plt
+
+    out = Path(path)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out)
+    finally:
+        plt.close(fig)
     return out

@@ -7,7 +7,8 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 - ``metrics.json``: the printed metrics, machine-readable, with the scenario's identity (task,
   interface, paradigm, goals, seed) and ``"interrupted"``;
 - ``goal_probabilities.png``: the goal probabilities over time in the style of the paper's figure
-  (threshold rho1 dashed, requests and mode switches marked, non-zero command segments below);
+  (each goal in its object's colour, threshold rho1 dashed; requests, mode switches and non-zero
+  command stretches in a strip below; the end of the trial and stage changes marked; a caption);
 - ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat);
 - ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
 
@@ -18,6 +19,12 @@ gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 ``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
 every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
 same scenario. Nothing is run and ``--out`` is not touched.
+
+Run from a terminal with Meshcat, the demo first compiles what it needs (announced on a first run),
+prints the URL and waits up to 30 s for a browser to open it (``--no-wait`` starts at once), runs
+at real time and keeps Meshcat up 5 s afterwards. Run from a script (standard input not a
+terminal) it prints the URL, does not wait or hold, and runs as fast as it can; the recording
+replays in simulated time either way.
 
 ``--out`` is checked (created if needed, a probe file written and deleted) before anything is
 built. Ctrl-C (SIGINT) or SIGTERM stops the trial between simulator steps; the command then writes
@@ -39,7 +46,15 @@ import time
 from pathlib import Path
 from typing import Any
 
-from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+from drake_disamb.commands._first_run import announce_kernel_compilation
+from drake_disamb.commands._meshcat import (
+    WAIT_FOR_BROWSER,
+    add_meshcat_arguments,
+    add_wait_argument,
+    attended,
+    start_meshcat,
+    wait_for_browser,
+)
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 
@@ -103,6 +118,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (no recording)")
     add_meshcat_arguments(parser)
+    add_wait_argument(parser)
     parser.add_argument(
         "--out", type=Path, default=Path("out/demo"), help="output folder (default: out/demo)"
     )
@@ -110,15 +126,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--hold",
         type=_nonnegative_float,
         default=None,
-        help="seconds to keep Meshcat serving after the trial (default: 5 with Meshcat, 0 without)",
+        help="seconds Meshcat keeps serving after the trial (default: 5 with Meshcat in a terminal, else 0)",
     )
     parser.add_argument(
         "--realtime-rate",
         type=_nonnegative_float,
         default=None,
-        help="target real-time rate with Meshcat (default 1.0; 0 = as fast as possible)",
+        help="target real-time rate (default: 1 with Meshcat from a terminal, else 0 = as fast as possible)",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--quiet", action="store_true", help="no progress display")
     parser.add_argument(
         "--live",
         action="store_true",
@@ -212,6 +228,37 @@ def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN00
     return path
 
 
+def _say(line: str) -> None:
+    print(line, flush=True)
+
+
+WARM_UP = 0.05
+"""Simulated seconds of a headless trial run before a watched one, to have its kernels ready (the
+simulated user asks for disambiguation at the start, so the first ticks use them all)."""
+
+
+def _waits_for_browser(args: argparse.Namespace) -> bool:
+    """Whether the demo waits for a browser: with Meshcat, from a terminal, without ``--no-wait``."""
+    return not (args.no_meshcat or args.no_wait) and attended()
+
+
+def _show_url(meshcat: Any, args: argparse.Namespace, stop: StopRequest) -> None:
+    """Print the Meshcat URL (once) and, from a terminal, wait for a browser to open it."""
+    url = meshcat.web_url()
+    if not _waits_for_browser(args):
+        print(f"Meshcat: {url} (open it in a browser to watch)", flush=True)
+        return
+    print(
+        f"Meshcat: {url}\nopen it in a browser: the trial starts when the page is open "
+        f"(waiting up to {WAIT_FOR_BROWSER:g} s; --no-wait starts at once)",
+        flush=True,
+    )
+    if wait_for_browser(meshcat, WAIT_FOR_BROWSER, stop=lambda: bool(stop)):
+        print("the page is open", flush=True)
+    elif not stop:
+        print(f"no browser opened the page within {WAIT_FOR_BROWSER:g} s: starting anyway", flush=True)
+
+
 def _error(message: object) -> int:
     print(f"drake-disamb demo: error: {message}", file=sys.stderr)
     return 2
@@ -270,6 +317,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(exc)
 
     from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
+    from drake_disamb.progress import SimulationProgress
 
     meshcat = None
     if not args.no_meshcat:
@@ -277,8 +325,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             meshcat = start_meshcat(args)
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
-        print(f"Meshcat: {meshcat.web_url()}", flush=True)
-    realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if meshcat is not None else 0.0)
+    watching = meshcat is not None and attended()  # someone at a terminal may watch the page
+    realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if watching else 0.0)
     source = None
     if args.live:
         from drake_disamb.core.interfaces import InterfaceConfig
@@ -288,18 +336,27 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         source = MeshcatLiveInput(meshcat, interface)
         source.set_name("live_input")
         realtime = args.realtime_rate if args.realtime_rate is not None else 1.0
+    watched = meshcat is not None and (args.live or _waits_for_browser(args))
+    with announce_kernel_compilation(_say):
+        try:
+            handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
+        except ValueError as exc:
+            return _error(exc)
+        if watched:
+            # Someone will watch from the first tick: compile (or load) every kernel now, not then.
+            run_trial(dataclasses.replace(scenario, duration=WARM_UP), progress=False)
+    if meshcat is not None:
+        _show_url(meshcat, args, stop)
+    if args.live:
         print(LIVE_HELP[scenario.interface], flush=True)
-    try:
-        handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
-    except ValueError as exc:
-        return _error(exc)
-    progress = not args.quiet and sys.stderr.isatty()
     print(
         f"running the trial (up to {scenario.duration:g} s simulated); Ctrl-C stops it and keeps the results",
         flush=True,
     )
+    progress = False if args.quiet else SimulationProgress(scenario.duration)
     try:
-        result = run_trial(handles, progress=progress, realtime_rate=realtime, stop_requested=stop)
+        with announce_kernel_compilation(progress.write if progress else _say):
+            result = run_trial(handles, progress=progress, realtime_rate=realtime, stop_requested=stop)
     finally:
         if source is not None:
             source.remove_controls()
@@ -315,9 +372,9 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         print(f"wrote {path}")
     if result.interrupted:
         return EXIT_INTERRUPTED
-    hold = args.hold if args.hold is not None else (5.0 if meshcat is not None else 0.0)
+    hold = args.hold if args.hold is not None else (5.0 if watching else 0.0)
     if meshcat is not None and hold > 0 and not stop:
-        print(f"Meshcat stays up for {hold:g} s at {meshcat.web_url()} (Ctrl-C to quit)", flush=True)
+        print(f"Meshcat stays up for {hold:g} s (Ctrl-C to quit)", flush=True)
         end = time.monotonic() + hold
         while not stop and time.monotonic() < end:
             time.sleep(min(0.1, max(0.0, end - time.monotonic())))

@@ -39,19 +39,26 @@ and transition entries must be finite floats (NaN, Infinity, 1e400 or a 400-digi
 case errors). Quaternions are normalised, so their scale is free, but a norm that vanishes
 (< 1e-12) or overflows (entries beyond about 1e154) is a case error.
 
-With --explain each result also gets an "explanation" field (a short account of why the mode won
-and which features dominated), and the same text is printed to stderr for people.
+With --explain stdout gets the explanations instead, for people: per case, why the mode won and
+which features dominated (or the case's error). --json FILE writes the JSON results to FILE (with
+--explain each result there also has an "explanation" field), and stdout then gets no JSON.
 """
 
 EPILOG = """\
 exit status:
   0  every case was solved
   1  some cases are invalid or could not be solved: each has an "error" entry in its place, the
-     others are solved, and stdout is still one valid JSON list
+     others are solved, and the output is still one valid JSON list (with --explain: the case's
+     error in place of its explanation)
   2  the input as a whole is unusable: --cases cannot be read, is larger than 16 MiB, is not
      UTF-8 text, is not JSON, is nested deeper than 64 levels, has a duplicate key in an object,
-     or is not a JSON list (also a bad command-line option). One line on stderr names the
-     problem and the file; nothing goes to stdout.
+     or is not a JSON list (also a bad command-line option, or a --json file that cannot be
+     written). One line on stderr names the problem and the file; nothing goes to stdout.
+
+examples (from the repository root):
+  drake-disamb disambiguate --cases examples/disambiguate_cases.json --explain
+  drake-disamb disambiguate --cases examples/disambiguate_cases.json --json out/modes.json
+  drake-disamb disambiguate --cases examples/disambiguate_errors.json   # exit 1: per-case errors
 """
 
 MAX_BYTES = 16 * 1024 * 1024
@@ -151,7 +158,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--explain",
         action="store_true",
-        help="Add an 'explanation' field to each result and print the explanations to stderr.",
+        help="Print an explanation of each choice (and each case's error) instead of the JSON.",
+    )
+    parser.add_argument(
+        "--json",
+        metavar="FILE.json",
+        default=None,
+        help="Write the JSON results to this file instead of stdout (checked before any work).",
     )
     parser.add_argument(
         "--indent", type=_indent, default=2, help="JSON indentation, 0 to 16 (default 2; -1 for one line)."
@@ -409,9 +422,31 @@ def solve_cases(
     return results, invalid
 
 
+def format_explanations(results: list[dict]) -> str:
+    """The ``--explain`` text: per case a header line, then its explanation (or error) indented."""
+    blocks = []
+    for i, entry in enumerate(results):
+        if "error" in entry:
+            text = "error: " + entry["error"].removeprefix(f"case {i}: ")
+        else:
+            text = entry.get("explanation", "")
+        blocks.append(f"case {i}:\n" + "\n".join("  " + line for line in text.splitlines()))
+    return "\n".join(blocks)
+
+
 def run(args: argparse.Namespace) -> int:
-    """Read the cases, print the results as JSON; exit status 0 / 1 (invalid cases) / 2 (bad input)."""
+    """Read the cases, write the results (JSON or, with --explain, explanations); exit status 0 / 1
+    (invalid cases) / 2 (bad input or an unwritable --json)."""
+    from drake_disamb.commands._outputs import check_output_file
+
     name = "<stdin>" if args.cases == "-" else args.cases
+    json_path = getattr(args, "json", None)
+    if json_path is not None:
+        try:
+            check_output_file(json_path, "--json")
+        except ValueError as exc:
+            print(f"drake-disamb disambiguate: {' '.join(str(exc).split())}", file=sys.stderr)
+            return 2
     try:
         cases = read_cases(args.cases)
     except InputError as exc:
@@ -420,9 +455,19 @@ def run(args: argparse.Namespace) -> int:
         return 2
     results, invalid = solve_cases(cases, args.preset, args.explain)
     indent = None if args.indent < 0 else args.indent
-    print(json.dumps(results, indent=indent, allow_nan=False))
+    text = json.dumps(results, indent=indent, allow_nan=False)
+    if json_path is not None:
+        try:
+            with open(json_path, "w", encoding="utf-8") as f:
+                f.write(text + "\n")
+        except OSError as exc:
+            reason = exc.strerror or type(exc).__name__
+            print(f"drake-disamb disambiguate: --json: cannot write {json_path} ({reason})", file=sys.stderr)
+            return 2
     if args.explain:
-        for i, entry in enumerate(results):
-            text = entry.get("explanation", entry.get("error", ""))
-            print(f"--- case {i} ---\n{text}", file=sys.stderr)
+        print(format_explanations(results))
+    elif json_path is None:
+        print(text)
+    if json_path is not None:
+        print(f"wrote {json_path}", file=sys.stderr)
     return 1 if invalid else 0

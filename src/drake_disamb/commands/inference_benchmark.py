@@ -248,6 +248,8 @@ def _run(args: argparse.Namespace) -> int:
             "per_trial": {m: {k: v.tolist() for k, v in s.items()} for m, s in scores.items()},
         }
         Path(args.json).write_text(json.dumps(payload, indent=2, allow_nan=True))
+        print(f"wrote {args.json}")
     if args.plot:
         plot_comparison(streamed.example, streamed.example_beliefs, scores, args.example, args.plot)
+        print(f"wrote {args.plot}")
     return 0

@@ -1,5 +1,8 @@
 """``drake-disamb station-demo``: the MICO station tracing a scripted end-effector velocity pattern.
 
+With Meshcat it runs at real time when started from a terminal, and as fast as it can from a script
+(standard input not a terminal).
+
 Exit status: 0 done, 2 bad arguments (one line on stderr naming the option and value, checked
 before anything is built, ``--out`` included), 130 stopped by Ctrl-C (SIGINT) or SIGTERM, which
 end the simulation between steps and still print where the arm got to.
@@ -18,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.commands._meshcat import add_meshcat_arguments, start_meshcat
+from drake_disamb.commands._meshcat import add_meshcat_arguments, attended, start_meshcat
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 
@@ -207,13 +210,21 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             return _error(exc)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     station = build_station(config, meshcat=meshcat)
+    if meshcat is not None:
+        from drake_disamb.clearance import table_top_z
+        from drake_disamb.systems.visualization import frame_workspace, illustration_bounds
+
+        frame_workspace(
+            meshcat, *illustration_bounds(station.plant, station.scene_graph), work_height=table_top_z()
+        )
     try:
         written = write_diagram_graph(station.diagram, out / "station")
     except OSError as exc:
         return _error(f"--out: writing into {out} failed ({exc})")
     print("diagram: " + ", ".join(str(p) for p in written), flush=True)
 
-    simulator = start_simulation(station, realtime_rate=1.0 if meshcat is not None else 0.0)
+    # Real time when someone may watch (Meshcat, from a terminal); from a script, as fast as it can.
+    simulator = start_simulation(station, realtime_rate=1.0 if meshcat is not None and attended() else 0.0)
     ctx = simulator.get_mutable_context()
     p0 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
     t0 = ctx.get_time()

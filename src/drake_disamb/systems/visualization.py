@@ -2,32 +2,49 @@
 
 What is drawn (all under ``/shared_control`` in the Meshcat scene tree):
 
-- ``goals/g<i>``: one sphere per goal at its position, sized and coloured by its probability
-  (radius from ``min_radius`` at p = 0 to ``max_radius`` at p = 1; colour from grey to the goal's
-  colour in :data:`COLOR_LEVELS` steps). Sizes are animated with the ``scale`` property and
-  colours by switching the ``visible`` flag of pre-built spheres, so both show in the saved
-  recording (a Meshcat animation replays transforms and properties only).
+- ``goals/g<i>``: one sphere per goal at its position, in the goal's own colour (its object's, see
+  :func:`drake_disamb.display.goal_colors`), sized and made opaque by its probability (radius from
+  ``min_radius`` at p = 0 to ``max_radius`` at p = 1; opacity from :data:`MIN_OPACITY` to
+  :data:`MAX_OPACITY` in :data:`COLOR_LEVELS` steps). Sizes are animated with the ``scale``
+  property and opacities by switching the ``visible`` flag of pre-built spheres, so both show in
+  the saved recording (a Meshcat animation replays transforms and properties only). A multi-step
+  task gives one colour set per stage (``goals/g<i>/s/c<k>``), switched by the ``stage`` input.
 - ``mode/d<k>``: the active control mode's dimensions at the gripper, in W: an arrow (thin
   cylinder with a cone-less tip sphere) along x/y/z for a translational dimension, a flat ring
   about the axis for a rotational one (red/green/blue for x/y/z), and a yellow sphere for the
   gripper mode.
 - ``alpha``: a vertical bar beside the arm whose height is the autonomy's share alpha (a faint
   full-height sleeve shows alpha = 1); in a live session a read-only ``alpha`` slider too.
+- a legend (optional): lines of the Meshcat control panel naming the intended goal, the goals'
+  colours and what the above means (:func:`drake_disamb.display.legend_rows`). Meshcat's
+  ``StaticHtml`` leaves the control panel out; :func:`drake_disamb.display.add_legend_to_html` puts
+  the same legend on a saved recording.
+
+:func:`frame_workspace` points the camera at the table, the arm and the objects and lays the floor
+grid at the foot of the table.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from pydrake.geometry import Cylinder, Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
+
+from drake_disamb.display import LegendRow
 
 ROOT = "/shared_control"
 COLOR_LEVELS = 5
-"""Number of colour steps between grey (p = 0) and the goal's colour (p = 1)."""
+"""Number of opacity steps of a goal's sphere between p = 0 and p = 1."""
+MIN_OPACITY = 0.3
+"""Opacity of a goal's sphere at p = 0."""
+MAX_OPACITY = 0.9
+"""Opacity of a goal's sphere at p = 1."""
 
 GOAL_PALETTE: tuple[tuple[float, float, float], ...] = (
     (0.122, 0.467, 0.706),
@@ -39,16 +56,36 @@ GOAL_PALETTE: tuple[tuple[float, float, float], ...] = (
     (0.890, 0.467, 0.761),
     (0.498, 0.498, 0.498),
 )
-"""Goal colours (matplotlib's tab10), shared with :mod:`drake_disamb.plotting`."""
+"""Fallback goal colours (matplotlib's tab10) when no colours are given; a scenario's
+visualizer uses its objects' colours (:func:`drake_disamb.display.goal_colors`)."""
 
 AXIS_COLORS = ((0.9, 0.1, 0.1), (0.1, 0.8, 0.1), (0.1, 0.3, 0.95))
 GRIPPER_DIM = 6
-_GREY = np.array([0.7, 0.7, 0.7])
 
 
 def goal_color(index: int) -> tuple[float, float, float]:
     """The display colour of goal ``index`` (cycles through :data:`GOAL_PALETTE`)."""
     return GOAL_PALETTE[index % len(GOAL_PALETTE)]
+
+
+def _color_sets(goal_colors: ArrayLike | None, n_goals: int) -> list[NDArray[np.float64]]:
+    """``goal_colors`` as a list of ``(n_goals, 3)`` RGB arrays, one per stage (checked)."""
+    if goal_colors is None:
+        return [np.array([goal_color(i) for i in range(n_goals)], dtype=float)]
+    try:
+        c = np.asarray(goal_colors, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"goal_colors: expected numbers, got {goal_colors!r}") from None
+    if c.ndim == 2:
+        c = c[None]
+    if c.ndim != 3 or c.shape[0] < 1 or c.shape[1] != n_goals or c.shape[2] not in (3, 4):
+        raise ValueError(
+            f"goal_colors: expected {n_goals} colours (r, g, b[, a]), or one such set per stage, "
+            f"got shape {c.shape}"
+        )
+    if not np.all((c >= 0) & (c <= 1)):
+        raise ValueError("goal_colors: expected entries in [0, 1]")
+    return [stage[:, :3].copy() for stage in c]
 
 
 def probability_level(p: float, levels: int = COLOR_LEVELS) -> int:
@@ -79,6 +116,7 @@ class SharedControlVisualizer(LeafSystem):
         - ee_pose
         - mode
         - alpha
+        - stage (multi-step colours only)
 
     Input ports:
         belief (n): goal probabilities (dimensionless, a probability vector).
@@ -86,12 +124,22 @@ class SharedControlVisualizer(LeafSystem):
         ee_pose (7): end-effector pose in W (m, unit quaternion).
         mode (1): index of the active control mode into ``modes``.
         alpha (1): the autonomy's share of the blended command, in [0, 1].
+        stage (1): index of the current stage (the task manager's ``stage``); declared only when
+            ``goal_colors`` gives more than one stage. Goal ``i`` is drawn in
+            ``goal_colors[stage][i]`` (a stage beyond the last keeps the last stage's colours).
 
     No output ports. A periodic publish event (every ``publish_period`` seconds, at
     initialization, and on ``ForcedPublish``) updates the scene; every update carries the context
     time so that a running Meshcat recording (``meshcat.StartRecording()``) captures it.
     Non-finite inputs are drawn as "no information" (smallest goal, no mode, alpha 0) instead of
     failing.
+
+    Args:
+        goal_colors: ``(n, 3 or 4)``: the colour ``(r, g, b[, a])`` of each goal (the alpha is not
+            used: opacity shows the probability); or ``(n_stages, n, 3 or 4)``: one set per stage
+            of a multi-step task. Default: :data:`GOAL_PALETTE`.
+        legend: Lines shown in the Meshcat control panel (one read-only row each, in order), e.g.
+            :func:`drake_disamb.display.legend_rows`; ``None`` shows none.
     """
 
     def __init__(
@@ -99,13 +147,14 @@ class SharedControlVisualizer(LeafSystem):
         meshcat: Meshcat,
         n_goals: int,
         modes: Sequence[Sequence[int]],
-        goal_colors: Sequence[Sequence[float]] | None = None,
+        goal_colors: ArrayLike | None = None,
         publish_period: float = 1.0 / 32.0,
         min_radius: float = 0.012,
         max_radius: float = 0.05,
         alpha_bar_position: ArrayLike = (0.35, 0.25, 0.0),
         alpha_bar_height: float = 0.4,
         add_slider: bool = True,
+        legend: Sequence[LegendRow] | None = None,
     ) -> None:
         super().__init__()
         if meshcat is None:
@@ -123,31 +172,46 @@ class SharedControlVisualizer(LeafSystem):
             raise ValueError(
                 f"min_radius/max_radius: expected 0 < min < max, got {min_radius!r}, {max_radius!r}"
             )
-        colors = [goal_color(i) for i in range(n_goals)] if goal_colors is None else list(goal_colors)
-        if len(colors) != n_goals:
-            raise ValueError(f"goal_colors: expected {n_goals} colours, got {len(colors)}")
         self._meshcat = meshcat
         self._n = n_goals
         self._modes = [tuple(int(d) for d in m) for m in modes]
-        self._colors = [np.asarray(c, dtype=float)[:3] for c in colors]
+        self._colors = _color_sets(goal_colors, n_goals)
         self._r_min = float(min_radius)
         self._r_max = float(max_radius)
         self._bar_xyz = np.asarray(alpha_bar_position, dtype=float)
         self._bar_height = float(alpha_bar_height)
         self._slider = "alpha (autonomy share)" if add_slider else None
+        self._legend = [row.html() for row in legend] if legend is not None else []
         # What was last sent, to skip redundant messages (kept per instance; reset on init).
         self._last_level: list[int | None] = [None] * n_goals
         self._last_mode: int | None = None
+        self._last_stage: int | None = None
 
         self._belief = self.DeclareVectorInputPort("belief", n_goals)
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", n_goals * 7)
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
         self._mode = self.DeclareVectorInputPort("mode", 1)
         self._alpha = self.DeclareVectorInputPort("alpha", 1)
+        self._stage = self.DeclareVectorInputPort("stage", 1) if len(self._colors) > 1 else None
         self.DeclarePeriodicPublishEvent(publish_period, 0.0, self._publish)
         self.DeclareForcedPublishEvent(self._publish)
         self.DeclareInitializationPublishEvent(self._initialize)
         self._create_objects()
+
+    @property
+    def goal_colors(self) -> list[list[tuple[float, float, float]]]:
+        """``[stage][goal]`` the ``(r, g, b)`` the spheres are drawn in."""
+        return [[tuple(float(c) for c in rgb) for rgb in stage] for stage in self._colors]  # type: ignore[misc]
+
+    @property
+    def legend_names(self) -> list[str]:
+        """The control-panel rows of the legend (HTML), in order."""
+        return list(self._legend)
+
+    def remove_legend(self) -> None:
+        """Delete the legend's rows from the Meshcat control panel."""
+        for name in self._legend:
+            self._meshcat.DeleteButton(name, strict=False)
 
     # -- scene creation -----------------------------------------------------------------------
 
@@ -155,13 +219,14 @@ class SharedControlVisualizer(LeafSystem):
         m = self._meshcat
         m.Delete(ROOT)
         for i in range(self._n):
-            for level in range(COLOR_LEVELS):
-                w = (level + 1) / COLOR_LEVELS
-                rgb = (1 - w) * _GREY + w * self._colors[i]
-                path = f"{ROOT}/goals/g{i}/s/level{level}"
-                # Unit sphere, scaled to the probability's radius on the goal's group node.
-                m.SetObject(path, Sphere(1.0), Rgba(*rgb, 0.45 + 0.4 * w))
-                m.SetProperty(path, "visible", level == 0)
+            for k, colors in enumerate(self._colors):
+                for level in range(COLOR_LEVELS):
+                    opacity = MIN_OPACITY + (MAX_OPACITY - MIN_OPACITY) * level / (COLOR_LEVELS - 1)
+                    path = f"{ROOT}/goals/g{i}/s/c{k}/level{level}"
+                    # Unit sphere, scaled to the probability's radius on the goal's group node.
+                    m.SetObject(path, Sphere(1.0), Rgba(*colors[i], opacity))
+                    m.SetProperty(path, "visible", level == 0)
+                m.SetProperty(f"{ROOT}/goals/g{i}/s/c{k}", "visible", k == 0)
         # Mode display: translations as arrows, rotations as rings, gripper as a sphere.
         arrow_len, ring_r = 0.12, 0.06
         for k in range(3):
@@ -192,12 +257,15 @@ class SharedControlVisualizer(LeafSystem):
         m.SetProperty(f"{ROOT}/alpha/bar", "scale", [1.0, 1.0, 1e-3])
         if self._slider is not None and self._slider not in m.GetSliderNames():
             m.AddSlider(self._slider, 0.0, 1.0, 0.01, 0.0)
+        for name in self._legend:
+            m.AddButton(name)
 
     # -- events -------------------------------------------------------------------------------
 
     def _initialize(self, context: Context) -> EventStatus:
         self._last_level = [None] * self._n
         self._last_mode = None
+        self._last_stage = None
         return self._publish(context)
 
     def _publish(self, context: Context) -> EventStatus:
@@ -209,6 +277,15 @@ class SharedControlVisualizer(LeafSystem):
         mode_value = float(self._mode.Eval(context)[0])
         alpha = float(self._alpha.Eval(context)[0])
 
+        if self._stage is not None:
+            value = float(self._stage.Eval(context)[0])
+            stage = int(np.clip(value, 0, len(self._colors) - 1)) if np.isfinite(value) else 0
+            if stage != self._last_stage:
+                for i in range(self._n):
+                    for k in range(len(self._colors)):
+                        m.SetProperty(f"{ROOT}/goals/g{i}/s/c{k}", "visible", k == stage, t)
+                self._last_stage = stage
+
         for i in range(self._n):
             p = belief[i] if np.isfinite(belief[i]) else 0.0
             p = float(np.clip(p, 0.0, 1.0))
@@ -219,8 +296,9 @@ class SharedControlVisualizer(LeafSystem):
             m.SetProperty(f"{path}/s", "scale", [radius] * 3, t)
             level = probability_level(p)
             if level != self._last_level[i]:
-                for k in range(COLOR_LEVELS):
-                    m.SetProperty(f"{path}/s/level{k}", "visible", k == level, t)
+                for c in range(len(self._colors)):
+                    for k in range(COLOR_LEVELS):
+                        m.SetProperty(f"{path}/s/c{c}/level{k}", "visible", k == level, t)
                 self._last_level[i] = level
 
         mode = int(mode_value) if np.isfinite(mode_value) and 0 <= mode_value < len(self._modes) else -1
@@ -237,3 +315,120 @@ class SharedControlVisualizer(LeafSystem):
         if self._slider is not None:
             m.SetSliderValue(self._slider, a)
         return EventStatus.Succeeded()
+
+
+# ----------------------------------------------------------------------------------------------
+# Framing the view
+# ----------------------------------------------------------------------------------------------
+
+
+def illustration_bounds(plant: Any, scene_graph: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Axis-aligned box ``(lower, upper)`` (m, in W) around the plant's illustration geometry.
+
+    Boxes, cylinders and spheres count with their full extent; a mesh counts with its frame's origin
+    (enough to frame a scene). Poses are those of the plant's default context (the start posture).
+
+    Raises:
+        ValueError: the plant has no illustration geometry.
+    """
+    from pydrake.geometry import Role
+
+    inspector = scene_graph.model_inspector()
+    context = plant.CreateDefaultContext()
+    points = []
+    for index in range(plant.num_bodies()):
+        body = plant.get_body(BodyIndex(index))
+        frame_id = plant.GetBodyFrameIdIfExists(body.index())
+        if frame_id is None:
+            continue
+        X_WB = plant.EvalBodyPoseInWorld(context, body)
+        for g in inspector.GetGeometries(frame_id, Role.kIllustration):
+            X_WG = X_WB @ inspector.GetPoseInFrame(g)
+            shape = inspector.GetShape(g)
+            kind = type(shape).__name__
+            if kind == "Box":
+                half = np.array([shape.width(), shape.depth(), shape.height()]) / 2
+            elif kind == "Cylinder":
+                half = np.array([shape.radius(), shape.radius(), shape.length() / 2])
+            elif kind == "Sphere":
+                half = np.full(3, shape.radius())
+            else:
+                half = np.zeros(3)
+            corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+            points.append((X_WG.rotation().matrix() @ corners.T).T + X_WG.translation())
+    if not points:
+        raise ValueError("plant: expected illustration geometry to frame, found none")
+    every = np.concatenate(points)
+    return every.min(axis=0), every.max(axis=0)
+
+
+CAMERA_FOV = 75.0
+"""Vertical field of view (degrees) of Meshcat's default perspective camera."""
+
+
+def frame_workspace(
+    meshcat: Meshcat,
+    lower: ArrayLike,
+    upper: ArrayLike,
+    work_height: float = 0.0,
+    view_direction: ArrayLike = (0.1, -1.0, 1.0),
+    fill: float = 1.5,
+    zoom: float = 1.8,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Point Meshcat's camera at the workspace and lay the floor grid at the scene's foot.
+
+    The camera looks at the centre of the box's top part (from ``work_height``, e.g. the table top,
+    to the box's top), from ``view_direction`` (a direction from the target toward the camera, in
+    W). It zooms in by ``zoom`` (a narrower view from farther away: less wide-angle distortion)
+    and stands where the diameter of that part's bounding sphere spans ``fill`` times the view's
+    height. The floor grid moves from z = 0 (where it would cut a table top at z = 0) down to the
+    box's bottom (the foot of the table's legs).
+
+    Args:
+        lower, upper: The scene's box (m, in W), e.g. :func:`illustration_bounds`.
+        work_height: Height (m) of the working surface.
+
+    Returns:
+        The camera position and target (m, in W).
+    """
+    lo = np.asarray(lower, dtype=float)
+    hi = np.asarray(upper, dtype=float)
+    if lo.shape != (3,) or hi.shape != (3,) or not np.all(np.isfinite(lo) & np.isfinite(hi) & (lo <= hi)):
+        raise ValueError(f"lower/upper: expected two finite 3-vectors with lower <= upper, got {lo}, {hi}")
+    d = np.asarray(view_direction, dtype=float)
+    if d.shape != (3,) or not np.isfinite(d).all() or np.linalg.norm(d) == 0:
+        raise ValueError(f"view_direction: expected a non-zero 3-vector, got {view_direction!r}")
+    if not (np.isfinite(fill) and fill > 0 and np.isfinite(zoom) and zoom > 0):
+        raise ValueError(f"fill/zoom: expected numbers > 0, got {fill!r}, {zoom!r}")
+    d = d / np.linalg.norm(d)
+    z0 = float(np.clip(work_height, lo[2], hi[2]))
+    target = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, z0 + 0.25 * (hi[2] - z0)])
+    radius = 0.5 * float(np.linalg.norm([hi[0] - lo[0], hi[1] - lo[1], hi[2] - z0]))
+    distance = radius * zoom / (fill * np.tan(np.radians(CAMERA_FOV) / 2))
+    camera = target + distance * d
+    meshcat.SetCameraPose(camera, target)
+    meshcat.SetProperty("/Cameras/default/rotated/<object>", "zoom", float(zoom))
+    # Meshcat's grid lies in its node's x-z plane, turned into W's x-y plane by a quarter turn
+    # about x: keep the turn, lower the node.
+    meshcat.SetTransform(
+        "/Grid", RigidTransform(RotationMatrix.MakeXRotation(np.pi / 2), [0.0, 0.0, float(lo[2])])
+    )
+    return camera, target
+
+
+def visualizer_for_scenario(
+    meshcat: Meshcat, scenario: Any, modes: Sequence[Sequence[int]], **kwargs: Any
+) -> SharedControlVisualizer:
+    """A :class:`SharedControlVisualizer` for ``scenario``: its goals in their objects' colours (one
+    set per stage), the legend of :func:`drake_disamb.display.legend_rows`; ``kwargs`` go to the
+    constructor. A multi-step scenario's visualizer has the ``stage`` input port."""
+    from drake_disamb.display import goal_colors, legend_rows
+
+    return SharedControlVisualizer(
+        meshcat,
+        scenario.n_goals,
+        modes,
+        goal_colors=goal_colors(scenario),
+        legend=legend_rows(scenario),
+        **kwargs,
+    )
