@@ -28,7 +28,6 @@ from drake_disamb.station import (
     ARM_JOINTS,
     EE_FRAME,
     DifferentialIKIntegrator,
-    IkStatus,
     Station,
     StationConfig,
     build_station,
@@ -71,7 +70,7 @@ class _Driver:
         self, q0: np.ndarray, goal: np.ndarray, pos_tol: float, ori_tol: float
     ) -> tuple[bool, np.ndarray]:
         """Drive from joint angles ``q0`` toward ``goal``; True once within both tolerances."""
-        x = np.concatenate((q0, np.zeros(6), [float(IkStatus.OK)]))
+        x = np.concatenate((q0, np.zeros(6)))  # the integrator's set point [q_d, v_d]
         for _ in range(int(MAX_TIME / self.period)):
             q = x[:6]
             pose = self.pose(q)
@@ -81,10 +80,10 @@ class _Driver:
             V = GAIN * err
             V[:3] *= min(1.0, LINEAR_SPEED / max(np.linalg.norm(V[:3]), 1e-12))
             V[3:] *= min(1.0, ANGULAR_SPEED / max(np.linalg.norm(V[3:]), 1e-12))
-            self.ik_ctx.SetDiscreteState(x)
+            self.ik_ctx.SetDiscreteState(0, x)
             self.ik.GetInputPort("arm_joint_state").FixValue(self.ik_ctx, np.concatenate((q, x[6:12])))
             self.ik.GetInputPort("ee_velocity_command").FixValue(self.ik_ctx, V)
-            x = self.ik.EvalUniquePeriodicDiscreteUpdate(self.ik_ctx).get_vector().get_value().copy()
+            x = self.ik.EvalUniquePeriodicDiscreteUpdate(self.ik_ctx).get_vector(0).get_value().copy()
         return False, x[:6]
 
 
