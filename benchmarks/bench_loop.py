@@ -31,9 +31,10 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
-from drake_disamb.builder import build_shared_control_diagram, run_trial
+from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import Scenario, load_scenario, resolve_scenario, with_overrides
 from drake_disamb.station import build_station
+from drake_disamb.trial import run_trial
 
 
 def station_floor(scenario: Scenario, times: np.ndarray, u: np.ndarray) -> tuple[float, float]:

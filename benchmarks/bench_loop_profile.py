@@ -124,8 +124,9 @@ def main() -> None:
     parser.add_argument("--by-method", action="store_true", help="break down per callback, not per system")
     args = parser.parse_args()
 
-    from drake_disamb.builder import build_shared_control_diagram, run_trial
+    from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
 
     scenario = load_scenario(args.task)
     print(

@@ -19,8 +19,8 @@ import itertools
 import statistics
 import time
 
-from drake_disamb.builder import run_trial
 from drake_disamb.config import load_scenario, with_overrides
+from drake_disamb.trial import run_trial
 
 
 def goal_choices(task: str) -> list[list[int]]:

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from drake_disamb.builder import build_shared_control_diagram, run_trial
+from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario, with_overrides
 from drake_disamb.diagram_io import write_diagram_graph
+from drake_disamb.trial import run_trial
 
 
 def main(task: str, argv: list[str] | None = None) -> int:

@@ -85,8 +85,10 @@ def record_demo(out_dir: Path, task: str = "reaching") -> Path:
     """Run one trial of ``task`` with Meshcat (as fast as possible); return its ``recording.html``."""
     from pydrake.geometry import Meshcat, MeshcatParams
 
-    from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
+    from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.config import load_scenario
+    from drake_disamb.plotting import write_trial_figures
+    from drake_disamb.trial import run_trial
 
     meshcat = Meshcat(MeshcatParams(host="localhost"))
     handles = build_shared_control_diagram(load_scenario(task), meshcat=meshcat)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_disamb.builder import build_shared_control_diagram, run_trial
+from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.cli import main
 from drake_disamb.config import (
     EMBEDDED_TASKS,
@@ -27,6 +27,7 @@ from drake_disamb.config import (
 from drake_disamb.core.disambiguation import preset
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
+from drake_disamb.trial import run_trial
 
 
 def _reaching_with(extra: str) -> str:

@@ -245,9 +245,9 @@ def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_p
 
 def test_stop_request_in_process_keeps_the_partial_trial(tmp_path: Path) -> None:
     """run_trial's stop_requested: the result covers the trial up to the stop, flagged interrupted."""
-    from drake_disamb.builder import run_trial
     from drake_disamb.commands.demo import metrics_dict
     from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
 
     result = run_trial(load_scenario("reaching"), progress=False, stop_requested=lambda: True)
     assert result.interrupted and not result.success and result.time < 0.05

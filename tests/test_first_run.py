@@ -83,8 +83,8 @@ def test_progress_on_a_terminal_has_no_false_total() -> None:
 def test_run_trial_shows_progress_off_a_terminal(capsys: pytest.CaptureFixture[str]) -> None:
     import dataclasses
 
-    from drake_disamb.builder import run_trial
     from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
 
     scenario = dataclasses.replace(load_scenario("reaching"), duration=1.5)
     run_trial(scenario, progress=SimulationProgress(scenario.duration, interval=0.2), realtime_rate=1.0)
@@ -147,7 +147,7 @@ def test_from_a_terminal_the_demo_waits_for_a_browser(
 ) -> None:
     waited: list[float] = []
     warm_ups: list[float] = []
-    real_run_trial = __import__("drake_disamb.builder", fromlist=["run_trial"]).run_trial
+    real_run_trial = __import__("drake_disamb.trial", fromlist=["run_trial"]).run_trial
 
     def fake_wait(meshcat, timeout, stop, settle=1.0):  # noqa: ANN001, ANN202
         assert meshcat.HasPath("/shared_control/goals/g0")  # the scene is drawn before anyone looks
@@ -160,7 +160,7 @@ def test_from_a_terminal_the_demo_waits_for_a_browser(
         return real_run_trial(handles, *args, **kwargs)
 
     monkeypatch.setattr(demo, "wait_for_browser", fake_wait)
-    monkeypatch.setattr("drake_disamb.builder.run_trial", counting_run_trial)
+    monkeypatch.setattr("drake_disamb.trial.run_trial", counting_run_trial)
     monkeypatch.setattr("sys.stdin", _Terminal())
     assert _demo(tmp_path, *(["--no-wait"] if no_wait else [])) == 1
     out = capsys.readouterr().out
@@ -188,16 +188,16 @@ def test_from_a_script_the_demo_runs_straight_through(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """No --hold or --realtime-rate given: no waiting, no holding, as fast as possible."""
-    from drake_disamb import builder
+    from drake_disamb import trial
 
     rates: list[float] = []
-    real_run_trial = builder.run_trial
+    real_run_trial = trial.run_trial
 
     def recording_run_trial(handles, *args, **kwargs):  # noqa: ANN001, ANN202
         rates.append(kwargs["realtime_rate"])
         return real_run_trial(handles, *args, **kwargs)
 
-    monkeypatch.setattr(builder, "run_trial", recording_run_trial)
+    monkeypatch.setattr(trial, "run_trial", recording_run_trial)
     monkeypatch.setattr("sys.stdin", _Script())
     assert main(["demo", "--quiet", "--duration", "0.5", "--out", str(tmp_path)]) == 1
     out = capsys.readouterr().out

@@ -190,8 +190,9 @@ def test_joystick_system_reads_sliders_or_a_gamepad_and_recentres() -> None:
 
 def test_a_live_person_drives_the_arm() -> None:
     """The full reaching diagram driven from the page: holding Left moves the arm along +x."""
-    from drake_disamb.builder import build_shared_control_diagram, run_trial
+    from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
 
     scenario = dataclasses.replace(load_scenario("reaching"), duration=1.5)
     page = FakePage()

@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 from matplotlib.colors import to_rgb
 
-from drake_disamb.builder import build_shared_control_diagram, run_trial
+from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario
 from drake_disamb.display import add_legend_to_html, belief_caption, css_color, legend_rows
 from drake_disamb.plotting import goal_probability_figure, trial_figure, trial_outcome
 from drake_disamb.systems.visualization import COLOR_LEVELS, ROOT, visualizer_for_scenario
+from drake_disamb.trial import run_trial
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_visualization import FakeMeshcat  # noqa: E402

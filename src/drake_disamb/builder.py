@@ -17,9 +17,8 @@ The interface, user, autonomy, blender, disambiguation and task manager tick eve
 ``scenario.control_period`` (100 Hz by default, the MICO's Cartesian velocity interface); the DFT
 belief is continuous state, integrated between ticks by the integrator of the scenario's
 ``simulator_config``; the arm is the station's discrete plant (``plant_config``). Every system's
-config comes from :func:`~drake_disamb.config.resolve_scenario`. :func:`run_trial` simulates one
-trial until the task is done or the time limit, and returns a :class:`TrialResult` with the metrics
-of the paper (success, time, mode switches, requests, button presses) and the logs.
+config comes from :func:`~drake_disamb.config.resolve_scenario`. Running a trial is
+:func:`drake_disamb.trial.run_trial`; this module only wires.
 
 Belief slot ``i`` in stage ``k`` is goal ``i`` of :meth:`Scenario.stage_goals(k)
 <drake_disamb.config.Scenario.stage_goals>`; the simulated user gets one intended goal per
@@ -28,21 +27,16 @@ stage and the task manager's ``stage``.
 
 from __future__ import annotations
 
-import time as _time
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
-from pydrake.systems.framework import Context, Diagram, DiagramBuilder, EventStatus, System
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder, System
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
-from drake_disamb.progress import SimulationProgress
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import DisambiguationSystem
@@ -105,58 +99,6 @@ class SharedControlDiagram:
     def goal_names(self, stage: int) -> list[str]:
         """Goal names in belief-slot order for ``stage``."""
         return [g.name for g in self.scenario.stage_goals(stage)]
-
-
-@dataclass
-class TrialResult:
-    """Outcome and logs of one trial.
-
-    Attributes:
-        scenario: The scenario run.
-        success: Every stage completed at the user's intended goal within the time limit.
-        done: Every stage completed (at some goal).
-        time: Simulated time (s) at the end (completion time when ``done``).
-        stage_times: Completion time (s) of each stage (NaN if not completed).
-        reached_goals: Per stage, the scenario goal index (within the stage) reached, or -1.
-        intended_goals: Per stage, the user's intended goal index (within the stage).
-        intended_goal_names, reached_goal_names: The same as names.
-        mode_switches: Manual mode switches (mode-button presses).
-        requests: Disambiguation requests.
-        button_presses: ``mode_switches + requests`` (the paper's metric).
-        request_times, mode_switch_times: Event times (s).
-        disambiguation_switch_times: Times (s) a request changed the mode.
-        events: The interface's event log.
-        mean_alpha: Mean alpha over the samples where the user commanded the arm.
-        wall_time: Wall-clock seconds of the simulation.
-        realtime_rate: ``time / wall_time``.
-        logs: ``{name: (times (T,), values (T, size))}`` for every logged signal.
-        rho1: The assistance threshold used.
-        interrupted: The trial was stopped early by a stop request or ``KeyboardInterrupt``
-            (:func:`run_trial`); the metrics and logs cover the trial up to ``time``.
-    """
-
-    scenario: Scenario
-    success: bool
-    done: bool
-    time: float
-    stage_times: list[float]
-    reached_goals: list[int]
-    intended_goals: list[int]
-    intended_goal_names: list[str]
-    reached_goal_names: list[str]
-    mode_switches: int
-    requests: int
-    button_presses: int
-    request_times: list[float]
-    mode_switch_times: list[float]
-    disambiguation_switch_times: list[float]
-    events: tuple
-    mean_alpha: float
-    wall_time: float
-    realtime_rate: float
-    rho1: float
-    logs: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = field(repr=False)
-    interrupted: bool = False
 
 
 def _make_inference(config: TrialConfig, control_period: float) -> System:
@@ -331,175 +273,3 @@ def start_ee_pose(station: Any) -> NDArray[np.float64]:
     plant = station.plant
     X = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(plant.CreateDefaultContext())
     return np.concatenate((X.translation(), X.rotation().ToQuaternion().wxyz()))
-
-
-# ----------------------------------------------------------------------------------------------
-# Running a trial
-# ----------------------------------------------------------------------------------------------
-
-
-def _log(
-    handles: SharedControlDiagram, context, name: str
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    logger = handles.loggers[name]
-    log = logger.FindLog(context)
-    return np.asarray(log.sample_times()).copy(), np.asarray(log.data()).T.copy()
-
-
-def run_trial(
-    scenario: Scenario | SharedControlDiagram,
-    meshcat: Meshcat | None = None,
-    progress: bool | SimulationProgress = True,
-    realtime_rate: float | None = None,
-    stop_at_success: bool = True,
-    recording: bool | None = None,
-    stop_requested: Callable[[], bool] | None = None,
-) -> TrialResult:
-    """Simulate one trial until the task is done (or ``scenario.duration``).
-
-    Args:
-        scenario: A scenario (a diagram is built for it) or a built :class:`SharedControlDiagram`.
-        meshcat: Meshcat for a scenario argument (ignored for a built diagram, which has its own).
-        progress: Show the simulated time while running: ``True`` makes a
-            :class:`~drake_disamb.progress.SimulationProgress` on stderr (an in-place line on a
-            terminal, a line per second of wall time elsewhere); pass one to choose its stream
-            (it is closed at the end); ``False`` shows nothing.
-        realtime_rate: Target real-time rate (0 = as fast as possible); ``None`` keeps the
-            scenario's ``simulator_config.target_realtime_rate``.
-        stop_at_success: Stop once every stage is done (else run to ``scenario.duration``).
-        recording: Record the Meshcat animation (default: whenever there is Meshcat). The
-            recording is published at the end (:func:`save_recording` writes it to HTML).
-        stop_requested: Checked after every simulator step; once it returns True the trial stops
-            there (a signal handler's flag). A ``KeyboardInterrupt`` raised during the simulation
-            stops it the same way. Either way the result has ``interrupted=True`` and holds the
-            metrics, logs and Meshcat recording up to the stop.
-    """
-    handles = (
-        scenario
-        if isinstance(scenario, SharedControlDiagram)
-        else build_shared_control_diagram(scenario, meshcat)
-    )
-    sc = handles.scenario
-    meshcat = handles.meshcat
-    record = (meshcat is not None) if recording is None else (recording and meshcat is not None)
-    simulator = Simulator(handles.diagram)
-    ApplySimulatorConfig(handles.config.simulator, simulator)  # the integrator of the continuous belief
-    if realtime_rate is not None:
-        simulator.set_target_realtime_rate(realtime_rate)
-    root = simulator.get_mutable_context()
-    handles.initialize(root)
-    task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
-    task_context = task.GetMyContextFromRoot(root)
-
-    bar = SimulationProgress(sc.duration) if progress is True else (progress or None)
-    stopped = [False]
-
-    def monitor(context) -> EventStatus:
-        if bar is not None:
-            bar.update(context.get_time())
-        if stop_requested is not None and stop_requested():
-            stopped[0] = True
-            return EventStatus.ReachedTermination(task, "stop requested")
-        if stop_at_success and task.is_done(task.GetMyContextFromRoot(context)):
-            return EventStatus.ReachedTermination(task, "task done")
-        return EventStatus.DidNothing()
-
-    simulator.set_monitor(monitor)
-    if record:
-        meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
-    start = _time.perf_counter()
-    try:
-        simulator.Initialize()
-        simulator.AdvanceTo(sc.duration)
-    except KeyboardInterrupt:
-        stopped[0] = True
-    wall = _time.perf_counter() - start
-    if bar is not None:
-        bar.close()
-    if record:
-        meshcat.StopRecording()
-        meshcat.PublishRecording()
-
-    t_end = root.get_time()
-    interface = handles.systems["interface"]
-    events = tuple(interface.get_event_log(interface.GetMyContextFromRoot(root)))
-    switches = [e.time for e in events if e.kind == "mode_switch"]
-    requests = [e.time for e in events if e.kind == "disambiguation_request"]
-    disamb_switches = [e.time for e in events if e.kind == "disambiguation_switch"]
-    reached = task.reached_goals(task_context)
-    done = task.is_done(task_context)
-    intended = list(sc.user.goals)
-    success = done and reached == intended
-    logs = {name: _log(handles, root, name) for name, _, _ in LOGGED_SIGNALS}
-    _, uh = logs["u_h"]
-    _, alpha = logs["alpha"]
-    commanding = np.any(np.abs(uh) > 1e-9, axis=1)
-    mean_alpha = float(np.mean(alpha[commanding, 0])) if np.any(commanding) else 0.0
-    rho1 = handles.config.rhos[0]
-    return TrialResult(
-        scenario=sc,
-        success=bool(success),
-        done=bool(done),
-        time=float(t_end),
-        stage_times=task.stage_end_times(task_context),
-        reached_goals=reached,
-        intended_goals=intended,
-        intended_goal_names=[sc.stage_goals(k)[i].name for k, i in enumerate(intended)],
-        reached_goal_names=[sc.stage_goals(k)[i].name for k, i in enumerate(reached) if i >= 0],
-        mode_switches=len(switches),
-        requests=len(requests),
-        button_presses=len(switches) + len(requests),
-        request_times=requests,
-        mode_switch_times=switches,
-        disambiguation_switch_times=disamb_switches,
-        events=events,
-        mean_alpha=mean_alpha,
-        wall_time=wall,
-        realtime_rate=float(t_end / wall) if wall > 0 else float("inf"),
-        rho1=rho1,
-        logs=logs,
-        interrupted=stopped[0],
-    )
-
-
-def save_recording(meshcat: Meshcat, path: str | Path, legend: Any = None, title: str = "") -> Path:
-    """Write Meshcat's current scene and published recording as a self-contained HTML file.
-
-    ``legend`` (rows of :func:`drake_disamb.display.legend_rows`) is laid over the page, headed by
-    ``title``: Meshcat's HTML leaves out the control panel where a live page shows it."""
-    from drake_disamb.display import add_legend_to_html
-
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    page = meshcat.StaticHtml()
-    if legend:
-        page = add_legend_to_html(page, legend, title)
-    out.write_text(page, encoding="utf-8")
-    return out
-
-
-def write_trial_figures(
-    result: TrialResult, handles: SharedControlDiagram, out_dir: str | Path
-) -> list[Path]:
-    """Write the goal-probability figure, the Meshcat recording (if any) and the diagram picture."""
-    from drake_disamb.diagram_io import write_diagram_graph
-    from drake_disamb.display import legend_rows
-    from drake_disamb.plotting import write_trial_figure
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    sc = result.scenario
-    written = [write_trial_figure(result, out / "goal_probabilities.png")]
-    if handles.meshcat is not None:
-        title = f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm"
-        written.append(save_recording(handles.meshcat, out / "recording.html", legend_rows(sc), title))
-    written.extend(Path(p) for p in _as_list(write_diagram_graph(handles.diagram, out / "diagram")))
-    return written
-
-
-def _as_list(value: Any) -> list[Any]:
-    if value is None:
-        return []
-    if isinstance(value, list | tuple):
-        return list(value)
-    return [value]

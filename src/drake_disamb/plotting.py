@@ -274,7 +274,7 @@ def plot_goal_probabilities(times: ArrayLike, belief: ArrayLike, path: str | Pat
 
 def trial_outcome(result: Any) -> str:
     """How a trial ended, for labels: "interrupted", "goal reached", "other goal reached" or
-    "time limit" (``result`` is a :class:`~drake_disamb.builder.TrialResult`)."""
+    "time limit" (``result`` is a :class:`~drake_disamb.trial.TrialResult`)."""
     if getattr(result, "interrupted", False):
         return "interrupted"
     if result.done:
@@ -283,7 +283,7 @@ def trial_outcome(result: Any) -> str:
 
 
 def trial_figure(result: Any) -> Any:
-    """:func:`goal_probability_figure` of a :class:`~drake_disamb.builder.TrialResult`: its goals
+    """:func:`goal_probability_figure` of a :class:`~drake_disamb.trial.TrialResult`: its goals
     in their objects' colours, the intended goal(s), stage changes, the end of the trial and the
     caption of :func:`drake_disamb.display.belief_caption`."""
     from drake_disamb.display import belief_caption, goal_colors
@@ -332,3 +332,45 @@ def _save(fig: Any, path: str | Path) -> Path:
     finally:
         plt.close(fig)
     return out
+
+
+def save_recording(meshcat: Any, path: str | Path, legend: Any = None, title: str = "") -> Path:
+    """Write Meshcat's current scene and published recording as a self-contained HTML file.
+
+    ``legend`` (rows of :func:`drake_disamb.display.legend_rows`) is laid over the page, headed by
+    ``title``: Meshcat's HTML leaves out the control panel where a live page shows it."""
+    from drake_disamb.display import add_legend_to_html
+
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    page = meshcat.StaticHtml()
+    if legend:
+        page = add_legend_to_html(page, legend, title)
+    out.write_text(page, encoding="utf-8")
+    return out
+
+
+def write_trial_figures(result: Any, handles: Any, out_dir: str | Path) -> list[Path]:
+    """Write the goal-probability figure, the Meshcat recording (if any) and the diagram picture of a
+    :class:`~drake_disamb.trial.TrialResult` run on ``handles``
+    (:class:`~drake_disamb.builder.SharedControlDiagram`)."""
+    from drake_disamb.diagram_io import write_diagram_graph
+    from drake_disamb.display import legend_rows
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    sc = result.scenario
+    written = [write_trial_figure(result, out / "goal_probabilities.png")]
+    if handles.meshcat is not None:
+        title = f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm"
+        written.append(save_recording(handles.meshcat, out / "recording.html", legend_rows(sc), title))
+    written.extend(Path(p) for p in _as_list(write_diagram_graph(handles.diagram, out / "diagram")))
+    return written
+
+
+def _as_list(value: Any) -> list[Any]:
+    if value is None:
+        return []
+    if isinstance(value, list | tuple):
+        return list(value)
+    return [value]

@@ -316,8 +316,10 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     except ValueError as exc:
         return _error(exc)
 
-    from drake_disamb.builder import build_shared_control_diagram, run_trial, write_trial_figures
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.plotting import write_trial_figures
     from drake_disamb.progress import SimulationProgress
+    from drake_disamb.trial import run_trial
 
     meshcat = None
     if not args.no_meshcat:

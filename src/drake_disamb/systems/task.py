@@ -8,7 +8,7 @@ reached and when, and switches to the next stage's goal set. After the last stag
 done (``done`` = 1) and the goal set stays that of the last stage.
 
 The manager does not know the user's intent: it reports which goal was reached in each stage;
-whether that was the intended one is the trial's business (:func:`drake_disamb.builder.run_trial`).
+whether that was the intended one is the trial's business (:func:`drake_disamb.trial.run_trial`).
 """
 
 from __future__ import annotations
