@@ -201,20 +201,24 @@ def test_bad_out_subprocess_is_fast_and_one_line(tmp_path: Path) -> None:
 
 
 def _wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str]:
-    lines: list[str] = []
+    """Lines of ``proc``'s stdout up to the first one holding ``text``. Reads the pipe's bytes
+    directly: ``readline`` on the text wrapper would buffer lines that ``select`` then cannot see."""
+    fd = proc.stdout.fileno()
+    data = b""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
-        ready, _, _ = select.select([proc.stdout], [], [], 0.5)
+        ready, _, _ = select.select([fd], [], [], 0.5)
         if ready:
-            line = proc.stdout.readline()
-            if not line:
+            chunk = os.read(fd, 65536)
+            if not chunk:
                 break
-            lines.append(line)
-            if text in line:
+            data += chunk
+            lines = data.decode(errors="replace").splitlines(keepends=True)
+            if any(text in line for line in lines):
                 return lines
     proc.kill()
     err = proc.stderr.read()
-    raise AssertionError(f"no line with {text!r} within {timeout} s; got {lines}, stderr {err}")
+    raise AssertionError(f"no line with {text!r} within {timeout} s; got {data!r}, stderr {err}")
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
@@ -241,6 +245,33 @@ def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_p
     png = tmp_path / "goal_probabilities.png"
     assert png.stat().st_size > 10_000 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(tmp_path.glob(".*tmp*"))
+
+
+@pytest.mark.parametrize(
+    "mode",
+    [
+        ["--realtime-rate", "0.5"],  # with Meshcat: the recording so far is kept too
+        ["--live"],  # a person ends a live trial with Ctrl-C: nothing of it may be lost
+    ],
+    ids=["meshcat", "live"],
+)
+def test_sigint_with_meshcat_keeps_metrics_figure_and_recording(mode: list[str], tmp_path: Path) -> None:
+    proc = _cli_process("demo", "--quiet", "--duration", "600", "--out", str(tmp_path), *mode)
+    try:
+        _wait_for_line(proc, "running the trial", timeout=180)
+        time.sleep(3.0)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["interrupted"] is True and metrics["time"] > 0.5
+    assert (tmp_path / "goal_probabilities.png").stat().st_size > 10_000
+    page = (tmp_path / "recording.html").read_text()
+    assert "<html" in page.lower() and len(page) > 10_000
 
 
 def test_stop_request_in_process_keeps_the_partial_trial(tmp_path: Path) -> None:
