@@ -24,6 +24,7 @@ from drake_disamb.config import (
     scenario_from_yaml,
     with_overrides,
 )
+from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.disambiguation import preset
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
@@ -59,12 +60,12 @@ def test_drake_field_names_set_the_plant_and_the_simulator() -> None:
     assert handles.config.simulator.integration_scheme == "runge_kutta3"
 
 
-def test_embedded_tasks_keep_the_integrator_and_plant_step() -> None:
+def test_embedded_tasks_integrate_the_belief_by_euler_at_the_control_period() -> None:
     for name in EMBEDDED_TASKS:
         s = load_scenario(name)
         sim = s.simulator_config
         assert (sim.integration_scheme, sim.max_step_size, sim.use_error_control) == (
-            "runge_kutta2",
+            "explicit_euler",
             0.01,
             False,
         )
@@ -208,7 +209,7 @@ def test_demo_dump_scenario_prints_the_resolved_scenario(capsys, tmp_path: Path)
         with_overrides(load_scenario("reaching"), interface="joystick", goal=2), duration=5.0
     )
     assert scenario_from_yaml(text) == expected
-    assert "integration_scheme: runge_kutta2" in text and "time_step: 0.01" in text
+    assert "integration_scheme: explicit_euler" in text and "time_step: 0.01" in text
     assert not out.exists()
     assert main(["demo", "--dump-scenario", "--goal", "9"]) == 2
     assert "goal: expected an index in [0, 4]" in capsys.readouterr().err
@@ -284,3 +285,30 @@ def test_core_config_errors_name_the_scenario_field() -> None:
     s.initial_mode = 9
     with pytest.raises(ValueError, match=r"scenario\.initial_mode: InterfaceConfig\.initial_mode: .* got 9"):
         resolve_scenario(s)
+
+
+@pytest.mark.parametrize(
+    ("scheme", "step", "lam", "ok"),
+    [
+        ("explicit_euler", 0.01, 3.0, True),  # the mico parameters: h D = 0.08
+        ("explicit_euler", 0.01, 200.0, False),  # the authors' lambda: h D up to 5, unstable
+        ("runge_kutta2", 0.01, 200.0, False),
+        ("explicit_euler", 0.002, 200.0, True),  # a shorter step is stable again
+    ],
+)
+def test_an_unstable_fixed_step_belief_integrator_is_refused(
+    scheme: str, step: float, lam: float, ok: bool
+) -> None:
+    text = embedded_scenario_text("reaching").replace(
+        "integration_scheme: explicit_euler", f"integration_scheme: {scheme}"
+    )
+    text = text.replace("max_step_size: 0.01", f"max_step_size: {step}")
+    s = scenario_from_yaml(text)
+    s = dataclasses.replace(
+        s, inference=dataclasses.replace(s.inference, dft=dataclasses.replace(s.inference.dft, lam=lam))
+    )
+    if ok:
+        check_scenario(s)
+    else:
+        with pytest.raises(ValueError, match=r"scenario\.simulator_config\.max_step_size: .* too long for"):
+            check_scenario(s)

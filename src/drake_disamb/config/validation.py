@@ -105,6 +105,44 @@ def _check_simulator_config(s: Scenario, name: str) -> None:
         raise ValueError(f"{path}.start_time: expected 0 (a trial starts at t = 0), got {fmt(c.start_time)}")
 
 
+FIXED_STEP_STABILITY: dict[str, float] = {
+    "explicit_euler": 2.0,
+    "runge_kutta2": 2.0,
+    "runge_kutta3": 2.51,
+}
+"""Stability limit of ``h * D`` for the fixed-step explicit schemes, where ``D`` is the decay rate of
+the DFT belief's linearised flow (the interval of absolute stability on the negative real axis)."""
+
+
+def belief_rate_bound(s: Scenario) -> float:
+    """An upper bound (1/s) on how fast the DFT belief's flow relaxes: ``1/tau1 + 1/tau2 +
+    n |lambda| / 2`` (``sum(drive) = 1/tau2 + sum(lambda sigma(xi))`` with ``|sigma| <= 1/2``), for the
+    largest stage's ``n`` goals."""
+    d = s.inference.dft
+    n = max(len(s.stage_goals(k)) for k in range(len(s.stages)))
+    lam = np.abs(np.asarray(d.lam, dtype=float))
+    excitation = n * float(lam) / 2 if lam.ndim == 0 else float(np.max(lam.sum(axis=1))) * n / 2
+    return 1.0 / d.tau1 + 1.0 / d.tau2 + excitation
+
+
+def _check_belief_integrator(s: Scenario, name: str) -> None:
+    """A fixed-step explicit scheme must be stable on the DFT belief
+    (``benchmarks/bench_belief_integrator.py`` shows the authors' lambda = 200 at 10 ms taking explicit
+    Euler to a negative belief and costing it 2 points of accuracy)."""
+    c = s.simulator_config
+    limit = FIXED_STEP_STABILITY.get(c.integration_scheme)
+    if s.inference.method != "dft" or c.use_error_control or limit is None:
+        return
+    rate = belief_rate_bound(s)
+    if c.max_step_size * rate > limit:
+        raise ValueError(
+            f"{name}.simulator_config.max_step_size: {c.max_step_size!r} s is too long for "
+            f"{c.integration_scheme} on this DFT belief (it relaxes at up to {rate:.3g} /s; the "
+            f"scheme is stable up to {limit / rate:.3g} s): take a shorter step, runge_kutta3, or "
+            "use_error_control: true"
+        )
+
+
 def _check_timing(s: Scenario, name: str) -> None:
     from drake_disamb.station import check_plant_config
 
@@ -166,6 +204,7 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
             f"{name}.initial_mode: expected a non-negative mode index, got {fmt(s.initial_mode)}"
         )
     check_counts(len(s.goals), len(s.stages), name)
+    _check_belief_integrator(s, name)
     for i, stage in enumerate(s.stages):
         if stage.hold_time is not None:
             _check_positive(stage.hold_time, f"{name}.stages[{i}].hold_time", allow_zero=True)
