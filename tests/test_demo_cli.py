@@ -221,13 +221,8 @@ def _wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[st
     raise AssertionError(f"no line with {text!r} within {timeout} s; got {data!r}, stderr {err}")
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_path: Path) -> None:
-    # At half real time the default reaching trial (about 6 s simulated) cannot end by itself.
-    proc = _cli_process(
-        "demo", "--no-meshcat", "--quiet", "--realtime-rate", "0.5", "--duration", "600",
-        "--out", str(tmp_path),
-    )  # fmt: skip
+def _interrupt(proc: subprocess.Popen, sig: signal.Signals) -> tuple[str, str]:
+    """Send ``sig`` 3 s into the trial; the demo must end cleanly with status 130. Its output."""
     try:
         _wait_for_line(proc, "running the trial", timeout=180)
         time.sleep(3.0)
@@ -238,6 +233,17 @@ def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_p
             proc.kill()
     assert proc.returncode == 130, err
     assert "Traceback" not in err
+    return out, err
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_path: Path) -> None:
+    # At half real time the default reaching trial (about 6 s simulated) cannot end by itself.
+    proc = _cli_process(
+        "demo", "--no-meshcat", "--quiet", "--realtime-rate", "0.5", "--duration", "600",
+        "--out", str(tmp_path),
+    )  # fmt: skip
+    out, err = _interrupt(proc, sig)
     assert f"stopped by {sig.name}" in out
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["interrupted"] is True and metrics["success"] is False
@@ -257,16 +263,7 @@ def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_p
 )
 def test_sigint_with_meshcat_keeps_metrics_figure_and_recording(mode: list[str], tmp_path: Path) -> None:
     proc = _cli_process("demo", "--quiet", "--duration", "600", "--out", str(tmp_path), *mode)
-    try:
-        _wait_for_line(proc, "running the trial", timeout=180)
-        time.sleep(3.0)
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 130, err
-    assert "Traceback" not in err
+    _interrupt(proc, signal.SIGINT)
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["interrupted"] is True and metrics["time"] > 0.5
     assert (tmp_path / "goal_probabilities.png").stat().st_size > 10_000

@@ -2,10 +2,14 @@
 
 For every probed control dimension ``k`` and both directions, the belief is projected forward
 from the current time ``t_a`` under a constant probe command ``+/- s e_k``: each step of length
-``delta_t`` first updates the belief with the project's inference update (the very same function
-the live system uses, :func:`drake_disamb.core.inference.dft_euler_step` or
-:func:`~drake_disamb.core.inference.bayes_step`, taken in their two halves) at the current pose,
-then moves a kinematic point robot (position and orientation) by the probe. All ``2 n_k`` probes
+``delta_t`` first updates the belief with the project's inference update at the current pose,
+then moves a kinematic point robot (position and orientation) by the probe. The update is the
+live system's model with the live system's parameters (the scenario's resolver passes the same
+``DFTParams`` and potential field to both), but not bit for bit the live computation: the
+projection takes the authors' discrete step, :func:`drake_disamb.core.inference.dft_euler_step`
+(or :func:`~drake_disamb.core.inference.bayes_step`) of ``delta_t`` (0.1 s for ``mico``), while
+the live belief is the continuous flow the simulator integrates at the control period (explicit
+Euler at 10 ms in the embedded tasks). All ``2 n_k`` probes
 run together as one batch (leading probe axis), never one after another.
 
 From the projected beliefs (paper Section "Features of D_k", FACTS section 4):
@@ -31,6 +35,10 @@ Two named presets (:func:`preset`):
 
 Degenerate scenes (one goal, goals at the robot, a certain belief, zero displacement) give valid,
 finite results: every division is guarded.
+
+The module is longer than the project's ~500 lines because it is one algorithm with its configs,
+presets, explanation and batched layout, which read best together; the shared arithmetic already
+lives in :mod:`~drake_disamb.core.inference`, :mod:`~drake_disamb.core.autonomy` and the kernels.
 """
 
 from __future__ import annotations
