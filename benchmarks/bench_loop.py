@@ -100,7 +100,8 @@ def main() -> None:
             wall_rate, cpu_rate, table, floor = measure(args.seconds, ts, args.interface, args.profile)
         print(
             f"plant time step {ts:g} s: {wall_rate:6.2f}x real time (wall), {cpu_rate:6.2f}x (CPU); "
-            f"station alone {floor[0]:6.2f}x (wall), {floor[1]:6.2f}x (CPU); {host.describe()}"
+            f"station alone {floor[0]:6.2f}x (wall), {floor[1]:6.2f}x (CPU); loop / station "
+            f"{wall_rate / floor[0]:.0%} (wall), {cpu_rate / floor[1]:.0%} (CPU); {host.describe()}"
         )
         if table:
             print(table)
