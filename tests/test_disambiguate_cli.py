@@ -415,3 +415,22 @@ def test_help_documents_the_exit_codes_and_bad_options_exit_2() -> None:
         with pytest.raises(SystemExit) as exc:
             parser.parse_args(["--cases", "c.json", "--indent", bad])
         assert exc.value.code == 2
+
+
+def test_a_reader_that_goes_away_is_not_a_traceback(tmp_path: Path) -> None:
+    """``drake-disamb disambiguate ... | head -1``: the pipe closes early; no BrokenPipeError traceback."""
+    import subprocess
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "disambiguate_cases.json"
+    cases = tmp_path / "many.json"  # far more output than a pipe's buffer holds
+    cases.write_text(json.dumps(json.loads(example.read_text()) * 60))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "drake_disamb.cli", "disambiguate", "--cases", str(cases), "--indent", "2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert proc.stdout.readline()  # the first line, then the reader leaves
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141, err
+    assert "Traceback" not in err
