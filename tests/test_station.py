@@ -409,7 +409,7 @@ def test_integrator_state_layouts(rig: Rig) -> None:
     assert np.array_equal(view[IK_Q_D], MICO_HOME_Q) and not view[IK_V_D].any()
     assert view.mico_joint_1_q_d == MICO_HOME_Q[0]
     assert ik_context.get_discrete_state(1).CopyToVector().tolist() == [IkStatus.OK]
-    y = rig.station.gripper.CreateDefaultContext().get_discrete_state_vector().CopyToVector()
+    y = rig.station.gripper.CreateDefaultContext().get_discrete_state(0).CopyToVector()
     assert (
         GripperIntegratorState(y).opening == MICO_HOME_GRIPPER_OPENING
         and GripperIntegratorState(y).speed == 0
@@ -439,12 +439,12 @@ def test_gripper_integrator_alone() -> None:
     ctx = sys.CreateDefaultContext()
     sys.GetInputPort("finger_state").FixValue(ctx, [0.025, 0.025, 0, 0])
     sys.GetInputPort("gripper_command").FixValue(ctx, [0.1])
-    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).get_value()
     assert np.allclose(x, [0.051, 0.1])
-    ctx.SetDiscreteState([0.1195, 0.0])
-    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector().get_value()
+    ctx.SetDiscreteState(0, [0.1195, 0.0])
+    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).get_value()
     assert np.allclose(x, [0.12, 0.05])  # clamped at the limit, speed is what was achieved
-    ctx.SetDiscreteState(x)
+    ctx.SetDiscreteState(0, x)
     assert np.allclose(sys.GetOutputPort("finger_desired_state").Eval(ctx), [0.06, 0.06, 0.025, 0.025])
     assert sys.GetOutputPort("desired_opening").Eval(ctx)[0] == pytest.approx(0.12)
     with pytest.raises(ValueError, match="initial_opening"):

@@ -13,7 +13,6 @@ Their discrete states have named layouts (:data:`IkIntegratorState`, :data:`Grip
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -37,6 +36,7 @@ from drake_disamb.clearance import Solid, gripper_points_in_ee, table_top_z
 from drake_disamb.core._validation import all_finite
 from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
 from drake_disamb.station.config import ARM_JOINTS, ARM_MODEL_NAME, EE_FRAME, SceneObject, StationConfig
+from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 IkIntegratorState = namedview(
     "IkIntegratorState", [f"{j}_q_d" for j in ARM_JOINTS] + [f"{j}_v_d" for j in ARM_JOINTS]
@@ -50,25 +50,6 @@ IK_V_D = slice(6, 12)
 
 GripperIntegratorState = namedview("GripperIntegratorState", ["opening", "speed"])
 """Layout of :class:`GripperOpeningIntegrator`'s discrete state: desired opening (m) and its rate (m/s)."""
-
-
-class _RateLimitedWarner:
-    """Issues a RuntimeWarning at most once per ``interval`` seconds of simulated time."""
-
-    def __init__(self, who: str, interval: float) -> None:
-        self._who = who
-        self._interval = interval
-        self._last: float | None = None
-        self._suppressed = 0
-
-    def warn(self, time: float, message: str) -> None:
-        if self._last is not None and 0.0 <= time - self._last < self._interval:
-            self._suppressed += 1
-            return
-        extra = f" ({self._suppressed} similar warnings suppressed)" if self._suppressed else ""
-        self._last = time
-        self._suppressed = 0
-        warnings.warn(f"{self._who} at t = {time:.3f} s: {message}{extra}", RuntimeWarning, stacklevel=3)
 
 
 def _read_command(port: InputPort, context: Context, size: int) -> tuple[NDArray[np.float64], bool]:
@@ -119,10 +100,13 @@ class DifferentialIKIntegrator(LeafSystem):
     output_ports:
     - desired_state (12): set point q_d (rad) then v_d (rad/s), held between control steps
     - ik_status (1): IkStatus code of the last control step
+    - sanitized_input_count (1): control steps whose command had a NaN/inf entry (read as zero)
     @endsystem
 
-    Discrete state: two groups, the set point ``[q_d (6), v_d (6)]`` (:data:`IkIntegratorState`) and
-    ``[status (1)]``; both outputs are state output ports (no Python callback to read them).
+    Discrete state: the set point ``[q_d (6), v_d (6)]`` (:data:`IkIntegratorState`), ``[status
+    (1)]`` and the sanitised-input count with its warning time
+    (:class:`~drake_disamb.systems.sanitized.SanitizedInputCounter`); the outputs are state output
+    ports (no Python callback to read them).
     """
 
     def __init__(
@@ -146,9 +130,6 @@ class DifferentialIKIntegrator(LeafSystem):
         self._period = float(config.control_period)
         self._reseed_tol = float(config.reseed_tolerance)
         self._limited_alpha = float(config.limited_alpha)
-        self._warner = _RateLimitedWarner(
-            "DifferentialIKIntegrator: ee_velocity_command", config.warn_interval
-        )
 
         lower = np.array([j.position_lower_limits()[0] for j in joints])
         upper = np.array([j.position_upper_limits()[0] for j in joints])
@@ -184,6 +165,7 @@ class DifferentialIKIntegrator(LeafSystem):
 
         self._state = self.DeclareDiscreteState(_set_point(home, np.zeros(6)))
         self._status = self.DeclareDiscreteState([float(IkStatus.OK)])
+        self._sanitized = SanitizedInputCounter(self, config.warn_interval)
         self._command_port = self.DeclareVectorInputPort("ee_velocity_command", 6)
         self._measured_port = self.DeclareVectorInputPort("arm_joint_state", 12)
         self.DeclareStateOutputPort("desired_state", self._state)
@@ -243,8 +225,10 @@ class DifferentialIKIntegrator(LeafSystem):
         status = IkStatus.OK
         if not valid:
             status = IkStatus.INVALID_COMMAND
-            self._warner.warn(
-                context.get_time(), "non-finite command treated as zero (ik_status = INVALID_COMMAND)"
+            self._sanitized.record(
+                context,
+                discrete_state,
+                "non-finite ee_velocity_command treated as zero (ik_status = INVALID_COMMAND)",
             )
         meas = np.asarray(self._measured_port.Eval(context), dtype=float)[:6]
         # The largest drift; NaN or inf when the measurement is not finite (then no reseed).
@@ -277,9 +261,11 @@ class GripperOpeningIntegrator(LeafSystem):
     - finger_desired_state (4): q_left, q_right (m) then v_left, v_right (m/s); each finger is at
       half the desired opening
     - desired_opening (1): desired distance between the fingertips, m
+    - sanitized_input_count (1): control steps whose command was NaN/inf (read as zero)
     @endsystem
 
-    Discrete state ``[opening_d (m), speed_d (m/s)]`` (:data:`GripperIntegratorState`); the opening
+    Discrete state ``[opening_d (m), speed_d (m/s)]`` (:data:`GripperIntegratorState`), plus the
+    sanitised-input count (:class:`~drake_disamb.systems.sanitized.SanitizedInputCounter`); the opening
     is clamped to ``[0, max_opening]``, initialised from ``finger_state`` when the simulator
     initialises.
     """
@@ -299,8 +285,8 @@ class GripperOpeningIntegrator(LeafSystem):
             )
         self._period = float(control_period)
         self._max = float(max_opening)
-        self._warner = _RateLimitedWarner("GripperOpeningIntegrator: gripper_command", warn_interval)
         self._state = self.DeclareDiscreteState(np.array([initial_opening, 0.0]))
+        self._sanitized = SanitizedInputCounter(self, warn_interval)
         self._command_port = self.DeclareVectorInputPort("gripper_command", 1)
         self._finger_port = self.DeclareVectorInputPort("finger_state", 4)
         ticket = {self.discrete_state_ticket(self._state)}
@@ -332,7 +318,7 @@ class GripperOpeningIntegrator(LeafSystem):
         cmd = self._command_port.Eval(context)[0].item()
         if not math.isfinite(cmd):
             cmd = 0.0
-            self._warner.warn(context.get_time(), "non-finite command treated as zero")
+            self._sanitized.record(context, discrete_state, "non-finite gripper_command treated as zero")
         new = min(max(opening + cmd * self._period, 0.0), self._max)  # np.clip of a finite number
         discrete_state.get_mutable_vector(self._state).SetFromVector([new, (new - opening) / self._period])
         return EventStatus.Succeeded()

@@ -18,7 +18,7 @@ from pydrake.systems.framework import (
 
 from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.blending import BlendingConfig, shared_control
-from drake_disamb.systems._sanitized import SanitizedInputCounter
+from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 

@@ -62,7 +62,7 @@ from drake_disamb.core.inference import (
     rest_state,
     sanitize_command,
 )
-from drake_disamb.systems._sanitized import SanitizedInputCounter
+from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
 """Largest ``|sum(p) - 1|`` the DFT system's periodic projection leaves alone (p positive)."""

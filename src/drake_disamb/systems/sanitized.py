@@ -63,8 +63,9 @@ class SanitizedInputCounter:
     """The running count of sanitised inputs of one system, in that system's discrete state.
 
     Declares on ``system`` two discrete groups: ``[count]``, exposed as the state output port
-    ``sanitized_input_count`` (1), and ``[time of the last warning (s)]`` (``-inf`` before any).
-    Both start at their defaults in every new context. :meth:`record` is called from the system's
+    ``sanitized_input_count`` (1), and ``[time of the last warning (s), count at it]`` (``-inf``
+    and 0 before any). Both start at their defaults in every new context, so two contexts or two
+    simulations never share a warning's timing. :meth:`record` is called from the system's
     discrete or unrestricted update with the values it writes.
     """
 
@@ -74,7 +75,7 @@ class SanitizedInputCounter:
         self._system = system
         self._warn_interval = float(warn_interval)
         self._count_index = system.DeclareDiscreteState(np.zeros(1))
-        self._warned_at_index = system.DeclareDiscreteState(np.array([-np.inf]))
+        self._warned_index = system.DeclareDiscreteState(np.array([-np.inf, 0.0]))
         self.port = system.DeclareStateOutputPort(SANITIZED_INPUT_COUNT, self._count_index)
 
     def count(self, context: Context) -> int:
@@ -87,13 +88,15 @@ class SanitizedInputCounter:
         count = context.get_discrete_state(self._count_index).get_value()[0] + 1.0
         discrete_state.get_mutable_vector(self._count_index).SetAtIndex(0, count)
         time = context.get_time()
-        warned_at = context.get_discrete_state(self._warned_at_index).get_value()[0]
+        warned_at, count_then = context.get_discrete_state(self._warned_index).get_value()
         if time - warned_at < self._warn_interval:
             return
-        discrete_state.get_mutable_vector(self._warned_at_index).SetAtIndex(0, time)
+        discrete_state.get_mutable_vector(self._warned_index).SetFromVector([time, count])
         name = self._system.get_name() or type(self._system).__name__
+        suppressed = int(count - count_then - 1) if count_then > 0 else 0
+        extra = f"{suppressed} similar warnings suppressed; " if suppressed else ""
         warnings.warn(
-            f"{name} at t = {time:.3f} s: {message} ({int(count)} sanitised so far; "
+            f"{name} at t = {time:.3f} s: {message} ({extra}{int(count)} sanitised so far; "
             f"warned at most once per {self._warn_interval:g} s)",
             RuntimeWarning,
             stacklevel=3,
