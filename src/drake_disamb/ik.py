@@ -397,19 +397,14 @@ class VelocityIkSolver:
         n = limits.size
         self.q_nominal = None if q_nominal is None else _vector("VelocityIkSolver.q_nominal", q_nominal, n)
         self._n = n
-        self._accel_weight = 1.0 / np.minimum(limits.acceleration, 1e12) ** 2
-        # The limits as Python floats, for the per-joint loops of a step.
+        # The limits as Python floats, for the per-joint loops of a step (an infinite acceleration
+        # limit counts as 1e12; the weight of the nearest-point fallback is 1 / acceleration^2).
+        acc = np.minimum(limits.acceleration, 1e12)
         self._lower = limits.lower.tolist()
         self._upper = limits.upper.tolist()
         self._vmax = limits.velocity.tolist()
-        self._acc = np.minimum(limits.acceleration, 1e12).tolist()
-        self._weight = self._accel_weight.tolist()
-
-    def bounds(
-        self, q: NDArray[np.float64], v_prev: NDArray[np.float64]
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """:func:`velocity_bounds` for this solver's limits and step (unchecked)."""
-        return _bounds(q, v_prev, self.dt, self.limits)
+        self._acc = acc.tolist()
+        self._weight = (1.0 / acc**2).tolist()
 
     def solve(
         self,
