@@ -4,16 +4,13 @@
 from __future__ import annotations
 
 import json
-import os
-import select
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from support import cli_process, interrupt
 
 from drake_disamb.cli import main
 from drake_disamb.plotting import nonzero_segments, plot_goal_probabilities
@@ -115,18 +112,6 @@ def test_plot_rejects_mismatched_shapes(tmp_path: Path) -> None:
 # ----------------------------------------------------------------------------------------------
 # An unusable --out fails at once; SIGINT / SIGTERM stop the trial and keep its results.
 # ----------------------------------------------------------------------------------------------
-SRC = Path(__file__).resolve().parents[1] / "src"
-
-
-def _cli_process(*argv: str) -> subprocess.Popen:
-    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    return subprocess.Popen(
-        [sys.executable, "-m", "drake_disamb.cli", *argv],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
 
 
 def _timed_main(argv: list[str]) -> tuple[int, float]:
@@ -190,7 +175,7 @@ def test_bad_out_subprocess_is_fast_and_one_line(tmp_path: Path) -> None:
     blocker = tmp_path / "file.txt"
     blocker.write_text("")
     start = time.perf_counter()
-    proc = _cli_process("demo", "--no-meshcat", "--out", str(blocker))
+    proc = cli_process("demo", "--no-meshcat", "--out", str(blocker))
     out, err = proc.communicate(timeout=30)
     assert time.perf_counter() - start < 2.0
     assert proc.returncode == 2
@@ -200,50 +185,14 @@ def test_bad_out_subprocess_is_fast_and_one_line(tmp_path: Path) -> None:
     assert out == ""
 
 
-def _wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str]:
-    """Lines of ``proc``'s stdout up to the first one holding ``text``. Reads the pipe's bytes
-    directly: ``readline`` on the text wrapper would buffer lines that ``select`` then cannot see."""
-    fd = proc.stdout.fileno()
-    data = b""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        ready, _, _ = select.select([fd], [], [], 0.5)
-        if ready:
-            chunk = os.read(fd, 65536)
-            if not chunk:
-                break
-            data += chunk
-            lines = data.decode(errors="replace").splitlines(keepends=True)
-            if any(text in line for line in lines):
-                return lines
-    proc.kill()
-    err = proc.stderr.read()
-    raise AssertionError(f"no line with {text!r} within {timeout} s; got {data!r}, stderr {err}")
-
-
-def _interrupt(proc: subprocess.Popen, sig: signal.Signals) -> tuple[str, str]:
-    """Send ``sig`` 3 s into the trial; the demo must end cleanly with status 130. Its output."""
-    try:
-        _wait_for_line(proc, "running the trial", timeout=180)
-        time.sleep(3.0)
-        proc.send_signal(sig)
-        out, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 130, err
-    assert "Traceback" not in err
-    return out, err
-
-
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_path: Path) -> None:
     # At half real time the default reaching trial (about 6 s simulated) cannot end by itself.
-    proc = _cli_process(
+    proc = cli_process(
         "demo", "--no-meshcat", "--quiet", "--realtime-rate", "0.5", "--duration", "600",
         "--out", str(tmp_path),
     )  # fmt: skip
-    out, err = _interrupt(proc, sig)
+    out, err = interrupt(proc, sig)
     assert f"stopped by {sig.name}" in out
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["interrupted"] is True and metrics["success"] is False
@@ -262,8 +211,8 @@ def test_signal_stops_the_trial_and_keeps_its_results(sig: signal.Signals, tmp_p
     ids=["meshcat", "live"],
 )
 def test_sigint_with_meshcat_keeps_metrics_figure_and_recording(mode: list[str], tmp_path: Path) -> None:
-    proc = _cli_process("demo", "--quiet", "--duration", "600", "--out", str(tmp_path), *mode)
-    _interrupt(proc, signal.SIGINT)
+    proc = cli_process("demo", "--quiet", "--duration", "600", "--out", str(tmp_path), *mode)
+    interrupt(proc, signal.SIGINT)
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["interrupted"] is True and metrics["time"] > 0.5
     assert (tmp_path / "goal_probabilities.png").stat().st_size > 10_000

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from support import screenshot_script
 
 from drake_disamb.core.interfaces import InterfaceConfig
 from drake_disamb.systems.live import AXIS_SLIDERS, LIVE_CONTROLS, MeshcatLiveInput
@@ -59,16 +60,7 @@ def page() -> Iterator[Callable[[str], tuple[Any, Any, MeshcatLiveInput]]]:
         system = MeshcatLiveInput(meshcat, InterfaceConfig(kind=kind))
         options = Options()
         # No sandbox (CI runs as root); nothing in the background that would reach the network.
-        for flag in (
-            "--headless=new",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-        ):
+        for flag in screenshot_script().CHROMIUM_FLAGS:
             options.add_argument(flag)
         options.binary_location = CHROMIUM
         driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)

@@ -4,7 +4,6 @@ a real browser (headless Chromium; skipped without it)."""
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 import sys
 from pathlib import Path
@@ -13,6 +12,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from matplotlib.colors import to_rgb
+from support import screenshot_script
 
 from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario
@@ -196,15 +196,6 @@ def test_caption_and_legend_texts() -> None:
 # ----------------------------------------------------------------------------------------------
 
 
-def _screenshot_module():  # noqa: ANN202
-    spec = importlib.util.spec_from_file_location(
-        "recording_screenshot", REPO / "diagrams" / "recording_screenshot.py"
-    )
-    module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
-    spec.loader.exec_module(module)  # type: ignore[union-attr]
-    return module
-
-
 @pytest.mark.skipif(
     (shutil.which("chromium") or shutil.which("chromium-browser")) is None
     or shutil.which("chromedriver") is None,
@@ -212,7 +203,7 @@ def _screenshot_module():  # noqa: ANN202
 )
 def test_recording_frames_the_table_and_shows_the_legend(tmp_path: Path) -> None:
     pytest.importorskip("selenium", reason="needs the selenium package")
-    shots = _screenshot_module()
+    shots = screenshot_script()
     html = shots.record_demo(tmp_path)
     measured = shots.screenshot(html, tmp_path / "recording.png", at=0.6, settle=0.5)
     assert (tmp_path / "recording.png").stat().st_size > 10_000

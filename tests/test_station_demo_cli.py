@@ -2,18 +2,14 @@
 
 from __future__ import annotations
 
-import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
+from support import cli_process, interrupt
 
 from drake_disamb.cli import main
-
-SRC = Path(__file__).resolve().parents[1] / "src"
 
 
 @pytest.mark.parametrize(
@@ -50,24 +46,7 @@ def test_out_that_is_a_file_is_a_one_line_error(tmp_path: Path, capsys) -> None:
 
 
 def test_sigint_stops_the_pattern(tmp_path: Path) -> None:
-    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "drake_disamb.cli", "station-demo", "--no-meshcat", "--duration", "100000",
-         "--out", str(tmp_path)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )  # fmt: skip
-    try:
-        first = proc.stdout.readline()  # "diagram: ...", printed just before the simulation starts
-        assert first.startswith("diagram:"), (first, proc.stderr.read() if proc.poll() is not None else "")
-        time.sleep(1.5)
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 130, err
-    assert "Traceback" not in err
+    proc = cli_process("station-demo", "--no-meshcat", "--duration", "100000", "--out", str(tmp_path))
+    # "diagram: ..." is printed just before the simulation starts.
+    out, _ = interrupt(proc, signal.SIGINT, ready="diagram:", after=1.5)
     assert "stopped by SIGINT" in out and "final EE displacement" in out

@@ -1,0 +1,77 @@
+"""Helpers shared by the test files: the CLI in a child process, stopped by a signal, and the
+recording-screenshot script of ``diagrams/`` (its Chromium flags serve the browser tests too)."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from types import ModuleType
+
+REPO = Path(__file__).resolve().parents[1]
+SRC = REPO / "src"
+
+
+def cli_process(*argv: str) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    return subprocess.Popen(
+        [sys.executable, "-m", "drake_disamb.cli", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+
+
+def wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str]:
+    """Lines of ``proc``'s stdout up to the first one holding ``text``. Reads the pipe's bytes
+    directly: ``readline`` on the text wrapper would buffer lines that ``select`` then cannot see."""
+    fd = proc.stdout.fileno()
+    data = b""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        ready, _, _ = select.select([fd], [], [], 0.5)
+        if ready:
+            chunk = os.read(fd, 65536)
+            if not chunk:
+                break
+            data += chunk
+            lines = data.decode(errors="replace").splitlines(keepends=True)
+            if any(text in line for line in lines):
+                return lines
+    proc.kill()
+    err = proc.stderr.read()
+    raise AssertionError(f"no line with {text!r} within {timeout} s; got {data!r}, stderr {err}")
+
+
+def interrupt(
+    proc: subprocess.Popen, sig: signal.Signals, ready: str = "running the trial", after: float = 3.0
+) -> tuple[str, str]:
+    """Send ``sig`` ``after`` seconds past the line holding ``ready``; the command must end cleanly
+    with status 130. Its remaining stdout and its stderr."""
+    try:
+        wait_for_line(proc, ready, timeout=180)
+        time.sleep(after)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    return out, err
+
+
+def screenshot_script() -> ModuleType:
+    """``diagrams/recording_screenshot.py`` as a module."""
+    spec = importlib.util.spec_from_file_location(
+        "recording_screenshot", REPO / "diagrams" / "recording_screenshot.py"
+    )
+    module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
+    spec.loader.exec_module(module)  # type: ignore[union-attr]
+    return module
