@@ -13,6 +13,7 @@ COMMANDS: dict[str, str] = {
     "station-demo": "station_demo",
     "inference-benchmark": "inference_benchmark",
     "disambiguate": "disambiguate",
+    "study": "study",
 }
 
 

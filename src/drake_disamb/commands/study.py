@@ -1,0 +1,28 @@
+"""``drake-disamb study``: the user study, one sub-command per module (``study run``, ...).
+
+Each module in :data:`STUDY_COMMANDS` defines ``HELP``, ``add_arguments(parser)`` and
+``run(args) -> int``, like the top-level commands, and imports pydrake lazily.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+HELP = "Run the user study with simulated users, import the authors' human logs, and report on them."
+
+# ``study`` sub-command name -> module in drake_disamb.commands.
+STUDY_COMMANDS: dict[str, str] = {}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND", required=True)
+    for name, module_name in STUDY_COMMANDS.items():
+        module = importlib.import_module(f"drake_disamb.commands.{module_name}")
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        module.add_arguments(p)
+        p.set_defaults(_study_run=module.run)
+
+
+def run(args: argparse.Namespace) -> int:
+    return int(args._study_run(args) or 0)

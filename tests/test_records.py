@@ -1,0 +1,98 @@
+"""Trial records: round trip, append-only writing, the half-written last line, clear errors."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+
+from drake_disamb.study.records import FORMAT, RecordError, TrialRecord, append_record, read_records
+
+
+def _record(trial_id: str = "t0", **changes) -> TrialRecord:
+    values = dict(
+        trial_id=trial_id,
+        subject="S01",
+        interface="head_array",
+        task="reaching",
+        paradigm="disambiguation",
+        disambiguation_method="algorithm1",
+        repetition=0,
+        seed=7,
+        start_pose=1,
+        initial_mode="vx",
+        intended_goals=[2],
+        reached_goals=[2],
+        success=True,
+        done=True,
+        duration=31.5,
+        completion_time=31.5,
+        mode_switches=2,
+        requests=1,
+        automatic_switches=0,
+        button_presses=3,
+        request_times=[1.2],
+        mode_switch_times=[4.0, 9.5],
+        mode_switch_modes=["vy", "vz"],
+        automatic_switch_times=[],
+        mean_alpha=0.3,
+        assistance_onset=5.0,
+        wall_time=2.5,
+    )
+    values.update(changes)
+    return TrialRecord(**values)
+
+
+def test_round_trip_and_append(tmp_path):
+    path = tmp_path / "trials.jsonl"
+    append_record(path, _record("a"))
+    append_record(path, _record("b", seed=8))
+    records = read_records(path)
+    assert [r.trial_id for r in records] == ["a", "b"]
+    assert records[0] == _record("a")
+    assert json.loads(path.read_text().splitlines()[1])["format"] == FORMAT
+
+
+def test_half_written_last_line_is_cut_only_on_repair(tmp_path):
+    path = tmp_path / "trials.jsonl"
+    append_record(path, _record("a"))
+    with open(path, "a") as f:
+        f.write(_record("b").to_json()[:40])
+    with pytest.raises(RecordError, match=r"trials.jsonl:2: the last line is incomplete"):
+        read_records(path)
+    assert [r.trial_id for r in read_records(path, repair=True)] == ["a"]
+    assert path.read_text() == _record("a").to_json() + "\n"
+
+
+@pytest.mark.parametrize(
+    ("line", "match"),
+    [
+        ("{not json", r"trials.jsonl:2: not a JSON record"),
+        ("[1, 2]", r"trials.jsonl:2: expected a JSON object"),
+        (json.dumps({**dataclasses.asdict(_record("x")), "format": 0}), r"trials.jsonl:2: record format 0"),
+        (json.dumps({**dataclasses.asdict(_record("x")), "colour": 1}), r"unknown \['colour'\]"),
+        (_record("a").to_json(), r"trials.jsonl:2: trial_id 'a' appears twice"),
+        ("", r"trials.jsonl:2: empty line"),
+    ],
+)
+def test_malformed_lines_name_file_and_line(tmp_path, line, match):
+    path = tmp_path / "trials.jsonl"
+    append_record(path, _record("a"))
+    with open(path, "a") as f:
+        f.write(line + "\n")
+    before = path.read_bytes()
+    with pytest.raises(RecordError, match=match):
+        read_records(path, repair=True)
+    assert path.read_bytes() == before
+
+
+def test_inconsistent_counts_are_refused():
+    with pytest.raises(RecordError, match="button_presses"):
+        _record(button_presses=4)
+    with pytest.raises(RecordError, match="mode_switch_times"):
+        _record(mode_switch_times=[1.0])
+    with pytest.raises(RecordError, match="source"):
+        _record(source="robot")
+    with pytest.raises(RecordError, match="duration"):
+        _record(duration=float("nan"))
