@@ -1,0 +1,427 @@
+"""Import the authors' human-study logs (4 of the paper's 8 subjects) as :class:`TrialRecord` s.
+
+The logs (``../shared/data/tnsre2020_human_study/``, its README gives the format) are MATLAB files,
+one per trial, ``H<s>/H<s>PH<b><TASK><IF>T<n>.mat``, and ``trial_order_testing_8.mat`` with each
+trial's condition. :func:`import_authors` turns every trial into a record with ``source="authors"``
+appended to ``DIR/trials.jsonl`` and its time series in ``DIR/traces/<trial_id>.npz``. Nothing is
+overwritten: trials whose ``trial_id`` (the file's stem, e.g. ``H2PH1POHAT1``) is already in
+``DIR/trials.jsonl`` are skipped, so a second import (or one after an interruption) adds only the
+missing ones.
+
+How each field is made (times are seconds from the trial's ``start_time``):
+
+- ``subject`` ``H2`` ... ``H9`` (the paper's subject 1 is H2); ``interface``, ``task``, ``paradigm``
+  (``on`` -> ``disambiguation``, ``wo`` -> ``manual``), ``intended_goals`` (the 1-based target goal
+  as a 0-based index into the task's goals: 5 for reaching, all 4 pouring goals, the belief the
+  authors logged was over those 4), ``start_pose`` (home position - 1) from the trial-order file,
+  with the corrections the authors' ``parse_data.m`` applies (:data:`ORDER_FIXES`).
+- ``initial_mode``: the mode logged in ``current_mode``'s second row (the order file's 0-based
+  initial mode agrees with it after the corrections), named as in
+  :data:`drake_disamb.core.interfaces.MODES` by its position in the interface's cycle
+  (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``, FACTS
+  section 5; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
+  ``extra["initial_mode_id"]``.
+- ``request_times``: the rows of ``assistance_requested`` after the placeholder. Every request
+  made one mode switch of its own (the disambiguation system's), logged in ``mode_switches`` at
+  the time of the request's row in ``cmode_conf_disamb`` (the scores computed for it): that
+  switch is the ``mode_switches`` row nearest in time to it (within 3 ms in every published
+  trial). The authors' ``loadData.m`` instead takes the first switch at or after the request,
+  which in one trial (H3PH1REHAT16: a button press 1.4 s after the request, 3.3 s before the
+  system's switch) takes the user's press; the counts are the same either way.
+- ``mode_switch_times``: the remaining rows of ``mode_switches`` after the placeholder and the
+  initial-mode row (the README's "rows minus 2 minus requests"), ``mode_switch_modes`` the mode
+  each entered (the ``current_mode`` row logged at that time). Raw: the authors' cleaning is
+  applied by :mod:`drake_disamb.study.metrics`.
+- ``duration`` = ``completion_time`` = ``total_time``; ``reached_goals``, ``success`` and ``done``
+  are null (not logged). ``valid`` is False for the 14 trials the authors excluded as failed
+  (:data:`FAILED_TRIALS`, the paper's unsuccessful trials).
+- ``mean_alpha``: the mean of ``alpha`` over its samples from ``start_time`` to ``end_time`` (all
+  samples, commanded or not: the logs have no time stamps for ``user_vel`` to tell). The
+  authors' ``loadData.m`` kept a different number, the share of those samples with alpha above
+  0.6, which is in ``extra["alpha_share_above_0_6"]``.
+- ``assistance_onset``: for reaching, the first time from which the belief's argmax is the
+  target goal with alpha above 0 and stays so to the end (:func:`metrics.assistance_onset`);
+  null for pouring, whose single logged target does not say which goal each stage meant.
+- ``disambiguation_method``: ``algorithm1`` for disambiguation trials, null for manual ones;
+  ``seed`` null, ``wall_time`` 0.
+
+The trace has ``t`` (the ``alpha`` sample times, from the first logged sample, which may precede
+the start), ``belief`` (``goal_probabilities``), ``alpha``, ``u`` (``blended_vel``) and ``mode``
+(index into the interface's modes of the mode in force at each sample), all on ``t``; ``u_h``
+(``user_vel``, about 100 Hz) was logged without times: it is stored as logged, with ``t_u_h``
+spreading its samples evenly over ``t``'s span (an approximation). No ``ee_pose`` was logged.
+Velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from drake_disamb.core.interfaces import DIM_NAMES, MODES
+from drake_disamb.study.metrics import assistance_onset
+from drake_disamb.study.records import TrialRecord, append_record, read_records
+
+__all__ = [
+    "FAILED_TRIALS",
+    "MODE_IDS",
+    "ORDER_FIXES",
+    "AuthorsTrial",
+    "ImportSummary",
+    "import_authors",
+    "load_trial_order",
+    "mode_name",
+    "parse_trial_name",
+    "read_trial",
+]
+
+FAILED_TRIALS: frozenset[tuple[str, int, int]] = frozenset(
+    {
+        ("H3", 2, 12),
+        ("H4", 2, 9),
+        ("H4", 2, 12),
+        ("H5", 1, 3),
+        ("H5", 1, 4),
+        ("H5", 1, 11),
+        ("H5", 1, 14),
+        ("H5", 1, 16),
+        ("H6", 1, 8),
+        ("H6", 2, 6),
+        ("H7", 1, 3),
+        ("H7", 1, 13),
+        ("H8", 1, 13),
+        ("H8", 1, 15),
+    }
+)
+"""(subject, block, trial) of the 14 trials the authors excluded as failed (data README)."""
+
+ORDER_FIXES: dict[tuple[str, int, int], dict[str, int]] = {
+    ("H9", 2, 12): {"goal": 4},
+    ("H3", 1, 11): {"initial_mode": 2},
+    ("H2", 1, 2): {"home": 3},
+    ("H2", 1, 3): {"home": 1},
+    ("H2", 2, 1): {"initial_mode": 3},
+}
+"""Corrections of the trial-order file that the authors' ``parse_data.m`` applies ("fix human
+errors in trial conditions"), keyed by (subject, block, trial)."""
+
+MODE_IDS: dict[str, tuple[int, ...]] = {
+    "joystick": (12, 13, 45, 6, 7),
+    "head_array": (1, 2, 3, 4, 5, 6, 7),
+}
+"""The authors' mode ids per interface, in the order of :data:`MODES` (the cycle order)."""
+
+_INTERFACES = {"J2": "joystick", "HA": "head_array", "j": "joystick", "h": "head_array"}
+_TASKS = {"RE": "reaching", "PO": "pouring", "r": "reaching", "p": "pouring"}
+_PARADIGMS = {"on": "disambiguation", "wo": "manual"}
+_NAME = re.compile(r"^(H\d)PH([12])(RE|PO)(J2|HA)T(\d{1,2})\.mat$")
+_SWITCH_MATCH = 0.05
+"""Largest gap (s) between a request's score row and the mode switch it made; wider is an error."""
+
+
+def mode_name(mode: tuple[int, ...]) -> str:
+    """Name of a control mode: its dimension names joined by ``_`` (``(0, 1)`` -> ``vx_vy``)."""
+    return "_".join(DIM_NAMES[d] for d in mode)
+
+
+def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
+    """``(subject, block, task, interface, trial)`` of a trial file name like ``H2PH1POHAT1.mat``.
+
+    Raises:
+        ValueError: The name does not follow the data README's pattern.
+    """
+    m = _NAME.match(name)
+    if m is None:
+        raise ValueError(f"trial file name: expected H<s>PH<b><RE|PO><J2|HA>T<n>.mat, got {name!r}")
+    return m[1], int(m[2]), _TASKS[m[3]], _INTERFACES[m[4]], int(m[5])
+
+
+def _loadmat(path: Path) -> dict[str, Any]:
+    from scipy.io import loadmat
+
+    try:
+        return loadmat(str(path))
+    except Exception as err:  # scipy raises several types for a damaged file
+        raise ValueError(f"{path}: cannot read the MATLAB file: {err}") from None
+
+
+def load_trial_order(path: str | Path) -> dict[tuple[str, int, int], dict[str, Any]]:
+    """The condition of every trial in ``trial_order_testing_8.mat``, corrected by :data:`ORDER_FIXES`.
+
+    Returns:
+        ``{(subject, block, trial): {"task", "interface", "paradigm", "goal", "home",
+        "initial_mode"}}`` with ``goal`` and ``home`` 1-based and ``initial_mode`` 0-based, as in
+        the file.
+    """
+    path = Path(path)
+    data = _loadmat(path)
+    order: dict[tuple[str, int, int], dict[str, Any]] = {}
+    for block in (1, 2):
+        key = f"ph{block}_trial_mat"
+        if key not in data:
+            raise ValueError(f"{path}: no variable {key!r}")
+        mat = data[key]
+        if mat.ndim != 3 or mat.shape[1] != 6:
+            raise ValueError(f"{path}: {key} has shape {mat.shape}, expected (16, 6, subjects)")
+        for s in range(mat.shape[2]):
+            subject = f"H{s + 2}"
+            for n in range(mat.shape[0]):
+                cell = [np.asarray(mat[n, c, s]).ravel() for c in range(6)]
+                entry = {
+                    "task": _TASKS[str(cell[0][0])],
+                    "interface": _INTERFACES[str(cell[1][0])],
+                    "paradigm": _PARADIGMS[str(cell[2][0])],
+                    "goal": int(cell[3][0]),
+                    "home": int(cell[4][0]),
+                    "initial_mode": int(cell[5][0]),
+                }
+                entry.update(ORDER_FIXES.get((subject, block, n + 1), {}))
+                order[(subject, block, n + 1)] = entry
+    return order
+
+
+@dataclass
+class AuthorsTrial:
+    """One imported trial: its record and its trace arrays (see the module docstring)."""
+
+    record: TrialRecord
+    trace: dict[str, NDArray[Any]]
+
+
+def _events(data: dict[str, Any], name: str, path: Path, width: int) -> NDArray[np.float64]:
+    if name not in data:
+        raise ValueError(f"{path}: no variable {name!r}")
+    a = np.asarray(data[name], dtype=float)
+    if a.ndim != 2 or a.shape[1] != width or a.shape[0] < 1:
+        raise ValueError(f"{path}: {name} has shape {a.shape}, expected (k, {width}) with a placeholder row")
+    return a[1:]  # row 1 is the zero placeholder
+
+
+def _scalar(data: dict[str, Any], name: str, path: Path) -> float:
+    if name not in data:
+        raise ValueError(f"{path}: no variable {name!r}")
+    value = float(np.asarray(data[name], dtype=float).ravel()[0])
+    if not np.isfinite(value):
+        raise ValueError(f"{path}: {name} is {value}")
+    return value
+
+
+def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any]]) -> AuthorsTrial:
+    """Read one trial file into its record and trace (see the module docstring).
+
+    Args:
+        path: ``H<s>/H<s>PH<b><TASK><IF>T<n>.mat``.
+        order: :func:`load_trial_order`'s result.
+
+    Raises:
+        ValueError: The name, a variable or the trial's condition is missing or inconsistent; the
+            message names the file.
+    """
+    path = Path(path)
+    subject, block, task, interface, trial = parse_trial_name(path.name)
+    cond = order.get((subject, block, trial))
+    if cond is None:
+        raise ValueError(f"{path}: no entry for ({subject}, block {block}, trial {trial}) in the trial order")
+    if (cond["task"], cond["interface"]) != (task, interface):
+        raise ValueError(
+            f"{path}: the trial order says {cond['task']} / {cond['interface']}, "
+            f"the file name {task} / {interface}"
+        )
+    data = _loadmat(path)
+    start = _scalar(data, "start_time", path)
+    total = _scalar(data, "total_time", path)
+    switches = _events(data, "mode_switches", path, 2)
+    current = _events(data, "current_mode", path, 2)
+    requested = _events(data, "assistance_requested", path, 2)
+    scores = np.asarray(data.get("cmode_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
+    if len(switches) < 1 or len(current) < 1:
+        raise ValueError(f"{path}: mode_switches / current_mode lack the initial-mode row")
+    if len(scores) != len(requested):
+        raise ValueError(
+            f"{path}: {len(requested)} requests but {len(scores)} rows of cmode_conf_disamb (one per request)"
+        )
+    ids = MODE_IDS[interface]
+    modes = MODES[interface]
+
+    def name_of(mode_id: float) -> str:
+        if int(mode_id) not in ids:
+            raise ValueError(f"{path}: current_mode id {mode_id!r} is not one of {ids} ({interface})")
+        return mode_name(modes[ids.index(int(mode_id))])
+
+    initial_id = int(current[0, 0])
+    initial_mode = name_of(initial_id)
+    switch_t = switches[1:, 1] - start  # without the initial-mode row
+    request_t = requested[:, 1] - start
+    own: set[int] = set()
+    for score_t in scores[:, -1] - start:
+        gaps = np.abs(switch_t - score_t)
+        k = int(np.argmin(gaps)) if len(gaps) else -1
+        if k < 0 or gaps[k] > _SWITCH_MATCH or k in own:
+            raise ValueError(
+                f"{path}: no mode switch of its own for the request scored at t = {score_t:.3f} s"
+            )
+        own.add(k)
+    user = [k for k in range(len(switch_t)) if k not in own]
+    cm_t = current[:, 1] - start
+    user_modes = [name_of(current[int(np.argmin(np.abs(cm_t - switch_t[k]))), 0]) for k in user]
+
+    alpha_log = np.asarray(data["alpha"], dtype=float)[1:]
+    belief = np.asarray(data["goal_probabilities"], dtype=float)[1:]
+    blended = np.asarray(data["blended_vel"], dtype=float).T[1:]
+    user_vel = np.asarray(data["user_vel"], dtype=float).T
+    t = alpha_log[:, 1] - start
+    n = min(len(t), len(belief), len(blended))
+    t, alpha, belief, blended = t[:n], alpha_log[:n, 0], belief[:n], blended[:n]
+    during = (t >= 0.0) & (t <= total)
+    mean_alpha = float(np.mean(alpha[during])) if np.any(during) else None
+    share = float(np.mean(alpha[during] > 0.6)) if np.any(during) else None
+    mode_index = np.zeros(n, dtype=np.int64)
+    order_idx = np.searchsorted(cm_t, t, side="right") - 1
+    cm_index = np.array([ids.index(int(v)) if int(v) in ids else -1 for v in current[:, 0]])
+    mode_index[:] = np.where(order_idx >= 0, cm_index[np.clip(order_idx, 0, None)], cm_index[0])
+
+    goal = cond["goal"] - 1
+    onset = None
+    if task == "reaching" and np.any(during):
+        onset = assistance_onset(t[during], belief[during], alpha[during], goal)
+    paradigm = cond["paradigm"]
+    extra: dict[str, Any] = {
+        "file": f"{subject}/{path.name}",
+        "block": block,
+        "trial": trial,
+        "target_goal": cond["goal"],
+        "initial_mode_id": initial_id,
+        "alpha_share_above_0_6": share,
+    }
+    if cond["initial_mode"] != ids.index(initial_id):
+        extra["order_initial_mode"] = cond["initial_mode"]
+    record = TrialRecord(
+        trial_id=path.stem,
+        subject=subject,
+        interface=interface,
+        task=task,
+        paradigm=paradigm,
+        disambiguation_method="algorithm1" if paradigm == "disambiguation" else None,
+        repetition=0,
+        seed=None,
+        start_pose=cond["home"] - 1,
+        initial_mode=initial_mode,
+        intended_goals=[goal],
+        reached_goals=None,
+        success=None,
+        done=None,
+        duration=total,
+        completion_time=total,
+        mode_switches=len(user),
+        requests=len(request_t),
+        automatic_switches=0,
+        button_presses=len(user) + len(request_t),
+        request_times=[float(x) for x in request_t],
+        mode_switch_times=[float(switch_t[k]) for k in user],
+        mode_switch_modes=user_modes,
+        automatic_switch_times=[],
+        mean_alpha=mean_alpha,
+        assistance_onset=onset,
+        wall_time=0.0,
+        valid=(subject, block, trial) not in FAILED_TRIALS,
+        source="authors",
+        extra=extra,
+    )
+    m = len(user_vel)
+    t_u_h = np.linspace(t[0], t[-1], m) if n and m else np.zeros(m)
+    trace = {
+        "t": t,
+        "belief": belief,
+        "alpha": alpha,
+        "u": blended,
+        "mode": mode_index,
+        "u_h": user_vel,
+        "t_u_h": t_u_h,
+    }
+    return AuthorsTrial(record, trace)
+
+
+@dataclass
+class ImportSummary:
+    """What :func:`import_authors` did."""
+
+    imported: int
+    skipped: int
+    records: Path
+
+
+def _trial_files(data_dir: Path) -> list[Path]:
+    files = [p for p in data_dir.glob("H*/H*.mat") if _NAME.match(p.name)]
+
+    def key(p: Path) -> tuple[str, int, str, int]:
+        subject, block, task, interface, trial = parse_trial_name(p.name)
+        return subject, block, interface, trial
+
+    return sorted(files, key=key)
+
+
+def _repetitions(records: list[TrialRecord]) -> None:
+    """Number the trials of each (subject, interface, task, paradigm) 0, 1, ... in trial order."""
+    groups: dict[tuple[str, str, str, str], list[TrialRecord]] = {}
+    for r in records:
+        groups.setdefault((r.subject, r.interface, r.task, r.paradigm), []).append(r)
+    for group in groups.values():
+        group.sort(key=lambda r: (r.extra["block"], r.extra["trial"]))
+        for i, r in enumerate(group):
+            r.repetition = i
+
+
+def import_authors(
+    data_dir: str | Path, out_dir: str | Path, progress: Callable[[str], None] | None = None
+) -> ImportSummary:
+    """Import every trial file of ``data_dir`` into ``out_dir`` (records and traces).
+
+    Trials already in ``out_dir/trials.jsonl`` (same ``trial_id``) are skipped; nothing existing is
+    overwritten. Each record is appended only after its trace is written.
+
+    Raises:
+        ValueError: ``data_dir`` has no trial files or no trial order, or a file is malformed.
+        RecordError: ``out_dir/trials.jsonl`` exists but cannot be read (names file and line).
+    """
+    data_dir = Path(data_dir)
+    out_dir = Path(out_dir)
+    order_path = data_dir / "trial_order_testing_8.mat"
+    if not order_path.is_file():
+        raise ValueError(f"{order_path}: the trial-order file is missing (is {data_dir} the data folder?)")
+    files = _trial_files(data_dir)
+    if not files:
+        raise ValueError(f"{data_dir}: no trial files H<s>/H<s>PH<b><TASK><IF>T<n>.mat")
+    order = load_trial_order(order_path)
+    records_path = out_dir / "trials.jsonl"
+    done: set[str] = set()
+    if records_path.exists():
+        done = {r.trial_id for r in read_records(records_path)}
+    # Read everything first: repetitions are numbered within each condition, and a malformed file
+    # stops the import before anything is written.
+    trials = [read_trial(p, order) for p in files]
+    _repetitions([t.record for t in trials])
+    traces = out_dir / "traces"
+    try:
+        traces.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ValueError(f"--out {out_dir}: cannot create {traces}: {err.strerror or err}") from None
+    imported = 0
+    for trial in trials:
+        rid = trial.record.trial_id
+        if rid in done:
+            continue
+        tmp = traces / f".{rid}.tmp.npz"
+        np.savez_compressed(tmp, **trial.trace)
+        os.replace(tmp, traces / f"{rid}.npz")
+        append_record(records_path, trial.record)
+        imported += 1
+        if progress is not None:
+            progress(rid)
+    return ImportSummary(imported=imported, skipped=len(trials) - imported, records=records_path)
