@@ -44,7 +44,7 @@ import numpy as np
 
 from drake_disamb.study.metrics import TrialMetrics, request_time_skewness, summarize, trial_metrics
 from drake_disamb.study.records import RecordError, TrialRecord, read_records
-from drake_disamb.study.stats import run_tests
+from drake_disamb.study.stats import MIXED_METRICS, run_tests
 
 __all__ = [
     "PAPER_MANUAL_SWITCHES",
@@ -735,13 +735,17 @@ def _json_clean(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     ]
 
 
-def write_report(folder: str | Path, compare: str | Path | None = None) -> ReportFiles:
+def write_report(
+    folder: str | Path, compare: str | Path | None = None, mixed_model: bool = True
+) -> ReportFiles:
     """Write the report of ``folder`` (or the combined ablation report) into ``folder/report/``.
 
     Args:
         folder: A study folder (``trials.jsonl``, ``traces/``) or an ablation folder
             (``ablation.json``).
         compare: Another study folder whose means are set beside this one's.
+        mixed_model: Fit the per-subject mixed model (:data:`stats.MIXED_METRICS`; about half a
+            second per test); the signed-rank check on subject means is always made.
 
     Raises:
         RecordError: No records, a bad line or an unreadable folder (file and line named).
@@ -754,7 +758,7 @@ def write_report(folder: str | Path, compare: str | Path | None = None) -> Repor
     out = _report_dir(folder)
     trials = [trial_metrics(r) for r in records]
     summary = _json_clean(summarize(records))
-    tests = _json_clean(run_tests(records))
+    tests = _json_clean(run_tests(records, mixed_metrics=MIXED_METRICS if mixed_model else ()))
     _write_json(out / "summary.json", summary)
     _write_json(out / "stats.json", tests)
     sources = sorted({r.source for r in records})
