@@ -276,12 +276,14 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
     belief = np.asarray(data["goal_probabilities"], dtype=float)[1:]
     blended = np.asarray(data["blended_vel"], dtype=float).T[1:]
     user_vel = np.asarray(data["user_vel"], dtype=float).T
-    t = alpha_log[:, 1] - start
-    n = min(len(t), len(belief), len(blended))
-    t, alpha, belief, blended = t[:n], alpha_log[:n, 0], belief[:n], blended[:n]
+    t_alpha = alpha_log[:, 1] - start
+    in_trial = (t_alpha >= 0.0) & (t_alpha <= total)
+    mean_alpha = float(np.mean(alpha_log[in_trial, 0])) if np.any(in_trial) else None
+    share = float(np.mean(alpha_log[in_trial, 0] > 0.6)) if np.any(in_trial) else None
+    # A few files log one sample more of one of these arrays: the trace keeps the common length.
+    n = min(len(t_alpha), len(belief), len(blended))
+    t, alpha, belief, blended = t_alpha[:n], alpha_log[:n, 0], belief[:n], blended[:n]
     during = (t >= 0.0) & (t <= total)
-    mean_alpha = float(np.mean(alpha[during])) if np.any(during) else None
-    share = float(np.mean(alpha[during] > 0.6)) if np.any(during) else None
     mode_index = np.zeros(n, dtype=np.int64)
     order_idx = np.searchsorted(cm_t, t, side="right") - 1
     cm_index = np.array([ids.index(int(v)) if int(v) in ids else -1 for v in current[:, 0]])
