@@ -254,6 +254,7 @@ def _stacked(trials: Sequence[TrialMetrics], source: str) -> Any:
     ax.set_xticks(range(len(groups)))
     ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in groups])
     ax.set_ylabel("mean per trial (after the authors' cleaning)")
+    ax.margins(y=0.12)
     handles = [plt.Rectangle((0, 0), 1, 1, color=PARADIGM_COLORS[p], alpha=0.75) for p in paradigms]
     labels = [f"user mode switches ({p})" for p in paradigms]
     handles += [plt.Rectangle((0, 0), 1, 1, color="#d62728", alpha=0.8)]
@@ -330,13 +331,19 @@ def _alpha(trials: Sequence[TrialMetrics], source: str) -> Any:
             for body in parts["bodies"]:
                 body.set_facecolor(PARADIGM_COLORS[paradigm])
                 body.set_alpha(0.7)
+            for name in ("cmeans", "cmins", "cmaxes", "cbars"):
+                parts[name].set_color("k")
+                parts[name].set_linewidth(0.8)
     ax.set_xticks(range(len(groups)))
     ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in groups])
     ax.set_ylabel("mean alpha per trial")
     handles = [plt.Rectangle((0, 0), 1, 1, color=PARADIGM_COLORS[p], alpha=0.7) for p in paradigms]
     ax.legend(handles, [p.capitalize() for p in paradigms], fontsize=8)
     ax.grid(axis="y", alpha=0.3)
-    ax.set_title(f"Distribution of the per-trial mean blending factor alpha ({source})", fontsize=10)
+    ax.set_title(
+        f"Distribution of the per-trial mean blending factor alpha ({source}; bar: mean, whiskers: range)",
+        fontsize=10,
+    )
     fig.tight_layout()
     return fig
 
@@ -638,6 +645,7 @@ th { background: #eee; }
 td.yes { background: #dff0d8; } td.no { background: #f2dede; }
 img { max-width: 100%; border: 1px solid #ddd; margin: 0.3em 0; }
 .note { color: #555; font-size: 0.9em; }
+div.wide { overflow-x: auto; }
 """
 
 
@@ -656,7 +664,7 @@ def _table(
                 cls = f' class="{"yes" if v else "no"}"'
             cells.append(f"<td{cls}>{html.escape(text)}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
-    return f"<table><tr>{head}</tr>{''.join(body)}</table>"
+    return f'<div class="wide"><table><tr>{head}</tr>{"".join(body)}</table></div>'
 
 
 def _img(path: Path, alt: str) -> str:
