@@ -1021,9 +1021,10 @@ def _ablation_figure(effect: Sequence[dict[str, Any]]) -> Any:
                 if math.isfinite(y):
                     ax.text(x, y, st, ha="center", va="bottom" if y >= 0 else "top", fontsize=9)
         ax.axhline(0, color="k", lw=0.8)
+        ax.margins(y=0.12)
         ax.set_xticks(range(len(settings)))
         ax.set_xticklabels(settings, rotation=20, ha="right", fontsize=8)
-        ax.set_ylabel(f"Disambiguation - Manual ({unit})")
+        ax.set_ylabel(f"Disambiguation - Manual ({unit}), stars: rank-sum")
         ax.set_title(metric.replace("_", " "))
         ax.legend(fontsize=8)
         ax.grid(axis="y", alpha=0.3)
