@@ -468,3 +468,17 @@ def test_the_report_shows_its_figures_in_headless_chromium(study: Path, tmp_path
         assert complete and width > 300 and height > 200
         assert src == "data:image/png;base64,"
     assert (tmp_path / "screenshot.png").stat().st_size > 10_000
+
+
+def test_a_single_human_trial_is_reported(tmp_path: Path) -> None:
+    """One trial of one person (``demo --live --record``): every figure and table still comes out."""
+    records = [r for r in synthetic_records(source="human") if r.subject == "S01" and r.repetition == 0]
+    records = [r for r in records if r.interface == "joystick" and r.task == "reaching"][:2]
+    records[1].mean_alpha = records[0].mean_alpha  # no spread: no density to draw
+    records[1].paradigm = records[0].paradigm
+    write_study(tmp_path, records)
+    files = write_report(tmp_path)
+    assert files.index.is_file() and len(files.figures) == 6
+    assert json.loads(files.stats.read_text()) == []  # one paradigm: nothing to compare
+    (row,) = json.loads(files.summary.read_text())
+    assert row["source"] == "human" and row["n_trials"] == 2

@@ -327,6 +327,9 @@ def _alpha(trials: Sequence[TrialMetrics], source: str) -> Any:
             if not v:
                 continue
             x = gi + (pi - (len(paradigms) - 1) / 2) * width
+            if len(set(v)) < 2:  # no spread for a density: the values as points
+                ax.plot([x] * len(v), v, "o", color=PARADIGM_COLORS[paradigm])
+                continue
             parts = ax.violinplot([v], positions=[x], widths=width * 0.9, showmeans=True)
             for body in parts["bodies"]:
                 body.set_facecolor(PARADIGM_COLORS[paradigm])
