@@ -150,3 +150,24 @@ def test_bad_requests_name_the_argument(method: str) -> None:
         METHODS[method]([0.9, 0.9], np.zeros(3), MIRRORED, HEAD_ARRAY_MODES)
     with pytest.raises(ValueError, match=r"modes\[1\]"):
         METHODS[method]([0.5, 0.5], np.zeros(3), MIRRORED, [[0], [7]])
+
+
+@pytest.mark.parametrize("method", ["entropy", "kl"])
+def test_disambiguate_command_method_option(method: str, tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from drake_disamb import cli
+
+    case = {
+        "belief": [0.5, 0.5],
+        "position": [0, 0, 0],
+        "goals": MIRRORED.tolist(),
+        "modes": HEAD_ARRAY_MODES,
+    }
+    path = tmp_path / "cases.json"
+    path.write_text(json.dumps([case]))
+    assert cli.main(["disambiguate", "--cases", str(path), "--method", method]) == 0
+    (result,) = json.loads(capsys.readouterr().out)
+    core = METHODS[method]([0.5, 0.5], np.zeros(3), MIRRORED, HEAD_ARRAY_MODES)
+    assert result["method"] == method and result["mode"] == core.mode == 1
+    np.testing.assert_allclose(result["mode_scores"], core.mode_scores, rtol=1e-12)

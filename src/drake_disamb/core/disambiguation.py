@@ -388,7 +388,9 @@ class DisambiguationResult:
     def explain(self) -> str:
         """A short human-readable account of why the mode won and which features dominated."""
         lines: list[str] = []
-        sym = "D_m" if self.method == "algorithm1" else f"score ({self.method}, bits)"
+        sym = {"algorithm1": "D_m", "entropy": "expected entropy reduction (bits)"}.get(
+            self.method, "expected KL (bits)"
+        )
         order = np.argsort(-self.mode_scores, kind="stable")
         best = int(order[0])
         scores = ", ".join(
