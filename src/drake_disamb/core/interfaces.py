@@ -26,8 +26,9 @@ Non-finite raw entries never reach the arm: they are read as 0 (released / centr
 
 The update (:func:`interface_update`) is what the Drake system runs every control period: it
 detects rising edges of the buttons (a held button counts once), cycles the mode on a mode-button
-press, handles a disambiguation request by asking for the disambiguation system's choice (only on
-the request's rising edge), holds the sanitised raw signal, and returns the events it logged.
+press, handles a disambiguation request (or an automatic trigger) by asking for the disambiguation
+system's choice ``request_latency`` after it (in the same update when that is 0), holds the
+sanitised raw signal, and returns the events it logged.
 """
 
 from __future__ import annotations
