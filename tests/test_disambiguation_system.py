@@ -157,7 +157,7 @@ def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exceptio
     context = _fixed_context(system, [0.5, 0.5])
     simulator = Simulator(system, context)
     simulator.AdvanceTo(0.015)
-    monkeypatch.setattr(module, "disambiguate", broken)
+    monkeypatch.setattr(module, "select_disambiguating_mode", broken)
     with pytest.raises(type(error), match=re.escape(str(error))):
         system.GetOutputPort("disambiguation_mode").Eval(context)
     system.GetInputPort("request_count").FixValue(context, [1.0])

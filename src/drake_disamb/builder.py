@@ -6,8 +6,10 @@
     interface.u_h -------------------------> blender.u_h, inference.u_h
     autonomy.u_a --------------------------> blender.u_a, inference.u_a
     inference.belief ----------------------> blender, disambiguation, user, visualizer
-    disambiguation.disambiguation_mode ----> interface.disambiguation_mode   (disambiguation paradigm)
-    interface.mode / request_count --------> disambiguation.current_mode / request_count
+    disambiguation.disambiguation_mode ----> interface.disambiguation_mode   (disambiguation, automatic)
+    interface.mode / served_count ---------> disambiguation.current_mode / request_count
+    inference.belief, interface.u_h, mode -> automatic_trigger              (automatic paradigm)
+    automatic_trigger.automatic_request_count -> interface.automatic_request_count
     blender.u -----------------------------> station.ee_velocity_command
     interface.gripper_command -------------> station.gripper_command
     station.ee_pose -----------------------> everyone
@@ -39,7 +41,7 @@ from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrder
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
-from drake_disamb.systems.disambiguation import DisambiguationSystem
+from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
 from drake_disamb.systems.interfaces import make_interface
 from drake_disamb.systems.task import TaskManager
 from drake_disamb.systems.user import SimulatedUser
@@ -68,9 +70,9 @@ class SharedControlDiagram:
         station: The :class:`drake_disamb.station.Station` handle; its diagram is the subsystem
             ``"station"`` of ``diagram``.
         systems: Named subsystems: ``user`` (or the given input source), ``interface``,
-            ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation paradigm
-            only), ``task``, ``ee_pose_sampler``, ``diff_ik`` (the station's), ``visualizer``
-            (with Meshcat only).
+            ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation and
+            automatic paradigms), ``automatic_trigger`` (automatic paradigm only), ``task``,
+            ``ee_pose_sampler``, ``diff_ik`` (the station's), ``visualizer`` (with Meshcat only).
         loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS`).
         modes: The interface's control modes (dimension lists; gripper mode last).
         meshcat: The Meshcat instance, or ``None``.
@@ -212,7 +214,11 @@ def build_shared_control_diagram(
     if config.disambiguation is not None:  # the preset's probing, the live inference's update
         disamb = builder.AddSystem(
             DisambiguationSystem(
-                n, interface.arm_modes, config.disambiguation, control_period=scenario.control_period
+                n,
+                interface.arm_modes,
+                config.disambiguation,
+                control_period=scenario.control_period,
+                method=config.disambiguation_method,
             )
         )
         disamb.set_name("disambiguation")
@@ -220,11 +226,22 @@ def build_shared_control_diagram(
         builder.Connect(ee_pose, disamb.GetInputPort("ee_pose"))
         builder.Connect(goal_poses, disamb.GetInputPort("goal_poses"))
         builder.Connect(interface.GetOutputPort("mode"), disamb.GetInputPort("current_mode"))
-        builder.Connect(interface.GetOutputPort("request_count"), disamb.GetInputPort("request_count"))
+        builder.Connect(interface.GetOutputPort("served_count"), disamb.GetInputPort("request_count"))
         builder.Connect(
             disamb.GetOutputPort("disambiguation_mode"), interface.GetInputPort("disambiguation_mode")
         )
         systems["disambiguation"] = disamb
+    if config.automatic is not None:
+        trigger = builder.AddSystem(AutomaticTrigger(n, config.automatic, scenario.control_period))
+        trigger.set_name("automatic_trigger")
+        builder.Connect(inference.GetOutputPort("belief"), trigger.GetInputPort("belief"))
+        builder.Connect(interface.GetOutputPort("u_h"), trigger.GetInputPort("u_h"))
+        builder.Connect(interface.GetOutputPort("mode"), trigger.GetInputPort("mode"))
+        builder.Connect(
+            trigger.GetOutputPort("automatic_request_count"),
+            interface.GetInputPort("automatic_request_count"),
+        )
+        systems["automatic_trigger"] = trigger
 
     if meshcat is not None:
         from drake_disamb.clearance import table_top_z

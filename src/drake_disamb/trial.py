@@ -39,11 +39,15 @@ class TrialResult:
         reached_goals: Per stage, the scenario goal index (within the stage) reached, or -1.
         intended_goals: Per stage, the user's intended goal index (within the stage).
         intended_goal_names, reached_goal_names: The same as names.
-        mode_switches: Manual mode switches (mode-button presses).
-        requests: Disambiguation requests.
+        mode_switches: Manual mode switches (mode-button presses; the user's own only).
+        requests: Disambiguation requests (request-button presses).
         button_presses: ``mode_switches + requests`` (the paper's metric).
         request_times, mode_switch_times: Event times (s).
-        disambiguation_switch_times: Times (s) a request changed the mode.
+        disambiguation_switch_times: Times (s) a request changed the mode (the switch, which comes
+            ``disambiguation.request_latency`` after the press).
+        automatic_switches: Mode changes the Automatic paradigm's trigger caused (no press; not in
+            ``button_presses``); 0 in the other paradigms.
+        automatic_switch_times: Their times (s).
         events: The interface's event log.
         mean_alpha: Mean alpha over the samples where the user commanded the arm.
         wall_time: Wall-clock seconds of the simulation.
@@ -76,6 +80,8 @@ class TrialResult:
     rho1: float
     logs: dict[str, tuple[NDArray[np.float64], NDArray[np.float64]]] = field(repr=False)
     interrupted: bool = False
+    automatic_switches: int = 0
+    automatic_switch_times: list[float] = field(default_factory=list)
 
 
 def _log(
@@ -166,6 +172,7 @@ def run_trial(
     switches = [e.time for e in events if e.kind == "mode_switch"]
     requests = [e.time for e in events if e.kind == "disambiguation_request"]
     disamb_switches = [e.time for e in events if e.kind == "disambiguation_switch"]
+    automatic_switches = [e.time for e in events if e.kind == "automatic_switch"]
     reached = task.reached_goals(task_context)
     done = task.is_done(task_context)
     intended = list(sc.user.goals)
@@ -199,4 +206,6 @@ def run_trial(
         rho1=rho1,
         logs=logs,
         interrupted=stopped[0],
+        automatic_switches=len(automatic_switches),
+        automatic_switch_times=automatic_switches,
     )

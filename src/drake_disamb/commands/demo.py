@@ -108,7 +108,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="embedded task name (reaching, pouring) or a scenario YAML path (default: reaching)",
     )
     parser.add_argument("--interface", default=None, help="head_array or joystick (default: the scenario's)")
-    parser.add_argument("--paradigm", default=None, help="disambiguation or manual (default: the scenario's)")
+    parser.add_argument(
+        "--paradigm", default=None, help="manual, disambiguation or automatic (default: the scenario's)"
+    )
     parser.add_argument(
         "--goal",
         type=_goal_arg,
@@ -174,6 +176,10 @@ def format_metrics(result) -> str:  # noqa: ANN001 (TrialResult, imported lazily
         ("mode switches", str(result.mode_switches)),
         ("disambiguation requests", str(result.requests)),
         ("button presses", str(result.button_presses)),
+    ]
+    if result.scenario.paradigm == "automatic":
+        rows.append(("automatic switches", str(result.automatic_switches)))
+    rows += [
         ("mean alpha while commanding", f"{result.mean_alpha:.3f}"),
         ("simulated / wall time (s)", f"{result.time:.2f} / {result.wall_time:.2f}"),
         ("real-time rate", f"{result.realtime_rate:.1f}x"),
@@ -213,6 +219,8 @@ def metrics_dict(result, live: bool = False) -> dict[str, Any]:  # noqa: ANN001 
         "button_presses": int(result.button_presses),
         "request_times": [float(t) for t in result.request_times],
         "mode_switch_times": [float(t) for t in result.mode_switch_times],
+        "automatic_switches": int(result.automatic_switches),
+        "automatic_switch_times": [float(t) for t in result.automatic_switch_times],
         "mean_alpha": _finite_or_none(result.mean_alpha),
         "wall_time": float(result.wall_time),
         "realtime_rate": _finite_or_none(result.realtime_rate),

@@ -1,4 +1,5 @@
-"""``drake-disamb disambiguate``: run Algorithm 1 on scenes given as JSON, print JSON results."""
+"""``drake-disamb disambiguate``: run Algorithm 1 (or ``--method entropy | kl``) on scenes given as JSON,
+print JSON results."""
 
 from __future__ import annotations
 
@@ -156,6 +157,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="Preset for cases that do not name one (default: mico).",
     )
     parser.add_argument(
+        "--method",
+        default="algorithm1",
+        choices=("algorithm1", "entropy", "kl"),
+        help="Mode selection: the paper's Algorithm 1 (default), the minimum expected entropy or the "
+        "maximum expected KL divergence of the projected belief (same projection, same output format).",
+    )
+    parser.add_argument(
         "--explain",
         action="store_true",
         help="Print an explanation of each choice (and each case's error) instead of the JSON.",
@@ -311,11 +319,15 @@ def _numbers(value: Any, field: str, size: int | None = None) -> list[float]:
     return out
 
 
-def _solve_case(case: Any, default_preset: str) -> Any:
-    """Validate one case and run the core; raises :class:`CaseError`."""
+def _solve_case(case: Any, default_preset: str, method: str = "algorithm1") -> Any:
+    """Validate one case and run the core's ``method``; raises :class:`CaseError`."""
+    import functools
+
     import numpy as np
 
-    from drake_disamb.core.disambiguation import disambiguate, preset
+    from drake_disamb.core.disambiguation import disambiguate, preset, select_disambiguating_mode
+
+    solve = disambiguate if method == "algorithm1" else functools.partial(select_disambiguating_mode, method)
 
     if not isinstance(case, dict):
         raise CaseError("case", f"expected a JSON object, got {_short(case)}")
@@ -364,7 +376,7 @@ def _solve_case(case: Any, default_preset: str) -> Any:
         transition = [_numbers(r, "transition_matrix", len(rows)) for r in transition]
     try:
         config = preset(name, transition=transition)
-        return disambiguate(
+        return solve(
             belief,
             position,
             goal_positions,
@@ -389,9 +401,10 @@ def _cut(text: str, limit: int = 1000) -> str:
 
 
 def solve_cases(
-    cases: list[Any], default_preset: str = "mico", explain: bool = False
+    cases: list[Any], default_preset: str = "mico", explain: bool = False, method: str = "algorithm1"
 ) -> tuple[list[dict], int]:
-    """Solve every case. Returns ``(results, number of cases with an error entry)``.
+    """Solve every case with the mode-selection ``method``. Returns ``(results, number of cases with
+    an error entry)``.
 
     A case never costs the others: a :class:`CaseError` (invalid input) and any other exception
     raised while solving it (or building its JSON result) become that case's ``{"error": ...}``
@@ -406,7 +419,7 @@ def solve_cases(
     with np.errstate(all="ignore"):
         for i, case in enumerate(cases):
             try:
-                result = _solve_case(case, default_preset)
+                result = _solve_case(case, default_preset, method)
                 entry = result.to_dict()
                 if explain:
                     entry["explanation"] = result.explain()
@@ -453,7 +466,7 @@ def run(args: argparse.Namespace) -> int:
         problem = " ".join(str(exc).split())  # exactly one line
         print(f"drake-disamb disambiguate: --cases {name!r}: {problem}", file=sys.stderr)
         return 2
-    results, invalid = solve_cases(cases, args.preset, args.explain)
+    results, invalid = solve_cases(cases, args.preset, args.explain, args.method)
     indent = None if args.indent < 0 else args.indent
     text = json.dumps(results, indent=indent, allow_nan=False)
     if json_path is not None:

@@ -13,6 +13,9 @@ and returns a :class:`TrialConfig`:
   horizons, weights), and its method, DFT parameters and potential field are replaced by the
   scenario's. The ``memory`` method has no forward projection, so the disambiguation paradigm
   refuses it;
+- the mode-selection method, the request latency (the interface's: it delays the switch) and, in
+  the Automatic paradigm, the trigger (its ``confidence_threshold`` written out as ``rho1`` when
+  left out; without its request button the interface logs presses but serves none);
 - the simulated user's config (its seed is the scenario's; in the manual paradigm it never asks
   for disambiguation), the interface's, the station's (Drake's ``MultibodyPlantConfig``, the start
   posture and the scene objects) and Drake's ``SimulatorConfig``.
@@ -34,6 +37,8 @@ import numpy as np
 from drake_disamb.config.checks import cut, fmt
 from drake_disamb.config.schema import Scenario
 from drake_disamb.config.validation import check_scenario
+from drake_disamb.core._validation import is_real
+from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig, resolve_rhos
 from drake_disamb.core.disambiguation import DisambiguationConfig, preset
@@ -58,6 +63,9 @@ class TrialConfig:
         dft: The DFT parameters of the live inference and of the forward projection.
         disambiguation: The forward projection's config (``None`` in the manual paradigm): the
             preset's probing with the live inference's method, ``dft`` and ``autonomy``.
+        disambiguation_method: The mode-selection method (``"algorithm1"``, ``"entropy"``, ``"kl"``).
+        automatic: The Automatic paradigm's trigger, ``confidence_threshold`` written out
+            (``None`` in the other paradigms).
         user: The simulated user's config (seed and ``rho1`` set).
         interface: The interface's config.
         station: The station's config (plant config, control period, start posture, scene objects).
@@ -75,6 +83,8 @@ class TrialConfig:
     interface: InterfaceConfig
     station: Any
     simulator: Any
+    disambiguation_method: str = "algorithm1"
+    automatic: AutomaticConfig | None = None
 
 
 def _named(path: str, make: Callable[[], T]) -> T:
@@ -138,10 +148,24 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         user = dataclasses.replace(user, request_at_start=False, request_when_unhelped_for=None)
     else:
         disambiguation = projection_config(s.disambiguation.preset, s.inference.method, dft, autonomy, name)
+    latency = s.disambiguation.request_latency
+    if not (is_real(latency) and latency >= 0):
+        raise ValueError(
+            f"{name}.disambiguation.request_latency: expected a finite number >= 0 (s), got {fmt(latency)}"
+        )
+    automatic = None
+    if s.paradigm == "automatic":
+        automatic = _named(f"{name}.disambiguation.automatic", s.disambiguation.automatic.to_config)
+        if automatic.confidence_threshold is None:
+            automatic = dataclasses.replace(automatic, confidence_threshold=rhos[0])
     interface = _named(
         f"{name}.initial_mode",
         lambda: InterfaceConfig(
-            kind=s.interface, control_period=s.control_period, initial_mode=s.initial_mode
+            kind=s.interface,
+            control_period=s.control_period,
+            initial_mode=s.initial_mode,
+            request_latency=float(latency),
+            serve_requests=automatic is None or automatic.request_button,
         ),
     )
     home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
@@ -166,6 +190,8 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         interface=interface,
         station=station,
         simulator=copy.copy(s.simulator_config),
+        disambiguation_method=s.disambiguation.method,
+        automatic=automatic,
     )
 
 

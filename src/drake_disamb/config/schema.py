@@ -41,9 +41,10 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from drake_disamb.config.checks import schema_fields
+from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
-from drake_disamb.core.disambiguation import MICO_DFT, PRESETS
+from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
 from drake_disamb.station import default_plant_config
@@ -51,7 +52,7 @@ from drake_disamb.station import default_plant_config
 INTERFACES: tuple[str, ...] = ("joystick", "head_array")
 """Interface names accepted by :attr:`Scenario.interface`."""
 
-PARADIGMS: tuple[str, ...] = ("manual", "disambiguation")
+PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
 
 INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
@@ -142,6 +143,15 @@ UserBehaviorSpec = _spec_class(
     embedded tasks set 2 s and 3 s).""",
 )
 
+AutomaticSpec = _spec_class(
+    AutomaticConfig,
+    "AutomaticSpec",
+    AutomaticConfig(),
+    doc="""The Automatic paradigm's trigger: the fields of
+    :class:`drake_disamb.core.automatic.AutomaticConfig` (its module docstring says why each).
+    ``confidence_threshold`` left out is the blending's ``rho1``.""",
+)
+
 
 @dataclass
 class ObjectSpec:
@@ -227,7 +237,8 @@ class InferenceSpec:
 
 @dataclass
 class DisambiguationSpec:
-    """Disambiguation (Algorithm 1).
+    """Disambiguation (Algorithm 1 or an alternative mode selection), in the Disambiguation and
+    Automatic paradigms.
 
     Attributes:
         preset: Name of a preset in :mod:`drake_disamb.core.disambiguation` (``"mico"`` or
@@ -235,9 +246,20 @@ class DisambiguationSpec:
             speeds, step and horizons, weights). The belief update it projects with is always the
             live one: the method and DFT parameters of :attr:`Scenario.inference` and the
             potential field of :attr:`Scenario.autonomy` replace the preset's own.
+        method: How the mode is chosen from the forward projection: ``"algorithm1"`` (the paper),
+            ``"entropy"`` (minimum expected entropy of the projected belief) or ``"kl"`` (maximum
+            expected KL divergence from the current belief); see
+            :func:`drake_disamb.core.disambiguation.select_disambiguating_mode`.
+        request_latency: Seconds (finite, >= 0) from a request press (or an automatic trigger) to
+            the mode switch; the mode is the one chosen at the switch time. The paper's system took
+            2 to 2.5 s; 0 (default) switches in the press's control tick.
+        automatic: The Automatic paradigm's trigger (used only with ``paradigm: automatic``).
     """
 
     preset: str = field(default="mico", metadata=_meta(choices=PRESETS))
+    method: str = field(default="algorithm1", metadata=_meta(choices=MODE_SELECTION_METHODS))
+    request_latency: float = 0.0
+    automatic: AutomaticSpec = field(default_factory=AutomaticSpec)
 
 
 @dataclass
@@ -294,7 +316,8 @@ class Scenario:
         task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
         description: Free text.
         interface: ``"joystick"`` or ``"head_array"``.
-        paradigm: ``"manual"`` or ``"disambiguation"``.
+        paradigm: ``"manual"`` (mode button only), ``"disambiguation"`` (plus the request
+            button) or ``"automatic"`` (plus the system's own switches, :class:`AutomaticSpec`).
         inference, disambiguation, blending, autonomy, user: Component settings.
         control_period: Period (s) of the control loop (interface, autonomy, blending,
             differential IK); 0.01 s = 100 Hz, the MICO's Cartesian velocity interface.

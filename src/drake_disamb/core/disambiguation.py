@@ -27,6 +27,12 @@ Ties: modes whose ``D_m`` lie within ``tie_tolerance`` (relative to the largest)
 equal. If every mode is equal the current mode is kept (``mode = None``); if the current mode is
 among several equally best modes it is kept too; otherwise the first of the best modes wins.
 
+Two alternative mode-selection methods run on the same forward projection (FACTS section 10, the
+authors' own experiments): :func:`expected_entropy_mode` (the minimum expected entropy of the
+projected belief) and :func:`expected_kl_mode` (the maximum expected KL divergence of the projected
+belief from the current one), with the same function shape, result type and tie rule;
+:func:`select_disambiguating_mode` runs any of :data:`MODE_SELECTION_METHODS` by name.
+
 Two named presets (:func:`preset`):
 
 - ``"authors-r3"`` reproduces the authors' R^3 simulation (FACTS sections 1 and 4).
@@ -333,6 +339,10 @@ class DisambiguationResult:
         current_mode: The mode in use when the request came (``None`` if not given).
         w: Weight of the short-term term used.
         tie_tolerance: Relative tie tolerance used.
+        method: The mode-selection method (:data:`MODE_SELECTION_METHODS`): ``"algorithm1"``
+            (the scores are ``D``), ``"entropy"`` or ``"kl"`` (the scores are bits, see
+            :func:`expected_entropy_mode` and :func:`expected_kl_mode`; ``features`` then holds the
+            per-probe ``"entropy"`` or ``"kl"``).
     """
 
     mode: int | None
@@ -348,6 +358,7 @@ class DisambiguationResult:
     current_mode: int | None
     w: float
     tie_tolerance: float
+    method: str = "algorithm1"
 
     @property
     def kept(self) -> bool:
@@ -357,6 +368,7 @@ class DisambiguationResult:
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (the ``disambiguate`` command's output format)."""
         return {
+            "method": self.method,
             "mode": self.mode,
             "best_mode": self.best_mode,
             "dimension": self.dimension,
@@ -376,6 +388,9 @@ class DisambiguationResult:
     def explain(self) -> str:
         """A short human-readable account of why the mode won and which features dominated."""
         lines: list[str] = []
+        sym = {"algorithm1": "D_m", "entropy": "expected entropy reduction (bits)"}.get(
+            self.method, "expected KL (bits)"
+        )
         order = np.argsort(-self.mode_scores, kind="stable")
         best = int(order[0])
         scores = ", ".join(
@@ -384,7 +399,8 @@ class DisambiguationResult:
         )
         if self.mode is None:
             cur = "the current mode" if self.current_mode is None else f"the current mode {self.current_mode}"
-            if np.all(self.mode_scores >= self.mode_scores.max() * (1 - self.tie_tolerance)):
+            top = self.mode_scores.max()
+            if np.all(self.mode_scores >= top - self.tie_tolerance * abs(top)):
                 lines.append(
                     f"Kept {cur}: every mode scores the same within {self.tie_tolerance:g} (relative); "
                     "moving in any mode would tell the goals apart equally (or not at all)."
@@ -396,10 +412,10 @@ class DisambiguationResult:
         else:
             runner = [int(i) for i in order if int(i) != self.mode]
             label = _mode_label(self.modes[self.mode])
-            text = f"Chose mode {self.mode} {label} with D_m = {self.mode_scores[self.mode]:.4g}"
+            text = f"Chose mode {self.mode} {label} with {sym} = {self.mode_scores[self.mode]:.4g}"
             if self.mode != best:
                 text += (
-                    f": it ties with mode {best} {_mode_label(self.modes[best])} (D_m = "
+                    f": it ties with mode {best} {_mode_label(self.modes[best])} ({sym} = "
                     f"{self.mode_scores[best]:.4g}) within {self.tie_tolerance:g} (relative), and the first "
                     "of the equally best modes wins"
                 )
@@ -411,7 +427,9 @@ class DisambiguationResult:
                 text += f"; runner-up mode {r} {_mode_label(self.modes[r])} scores {self.mode_scores[r]:.4g}"
                 text += f" ({ratio:.3g}x)" if np.isfinite(ratio) else " (nothing to disambiguate there)"
             lines.append(text + ".")
-        lines.append(f"Mode scores D_m: {scores}.")
+        lines.append(f"Mode scores {sym}: {scores}.")
+        if self.method != "algorithm1":
+            return "\n".join([*lines, _information_explanation(self)])
         # Which features drove the winning (or best) mode.
         focus = self.mode if self.mode is not None else best
         idx = [self.dimensions.index(k) for k in self.modes[focus] if k in self.dimensions]
@@ -519,6 +537,70 @@ def _check_transition_size(P: ArrayLike | None, n: int) -> None:
     """Contents are checked when the config is built (``check_transition``); here only the size."""
     if P is not None and np.shape(P) != (n, n):
         raise ValueError(f"transition: expected a {n}x{n} matrix (one row per goal), got shape {np.shape(P)}")
+
+
+def _validated_request(
+    belief: ArrayLike,
+    position: ArrayLike,
+    goal_positions: ArrayLike,
+    modes: Sequence[Sequence[int]],
+    config: DisambiguationConfig | None,
+    orientation: ArrayLike | None,
+    goal_orientations: ArrayLike | None,
+    current_mode: int | None,
+) -> tuple[
+    DisambiguationConfig,
+    tuple[tuple[int, ...], ...],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+]:
+    """The checks every mode-selection method runs on a request (the arguments of
+    :func:`disambiguate`): ``(config, modes, belief, position, orientation, goal_positions,
+    goal_orientations)``, validated and normalised; ``ValueError`` naming the argument otherwise."""
+    cfg = _DEFAULT_CONFIG if config is None else config
+    mode_dims = validate_modes(modes)
+    x = check_vectors(position, 3, "position")
+    if x.ndim != 1:
+        raise ValueError(f"position: expected 3 numbers, got shape {x.shape}")
+    _check_positions(x, "position")
+    gp = check_vectors(goal_positions, 3, "goal_positions")
+    if gp.ndim != 2 or not 1 <= gp.shape[0] <= MAX_GOALS:
+        raise ValueError(
+            f"goal_positions: expected shape (n, 3) with 1 <= n <= {MAX_GOALS} (MAX_GOALS), got {gp.shape}"
+        )
+    _check_positions(gp, "goal_positions")
+    n = gp.shape[0]
+    p = _validate_belief(belief, n)
+    q = (
+        np.array([1.0, 0.0, 0.0, 0.0])
+        if orientation is None
+        else normalized_quaternions(orientation, "orientation")
+    )
+    if q.ndim != 1:
+        raise ValueError(f"orientation: expected 4 numbers, got shape {q.shape}")
+    if goal_orientations is None:
+        gq = np.broadcast_to(q, (n, 4))
+    else:
+        gq = normalized_quaternions(goal_orientations, "goal_orientations")
+        if gq.shape != (n, 4):
+            raise ValueError(f"goal_orientations: expected shape ({n}, 4), got {gq.shape}")
+    if current_mode is not None and (
+        isinstance(current_mode, bool) or not isinstance(current_mode, int | np.integer) or current_mode < 0
+    ):
+        raise ValueError(f"current_mode: expected a non-negative integer or None, got {current_mode!r}")
+    if cfg.inference == "dft":
+        _check_transition_size(cfg.dft.transition, n)
+        if cfg.dft.rest is not None and np.shape(cfg.dft.rest) != (n,):
+            raise ValueError(f"dft.rest: expected {n} entries, got {np.asarray(cfg.dft.rest).tolist()!r}")
+        lam = np.asarray(cfg.dft.lam, dtype=float)
+        if lam.ndim != 0 and lam.shape != (n, n):
+            raise ValueError(f"dft.lam: expected a scalar or a {n}x{n} matrix, got shape {lam.shape}")
+    else:
+        _check_transition_size(cfg.bayes_transition, n)
+    return cfg, mode_dims, p, x, q, gp, gq
 
 
 # ----------------------------------------------------------------------------------------------
@@ -796,46 +878,9 @@ def disambiguate(
     Raises:
         ValueError: An input out of its bounds, naming the argument and the value.
     """
-    cfg = _DEFAULT_CONFIG if config is None else config
-    mode_dims = validate_modes(modes)
-    x = check_vectors(position, 3, "position")
-    if x.ndim != 1:
-        raise ValueError(f"position: expected 3 numbers, got shape {x.shape}")
-    _check_positions(x, "position")
-    gp = check_vectors(goal_positions, 3, "goal_positions")
-    if gp.ndim != 2 or not 1 <= gp.shape[0] <= MAX_GOALS:
-        raise ValueError(
-            f"goal_positions: expected shape (n, 3) with 1 <= n <= {MAX_GOALS} (MAX_GOALS), got {gp.shape}"
-        )
-    _check_positions(gp, "goal_positions")
-    n = gp.shape[0]
-    p = _validate_belief(belief, n)
-    q = (
-        np.array([1.0, 0.0, 0.0, 0.0])
-        if orientation is None
-        else normalized_quaternions(orientation, "orientation")
+    cfg, mode_dims, p, x, q, gp, gq = _validated_request(
+        belief, position, goal_positions, modes, config, orientation, goal_orientations, current_mode
     )
-    if q.ndim != 1:
-        raise ValueError(f"orientation: expected 4 numbers, got shape {q.shape}")
-    if goal_orientations is None:
-        gq = np.broadcast_to(q, (n, 4))
-    else:
-        gq = normalized_quaternions(goal_orientations, "goal_orientations")
-        if gq.shape != (n, 4):
-            raise ValueError(f"goal_orientations: expected shape ({n}, 4), got {gq.shape}")
-    if current_mode is not None and (
-        isinstance(current_mode, bool) or not isinstance(current_mode, int | np.integer) or current_mode < 0
-    ):
-        raise ValueError(f"current_mode: expected a non-negative integer or None, got {current_mode!r}")
-    if cfg.inference == "dft":
-        _check_transition_size(cfg.dft.transition, n)
-        if cfg.dft.rest is not None and np.shape(cfg.dft.rest) != (n,):
-            raise ValueError(f"dft.rest: expected {n} entries, got {np.asarray(cfg.dft.rest).tolist()!r}")
-        lam = np.asarray(cfg.dft.lam, dtype=float)
-        if lam.ndim != 0 and lam.shape != (n, n):
-            raise ValueError(f"dft.lam: expected a scalar or a {n}x{n} matrix, got shape {lam.shape}")
-    else:
-        _check_transition_size(cfg.bayes_transition, n)
 
     proj = forward_projection(p, x, q, gp, gq, cfg)
     feats = belief_features(proj.p_b, proj.p_c, proj.displacement, cfg.divide_upsilon)
@@ -860,3 +905,224 @@ def disambiguate(
         w=cfg.w,
         tie_tolerance=cfg.tie_tolerance,
     )
+
+
+# ----------------------------------------------------------------------------------------------
+# Alternative mode selection: expected entropy and expected KL divergence (FACTS section 10)
+# ----------------------------------------------------------------------------------------------
+
+MODE_SELECTION_METHODS: tuple[str, ...] = ("algorithm1", "entropy", "kl")
+"""Mode-selection methods: the paper's Algorithm 1 (:func:`disambiguate`), the expected entropy of
+the projected belief (:func:`expected_entropy_mode`) and its expected KL divergence from the
+current belief (:func:`expected_kl_mode`)."""
+
+_REALMIN = float(np.finfo(float).tiny)
+"""MATLAB's ``realmin``: the authors' guard inside their logarithms."""
+
+
+def entropy_bits(p: ArrayLike) -> NDArray[np.float64]:
+    """Shannon entropy (bits) over the last axis, the authors' ``-sum p log2(p + realmin)``.
+
+    ``[0.5, 0.5]`` has 1 bit, a certain belief 0 bits, the uniform belief over ``n`` goals
+    ``log2 n``.
+    """
+    a = np.asarray(p, dtype=float)
+    return -np.sum(a * np.log2(a + _REALMIN), axis=-1)
+
+
+def kl_bits(p: ArrayLike, q: ArrayLike) -> NDArray[np.float64]:
+    """``KL(p || q)`` in bits over the last axis (>= 0, 0 when ``p == q``).
+
+    The authors' ``-sum p log2(q / p + realmin)`` with its guards written so that no entry is a
+    NaN: a term with ``p_i = 0`` is 0, and ``q_i`` is read as at least ``realmin`` (so the
+    divergence from a belief with an exactly zero entry is large and finite, about 1022 bits per unit of
+    ``p_i``, instead of infinite).
+    """
+    a = np.asarray(p, dtype=float)
+    b = np.asarray(q, dtype=float)
+    ratio = np.log2(np.maximum(a, _REALMIN)) - np.log2(np.maximum(b, _REALMIN))
+    return np.sum(np.where(a > 0, a * ratio, 0.0), axis=-1)
+
+
+def expected_entropy_mode(
+    belief: ArrayLike,
+    position: ArrayLike,
+    goal_positions: ArrayLike,
+    modes: Sequence[Sequence[int]],
+    config: DisambiguationConfig | None = None,
+    *,
+    orientation: ArrayLike | None = None,
+    goal_orientations: ArrayLike | None = None,
+    current_mode: int | None = None,
+) -> DisambiguationResult:
+    """Pick the mode whose motion is expected to leave the belief most certain (minimum entropy).
+
+    The authors' entropy method (FACTS section 10) on :func:`disambiguate`'s forward projection
+    (:func:`forward_projection`, the same probes, inference update and horizons): each probe
+    ``+/- s e_k``'s projected belief at ``t_b`` (1 s in both presets, the authors' horizon) has
+    entropy ``H_k+/-`` (bits, :func:`entropy_bits`). A mode's expected projected entropy is the
+    mean over its probes (2 per probed dimension). The score maximised is the expected **entropy
+    reduction** ``H(p(t_a)) - mean H`` (bits), so the mode chosen is the one with the **minimum**
+    expected entropy. The authors' code takes the maximum expected entropy, which picks the mode
+    that leaves the belief least certain; that reads as a sign slip (the informative choice is the
+    one that sharpens the belief), and this function implements the minimum.
+
+    Differences from the authors' code: the probes are the axis probes of Algorithm 1 (``+/- s
+    e_k`` per dimension of the mode), not every sign combination of the mode's dimensions at once
+    (identical for the one-dimensional modes of the head array; for a joystick mode the corner
+    probes are not projected); and a mode none of whose dimensions is probed scores 0 (as if it
+    left the belief unchanged).
+
+    Ties and the returned mode as in :func:`disambiguate` (:func:`select_mode`, ``tie_tolerance``
+    relative to the best score): a mode that cannot change the belief scores 0; if no mode can,
+    every score is 0 and the current mode is kept (``mode = None``). A mode whose motion makes the
+    belief less certain scores below 0.
+
+    Args and errors: those of :func:`disambiguate`. Returns a :class:`DisambiguationResult` with
+    ``method = "entropy"``: ``scores_plus`` / ``scores_minus`` the per-probe entropy reduction
+    (bits), ``dimension_scores`` their mean, ``mode_scores`` the expected entropy reduction per
+    mode, ``features = {"entropy": H}`` (``(2, n_k)`` projected entropies, bits).
+    """
+    return _information_mode(
+        "entropy",
+        belief,
+        position,
+        goal_positions,
+        modes,
+        config,
+        orientation,
+        goal_orientations,
+        current_mode,
+    )
+
+
+def expected_kl_mode(
+    belief: ArrayLike,
+    position: ArrayLike,
+    goal_positions: ArrayLike,
+    modes: Sequence[Sequence[int]],
+    config: DisambiguationConfig | None = None,
+    *,
+    orientation: ArrayLike | None = None,
+    goal_orientations: ArrayLike | None = None,
+    current_mode: int | None = None,
+) -> DisambiguationResult:
+    """Pick the mode whose motion is expected to change the belief most (maximum expected KL).
+
+    The authors' KL method (FACTS section 10) on :func:`disambiguate`'s forward projection (the
+    same probes, inference update and horizons): each probe's score is ``KL(p(t_b) || p(t_a))``
+    (bits, :func:`kl_bits`) of its projected belief at ``t_b`` (1 s in both presets, the authors'
+    horizon) from the current one; a mode's score is the mean over its probes (2 per probed
+    dimension), and the mode with the **maximum** expected divergence is chosen, as in the
+    authors' code. A mode that cannot change the belief scores 0, the least possible; a mode none
+    of whose dimensions is probed also scores 0. Probes and ties as in
+    :func:`expected_entropy_mode` (the axis probes of Algorithm 1; :func:`select_mode`).
+
+    Args and errors: those of :func:`disambiguate`. Returns a :class:`DisambiguationResult` with
+    ``method = "kl"``: ``scores_plus`` / ``scores_minus`` the per-probe divergence (bits),
+    ``dimension_scores`` their mean, ``mode_scores`` the expected divergence per mode, ``features =
+    {"kl": ...}`` (the same ``(2, n_k)`` divergences).
+    """
+    return _information_mode(
+        "kl", belief, position, goal_positions, modes, config, orientation, goal_orientations, current_mode
+    )
+
+
+def select_disambiguating_mode(
+    method: str,
+    belief: ArrayLike,
+    position: ArrayLike,
+    goal_positions: ArrayLike,
+    modes: Sequence[Sequence[int]],
+    config: DisambiguationConfig | None = None,
+    *,
+    orientation: ArrayLike | None = None,
+    goal_orientations: ArrayLike | None = None,
+    current_mode: int | None = None,
+) -> DisambiguationResult:
+    """Run the mode-selection ``method`` (one of :data:`MODE_SELECTION_METHODS`) on a request.
+
+    ``"algorithm1"``: :func:`disambiguate`; ``"entropy"``: :func:`expected_entropy_mode`; ``"kl"``:
+    :func:`expected_kl_mode`. The other arguments are theirs.
+    """
+    if method not in _METHOD_FUNCTIONS:
+        raise ValueError(f"method: expected one of {MODE_SELECTION_METHODS}, got {method!r}")
+    return _METHOD_FUNCTIONS[method](
+        belief,
+        position,
+        goal_positions,
+        modes,
+        config,
+        orientation=orientation,
+        goal_orientations=goal_orientations,
+        current_mode=current_mode,
+    )
+
+
+def _information_mode(
+    method: str,
+    belief: ArrayLike,
+    position: ArrayLike,
+    goal_positions: ArrayLike,
+    modes: Sequence[Sequence[int]],
+    config: DisambiguationConfig | None,
+    orientation: ArrayLike | None,
+    goal_orientations: ArrayLike | None,
+    current_mode: int | None,
+) -> DisambiguationResult:
+    """The entropy and KL methods: Algorithm 1's projection, an information score per probe."""
+    cfg, mode_dims, p, x, q, gp, gq = _validated_request(
+        belief, position, goal_positions, modes, config, orientation, goal_orientations, current_mode
+    )
+    proj = forward_projection(p, x, q, gp, gq, cfg)
+    if method == "entropy":
+        feature = entropy_bits(proj.p_b)  # (2, n_k)
+        per_probe = entropy_bits(p) - feature  # entropy reduction: larger is better
+    else:
+        feature = kl_bits(proj.p_b, p)
+        per_probe = feature
+    D_k = 0.5 * (per_probe[0] + per_probe[1])  # the mean over the dimension's two probes
+    member = _membership(mode_dims, cfg.dimensions)
+    counts = member.sum(axis=1)
+    scores = np.divide(member @ D_k, counts, out=np.zeros(len(mode_dims)), where=counts > 0)
+    mode, best = select_mode(scores, None if current_mode is None else int(current_mode), cfg.tie_tolerance)
+    return DisambiguationResult(
+        mode=mode,
+        best_mode=best,
+        dimension=cfg.dimensions[int(np.argmax(D_k))],
+        dimensions=cfg.dimensions,
+        scores_plus=per_probe[0],
+        scores_minus=per_probe[1],
+        dimension_scores=D_k,
+        mode_scores=scores,
+        features={method: feature},
+        modes=mode_dims,
+        current_mode=None if current_mode is None else int(current_mode),
+        w=cfg.w,
+        tie_tolerance=cfg.tie_tolerance,
+        method=method,
+    )
+
+
+def _information_explanation(result: DisambiguationResult) -> str:
+    """The entropy / KL methods' last line of :meth:`DisambiguationResult.explain`."""
+    k = result.dimensions.index(result.dimension)
+    name = DIMENSION_NAMES[result.dimension]
+    if result.method == "entropy":
+        h = result.features["entropy"][:, k]
+        return (
+            f"Best dimension k* = {name}: moving +{name} / -{name} leaves a projected entropy of "
+            f"{h[0]:.4g} / {h[1]:.4g} bits at t_b (mean reduction {result.dimension_scores[k]:.4g} bits)."
+        )
+    d = result.features["kl"][:, k]
+    return (
+        f"Best dimension k* = {name}: moving +{name} / -{name} changes the belief by KL = {d[0]:.4g} / "
+        f"{d[1]:.4g} bits at t_b."
+    )
+
+
+_METHOD_FUNCTIONS = {
+    "algorithm1": disambiguate,
+    "entropy": expected_entropy_mode,
+    "kl": expected_kl_mode,
+}

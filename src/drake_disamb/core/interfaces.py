@@ -26,8 +26,9 @@ Non-finite raw entries never reach the arm: they are read as 0 (released / centr
 
 The update (:func:`interface_update`) is what the Drake system runs every control period: it
 detects rising edges of the buttons (a held button counts once), cycles the mode on a mode-button
-press, handles a disambiguation request by asking for the disambiguation system's choice (only on
-the request's rising edge), holds the sanitised raw signal, and returns the events it logged.
+press, handles a disambiguation request (or an automatic trigger) by asking for the disambiguation
+system's choice ``request_latency`` after it (in the same update when that is 0), holds the
+sanitised raw signal, and returns the events it logged.
 """
 
 from __future__ import annotations
@@ -80,7 +81,11 @@ DEFAULT_SPEEDS: dict[str, tuple[float, float]] = {
 }
 """Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs (FACTS 5)."""
 
-EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch"]
+EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch", "automatic_switch"]
+
+_DUE_TOLERANCE = 1e-6
+"""A pending mode switch is served by the first update at least ``request_latency - 1 us`` after it
+started (update times are sums of control periods, off by rounding)."""
 
 
 def check_kind(kind: str) -> str:
@@ -114,6 +119,14 @@ class InterfaceConfig:
         button_threshold: A button or switch level ``>=`` this counts as pressed.
         control_period: Period (s) of the interface update.
         initial_mode: Mode index at the start of a trial (the study randomised it).
+        request_latency: Time (s, finite, >= 0) from a request press (or an automatic trigger) to
+            the mode switch it causes: the paper's system took 2 to 2.5 s to compute the mode. The
+            switch is made by the first update at least this long after the press, with the
+            disambiguation system's choice *at that time* (its computation finished then: the
+            belief, pose and current mode of the switch time). 0 (default): the same update.
+        serve_requests: Whether a request press starts a disambiguation (default). False: presses
+            are logged and counted but never switch the mode (the Automatic paradigm without its
+            request button).
     """
 
     kind: str = "joystick"
@@ -123,6 +136,8 @@ class InterfaceConfig:
     button_threshold: float = 0.5
     control_period: float = 0.01
     initial_mode: int = 0
+    request_latency: float = 0.0
+    serve_requests: bool = True
 
     def __post_init__(self) -> None:
         check_kind(self.kind)
@@ -142,6 +157,11 @@ class InterfaceConfig:
             raise ValueError(
                 f"InterfaceConfig.initial_mode: expected an integer in [0, {n - 1}] for {self.kind}, "
                 f"got {self.initial_mode!r}"
+            )
+        check_real_fields(self, ("request_latency",), allow_zero=True)
+        if not isinstance(self.serve_requests, bool):
+            raise ValueError(
+                f"InterfaceConfig.serve_requests: expected true or false, got {self.serve_requests!r}"
             )
 
     @property
@@ -170,8 +190,10 @@ class InterfaceEvent:
 
     Attributes:
         time: Simulation time (s) of the update that saw it.
-        kind: ``"mode_switch"`` (manual press), ``"disambiguation_request"`` (request press) or
-            ``"disambiguation_switch"`` (the mode change a request caused).
+        kind: ``"mode_switch"`` (manual press), ``"disambiguation_request"`` (request press, at the
+            press), ``"disambiguation_switch"`` (the mode change a request caused, at the switch:
+            ``request_latency`` after the press) or ``"automatic_switch"`` (the mode change an
+            automatic trigger caused, Automatic paradigm).
         from_mode: Mode index before the event.
         to_mode: Mode index after it (equal to ``from_mode`` for a request).
     """
@@ -194,6 +216,13 @@ class InterfaceState:
         request_count: Disambiguation requests so far (request-button presses).
         nonfinite_count: Updates whose raw signal held a NaN or infinity.
         held_raw: The sanitised raw signal of the last update; the commands are computed from it.
+        pending_due: Time (s) at which the pending disambiguation switches the mode; -1 if none
+            (a number, not NaN: an unchanged state vector compares equal and is not rewritten).
+        pending_automatic: The pending disambiguation was started by an automatic trigger (1) or by
+            a request press (0).
+        served_count: Disambiguations served so far (the disambiguation system's choice read and
+            applied: requests and automatic triggers).
+        automatic_seen: The automatic trigger's request count seen at the last update.
     """
 
     mode: int = 0
@@ -203,11 +232,16 @@ class InterfaceState:
     request_count: int = 0
     nonfinite_count: int = 0
     held_raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
+    pending_due: float = -1.0
+    pending_automatic: int = 0
+    served_count: int = 0
+    automatic_seen: int = 0
 
-    VECTOR_SIZE = 6 + RAW_SIZE
+    VECTOR_SIZE = 10 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
-        """Flat vector ``[mode, prev_mode, prev_req, n_switch, n_req, n_bad, raw (4)]`` (Drake state)."""
+        """Flat vector ``[mode, prev_mode, prev_req, n_switch, n_req, n_bad, raw (4), pending_due,
+        pending_automatic, n_served, automatic_seen]`` (Drake state)."""
         head = [
             self.mode,
             self.prev_mode_button,
@@ -216,7 +250,8 @@ class InterfaceState:
             self.request_count,
             self.nonfinite_count,
         ]
-        return np.array([*head, *np.asarray(self.held_raw, dtype=float).tolist()])
+        tail = [self.pending_due, self.pending_automatic, self.served_count, self.automatic_seen]
+        return np.array([*head, *np.asarray(self.held_raw, dtype=float).tolist(), *tail])
 
     @classmethod
     def from_vector(cls, x: ArrayLike) -> InterfaceState:
@@ -232,7 +267,11 @@ class InterfaceState:
             mode_switch_count=int(round(switches)),
             request_count=int(round(requests)),
             nonfinite_count=int(round(nonfinite)),
-            held_raw=v[6:].copy(),
+            held_raw=v[6 : 6 + RAW_SIZE].copy(),
+            pending_due=float(v[6 + RAW_SIZE]),
+            pending_automatic=int(round(v[7 + RAW_SIZE])),
+            served_count=int(round(v[8 + RAW_SIZE])),
+            automatic_seen=int(round(v[9 + RAW_SIZE])),
         )
 
 
@@ -321,6 +360,7 @@ def interface_update(
     config: InterfaceConfig,
     read_disambiguation_mode: Callable[[], float | None] | None = None,
     warn: Callable[[str], None] | None = None,
+    automatic_requests: float | None = None,
 ) -> tuple[InterfaceState, list[InterfaceEvent]]:
     """One control-period update of an interface.
 
@@ -329,20 +369,31 @@ def interface_update(
         raw: The raw signal now (any values; sanitised here).
         time: Current time (s), stamped on the events.
         config: The interface.
-        read_disambiguation_mode: Called only when the request button has a rising edge; returns the
-            disambiguation system's choice (arm-mode index, -1 = keep) or ``None`` when there is no
-            disambiguation system (manual paradigm: the request is logged, the mode kept).
+        read_disambiguation_mode: Called only when a disambiguation is served (see below); returns
+            the disambiguation system's choice (arm-mode index, -1 = keep) or ``None`` when there is
+            no disambiguation system (manual paradigm: the request is logged, the mode kept).
         warn: Called with a message on the first non-finite raw signal and on an invalid
             disambiguation choice.
+        automatic_requests: The automatic trigger's running count of triggers (Automatic
+            paradigm), or ``None`` without one. A count larger than ``state.automatic_seen``
+            starts a disambiguation like a request press does, with no press.
 
     Returns:
         ``(new_state, events)``. A mode-button rising edge cycles the mode (``mode_switch``). A
-        request-button rising edge logs ``disambiguation_request`` and, if the disambiguation system
-        picks an arm mode different from the current one, switches to it
-        (``disambiguation_switch``). When both rise in the same update the manual switch is applied
-        first and the disambiguation choice last. Only manual switches count in
+        request-button rising edge logs ``disambiguation_request`` (at the press) and, with
+        ``config.serve_requests``, starts a disambiguation; so does a new automatic trigger. A
+        started disambiguation is served by the first update at least ``config.request_latency``
+        after it started (the same update when the latency is 0): the disambiguation system's
+        choice is read then (from that time's belief, pose and mode) and, if it is an arm mode
+        different from the current one, the mode switches to it, logged as
+        ``disambiguation_switch`` (a request's) or ``automatic_switch`` (a trigger's) at the switch
+        time. One disambiguation at a time: a press during the wait is logged and counted as a
+        request but starts nothing, and a trigger during the wait is dropped; manual mode switches
+        during the wait work as usual (the choice served at the end sees the mode they left).
+        When the mode button and a served disambiguation fall in the same update the manual
+        switch is applied first and the disambiguation choice last. Only manual switches count in
         ``mode_switch_count``; requests count in ``request_count`` (the paper's "button presses" is
-        their sum).
+        their sum), served disambiguations in ``served_count``.
     """
     clean, bad = sanitize_raw(raw, config)
     events: list[InterfaceEvent] = []
@@ -365,10 +416,21 @@ def interface_update(
         mode = new
         switches += 1
 
+    due, automatic = state.pending_due, state.pending_automatic
     request_level = clean[REQUEST_BUTTON]
     if request_level > 0.5 and state.prev_request_button <= 0.5:
         requests += 1
         events.append(InterfaceEvent(float(time), "disambiguation_request", mode, mode))
+        if config.serve_requests and due < 0:
+            due, automatic = float(time) + config.request_latency, 0
+    seen = state.automatic_seen
+    if automatic_requests is not None and math.isfinite(automatic_requests) and automatic_requests > seen:
+        seen = int(round(automatic_requests))
+        if due < 0:  # a trigger while a disambiguation is pending is dropped
+            due, automatic = float(time) + config.request_latency, 1
+    served = state.served_count
+    if due >= 0 and time >= due - _DUE_TOLERANCE:
+        served += 1
         value = read_disambiguation_mode() if read_disambiguation_mode is not None else None
         choice = parse_disambiguation_mode(value, len(config.arm_modes))
         if value is not None and choice is None and float(value) != -1.0 and warn is not None:
@@ -377,8 +439,10 @@ def interface_update(
                 f"for {config.kind}, got {value!r}; keeping mode {mode}"
             )
         if choice is not None and choice != mode:
-            events.append(InterfaceEvent(float(time), "disambiguation_switch", mode, choice))
+            kind: EventKind = "automatic_switch" if automatic else "disambiguation_switch"
+            events.append(InterfaceEvent(float(time), kind, mode, choice))
             mode = choice
+        due, automatic = -1.0, 0
 
     new_state = InterfaceState(
         mode=mode,
@@ -388,5 +452,9 @@ def interface_update(
         request_count=requests,
         nonfinite_count=nonfinite,
         held_raw=clean,
+        pending_due=due,
+        pending_automatic=automatic,
+        served_count=served,
+        automatic_seen=seen,
     )
     return new_state, events

@@ -1,7 +1,11 @@
-"""The disambiguation system: Algorithm 1 on request, for the interface's mode switch.
+"""The disambiguation system (Algorithm 1 or an alternative method, for the interface's mode switch)
+and the Automatic paradigm's trigger.
 
-All the algorithm lives in :mod:`drake_disamb.core.disambiguation`; this system only reads its
-inputs, calls :func:`~drake_disamb.core.disambiguation.disambiguate` and keeps the last result.
+All the algorithms live in the core (:mod:`drake_disamb.core.disambiguation`,
+:mod:`drake_disamb.core.automatic`); :class:`DisambiguationSystem` only reads its inputs, calls
+:func:`~drake_disamb.core.disambiguation.select_disambiguating_mode` and keeps the last result;
+:class:`AutomaticTrigger` holds the trigger's state and runs
+:func:`~drake_disamb.core.automatic.automatic_trigger_update` every control period.
 """
 
 from __future__ import annotations
@@ -15,15 +19,17 @@ from numpy.typing import NDArray
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
 
+from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import (
+    MODE_SELECTION_METHODS,
     DisambiguationConfig,
     DisambiguationResult,
-    disambiguate,
+    select_disambiguating_mode,
     validate_modes,
 )
 from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
-__all__ = ["DisambiguationSystem", "LastResult"]
+__all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
 
 POSE_SIZE = 7
 """A pose on a vector port: ``[x, y, z, qw, qx, qy, qz]``."""
@@ -62,7 +68,7 @@ _NO_REQUEST = LastResult()
 
 
 class DisambiguationSystem(LeafSystem):
-    """Chooses the disambiguating control mode ``m*`` (paper Algorithm 1) on request.
+    """Chooses the disambiguating control mode ``m*`` (paper Algorithm 1, or ``method``) on request.
 
     .. pydrake_system::
 
@@ -85,15 +91,18 @@ class DisambiguationSystem(LeafSystem):
         goal_poses (n * 7): the goal poses, each ``[x, y, z, qw, qx, qy, qz]`` in W.
         current_mode (1): the interface's current mode, an index into its mode list (arm modes
             first, gripper mode last); must come from interface *state*.
-        request_count (1): the interface's running count of disambiguation requests (from its
-            state).
+        request_count (1): the interface's running count of *served* disambiguations (its
+            ``served_count`` output, from its state): requests and automatic triggers, counted when
+            the interface reads ``disambiguation_mode``, i.e. at the switch time, ``request_latency``
+            after a press.
 
     Output ports:
         disambiguation_mode (1): ``m*`` as an index into ``modes``, or -1 when the current mode is
             kept (ties, or unusable inputs, see below). Computed on demand from
             ``belief``, ``ee_pose``, ``goal_poses`` and ``current_mode`` (direct feedthrough from
             those four, not from ``request_count``): the interface evaluates it only in the update
-            in which it sees the request button, and switches mode in that same control period.
+            in which it serves a disambiguation (a press, or ``request_latency`` after it), and
+            switches mode in that same control period.
         last_result (abstract): a :class:`LastResult` holding the
             :class:`~drake_disamb.core.disambiguation.DisambiguationResult` of the last request
             (scores per dimension and mode, features, the chosen mode), or ``None`` before any
@@ -132,6 +141,9 @@ class DisambiguationSystem(LeafSystem):
         n_goals: Number of goals.
         modes: The arm modes (dimension indices), as tuples.
         config: The :class:`~drake_disamb.core.disambiguation.DisambiguationConfig`.
+        method: The mode-selection method, one of
+            :data:`~drake_disamb.core.disambiguation.MODE_SELECTION_METHODS` (``"algorithm1"``,
+            ``"entropy"``, ``"kl"``; :func:`~drake_disamb.core.disambiguation.select_disambiguating_mode`).
     """
 
     def __init__(
@@ -140,6 +152,7 @@ class DisambiguationSystem(LeafSystem):
         modes: Sequence[Sequence[int]],
         config: DisambiguationConfig | None = None,
         control_period: float = 0.01,
+        method: str = "algorithm1",
     ) -> None:
         super().__init__()
         if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
@@ -151,6 +164,9 @@ class DisambiguationSystem(LeafSystem):
         self.config = DisambiguationConfig() if config is None else config
         if not isinstance(self.config, DisambiguationConfig):
             raise ValueError(f"config: expected a DisambiguationConfig, got {config!r}")
+        if method not in MODE_SELECTION_METHODS:
+            raise ValueError(f"method: expected one of {MODE_SELECTION_METHODS}, got {method!r}")
+        self.method = method
 
         n = self.n_goals
         self._belief = self.DeclareVectorInputPort("belief", n)
@@ -182,7 +198,8 @@ class DisambiguationSystem(LeafSystem):
         # One request on a small scene now, so that the compiled kernels of the core are loaded
         # (a fraction of a second, once per process) before a simulation, not at the user's first
         # request in a live session.
-        disambiguate(
+        select_disambiguating_mode(
+            self.method,
             np.full(n, 1.0 / n),
             np.zeros(3),
             0.1 * np.arange(3.0 * n).reshape(n, 3) + 0.2,
@@ -249,7 +266,8 @@ class DisambiguationSystem(LeafSystem):
         p = self._normalised_belief(request.belief)
         current = round(request.current_mode)
         goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
-        return disambiguate(
+        return select_disambiguating_mode(
+            self.method,
             p,
             request.ee_pose[:3],
             goals[:, :3],
@@ -299,4 +317,95 @@ class DisambiguationSystem(LeafSystem):
         state.get_mutable_discrete_state(self._tick_index).SetFromVector(
             np.concatenate(([seen, 1.0], self._pack(context)))
         )
+        return EventStatus.Succeeded()
+
+
+class AutomaticTrigger(LeafSystem):
+    """The Automatic paradigm's trigger: counts the moments the system should disambiguate by itself.
+
+    .. pydrake_system::
+
+        name: AutomaticTrigger
+        input_ports:
+        - belief
+        - u_h
+        - mode
+        output_ports:
+        - automatic_request_count
+
+    The rule and why are in :mod:`drake_disamb.core.automatic` (low confidence while the user
+    commands, for ``dwell_time`` since the last mode change, at most once per ``min_interval``).
+
+    Input ports:
+        belief (n): the current belief over the ``n`` goals.
+        u_h (6): the user's command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s; the paper's order, not
+            Drake's ``[w; v]``), from the interface's state.
+        mode (1): the interface's current mode index (from its state).
+
+    Output ports:
+        automatic_request_count (1): triggers so far (from state). The interface starts a
+            disambiguation when it grows (its ``automatic_request_count`` input) and logs the mode
+            change it causes as ``"automatic_switch"``.
+
+    State: two discrete groups, ``[dwell (s), mode seen, time of the last trigger (s; -1e9 before the
+    first)]`` and ``[trigger count]``, updated by a periodic discrete update every
+    ``control_period`` seconds (first at t = 0).
+
+    Attributes:
+        n_goals: Number of goals.
+        config: The :class:`~drake_disamb.core.automatic.AutomaticConfig` (threshold written out).
+        control_period: Period (s) of the update (the dwell grows by it per commanding tick).
+    """
+
+    _NEVER = -1e9
+    """The state's "no trigger yet" time: finite, so that an unchanged state compares equal."""
+
+    def __init__(self, n_goals: int, config: AutomaticConfig, control_period: float = 0.01) -> None:
+        super().__init__()
+        if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
+            raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
+        if not isinstance(config, AutomaticConfig) or config.confidence_threshold is None:
+            raise ValueError(
+                "config: expected an AutomaticConfig with its confidence_threshold written out, "
+                f"got {config!r}"
+            )
+        if not (np.isfinite(control_period) and control_period > 0):
+            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
+        self.n_goals = int(n_goals)
+        self.config = config
+        self.control_period = float(control_period)
+        self._belief = self.DeclareVectorInputPort("belief", self.n_goals)
+        self._u_h = self.DeclareVectorInputPort("u_h", 6)
+        self._mode = self.DeclareVectorInputPort("mode", 1)
+        self._main = self.DeclareDiscreteState(np.array([0.0, -1.0, self._NEVER]))
+        self._count = self.DeclareDiscreteState(np.zeros(1))
+        self.DeclareStateOutputPort("automatic_request_count", self._count)
+        self.DeclarePeriodicDiscreteUpdateEvent(self.control_period, 0.0, self._update)
+
+    def get_trigger_count(self, context: Context) -> int:
+        """Triggers so far in ``context``."""
+        return int(round(context.get_discrete_state(self._count).get_value()[0]))
+
+    def _update(self, context: Context, discrete_state) -> EventStatus:  # noqa: ANN001
+        dwell, mode, last = context.get_discrete_state(self._main).get_value().tolist()
+        count = context.get_discrete_state(self._count).get_value()[0]
+        before = TriggerState(
+            count=int(round(count)),
+            dwell=dwell,
+            mode=int(round(mode)),
+            last_trigger=-np.inf if last <= self._NEVER else last,
+        )
+        after, fired = automatic_trigger_update(
+            before,
+            self._belief.Eval(context),
+            self._u_h.Eval(context),
+            float(self._mode.Eval(context)[0]),
+            context.get_time(),
+            self.control_period,
+            self.config,
+        )
+        last_out = self._NEVER if not np.isfinite(after.last_trigger) else after.last_trigger
+        discrete_state.get_mutable_vector(self._main).SetFromVector([after.dwell, after.mode, last_out])
+        if fired:
+            discrete_state.get_mutable_vector(self._count).SetFromVector([after.count])
         return EventStatus.Succeeded()

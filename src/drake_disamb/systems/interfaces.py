@@ -63,6 +63,7 @@ class InterfaceSystem(LeafSystem):
         input_ports:
         - raw
         - disambiguation_mode
+        - automatic_request_count
         output_ports:
         - u_h
         - gripper_command
@@ -70,6 +71,7 @@ class InterfaceSystem(LeafSystem):
         - request_count
         - mode_switch_count
         - nonfinite_count
+        - served_count
         - event_log
 
     Input ports:
@@ -79,9 +81,14 @@ class InterfaceSystem(LeafSystem):
             (0.5) count as pressed; NaN/inf entries are read as 0 (counted in
             ``nonfinite_count``, warned once).
         disambiguation_mode (1): the disambiguation system's choice, an index into ``arm_modes``
-            or -1 = keep the current mode. Evaluated only in an update that sees a rising edge of
-            the request button. May be left unconnected (manual paradigm): requests are then logged
+            or -1 = keep the current mode. Evaluated only in an update that serves a disambiguation:
+            ``config.request_latency`` after a request press (the same update when it is 0) or an
+            automatic trigger. May be left unconnected (manual paradigm): requests are then logged
             and counted but the mode is kept.
+        automatic_request_count (1): the Automatic paradigm's trigger count
+            (:class:`~drake_disamb.systems.disambiguation.AutomaticTrigger`); when it grows, a
+            disambiguation starts as on a request press, but with no press, and the mode change it
+            causes is logged as ``"automatic_switch"``. Unconnected in the other paradigms.
 
     Output ports (all computed from state, so none depends directly on an input):
         u_h (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s) in the world frame, from
@@ -93,11 +100,15 @@ class InterfaceSystem(LeafSystem):
         request_count (1): disambiguation requests so far.
         mode_switch_count (1): manual mode switches so far (disambiguation switches not counted).
         nonfinite_count (1): updates whose raw signal held NaN/inf.
+        served_count (1): disambiguations served so far (requests and automatic triggers whose
+            ``disambiguation_mode`` was read); the disambiguation system's ``request_count`` input.
         event_log (abstract): :class:`EventLog` (a ``tuple[InterfaceEvent, ...]``), every mode
-            switch and request with its time, in order.
+            switch, request and disambiguation or automatic switch with its time, in order.
 
     State: discrete ``[mode, previous mode-button level, previous request-button level, mode-switch
-    count, request count, non-finite count, held raw (4)]``, one more discrete group per vector
+    count, request count, non-finite count, held raw (4), pending switch time (s, -1 if none), pending
+    is automatic, served count, automatic count seen]``
+    (:class:`~drake_disamb.core.interfaces.InterfaceState`), one more discrete group per vector
     output holding its value (so the outputs are state output ports, evaluated without calling
     Python), and the abstract event log; all are updated together by a periodic unrestricted update
     every ``config.control_period`` seconds (first update at t = 0).
@@ -130,6 +141,7 @@ class InterfaceSystem(LeafSystem):
 
         self._raw_port = self.DeclareVectorInputPort("raw", RAW_SIZE)
         self._disamb_port = self.DeclareVectorInputPort("disambiguation_mode", 1)
+        self._automatic_port = self.DeclareVectorInputPort("automatic_request_count", 1)
 
         for name, group in self._output_groups.items():
             self.DeclareStateOutputPort(name, group)
@@ -167,8 +179,11 @@ class InterfaceSystem(LeafSystem):
         def warn(message: str) -> None:
             warnings.warn(f"{self.get_name()}: {message}", RuntimeWarning, stacklevel=2)
 
+        automatic = (
+            float(self._automatic_port.Eval(context)[0]) if self._automatic_port.HasValue(context) else None
+        )
         after, events = interface_update(
-            before, raw, context.get_time(), self.config, read_disambiguation_mode, warn
+            before, raw, context.get_time(), self.config, read_disambiguation_mode, warn, automatic
         )
         # ``state`` starts as a copy of the current state: an unchanged state needs no writing (the
         # common case: the same raw signal, mode and counts as in the previous period).
@@ -192,6 +207,7 @@ class InterfaceSystem(LeafSystem):
             "mode_switch_count": [float(state.mode_switch_count)],
             "request_count": [float(state.request_count)],
             "nonfinite_count": [float(state.nonfinite_count)],
+            "served_count": [float(state.served_count)],
         }
 
     def _write(self, state: InterfaceState, discrete_state, vector=None) -> None:  # noqa: ANN001
@@ -208,9 +224,9 @@ class JoystickInterface(InterfaceSystem):
     Modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper``; ``axis_x`` drives the first dimension of
     the mode, ``axis_y`` the second. Speeds at full deflection: 0.13 m/s, 0.4 rad/s by default.
     Ports as :class:`InterfaceSystem`: inputs ``raw`` (4: axis_x, axis_y, mode_button,
-    disambiguation_button), ``disambiguation_mode`` (1); outputs ``u_h`` (6), ``gripper_command``
-    (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count`` (1), ``nonfinite_count`` (1),
-    ``event_log`` (abstract).
+    disambiguation_button), ``disambiguation_mode`` (1), ``automatic_request_count`` (1); outputs
+    ``u_h`` (6), ``gripper_command`` (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count``
+    (1), ``nonfinite_count`` (1), ``served_count`` (1), ``event_log`` (abstract).
     """
 
     def __init__(self, config: InterfaceConfig | None = None, **overrides: object) -> None:
@@ -228,9 +244,9 @@ class HeadArrayInterface(InterfaceSystem):
     ``back`` cycles ``vx, vy, vz, wx, wy, wz, gripper``; ``left`` / ``right`` drive the selected
     dimension positive / negative at 0.1 m/s or 0.2 rad/s by default. Ports as
     :class:`InterfaceSystem`: inputs ``raw`` (4: left, right, back, disambiguation_button),
-    ``disambiguation_mode`` (1); outputs ``u_h`` (6), ``gripper_command`` (1), ``mode`` (1),
-    ``request_count`` (1), ``mode_switch_count`` (1), ``nonfinite_count`` (1), ``event_log``
-    (abstract).
+    ``disambiguation_mode`` (1), ``automatic_request_count`` (1); outputs ``u_h`` (6),
+    ``gripper_command`` (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count`` (1),
+    ``nonfinite_count`` (1), ``served_count`` (1), ``event_log`` (abstract).
     """
 
     def __init__(self, config: InterfaceConfig | None = None, **overrides: object) -> None:

@@ -1,0 +1,407 @@
+"""Request latency, the Automatic paradigm's trigger and the mode-selection method option: the core
+functions, the LeafSystems driven in isolation with fixed inputs, the scenario checks and closed-loop
+trials."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from drake_disamb.config import load_scenario, resolve_scenario
+from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
+from drake_disamb.core.disambiguation import select_disambiguating_mode
+from drake_disamb.core.interfaces import InterfaceConfig, InterfaceState, initial_state, interface_update
+from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
+from drake_disamb.systems.interfaces import HeadArrayInterface
+
+DT = 0.01
+PRESS = [0.0, 0.0, 0.0, 1.0]
+IDLE = [0.0, 0.0, 0.0, 0.0]
+TRIGGER = AutomaticConfig(confidence_threshold=0.5, dwell_time=0.05, min_interval=0.2)
+
+
+# ------------------------------------------------------------------------------------------------
+# Core: the interface update with a latency
+# ------------------------------------------------------------------------------------------------
+
+
+def _run(config: InterfaceConfig, raws, choice: float = 4.0, automatic=None):  # type: ignore[no-untyped-def]
+    """Run the core update over ``raws`` (one per tick); returns the states, the events and the times
+    at which the disambiguation choice was read."""
+    state, events, reads = initial_state(config), [], []
+    states = []
+    for k, raw in enumerate(raws):
+        t = round(k * DT, 10)
+
+        def read(t: float = t) -> float:
+            reads.append(t)
+            return choice
+
+        auto = None if automatic is None else automatic[k]
+        state, new = interface_update(state, raw, t, config, read, None, auto)
+        events += new
+        states.append(state)
+    return states, events, reads
+
+
+def test_latency_zero_switches_in_the_press_update() -> None:
+    states, events, reads = _run(InterfaceConfig(kind="head_array"), [PRESS, IDLE])
+    assert reads == [0.0] and states[0].mode == 4 and states[0].served_count == 1
+    assert [(e.time, e.kind) for e in events] == [
+        (0.0, "disambiguation_request"),
+        (0.0, "disambiguation_switch"),
+    ]
+
+
+def test_the_switch_comes_latency_after_the_press_with_the_choice_of_then() -> None:
+    cfg = InterfaceConfig(kind="head_array", request_latency=0.05)
+    raws = [IDLE, PRESS, IDLE, PRESS, IDLE, IDLE, IDLE, IDLE, IDLE]
+    states, events, reads = _run(cfg, raws)
+    # Pressed at 0.01: read and switched at 0.06 (the first update >= 0.01 + 0.05), not before.
+    assert reads == [0.06]
+    assert [s.mode for s in states] == [0, 0, 0, 0, 0, 0, 4, 4, 4]
+    assert states[1].pending_due == pytest.approx(0.06) and states[6].pending_due == -1.0
+    # The second press (0.03, during the wait) is a request, but starts nothing.
+    assert [(e.time, e.kind) for e in events] == [
+        (0.01, "disambiguation_request"),
+        (0.03, "disambiguation_request"),
+        (0.06, "disambiguation_switch"),
+    ]
+    assert states[-1].request_count == 2 and states[-1].served_count == 1
+
+
+def test_a_manual_switch_during_the_wait_is_applied_and_the_choice_can_keep_it() -> None:
+    cfg = InterfaceConfig(kind="head_array", request_latency=0.03)
+    back = [0.0, 0.0, 1.0, 0.0]
+    # Press at 0, mode button at 0.01 (0 -> 1); the choice at 0.03 is mode 1: nothing to switch.
+    states, events, reads = _run(cfg, [PRESS, back, IDLE, IDLE, IDLE], choice=1.0)
+    assert reads == [0.03] and states[-1].mode == 1 and states[-1].mode_switch_count == 1
+    assert [e.kind for e in events] == ["disambiguation_request", "mode_switch"]
+
+
+def test_requests_not_served_without_serve_requests() -> None:
+    cfg = InterfaceConfig(kind="head_array", serve_requests=False)
+    states, events, reads = _run(cfg, [PRESS, IDLE])
+    assert reads == [] and states[-1].mode == 0 and states[-1].request_count == 1
+    assert [e.kind for e in events] == ["disambiguation_request"]
+
+
+def test_an_automatic_trigger_switches_without_a_press_after_the_latency() -> None:
+    cfg = InterfaceConfig(kind="head_array", request_latency=0.02)
+    counts = [0, 1, 1, 2, 2, 2, 2]  # the second trigger (0.03) comes during the wait: dropped
+    states, events, reads = _run(cfg, [IDLE] * 7, automatic=counts)
+    assert reads == [0.03]
+    assert [(e.time, e.kind, e.from_mode, e.to_mode) for e in events] == [(0.03, "automatic_switch", 0, 4)]
+    s = states[-1]
+    assert s.request_count == 0 and s.mode_switch_count == 0 and s.served_count == 1 and s.automatic_seen == 2
+
+
+def test_state_vector_round_trip_with_a_pending_switch() -> None:
+    s = InterfaceState(
+        mode=2, request_count=1, pending_due=3.25, pending_automatic=1, served_count=4, automatic_seen=2
+    )
+    back = InterfaceState.from_vector(s.to_vector())
+    assert (back.pending_due, back.pending_automatic, back.served_count, back.automatic_seen) == (
+        3.25,
+        1,
+        4,
+        2,
+    )
+
+
+@pytest.mark.parametrize("value", [-0.1, math.nan, math.inf, "2"])
+def test_interface_config_rejects_a_bad_latency(value: object) -> None:
+    with pytest.raises(ValueError, match=r"InterfaceConfig\.request_latency: expected a finite number >= 0"):
+        InterfaceConfig(request_latency=value)  # type: ignore[arg-type]
+
+
+# ------------------------------------------------------------------------------------------------
+# Core: the trigger
+# ------------------------------------------------------------------------------------------------
+
+LOW = [0.4, 0.3, 0.3]  # max 0.4 < 0.5
+HIGH = [0.6, 0.2, 0.2]
+MOVE = [0.1, 0, 0, 0, 0, 0]
+STILL = [0.0] * 6
+
+
+def _trigger(sequence, config: AutomaticConfig = TRIGGER) -> list[float]:  # type: ignore[no-untyped-def]
+    """Fire times of the trigger over ``sequence`` = [(belief, u_h, mode), ...], one per tick."""
+    state, fired = TriggerState(), []
+    for k, (belief, u_h, mode) in enumerate(sequence):
+        t = round(k * DT, 10)
+        state, f = automatic_trigger_update(state, belief, u_h, mode, t, DT, config)
+        if f:
+            fired.append(t)
+    return fired
+
+
+def test_trigger_fires_after_the_dwell_then_at_most_once_per_interval() -> None:
+    # Low confidence while commanding: dwell 0.05 s = 5 ticks (t = 0 .. 0.04), fires at 0.04; then
+    # again 0.2 s later at the earliest.
+    assert _trigger([(LOW, MOVE, 0)] * 50) == [0.04, 0.24, 0.44]
+
+
+def test_trigger_waits_while_confident_or_still_and_restarts_at_a_mode_change() -> None:
+    assert _trigger([(HIGH, MOVE, 0)] * 30) == []  # assisted: nothing to do
+    assert _trigger([(LOW, STILL, 0)] * 30) == []  # the user is not commanding
+    # Pauses neither count nor reset: 3 ticks moving, 10 still, 2 moving -> fires at the 5th moving tick.
+    seq = [(LOW, MOVE, 0)] * 3 + [(LOW, STILL, 0)] * 10 + [(LOW, MOVE, 0)] * 2
+    assert _trigger(seq) == [0.14]
+    # A mode change (the user's own switch) restarts the clock: 4 ticks, switch, 5 more.
+    seq = [(LOW, MOVE, 0)] * 4 + [(LOW, MOVE, 1)] * 5
+    assert _trigger(seq) == [0.08]
+    # Confidence reaching the threshold restarts it too.
+    seq = [(LOW, MOVE, 0)] * 4 + [(HIGH, MOVE, 0)] + [(LOW, MOVE, 0)] * 5
+    assert _trigger(seq) == [0.09]
+    # A non-finite belief is never a reason to switch.
+    assert _trigger([([math.nan, 0.5, 0.5], MOVE, 0)] * 30) == []
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (
+            {"confidence_threshold": 1.5},
+            r"AutomaticConfig\.confidence_threshold: expected a probability in \(0, 1\], got 1\.5",
+        ),
+        ({"confidence_threshold": 0.0}, r"AutomaticConfig\.confidence_threshold: .* got 0\.0"),
+        ({"dwell_time": 0.0}, r"AutomaticConfig\.dwell_time: expected a finite number > 0, got 0\.0"),
+        ({"min_interval": -1.0}, r"AutomaticConfig\.min_interval: expected a finite number >= 0, got -1\.0"),
+        ({"request_button": 1}, r"AutomaticConfig\.request_button: expected true or false, got 1"),
+    ],
+)
+def test_trigger_config_validation(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        AutomaticConfig(**kwargs)
+
+
+def test_the_trigger_needs_its_threshold_written_out() -> None:
+    with pytest.raises(ValueError, match="confidence_threshold"):
+        automatic_trigger_update(TriggerState(), LOW, MOVE, 0, 0.0, DT, AutomaticConfig())
+
+
+# ------------------------------------------------------------------------------------------------
+# Systems in isolation
+# ------------------------------------------------------------------------------------------------
+
+
+def test_automatic_trigger_system_with_fixed_inputs() -> None:
+    system = AutomaticTrigger(3, TRIGGER, control_period=DT)
+    names = [system.get_input_port(i).get_name() for i in range(system.num_input_ports())]
+    assert names == ["belief", "u_h", "mode"]
+    context = system.CreateDefaultContext()
+    system.GetInputPort("belief").FixValue(context, LOW)
+    system.GetInputPort("u_h").FixValue(context, MOVE)
+    system.GetInputPort("mode").FixValue(context, [0.0])
+    simulator = Simulator(system, context)
+    simulator.AdvanceTo(0.035)  # updates at 0 .. 0.03: 4 ticks of dwell
+    assert system.GetOutputPort("automatic_request_count").Eval(context)[0] == 0
+    simulator.AdvanceTo(0.045)  # the 5th tick (0.04) fires
+    assert system.GetOutputPort("automatic_request_count").Eval(context)[0] == 1
+    simulator.AdvanceTo(0.235)
+    assert system.get_trigger_count(context) == 1  # not again before 0.24
+    simulator.AdvanceTo(0.245)
+    assert system.get_trigger_count(context) == 2
+    system.GetInputPort("belief").FixValue(context, HIGH)
+    simulator.AdvanceTo(1.0)
+    assert system.get_trigger_count(context) == 2
+
+
+def test_automatic_trigger_system_validation() -> None:
+    with pytest.raises(ValueError, match="n_goals"):
+        AutomaticTrigger(0, TRIGGER)
+    with pytest.raises(ValueError, match="confidence_threshold written out"):
+        AutomaticTrigger(3, AutomaticConfig())
+    with pytest.raises(ValueError, match="control_period"):
+        AutomaticTrigger(3, TRIGGER, control_period=0.0)
+
+
+class _Interface:
+    """A head array stepped tick by tick with fixed inputs."""
+
+    def __init__(self, config: InterfaceConfig, choice: float) -> None:
+        self.system = HeadArrayInterface(config)
+        self.sim = Simulator(self.system)
+        self.ctx = self.sim.get_mutable_context()
+        self.system.GetInputPort("disambiguation_mode").FixValue(self.ctx, [choice])
+        self.system.GetInputPort("raw").FixValue(self.ctx, IDLE)
+        self.system.GetInputPort("automatic_request_count").FixValue(self.ctx, [0.0])
+        self.sim.Initialize()
+        self.k = 0
+
+    def tick(self, raw, automatic: float = 0.0) -> None:  # type: ignore[no-untyped-def]
+        self.system.GetInputPort("raw").FixValue(self.ctx, np.asarray(raw, dtype=float))
+        self.system.GetInputPort("automatic_request_count").FixValue(self.ctx, [automatic])
+        self.sim.AdvanceTo(self.k * DT + 0.5 * DT)
+        self.k += 1
+
+    def out(self, name: str) -> float:
+        return float(self.system.GetOutputPort(name).Eval(self.ctx)[0])
+
+    def log(self) -> list[tuple[float, str]]:
+        return [(round(e.time, 6), e.kind) for e in self.system.get_event_log(self.ctx)]
+
+
+def test_interface_system_switches_latency_after_the_press() -> None:
+    d = _Interface(InterfaceConfig(kind="head_array", request_latency=0.04), choice=3.0)
+    d.tick(PRESS)  # t = 0
+    for _ in range(3):
+        d.tick(IDLE)  # 0.01 .. 0.03
+        assert d.out("mode") == 0 and d.out("served_count") == 0 and d.out("request_count") == 1
+    d.tick(IDLE)  # 0.04
+    assert d.out("mode") == 3 and d.out("served_count") == 1
+    assert d.log() == [(0.0, "disambiguation_request"), (0.04, "disambiguation_switch")]
+
+
+def test_interface_system_logs_an_automatic_switch() -> None:
+    d = _Interface(InterfaceConfig(kind="head_array"), choice=2.0)
+    d.tick(IDLE)
+    d.tick(IDLE, automatic=1.0)  # the trigger's count grew: served in this update (latency 0)
+    assert d.out("mode") == 2 and d.out("request_count") == 0 and d.out("mode_switch_count") == 0
+    d.tick(IDLE, automatic=1.0)  # no new trigger
+    assert d.out("served_count") == 1
+    assert d.log() == [(0.01, "automatic_switch")]
+
+
+IDENTITY = [1.0, 0.0, 0.0, 0.0]
+GOAL_POSES = np.array([[0.2, -0.25, 0.1, *IDENTITY], [0.25, 0.2, 0.15, *IDENTITY]])
+EE_POSE = np.array([0.0, 0.0, 0.1, *IDENTITY])
+
+
+@pytest.mark.parametrize("method", ["entropy", "kl"])
+def test_disambiguation_system_runs_the_chosen_method(method: str) -> None:
+    modes = [[0], [1], [2], [3], [4], [5]]
+    system = DisambiguationSystem(2, modes, method=method)
+    assert system.method == method
+    context = system.CreateDefaultContext()
+    belief = np.array([0.55, 0.45])
+    system.GetInputPort("belief").FixValue(context, belief)
+    system.GetInputPort("ee_pose").FixValue(context, EE_POSE)
+    system.GetInputPort("goal_poses").FixValue(context, GOAL_POSES.ravel())
+    system.GetInputPort("current_mode").FixValue(context, [5.0])
+    system.GetInputPort("request_count").FixValue(context, [0.0])
+    simulator = Simulator(system, context)
+    simulator.AdvanceTo(0.015)
+    system.GetInputPort("request_count").FixValue(context, [1.0])
+    simulator.AdvanceTo(0.025)
+    result = system.get_last_result(context)
+    assert result is not None and result.method == method
+    expected = select_disambiguating_mode(
+        method, belief, EE_POSE[:3], GOAL_POSES[:, :3], modes, current_mode=5
+    )
+    np.testing.assert_allclose(result.mode_scores, expected.mode_scores, rtol=1e-12)
+    mode = system.GetOutputPort("disambiguation_mode").Eval(context)[0]
+    assert mode == (-1.0 if result.mode is None else result.mode)
+
+
+def test_disambiguation_system_rejects_an_unknown_method() -> None:
+    with pytest.raises(ValueError, match=r"method: expected one of .* got 'fisher'"):
+        DisambiguationSystem(2, [[0], [1]], method="fisher")
+
+
+# ------------------------------------------------------------------------------------------------
+# Scenario fields
+# ------------------------------------------------------------------------------------------------
+
+
+def test_scenario_fields_resolve() -> None:
+    s = load_scenario("reaching")
+    c = resolve_scenario(s)
+    assert c.disambiguation_method == "algorithm1" and c.automatic is None
+    assert c.interface.request_latency == 0.0 and c.interface.serve_requests
+    s.paradigm = "automatic"
+    s.disambiguation.method = "kl"
+    s.disambiguation.request_latency = 2.25
+    s.disambiguation.automatic.request_button = False
+    c = resolve_scenario(s)
+    assert c.disambiguation_method == "kl" and c.interface.request_latency == 2.25
+    assert c.automatic is not None and c.automatic.confidence_threshold == c.rhos[0]  # rho1 by default
+    assert not c.interface.serve_requests and c.disambiguation is not None
+    s.disambiguation.automatic.confidence_threshold = 0.5
+    assert resolve_scenario(s).automatic.confidence_threshold == 0.5
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "message"),
+    [
+        (
+            "disambiguation.request_latency",
+            -1.0,
+            r"scenario\.disambiguation\.request_latency: expected a finite number >= 0 \(s\), got -1\.0",
+        ),
+        (
+            "disambiguation.request_latency",
+            math.nan,
+            r"scenario\.disambiguation\.request_latency: expected a finite number, got nan",
+        ),
+        ("disambiguation.method", "fisher", r"scenario\.disambiguation\.method: expected one of .*'fisher'"),
+        ("paradigm", "auto", r"scenario\.paradigm: expected one of .*'auto'"),
+        (
+            "disambiguation.automatic.dwell_time",
+            0.0,
+            r"scenario\.disambiguation\.automatic: AutomaticConfig\.dwell_time: .* got 0\.0",
+        ),
+        (
+            "disambiguation.automatic.confidence_threshold",
+            1.5,
+            r"scenario\.disambiguation\.automatic: .*confidence_threshold.* got 1\.5",
+        ),
+    ],
+)
+def test_scenario_errors_name_field_and_value(path: str, value: object, message: str) -> None:
+    s = load_scenario("reaching")
+    s.paradigm = "automatic"
+    *parents, leaf = path.split(".")
+    target = s
+    for name in parents:
+        target = getattr(target, name)
+    setattr(target, leaf, value)
+    with pytest.raises(ValueError, match=message):
+        resolve_scenario(s)
+
+
+# ------------------------------------------------------------------------------------------------
+# Closed loop
+# ------------------------------------------------------------------------------------------------
+
+
+def _silent_user(task: str = "reaching"):  # type: ignore[no-untyped-def]
+    s = load_scenario(task)
+    s.user.config.request_at_start = False
+    s.user.config.request_when_unhelped_for = None
+    return s
+
+
+def test_automatic_paradigm_trial_succeeds_with_automatic_switches() -> None:
+    from drake_disamb.trial import run_trial
+
+    s = _silent_user()
+    s.paradigm = "automatic"
+    s.user.goals = [3]
+    s.initial_mode = 1
+    s.disambiguation.automatic.confidence_threshold = 0.5
+    r = run_trial(s, progress=False)
+    assert r.success
+    assert r.automatic_switches >= 1 and r.requests == 0
+    auto = [e for e in r.events if e.kind == "automatic_switch"]
+    assert [e.time for e in auto] == r.automatic_switch_times
+    assert all(e.from_mode != e.to_mode for e in auto)
+    # The user's own presses only: the automatic switches are not among them.
+    assert r.mode_switches == sum(e.kind == "mode_switch" for e in r.events)
+    assert r.button_presses == r.mode_switches
+    assert np.all(np.diff(r.automatic_switch_times) >= 4.0 - 1e-9)  # min_interval
+
+
+def test_request_latency_in_a_trial() -> None:
+    from drake_disamb.trial import run_trial
+
+    s = load_scenario("reaching")  # the embedded user asks at the start
+    s.disambiguation.request_latency = 2.0
+    r = run_trial(s, progress=False)
+    assert r.request_times[0] == pytest.approx(0.01)
+    assert r.disambiguation_switch_times[0] == pytest.approx(2.01)
+    assert r.automatic_switches == 0 and r.automatic_switch_times == []
