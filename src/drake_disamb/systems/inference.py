@@ -88,7 +88,7 @@ def _check_square(matrix: ArrayLike | None, n: int, name: str) -> NDArray[np.flo
 
 def _goals_changed(new: NDArray[np.float64], old: NDArray[np.float64], tol: float) -> bool:
     """True if any entry moved by more than ``tol`` or changed between finite and NaN."""
-    if np.array_equal(new, old):  # the common case, every tick (equal arrays hold no NaN)
+    if new.tobytes() == old.tobytes():  # the common case, every tick (equal bits: nothing moved)
         return False
     nan_new, nan_old = np.isnan(new), np.isnan(old)
     diff = np.abs(np.where(nan_new | nan_old, 0.0, new - old))
@@ -112,6 +112,7 @@ class _IntentInferenceBase(LeafSystem):
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
         self._u_a = self.DeclareVectorInputPort("u_a", 6 * self._n)
+        self._belief_memo: tuple[bytes, NDArray[np.float64]] | None = None  # see _belief
 
     @property
     def n_goals(self) -> int:
@@ -163,8 +164,16 @@ class _IntentInferenceBase(LeafSystem):
     # -- outputs --------------------------------------------------------------------------------
 
     def _belief(self, context: Context) -> NDArray[np.float64]:
-        # A copy projected onto the simplex: the stored state may carry integrator error.
-        return normalize_belief(np.array(self._raw_belief(context), dtype=float))
+        # A copy projected onto the simplex: the stored state may carry integrator error. The
+        # projection is a pure function of the stored belief: a one-entry memo of the last one
+        # keeps it from being recomputed when the state is rewritten unchanged (every tick's
+        # unrestricted update rewrites it). Read-only: the outputs copy it.
+        raw = self._raw_belief(context)
+        key = raw.tobytes()
+        memo = self._belief_memo
+        if memo is None or memo[0] != key:
+            memo = self._belief_memo = (key, normalize_belief(np.array(raw, dtype=float)))
+        return memo[1]
 
     def _calc_belief(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._belief(context))
@@ -282,8 +291,8 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     def _periodic_update(self, context: Context, state: State) -> EventStatus:
         counted = self._count_sanitized(context, state.get_mutable_discrete_state())
-        goals = self._goal_poses_now(context)
-        old = context.get_discrete_state(self._goals_index).CopyToVector()
+        goals = self._goal_poses.Eval(context)
+        old = context.get_discrete_state(self._goals_index).get_value()
         if _goals_changed(goals, old, self._tol):
             self._reset_update(context, state)
             return EventStatus.Succeeded()
