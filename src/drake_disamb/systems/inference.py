@@ -211,7 +211,8 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
     projected so that ``sum(p)`` stays 1, with a positivity guard), integrated by the simulator's
     integrator (the drive, the part of the right-hand side that does not depend on ``p``, is a cache
-    entry on the inputs: computed once per control tick, not at every integrator stage);
+    entry on the inputs: computed once per control tick, not at every integrator stage; it also
+    holds whether ``u_h`` was finite, the verdict the periodic update counts);
     discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
     it (an entry at or below zero, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard against
@@ -256,8 +257,10 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # change instead of at every integrator stage.
         inputs = [self._u_h, self._ee_pose, self._goal_poses] + ([self._u_a] if params.agreement else [])
         self._drive = self.DeclareCacheEntry(
-            "DFT drive rest/tau2 + lambda sigma(xi) (1/s)",
-            ValueProducer(allocate=lambda: AbstractValue.Make(np.zeros(self._n)), calc=self._calc_drive),
+            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite",
+            ValueProducer(
+                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True)), calc=self._calc_drive
+            ),
             prerequisites_of_calc={port.ticket() for port in inputs},
         )
         self._goals_index = self.DeclareDiscreteState(np.full(7 * self._n, np.nan))
@@ -274,15 +277,26 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         return context.get_continuous_state_vector().CopyToVector()
 
     def _calc_drive(self, context: Context, value: AbstractValue) -> None:
-        x_g = self._goal_positions(self._goal_poses_now(context))
+        # The drive and whether u_h was finite (the verdict the periodic update counts, so that
+        # the command is read and checked once per tick).
+        x_g = self._goal_positions(np.asarray(self._goal_poses.Eval(context), dtype=float))
         u_a = None
         if self._params.agreement:
             u_a = np.asarray(self._u_a.Eval(context), dtype=float).reshape(self._n, 6)
-        value.set_value(dft_drive(self._command(context), self._position(context), x_g, self._params, u_a))
+        u = np.asarray(self._u_h.Eval(context), dtype=float)
+        finite = all_finite(u)
+        command = u if finite else sanitize_command(u)
+        value.set_value((dft_drive(command, self._position(context), x_g, self._params, u_a), finite))
+
+    def _sanitized_input(self, context: Context) -> str | None:
+        # The drive's verdict on u_h (already computed for this tick's inputs by the integrator).
+        if not self._u_h.HasValue(context) or self._drive.Eval(context)[1]:
+            return None
+        return super()._sanitized_input(context)
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
         p = context.get_continuous_state_vector().CopyToVector()
-        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context), self._params)
+        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context)[0], self._params)
         derivatives.get_mutable_vector().SetFromVector(dp)
 
     def _reset_update(self, context: Context, state: State) -> None:
