@@ -62,7 +62,11 @@ class SharedControlBlender(LeafSystem):
             below); from state.
 
     The three outputs share one blending step, a cache entry that depends on the three inputs only
-    (computed once per change of the inputs, not per output or per integrator stage).
+    (computed once per change of the inputs, not per output or per integrator stage). The step is
+    a pure function of the inputs' values, and a one-entry memo on the system keeps the last one:
+    when Drake invalidates inputs whose values did not change (the diagram's unrestricted update
+    rewrites the belief and ``u_h`` unchanged at every tick), the entry is refilled without a new
+    blending step.
 
     **No user input.** The paper blends "always", so with ``assist_without_input=True`` a user who
     lets go is still driven toward ``g*`` at up to ``rho3 |u_a|`` (0.14 m/s with the default

@@ -100,7 +100,10 @@ class InterfaceSystem(LeafSystem):
     count, request count, non-finite count, held raw (4)]``, one more discrete group per vector
     output holding its value (so the outputs are state output ports, evaluated without calling
     Python), and the abstract event log; all are updated together by a periodic unrestricted update
-    every ``config.control_period`` seconds (first update at t = 0).
+    every ``config.control_period`` seconds (first update at t = 0). The update is a pure function
+    of the state and the raw signal (time only stamps events): a (state, raw) pair that gave no
+    change and no event is remembered (one entry, on the system) and its repetitions return at
+    once, writing nothing.
 
     Attributes:
         config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
