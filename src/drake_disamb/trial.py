@@ -146,11 +146,13 @@ def run_trial(
         if stop_requested is not None and stop_requested():
             stopped[0] = True
             return EventStatus.ReachedTermination(task, "stop requested")
-        if stop_at_success and task.is_done(task.GetMyContextFromRoot(context)):
+        # ``context`` is the simulator's own root context: its task subcontext is ``task_context``.
+        if stop_at_success and task.is_done(task_context):
             return EventStatus.ReachedTermination(task, "task done")
         return EventStatus.DidNothing()
 
-    simulator.set_monitor(monitor)
+    if bar is not None or stop_requested is not None or stop_at_success:  # else nothing to watch
+        simulator.set_monitor(monitor)
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
     start = _time.perf_counter()

@@ -28,7 +28,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _field_rows
 from drake_disamb.core._validation import all_finite, check_real_fields
-from drake_disamb.core.geometry import check_vectors, normalized_quaternions
+from drake_disamb.core.geometry import (
+    check_vectors,
+    normalized_quaternions,
+    normalized_quaternions_unchecked,
+)
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
@@ -170,15 +174,25 @@ def potential_field_commands(
 
 
 def potential_field_commands_from_poses(
-    ee_pose: NDArray[np.float64], goal_poses: NDArray[np.float64], config: PotentialFieldConfig
+    ee_pose: NDArray[np.float64],
+    goal_poses: NDArray[np.float64],
+    config: PotentialFieldConfig,
+    checked: bool = True,
 ) -> NDArray[np.float64]:
     """:func:`potential_field_commands` for one pose ``[x, y, z, qw, qx, qy, qz]`` and ``(n, 7)`` goal
     poses, with the lean validation of a control loop's hot path; returns ``(n, 6)``.
 
     The same numbers as :func:`potential_field_commands` (the same normalisation and kernel);
     shapes are the caller's business (a Drake port fixes them). A non-finite entry or a (near) zero
-    quaternion is a ``ValueError`` naming the argument, as there.
+    quaternion is a ``ValueError`` naming the argument, as there. ``checked=False`` skips those
+    checks: the caller has already checked the poses (every entry finite, each quaternion's norm
+    at least 1e-12 and finite, e.g. :func:`drake_disamb.systems.sanitized.usable_poses`), and they
+    are not checked twice per control tick.
     """
+    if not checked:
+        q = normalized_quaternions_unchecked(ee_pose[3:])
+        gq = normalized_quaternions_unchecked(goal_poses[:, 3:])
+        return _potential_field_commands(ee_pose[:3], q, goal_poses[:, :3], gq, config)
     if not all_finite(ee_pose, goal_poses):
         name = "quat" if not all_finite(ee_pose) else "goal_quats"
         bad = ee_pose if name == "quat" else goal_poses

@@ -66,13 +66,24 @@ def normalized_quaternions(q: ArrayLike, name: str) -> NDArray[np.float64]:
     """
     a = check_vectors(q, 4, name)
     with np.errstate(over="ignore"):  # an overflowing norm is rejected below, with its own message
-        norm = np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))  # what np.linalg.norm computes
+        norm = _quaternion_norms(a)
     if norm.size and np.minimum.reduce(norm, axis=None) < 1e-12:  # np.any, minus its wrapper
         raise ValueError(f"{name}: a quaternion has (near) zero norm, got {a.tolist()!r}")
     # Finite norms (each below 1.4e154) cannot sum to infinity: one sum checks them all.
     if not math.isfinite(np.add.reduce(norm, axis=None)):
         raise ValueError(f"{name}: a quaternion's norm overflows (entries too large), got {a.tolist()!r}")
     return a / norm
+
+
+def _quaternion_norms(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Norms of quaternions ``(..., 4)``, keepdims (what ``np.linalg.norm`` computes)."""
+    return np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))
+
+
+def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`normalized_quaternions` without its checks: ``q`` is a float array ``(..., 4)`` of
+    finite quaternions whose norms are at least 1e-12 and do not overflow (the caller checked)."""
+    return q / _quaternion_norms(q)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -96,7 +96,8 @@ class PotentialFieldAutonomy(LeafSystem):
         if not usable_poses(ee, goals):  # counted and warned by _check_inputs
             value.set_value((False, np.zeros(6 * self.n_goals)))
             return
-        u_a = potential_field_commands_from_poses(ee, goals.reshape(self.n_goals, 7), self.config)
+        # Checked once, just above: the core's own checks are skipped (checked=False).
+        u_a = potential_field_commands_from_poses(ee, goals.reshape(self.n_goals, 7), self.config, False)
         value.set_value((True, u_a.reshape(-1)))
 
     def _calc_u_a(self, context: Context, output: BasicVector) -> None:

@@ -62,7 +62,11 @@ class SharedControlBlender(LeafSystem):
             below); from state.
 
     The three outputs share one blending step, a cache entry that depends on the three inputs only
-    (computed once per change of the inputs, not per output or per integrator stage).
+    (computed once per change of the inputs, not per output or per integrator stage). The step is
+    a pure function of the inputs' values, and a one-entry memo on the system keeps the last one:
+    when Drake invalidates inputs whose values did not change (the diagram's unrestricted update
+    rewrites the belief and ``u_h`` unchanged at every tick), the entry is refilled without a new
+    blending step.
 
     **No user input.** The paper blends "always", so with ``assist_without_input=True`` a user who
     lets go is still driven toward ``g*`` at up to ``rho3 |u_a|`` (0.14 m/s with the default
@@ -109,6 +113,7 @@ class SharedControlBlender(LeafSystem):
         # One blending step per change of the inputs, shared by the three outputs (a cache entry
         # that depends on the inputs alone, not on time or on any state).
         inputs = {port.ticket() for port in (self._u_h_port, self._belief_port, self._u_a_port)}
+        self._memo: tuple[bytes, tuple[NDArray[np.float64], ...]] | None = None
         self._step = self.DeclareCacheEntry(
             "shared_control step (u, alpha, g_star)",
             ValueProducer(allocate=lambda: AbstractValue.Make(_NO_STEP), calc=self._calc_step),
@@ -140,8 +145,9 @@ class SharedControlBlender(LeafSystem):
         self._sanitized.record(context, discrete_state, message)
         return EventStatus.Succeeded()
 
-    def _compute(self, context: Context) -> tuple[np.ndarray, float, int]:
-        u_h, p, u_a = self._inputs(context)
+    def _compute(
+        self, u_h: NDArray[np.float64], p: NDArray[np.float64], u_a: NDArray[np.float64]
+    ) -> tuple[np.ndarray, float, int]:
         if not all_finite(u_h, p, u_a):  # counted and warned by _check_inputs
             u_h = np.where(np.isfinite(u_h), u_h, 0.0)
             u_a = np.where(np.isfinite(u_a), u_a, 0.0)
@@ -150,8 +156,16 @@ class SharedControlBlender(LeafSystem):
         return u, float(alpha), int(g_star)
 
     def _calc_step(self, context: Context, value: AbstractValue) -> None:
-        u, alpha, g_star = self._compute(context)
-        value.set_value((u, np.array([alpha]), np.array([float(g_star)])))
+        u_h, p, u_a = self._inputs(context)
+        # The step is a pure function of the three inputs: a one-entry memo of the last one keeps
+        # it from being recomputed when Drake invalidates inputs whose values did not change (the
+        # belief and u_h are rewritten, unchanged, at every tick's unrestricted update).
+        key = u_h.tobytes() + p.tobytes() + u_a.tobytes()
+        memo = self._memo
+        if memo is None or memo[0] != key:
+            u, alpha, g_star = self._compute(u_h, p, u_a)
+            memo = self._memo = (key, (u, np.array([alpha]), np.array([float(g_star)])))
+        value.set_value(memo[1])
 
     def _calc_u(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._step.Eval(context)[0])

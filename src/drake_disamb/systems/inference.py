@@ -88,7 +88,7 @@ def _check_square(matrix: ArrayLike | None, n: int, name: str) -> NDArray[np.flo
 
 def _goals_changed(new: NDArray[np.float64], old: NDArray[np.float64], tol: float) -> bool:
     """True if any entry moved by more than ``tol`` or changed between finite and NaN."""
-    if np.array_equal(new, old):  # the common case, every tick (equal arrays hold no NaN)
+    if new.tobytes() == old.tobytes():  # the common case, every tick (equal bits: nothing moved)
         return False
     nan_new, nan_old = np.isnan(new), np.isnan(old)
     diff = np.abs(np.where(nan_new | nan_old, 0.0, new - old))
@@ -112,6 +112,7 @@ class _IntentInferenceBase(LeafSystem):
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
         self._u_a = self.DeclareVectorInputPort("u_a", 6 * self._n)
+        self._belief_memo: tuple[bytes, NDArray[np.float64]] | None = None  # see _belief
 
     @property
     def n_goals(self) -> int:
@@ -163,8 +164,16 @@ class _IntentInferenceBase(LeafSystem):
     # -- outputs --------------------------------------------------------------------------------
 
     def _belief(self, context: Context) -> NDArray[np.float64]:
-        # A copy projected onto the simplex: the stored state may carry integrator error.
-        return normalize_belief(np.array(self._raw_belief(context), dtype=float))
+        # A copy projected onto the simplex: the stored state may carry integrator error. The
+        # projection is a pure function of the stored belief: a one-entry memo of the last one
+        # keeps it from being recomputed when the state is rewritten unchanged (every tick's
+        # unrestricted update rewrites it). Read-only: the outputs copy it.
+        raw = self._raw_belief(context)
+        key = raw.tobytes()
+        memo = self._belief_memo
+        if memo is None or memo[0] != key:
+            memo = self._belief_memo = (key, normalize_belief(np.array(raw, dtype=float)))
+        return memo[1]
 
     def _calc_belief(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._belief(context))
@@ -202,7 +211,8 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
     projected so that ``sum(p)`` stays 1, with a positivity guard), integrated by the simulator's
     integrator (the drive, the part of the right-hand side that does not depend on ``p``, is a cache
-    entry on the inputs: computed once per control tick, not at every integrator stage);
+    entry on the inputs: computed once per control tick, not at every integrator stage; it also
+    holds whether ``u_h`` was finite, the verdict the periodic update counts);
     discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
     it (an entry at or below zero, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard against
@@ -247,8 +257,10 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # change instead of at every integrator stage.
         inputs = [self._u_h, self._ee_pose, self._goal_poses] + ([self._u_a] if params.agreement else [])
         self._drive = self.DeclareCacheEntry(
-            "DFT drive rest/tau2 + lambda sigma(xi) (1/s)",
-            ValueProducer(allocate=lambda: AbstractValue.Make(np.zeros(self._n)), calc=self._calc_drive),
+            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite",
+            ValueProducer(
+                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True)), calc=self._calc_drive
+            ),
             prerequisites_of_calc={port.ticket() for port in inputs},
         )
         self._goals_index = self.DeclareDiscreteState(np.full(7 * self._n, np.nan))
@@ -265,15 +277,26 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         return context.get_continuous_state_vector().CopyToVector()
 
     def _calc_drive(self, context: Context, value: AbstractValue) -> None:
-        x_g = self._goal_positions(self._goal_poses_now(context))
+        # The drive and whether u_h was finite (the verdict the periodic update counts, so that
+        # the command is read and checked once per tick).
+        x_g = self._goal_positions(np.asarray(self._goal_poses.Eval(context), dtype=float))
         u_a = None
         if self._params.agreement:
             u_a = np.asarray(self._u_a.Eval(context), dtype=float).reshape(self._n, 6)
-        value.set_value(dft_drive(self._command(context), self._position(context), x_g, self._params, u_a))
+        u = np.asarray(self._u_h.Eval(context), dtype=float)
+        finite = all_finite(u)
+        command = u if finite else sanitize_command(u)
+        value.set_value((dft_drive(command, self._position(context), x_g, self._params, u_a), finite))
+
+    def _sanitized_input(self, context: Context) -> str | None:
+        # The drive's verdict on u_h (already computed for this tick's inputs by the integrator).
+        if not self._u_h.HasValue(context) or self._drive.Eval(context)[1]:
+            return None
+        return super()._sanitized_input(context)
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
         p = context.get_continuous_state_vector().CopyToVector()
-        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context), self._params)
+        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context)[0], self._params)
         derivatives.get_mutable_vector().SetFromVector(dp)
 
     def _reset_update(self, context: Context, state: State) -> None:
@@ -282,8 +305,8 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     def _periodic_update(self, context: Context, state: State) -> EventStatus:
         counted = self._count_sanitized(context, state.get_mutable_discrete_state())
-        goals = self._goal_poses_now(context)
-        old = context.get_discrete_state(self._goals_index).CopyToVector()
+        goals = self._goal_poses.Eval(context)
+        old = context.get_discrete_state(self._goals_index).get_value()
         if _goals_changed(goals, old, self._tol):
             self._reset_update(context, state)
             return EventStatus.Succeeded()

@@ -111,7 +111,10 @@ class InterfaceSystem(LeafSystem):
     (:class:`~drake_disamb.core.interfaces.InterfaceState`), one more discrete group per vector
     output holding its value (so the outputs are state output ports, evaluated without calling
     Python), and the abstract event log; all are updated together by a periodic unrestricted update
-    every ``config.control_period`` seconds (first update at t = 0).
+    every ``config.control_period`` seconds (first update at t = 0). The update is a pure function
+    of the state and the raw signal (time only stamps events): a (state, raw) pair that gave no
+    change and no event is remembered (one entry, on the system) and its repetitions return at
+    once, writing nothing.
 
     Attributes:
         config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
@@ -131,6 +134,7 @@ class InterfaceSystem(LeafSystem):
         self.raw_layout: tuple[str, ...] = RAW_LAYOUTS[config.kind]
 
         initial = initial_state(config)
+        self._fixed_point: bytes | None = None  # see _update
         self._state_index = self.DeclareDiscreteState(initial.to_vector())
         self._log_index = self.DeclareAbstractState(AbstractValue.Make(EventLog()))
         # Every vector output is a copy of state, so each gets its own discrete group, written by
@@ -168,8 +172,14 @@ class InterfaceSystem(LeafSystem):
 
     def _update(self, context: Context, state: State) -> EventStatus:
         vector = context.get_discrete_state(self._state_index).get_value()
-        before = InterfaceState.from_vector(vector)
         raw = self._raw_port.Eval(context)
+        # The update is a pure function of the state and the raw signal (time only stamps events):
+        # a (state, raw) pair that last gave no change and no event is a fixed point, and the
+        # common period -- the same raw signal, mode and counts as the previous one -- ends here.
+        key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes()
+        if key == self._fixed_point:
+            return EventStatus.DidNothing()
+        before = InterfaceState.from_vector(vector)
 
         def read_disambiguation_mode() -> float | None:
             if not self._disamb_port.HasValue(context):
@@ -194,8 +204,11 @@ class InterfaceSystem(LeafSystem):
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
+        if changed or events:
+            return EventStatus.Succeeded()
+        self._fixed_point = key
         # Nothing written: the simulator then leaves the context (and every cached value) alone.
-        return EventStatus.Succeeded() if changed or events else EventStatus.DidNothing()
+        return EventStatus.DidNothing()
 
     def _output_values(self, state: InterfaceState) -> dict[str, list[float]]:
         """The value of every vector output port for ``state`` (port name -> vector)."""

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.core.geometry import pose_errors
 
@@ -55,8 +55,9 @@ class TaskManager(LeafSystem):
 
     A goal counts as reached when the end effector stays within ``position_tolerance`` (m) and
     ``orientation_tolerance`` (rad) of it for ``hold_times[stage]`` seconds, checked every
-    ``period`` seconds (a periodic discrete update; all outputs depend on the state only, so the
-    manager has no direct feedthrough). A NaN pose never counts as reached.
+    ``period`` seconds (a periodic discrete update; all outputs are state output ports, each a
+    discrete group of its own written when the stage changes, so the manager has no direct
+    feedthrough). A NaN pose never counts as reached.
     """
 
     def __init__(
@@ -113,21 +114,15 @@ class TaskManager(LeafSystem):
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", POSE_SIZE)
         initial = np.concatenate(([0.0, -1.0, np.nan], np.full(n_stages, -1.0), np.full(n_stages, np.nan)))
         self._state = self.DeclareDiscreteState(initial)
+        # Every output is a copy of state, so each has a discrete group of its own holding its value
+        # (written by the update when it changes) and is a state output port: reading it calls no
+        # Python.
+        self._outputs = {
+            name: self.DeclareDiscreteState(value) for name, value in self._output_values(initial).items()
+        }
         self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
-        self.DeclareVectorOutputPort(
-            "goal_poses",
-            self._n_goals * POSE_SIZE,
-            self._calc_goal_poses,
-            {self.discrete_state_ticket(self._state)},
-        )
-        self.DeclareVectorOutputPort("stage", 1, self._calc_stage, {self.discrete_state_ticket(self._state)})
-        self.DeclareVectorOutputPort("done", 1, self._calc_done, {self.discrete_state_ticket(self._state)})
-        self.DeclareVectorOutputPort(
-            "reached_goals", n_stages, self._calc_reached, {self.discrete_state_ticket(self._state)}
-        )
-        self.DeclareVectorOutputPort(
-            "stage_end_times", n_stages, self._calc_times, {self.discrete_state_ticket(self._state)}
-        )
+        for name, group in self._outputs.items():
+            self.DeclareStateOutputPort(name, group)
 
     # -- properties ---------------------------------------------------------------------------
 
@@ -166,42 +161,46 @@ class TaskManager(LeafSystem):
 
     # -- update -------------------------------------------------------------------------------
 
-    def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
-        x = context.get_discrete_state(self._state).get_value().copy()
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        x = context.get_discrete_state(self._state).get_value()
         stage = int(x[_STAGE])
         if stage >= self._n_stages:
-            return
+            return EventStatus.DidNothing()
         t = context.get_time()
         dist, angle = pose_errors(self._ee_pose.Eval(context), self._goal_sets[stage])
         inside = np.flatnonzero((dist <= self._pos_tol) & (angle <= self._ori_tol))
         if inside.size == 0:
+            if x[_CANDIDATE] == -1.0:  # far from every goal, as before: nothing to write
+                return EventStatus.DidNothing()
+            x = x.copy()
             x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
-        else:
-            goal = int(inside[np.argmin(dist[inside])])
-            if int(x[_CANDIDATE]) != goal or not np.isfinite(x[_HOLD_START]):
-                x[_CANDIDATE], x[_HOLD_START] = float(goal), t
-            # A tiny slack absorbs the rounding of accumulated periodic event times.
-            if t - x[_HOLD_START] >= self._holds[stage] - 1e-9:
-                x[_HEADER + stage] = float(goal)
-                x[_HEADER + self._n_stages + stage] = t
-                x[_STAGE] = float(stage + 1)
-                x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
+            discrete_state.get_mutable_vector(self._state).SetFromVector(x)
+            return EventStatus.Succeeded()
+        x = x.copy()
+        goal = int(inside[np.argmin(dist[inside])])
+        if int(x[_CANDIDATE]) != goal or not np.isfinite(x[_HOLD_START]):
+            x[_CANDIDATE], x[_HOLD_START] = float(goal), t
+        # A tiny slack absorbs the rounding of accumulated periodic event times.
+        if t - x[_HOLD_START] >= self._holds[stage] - 1e-9:
+            x[_HEADER + stage] = float(goal)
+            x[_HEADER + self._n_stages + stage] = t
+            x[_STAGE] = float(stage + 1)
+            x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
+            for name, value in self._output_values(x).items():
+                discrete_state.get_mutable_vector(self._outputs[name]).SetFromVector(value)
         discrete_state.get_mutable_vector(self._state).SetFromVector(x)
+        return EventStatus.Succeeded()
 
     # -- outputs ------------------------------------------------------------------------------
 
-    def _calc_goal_poses(self, context: Context, output: BasicVector) -> None:
-        stage = min(self._stage_index(context), self._n_stages - 1)
-        output.SetFromVector(self._goal_sets[stage].ravel())
-
-    def _calc_stage(self, context: Context, output: BasicVector) -> None:
-        output.SetAtIndex(0, float(self._stage_index(context)))
-
-    def _calc_done(self, context: Context, output: BasicVector) -> None:
-        output.SetAtIndex(0, 1.0 if self.is_done(context) else 0.0)
-
-    def _calc_reached(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(np.asarray(self.reached_goals(context), dtype=float))
-
-    def _calc_times(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(np.asarray(self.stage_end_times(context), dtype=float))
+    def _output_values(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """The value of every output port for the state vector ``x`` (port name -> vector)."""
+        stage = int(x[_STAGE])
+        S = self._n_stages
+        return {
+            "goal_poses": self._goal_sets[min(stage, S - 1)].ravel(),
+            "stage": np.array([float(stage)]),
+            "done": np.array([1.0 if stage >= S else 0.0]),
+            "reached_goals": np.array(x[_HEADER : _HEADER + S]),
+            "stage_end_times": np.array(x[_HEADER + S :]),
+        }
