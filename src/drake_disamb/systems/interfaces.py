@@ -173,13 +173,20 @@ class InterfaceSystem(LeafSystem):
     def _update(self, context: Context, state: State) -> EventStatus:
         vector = context.get_discrete_state(self._state_index).get_value()
         raw = self._raw_port.Eval(context)
-        # The update is a pure function of the state and the raw signal (time only stamps events):
-        # a (state, raw) pair that last gave no change and no event is a fixed point, and the
-        # common period -- the same raw signal, mode and counts as the previous one -- ends here.
-        key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes()
-        if key == self._fixed_point:
-            return EventStatus.DidNothing()
+        automatic = (
+            float(self._automatic_port.Eval(context)[0]) if self._automatic_port.HasValue(context) else None
+        )
         before = InterfaceState.from_vector(vector)
+        # With no disambiguation pending the update is a pure function of the state, the raw signal
+        # and the automatic trigger's count (time only stamps events): such a triple that last gave
+        # no change and no event is a fixed point, and the common period -- the same raw signal,
+        # mode and counts as the previous one -- ends here. A pending disambiguation is served at
+        # its due time, so time matters then and nothing is remembered.
+        key = None
+        if before.pending_due < 0.0:
+            key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes() + repr(automatic).encode()
+            if key == self._fixed_point:
+                return EventStatus.DidNothing()
 
         def read_disambiguation_mode() -> float | None:
             if not self._disamb_port.HasValue(context):
@@ -189,9 +196,6 @@ class InterfaceSystem(LeafSystem):
         def warn(message: str) -> None:
             warnings.warn(f"{self.get_name()}: {message}", RuntimeWarning, stacklevel=2)
 
-        automatic = (
-            float(self._automatic_port.Eval(context)[0]) if self._automatic_port.HasValue(context) else None
-        )
         after, events = interface_update(
             before, raw, context.get_time(), self.config, read_disambiguation_mode, warn, automatic
         )
@@ -206,7 +210,8 @@ class InterfaceSystem(LeafSystem):
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
         if changed or events:
             return EventStatus.Succeeded()
-        self._fixed_point = key
+        if key is not None:
+            self._fixed_point = key
         # Nothing written: the simulator then leaves the context (and every cached value) alone.
         return EventStatus.DidNothing()
 
