@@ -446,10 +446,11 @@ def _draw(config: UserConfig, counter: int) -> np.random.Generator:
 
 
 def lognormal(median: float, log_sd: float, rng: np.random.Generator | None) -> float:
-    """``median * exp(log_sd * z)``, ``z`` standard normal from ``rng`` (``median`` if ``log_sd`` is 0)."""
+    """``median * exp(log_sd * z)``, ``z`` standard normal from ``rng`` truncated to ``[-2, 2]`` (no
+    minute-long waits from the tail); ``median`` if ``log_sd`` is 0."""
     if log_sd == 0 or rng is None:
         return float(median)
-    return float(median * math.exp(log_sd * rng.standard_normal()))
+    return float(median * math.exp(log_sd * min(max(rng.standard_normal(), -2.0), 2.0)))
 
 
 def presses_to(mode: int, target: np.ndarray | int, n_modes: int) -> np.ndarray | int:
