@@ -408,3 +408,32 @@ def test_calibrate_command_refuses_a_folder_without_logs(tmp_path: Path, capsys)
 
     assert main(["study", "calibrate", str(tmp_path)]) == 2
     assert "trial_order_testing_8.mat" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# the SimulatedUser system at its decision period
+# ---------------------------------------------------------------------------------------------
+
+
+def test_system_decides_at_its_decision_period_and_holds_the_raw_signal() -> None:
+    from pydrake.systems.analysis import Simulator
+
+    from drake_disamb.systems.user import SimulatedUser
+
+    cfg = dataclasses.replace(QUIET, decision_period=0.1, direction_kappa=10.0, seed=3)
+    user = SimulatedUser("joystick", 0, 2, cfg)
+    attrs = user.GetUniquePeriodicDiscreteUpdateAttribute()
+    assert attrs is not None and attrs.period_sec() == pytest.approx(0.1)
+    sim = Simulator(user)
+    ctx = sim.get_mutable_context()
+    user.GetInputPort("mode").FixValue(ctx, [1.0])
+    user.GetInputPort("ee_pose").FixValue(ctx, EE)
+    user.GetInputPort("goal_poses").FixValue(ctx, GOALS.reshape(-1))
+    sim.Initialize()
+    seen = []
+    for k in range(1, 30):
+        sim.AdvanceTo(k * 0.01 + 0.001)
+        seen.append(tuple(user.GetOutputPort("raw").Eval(ctx)))
+    assert len(set(seen[:9])) == 1 and len(set(seen)) == 3  # held 0.1 s; redrawn at 0.1 and 0.2
+    with pytest.raises(ValueError, match="decision_period"):
+        SimulatedUser("joystick", 0, 2, dataclasses.replace(QUIET, decision_period=0.005))
