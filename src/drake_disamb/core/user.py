@@ -722,7 +722,8 @@ def _decide(
     if config.pause_rate > 0 and rng().random() < -math.expm1(-config.pause_rate * period):
         g = rng() if config.pause_log_sd > 0 else None
         wait = lognormal(config.pause_duration, config.pause_log_sd, g)
-        return _evolve(state, raw=zero, busy_until=time + max(wait, period), draws=draws)
+        # The stall watch (rule 5) counts commanding time: it starts again after the pause.
+        return _evolve(state, raw=zero, busy_until=time + max(wait, period), draws=draws, progress_mode=-1)
 
     # Rule 6: command.
     dims = modes[mode]
