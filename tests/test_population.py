@@ -202,6 +202,17 @@ def test_pauses_release_everything_for_a_drawn_duration() -> None:
     assert not any(not np.any(s.raw) for s in run_fixed_mode(QUIET, 1, until=1.0))
 
 
+def test_a_pause_is_not_a_stall() -> None:
+    # A stalled arm (the pose never changes) with long pauses: every pause restarts the stall watch,
+    # which counts commanding time only.
+    cfg = dataclasses.replace(
+        QUIET, stall_time=2.0, pause_rate=5.0, pause_duration=3.0, decision_period=0.1, seed=2
+    )
+    states = run_fixed_mode(cfg, 0, interface=HEAD, until=6.0)
+    paused = [k for k, s in enumerate(states[1:], 1) if not np.any(s.raw) and np.any(states[k - 1].raw)]
+    assert paused and all(states[k].progress_mode == -1 for k in paused)
+
+
 def test_request_probability_decay_and_instead_of_cycling() -> None:
     flat = np.array([0.5, 0.5])
     base = dataclasses.replace(QUIET, request_at_start=True, request_prob=0.5)
