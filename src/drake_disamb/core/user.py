@@ -51,7 +51,8 @@ values and where they come from):
   decisions). Every wait is at least two decision periods, so a press is one rising edge.
 - *Reaction times*: the wait after a press is lognormal with median ``reaction_time`` and log-sd
   ``reaction_log_sd``; after a mode change is finished (the target reached, or the mode a request
-  chose) the user waits a further lognormal ``settle_time`` before commanding; at the start of the
+  chose) the user waits a further lognormal ``settle_time`` (with probability ``settle_prob``)
+  before commanding; at the start of the
   trial it does nothing but an optional request for a lognormal ``start_delay``.
 - *Command noise*: the joystick's stick vector (``[axis_x, axis_y]``, the intended deflection of
   rule 6) gets a direction drawn from a von Mises-Fisher distribution of concentration
@@ -134,6 +135,8 @@ class UserConfig:
         reaction_log_sd: Log-sd of the lognormal wait after a press (median ``reaction_time``).
         settle_time: Median extra wait (s) after a finished mode change before commanding.
         settle_log_sd: Its log-sd.
+        settle_prob: Probability that a finished mode change is followed by the settle wait (else
+            the user commands right after its reaction wait).
         start_delay: Median time (s) before the first mode switch or command of the trial.
         start_delay_log_sd: Its log-sd.
         direction_kappa: Von Mises-Fisher concentration of the joystick's stick direction about the
@@ -175,6 +178,7 @@ class UserConfig:
     reaction_log_sd: float = 0.0
     settle_time: float = 0.0
     settle_log_sd: float = 0.0
+    settle_prob: float = 1.0
     start_delay: float = 0.0
     start_delay_log_sd: float = 0.0
     direction_kappa: float | None = None
@@ -262,6 +266,7 @@ class UserConfig:
             if value is not None and not (is_real(value) and value > 0):
                 raise ValueError(f"UserConfig.{name}: expected None or a number > 0, got {value!r}")
         for name in (
+            "settle_prob",
             "wrong_press_prob",
             "overshoot_prob",
             "request_prob",
@@ -626,7 +631,7 @@ def _decide(
         return press(REQUEST_BUTTON, target_mode=-1, request_mode=mode, request_since=time, **changes)
 
     def settle(**changes: object) -> UserState | None:
-        if config.settle_time <= 0:
+        if config.settle_time <= 0 or (config.settle_prob < 1.0 and rng().random() >= config.settle_prob):
             return None
         wait = lognormal(
             config.settle_time, config.settle_log_sd, rng() if config.settle_log_sd > 0 else None
@@ -691,7 +696,8 @@ def _decide(
         if use_requests and request_chance(config.request_instead_prob):
             return request()
         g = rng() if config.mode_temperature > 0 else None
-        target = choose_mode(arm_remaining, mode, n_modes, config, g)
+        # A Boltzmann user never "chooses" the exhausted mode it is in (the oracle cannot: it is the least).
+        target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=g is not None)
         if target == mode:  # unreachable with validated tolerances: nothing left anywhere
             return _evolve(state, raw=zero, target_mode=-1, draws=draws)
         return press(MODE_BUTTON, target_mode=target, overshot=False)

@@ -11,7 +11,8 @@ only, never the Manual-versus-Disambiguation outcome the study must predict:
 - **Press interval**: between consecutive mode switches with no command between them (a mode
   change made of several presses) and less than 3 s apart.
 - **Settle**: from the last switch of a mode change (user's or a request's) to the next non-zero
-  command, when no other switch or request comes first.
+  command, when no other switch or request comes first, and at least :data:`MIN_SETTLE` (a command
+  sooner was held through the press: its share is reported as ``held_through_switch``).
 - **Pauses**: runs of zero command of at least :data:`MIN_PAUSE` seconds between the first and the
   last command that hold no switch or request; the rate is per second of commanding.
 - **Deflection** (joystick): the command's size as a share of full deflection,
@@ -69,6 +70,8 @@ JOYSTICK_REPEAT = 2.0
 """A joystick switch into the same mode as the one before it within this many seconds is dropped."""
 BURST_GAP = 3.0
 """Switches less than this apart with no command between them are one mode change (s)."""
+MIN_SETTLE = 0.1
+"""A command sooner than this after a switch was held through it, not a settle (s)."""
 MIN_PAUSE = 0.5
 """Shortest run of zero command that counts as a pause (s)."""
 SPEEDS = {"joystick": (0.13, 0.4), "head_array": (0.1, 0.2)}
@@ -287,6 +290,7 @@ class BehaviourEstimates:
     start_delay: LogNormalFit
     press_interval: LogNormalFit
     settle: LogNormalFit
+    held_through_switch: float
     pause_duration: LogNormalFit
     pause_rate: dict[str, float]
     deflection: LogNormalFit
@@ -316,6 +320,7 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
     start: dict[str, list[float]] = {}
     press: dict[str, list[float]] = {}
     settle: dict[str, list[float]] = {}
+    held = n_settle = 0
     pause: dict[str, list[float]] = {}
     pause_count: dict[str, float] = {}
     command_time: dict[str, float] = {}
@@ -363,7 +368,11 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
             later_cmd = times_cmd[times_cmd > x]
             later_evt = events[events > x + 1e-9]
             if later_cmd.size and (not later_evt.size or later_evt[0] > later_cmd[0]):
-                settle.setdefault(s, []).append(float(later_cmd[0] - x))
+                n_settle += 1
+                if later_cmd[0] - x < MIN_SETTLE:
+                    held += 1
+                else:
+                    settle.setdefault(s, []).append(float(later_cmd[0] - x))
         # Pauses between the first and the last command, with no event inside.
         if on.size:
             inner = ~cmd[on[0] : on[-1] + 1]
@@ -419,6 +428,7 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
         start_delay=fit_lognormal(start),
         press_interval=fit_lognormal(press),
         settle=fit_lognormal(settle),
+        held_through_switch=held / n_settle if n_settle else math.nan,
         pause_duration=fit_lognormal(pause),
         pause_rate={s: pause_count.get(s, 0.0) / command_time[s] for s in sorted(command_time)},
         deflection=fit_lognormal(deflect),
@@ -458,7 +468,8 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"valid trials: {est.n_trials}",
         _fmt_fit("start delay", est.start_delay),
         _fmt_fit("press interval (in a change)", est.press_interval),
-        _fmt_fit("settle (switch -> command)", est.settle),
+        _fmt_fit(f"settle (switch -> command >= {MIN_SETTLE} s)", est.settle),
+        f"{'command held through switch':<28} {est.held_through_switch:.2f} of switches a command follows",
         _fmt_fit(f"pause duration (>= {MIN_PAUSE} s)", est.pause_duration),
         f"{'pause rate':<28} per second of commanding: {rates}",
         _fmt_fit("joystick deflection", est.deflection, "of full"),

@@ -74,8 +74,10 @@ def _default_distributions() -> dict[str, Distribution]:
         "reaction_time": LogNormal(0.47, 0.14, low=0.25),
         # Within-subject log-sd of the press interval (0.76 pooled; the per-subject spread is small).
         "reaction_log_sd": Uniform(0.6, 0.8),
-        # Switch -> next command 1.32 s median, less the press wait (0.47): 0.85 s; between 0.16.
-        "settle_time": LogNormal(0.85, 0.16),
+        # Switch -> next command (>= 0.1 s) median 2.54 s, less the press wait (0.47): 2.07 s;
+        # between 0.20, within 0.93; 35 % of switches have the command held through them.
+        "settle_time": LogNormal(2.07, 0.20),
+        "settle_prob": Uniform(0.55, 0.75),
         # Trial start -> first switch or command: median 5.62 s, between 0.42, within 0.84.
         "start_delay": LogNormal(5.6, 0.42, high=20.0),
         "start_delay_log_sd": Uniform(0.7, 0.9),
@@ -109,7 +111,7 @@ def _default_distributions() -> dict[str, Distribution]:
 def _default_fixed() -> dict[str, Any]:
     return {
         "decision_period": 0.1,  # decisions at 10 Hz (intermittent human control, ~100-200 ms)
-        "settle_log_sd": 0.8,  # the pooled 3.1 is inflated by commands during cycling
+        "settle_log_sd": 0.93,  # within: pooled log-sd of the settles
         "request_wait": 3.0,  # the system's 2-2.5 s latency; request -> switch 2.5-3.2 s in the logs
         "request_at_start": True,
     }
