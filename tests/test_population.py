@@ -465,3 +465,33 @@ def test_system_decides_at_its_decision_period_and_holds_the_raw_signal() -> Non
     assert len(set(seen[:9])) == 1 and len(set(seen)) == 3  # held 0.1 s; redrawn at 0.1 and 0.2
     with pytest.raises(ValueError, match="decision_period"):
         SimulatedUser("joystick", 0, 2, dataclasses.replace(QUIET, decision_period=0.005))
+
+
+def test_subjects_apply_to_a_scenario_and_survive_yaml() -> None:
+    from drake_disamb.config import (
+        dump_scenario,
+        load_scenario,
+        resolve_scenario,
+        scenario_from_yaml,
+        with_overrides,
+    )
+
+    subject = draw_subjects(1, 9)[0]
+    for paradigm in ("manual", "disambiguation"):
+        s = with_overrides(load_scenario("reaching"), paradigm=paradigm)
+        s = dataclasses.replace(
+            s, user=dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
+        )
+        assert scenario_from_yaml(dump_scenario(s)) == s
+        user = resolve_scenario(s).user
+        for key, value in subject.user.items():
+            if paradigm == "manual" and key in (
+                "request_at_start",
+                "request_instead_prob",
+                "request_when_unhelped_for",
+            ):
+                continue
+            assert getattr(user, key) == value, key
+        if paradigm == "manual":
+            assert not user.request_at_start and user.request_instead_prob == 0
+            assert user.request_when_unhelped_for is None
