@@ -81,9 +81,10 @@ def main() -> int:
         subjects = draw_subjects(ARGS.subjects, ARGS.seed)
         k = 0
         start = time.perf_counter()
-        for _ in range(ARGS.trials):
-            for itf, task, par in CONDITIONS:
-                row = run_one(itf, task, par, subjects[k % len(subjects)], ARGS.seed * 1000 + k)
+        for r in range(ARGS.trials):
+            for c, (itf, task, par) in enumerate(CONDITIONS):
+                subject = subjects[(c + 3 * r) % len(subjects)]  # each condition meets other subjects
+                row = run_one(itf, task, par, subject, ARGS.seed * 1000 + k)
                 k += 1
                 rows.append(row)
                 print(json.dumps(row), flush=True)

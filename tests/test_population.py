@@ -192,6 +192,18 @@ def test_mode_usefulness_and_softmax_choice() -> None:
     assert choose_mode(remaining, 0, 7, warm, np.random.default_rng(0), exclude_current=True) != 0
 
 
+def test_mode_review_leaves_a_useful_mode_for_a_better_one() -> None:
+    # Head array in vz (5 tolerances to go) while vx has 20: without reviews it drives vz to the
+    # end; with them it leaves vz for vx at the first review.
+    s = step(UserState(), 0.0, 2, QUIET, interface=HEAD)
+    assert s.raw[1] == 1.0  # driving -z
+    cfg = dataclasses.replace(QUIET, mode_review_rate=1000.0)  # review at every decision
+    s = step(UserState(), 0.0, 2, cfg, interface=HEAD)
+    assert s.raw[2] == 1.0 and s.target_mode == 0
+    s = step(UserState(), 0.0, 0, cfg, interface=HEAD)  # already in the best mode: stays
+    assert s.raw[0] == 1.0
+
+
 def test_overshoot_presses_once_too_many_and_goes_round_again() -> None:
     cfg = dataclasses.replace(QUIET, overshoot_prob=1.0)
     s = step(UserState(), 0.0, 1, cfg, interface=HEAD)  # vy has nothing to do: target vx (0)

@@ -65,7 +65,9 @@ values and where they come from):
   (:func:`mode_usefulness`: remaining error as a share of the largest, less ``press_cost`` per
   press it takes to get there) with temperature ``mode_temperature`` (0 = the best mode, rule 4);
   the presses are made one by one, and on reaching its target the user presses once more with
-  probability ``overshoot_prob`` (and must go round again).
+  probability ``overshoot_prob`` (and must go round again). With ``mode_review_rate`` it also
+  reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
+  and leaves it for a clearly better one, as people interleave modes.
 - *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``
   (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
@@ -147,6 +149,9 @@ class UserConfig:
         mode_temperature: Softmax temperature of the mode choice, in usefulness units (0 = the best).
         press_cost: Usefulness a mode loses per press needed to reach it.
         overshoot_prob: Probability of one press too many on reaching the target mode.
+        mode_review_rate: Reviews per second of commanding time of whether another mode would be
+            better (a Boltzmann choice with the current mode in it, at no press cost); 0 = only
+            when the mode is done or stalled.
         pause_rate: Pauses per second of the time it would command (0 = none).
         pause_duration: Median pause (s).
         pause_log_sd: Its log-sd.
@@ -188,6 +193,7 @@ class UserConfig:
     mode_temperature: float = 0.0
     press_cost: float = 0.0
     overshoot_prob: float = 0.0
+    mode_review_rate: float = 0.0
     pause_rate: float = 0.0
     pause_duration: float = 1.0
     pause_log_sd: float = 0.0
@@ -256,6 +262,7 @@ class UserConfig:
                 "mode_temperature",
                 "press_cost",
                 "pause_rate",
+                "mode_review_rate",
                 "pause_log_sd",
                 "request_wait",
             ),
@@ -723,6 +730,13 @@ def _decide(
                     return press(MODE_BUTTON, target_mode=best, overshot=False)
             # Nothing else to do: keep at it, and watch again from here.
             state = _evolve(state, progress_since=time, progress_best=now_remaining)
+
+    # Reviews: while the mode still helps, is another one better now? (People interleave modes.)
+    if config.mode_review_rate > 0 and rng().random() < -math.expm1(-config.mode_review_rate * period):
+        g = rng() if config.mode_temperature > 0 else None
+        choice = choose_mode(arm_remaining, mode, n_modes, config, g)
+        if choice != mode and arm_remaining[choice] > 1.0:
+            return press(MODE_BUTTON, target_mode=choice, overshot=False)
 
     # Pauses (fatigue, thinking).
     if config.pause_rate > 0 and rng().random() < -math.expm1(-config.pause_rate * period):
