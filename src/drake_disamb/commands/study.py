@@ -15,6 +15,7 @@ HELP = "Run the user study with simulated users, import the authors' human logs,
 STUDY_COMMANDS: dict[str, str] = {
     "import-authors": "study_import_authors",
     "report": "study_report",
+    "calibrate": "study_calibrate",
 }
 
 

@@ -145,7 +145,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     user = _named(f"{name}.user.config", lambda: s.user.config.to_config(seed=s.seed, rho1=rhos[0]))
     disambiguation = None
     if s.paradigm == "manual":
-        user = dataclasses.replace(user, request_at_start=False, request_when_unhelped_for=None)
+        user = user.without_requests()
     else:
         disambiguation = projection_config(s.disambiguation.preset, s.inference.method, dft, autonomy, name)
     latency = s.disambiguation.request_latency

@@ -41,6 +41,41 @@ runs out of useful modes before it is done.
 Randomness is optional and seeded: ``reaction_time_jitter`` (uniform, +/- s) and ``axis_noise``
 (Gaussian std added to joystick axes). Each draw uses ``default_rng([seed, counter])`` with a
 counter kept in the state, so a run is a pure function of the seed.
+
+**Human behaviour** (every field off by default, which is the deterministic user above; the
+population of :mod:`drake_disamb.study.population` turns them on, docs/population.md gives the
+values and where they come from):
+
+- *Decision rate*: ``decision_period`` (s) is how often the user decides (the
+  :class:`~drake_disamb.systems.user.SimulatedUser` ticks at it; the raw signal is held between
+  decisions). Every wait is at least two decision periods, so a press is one rising edge.
+- *Reaction times*: the wait after a press is lognormal with median ``reaction_time`` and log-sd
+  ``reaction_log_sd``; after a mode change is finished (the target reached, or the mode a request
+  chose) the user waits a further lognormal ``settle_time`` (with probability ``settle_prob``)
+  before commanding; at the start of the
+  trial it does nothing but an optional request for a lognormal ``start_delay``.
+- *Command noise*: the joystick's stick vector (``[axis_x, axis_y]``, the intended deflection of
+  rule 6) gets a direction drawn from a von Mises-Fisher distribution of concentration
+  ``direction_kappa`` about the intended one and a magnitude scaled by a lognormal factor of
+  log-sd ``deflection_log_sd``, once per decision. *Switch timing*: when the user stops driving
+  (either interface), it lets go late by an exponential ``release_lag`` (mean, s). *Wrong
+  presses*: when it starts to drive it hits the mode button instead with probability
+  ``wrong_press_prob``.
+- *Mode choice*: a new mode is drawn by softmax over the modes' usefulness
+  (:func:`mode_usefulness`: remaining error as a share of the largest, less ``press_cost`` per
+  press it takes to get there) with temperature ``mode_temperature`` (0 = the best mode, rule 4);
+  the presses are made one by one, and on reaching its target the user presses once more with
+  probability ``overshoot_prob`` (and must go round again). With ``mode_review_rate`` it also
+  reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
+  and leaves it for a clearly better one, as people interleave modes.
+- *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``
+  (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
+- *Requests*: a request the policy calls for (at the start, when unhelped) is made with
+  probability ``request_prob``; when a new mode is needed the user asks for disambiguation instead
+  of cycling with probability ``request_instead_prob``; both scaled by ``exp(-t /
+  request_decay_time)`` (requests concentrate early). After a request it waits up to
+  ``request_wait`` seconds for the mode to change, then keeps the mode the system chose with
+  probability ``accept_prob`` or cycles away from it to a mode of its own choice.
 """
 
 from __future__ import annotations
@@ -48,7 +83,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,6 +98,7 @@ from drake_disamb.core.interfaces import (
     REQUEST_BUTTON,
     InterfaceConfig,
 )
+from drake_disamb.core.trials import sample_von_mises_fisher
 
 NOT_COUNTING = -1.0
 """``unhelped_since`` value meaning "the autonomy is currently helping" (times are >= 0)."""
@@ -97,6 +133,34 @@ class UserConfig:
         rho1: Belief threshold below which the autonomy gives no assistance (as in the blender);
             ``None`` = the paper's ``1.2 / n_goals``.
         seed: Seed of the optional randomness.
+        decision_period: Seconds between the user's decisions (``None`` = every control period).
+        reaction_log_sd: Log-sd of the lognormal wait after a press (median ``reaction_time``).
+        settle_time: Median extra wait (s) after a finished mode change before commanding.
+        settle_log_sd: Its log-sd.
+        settle_prob: Probability that a finished mode change is followed by the settle wait (else
+            the user commands right after its reaction wait).
+        start_delay: Median time (s) before the first mode switch or command of the trial.
+        start_delay_log_sd: Its log-sd.
+        direction_kappa: Von Mises-Fisher concentration of the joystick's stick direction about the
+            intended one (``None`` = exact).
+        deflection_log_sd: Log-sd of the lognormal factor on the stick's deflection (0 = exact).
+        release_lag: Mean (s) of the exponential delay with which a drive is released.
+        wrong_press_prob: Probability that starting to drive presses the mode button instead.
+        mode_temperature: Softmax temperature of the mode choice, in usefulness units (0 = the best).
+        press_cost: Usefulness a mode loses per press needed to reach it.
+        overshoot_prob: Probability of one press too many on reaching the target mode.
+        mode_review_rate: Reviews per second of commanding time of whether another mode would be
+            better (a Boltzmann choice with the current mode in it, at no press cost); 0 = only
+            when the mode is done or stalled.
+        pause_rate: Pauses per second of the time it would command (0 = none).
+        pause_duration: Median pause (s).
+        pause_log_sd: Its log-sd.
+        request_prob: Probability of making a request the policy calls for (start, unhelped).
+        request_instead_prob: Probability of asking for disambiguation instead of cycling when a
+            new mode is needed (needs the belief, i.e. the disambiguation paradigm).
+        request_decay_time: Request probabilities are scaled by ``exp(-t / this)`` (``None`` = 1).
+        request_wait: After a request, wait up to this (s) for the mode to change.
+        accept_prob: Probability of keeping the mode a request chose (else cycle away from it).
     """
 
     position_tolerance: float = 0.01
@@ -115,6 +179,29 @@ class UserConfig:
     request_when_unhelped_for: float | None = 3.0
     rho1: float | None = None
     seed: int = 0
+    decision_period: float | None = None
+    reaction_log_sd: float = 0.0
+    settle_time: float = 0.0
+    settle_log_sd: float = 0.0
+    settle_prob: float = 1.0
+    start_delay: float = 0.0
+    start_delay_log_sd: float = 0.0
+    direction_kappa: float | None = None
+    deflection_log_sd: float = 0.0
+    release_lag: float = 0.0
+    wrong_press_prob: float = 0.0
+    mode_temperature: float = 0.0
+    press_cost: float = 0.0
+    overshoot_prob: float = 0.0
+    mode_review_rate: float = 0.0
+    pause_rate: float = 0.0
+    pause_duration: float = 1.0
+    pause_log_sd: float = 0.0
+    request_prob: float = 1.0
+    request_instead_prob: float = 0.0
+    request_decay_time: float | None = None
+    request_wait: float = 0.0
+    accept_prob: float = 1.0
 
     def __post_init__(self) -> None:
         check_real_fields(
@@ -161,6 +248,49 @@ class UserConfig:
             raise ValueError(f"UserConfig.rho1: expected None or a number in [0, 1], got {self.rho1!r}")
         if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
             raise ValueError(f"UserConfig.seed: expected an integer >= 0, got {self.seed!r}")
+        check_real_fields(self, ("pause_duration",))
+        check_real_fields(
+            self,
+            (
+                "reaction_log_sd",
+                "settle_time",
+                "settle_log_sd",
+                "start_delay",
+                "start_delay_log_sd",
+                "deflection_log_sd",
+                "release_lag",
+                "mode_temperature",
+                "press_cost",
+                "pause_rate",
+                "mode_review_rate",
+                "pause_log_sd",
+                "request_wait",
+            ),
+            allow_zero=True,
+        )
+        for name in ("decision_period", "direction_kappa", "request_decay_time"):
+            value = getattr(self, name)
+            if value is not None and not (is_real(value) and value > 0):
+                raise ValueError(f"UserConfig.{name}: expected None or a number > 0, got {value!r}")
+        for name in (
+            "settle_prob",
+            "wrong_press_prob",
+            "overshoot_prob",
+            "request_prob",
+            "request_instead_prob",
+            "accept_prob",
+        ):
+            value = getattr(self, name)
+            if not (is_real(value) and 0 <= value <= 1):
+                raise ValueError(f"UserConfig.{name}: expected a probability in [0, 1], got {value!r}")
+
+    def without_requests(self) -> UserConfig:
+        """This user with every disambiguation request off (the manual paradigm)."""
+        return replace(self, request_at_start=False, request_when_unhelped_for=None, request_instead_prob=0.0)
+
+    def period(self, interface: InterfaceConfig) -> float:
+        """Seconds between decisions with ``interface``: ``decision_period`` or its control period."""
+        return interface.control_period if self.decision_period is None else self.decision_period
 
     @property
     def min_reaction_time(self) -> float:
@@ -177,8 +307,9 @@ class UserState:
     """What the simulated user remembers between ticks.
 
     Attributes:
-        busy_until: No action before this time (s): reacting to its last press.
-        requested_at_start: Whether the start-of-trial request was made.
+        busy_until: No action before this time (s): reacting to its last press, settling into a new
+            mode, or pausing.
+        requested_at_start: Whether the start-of-trial request was made (or passed up).
         unhelped_since: Time (s) since which the autonomy has not been helping, or
             :data:`NOT_COUNTING`.
         draws: Counter of random draws (keys the seeded generator).
@@ -187,6 +318,13 @@ class UserState:
         progress_mode: The mode whose progress it is watching (rule 5), or -1.
         progress_since: When the watch (re)started (s).
         progress_best: The mode's remaining error then (tolerance units).
+        started: Whether the start delay was drawn.
+        start_until: No mode switch or command before this time (s): the start delay.
+        hold_until: A late release in progress: the raw signal is held until this time (s); 0 = none.
+        request_mode: The mode when its last request was made while it waits for the switch, or -1.
+        request_since: When that request was made (s).
+        judge: The mode a request chose is to be accepted or left at the next free decision.
+        overshot: It has pressed once too many toward the current target.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -199,24 +337,42 @@ class UserState:
     progress_mode: int = -1
     progress_since: float = 0.0
     progress_best: float = 0.0
+    started: bool = False
+    start_until: float = 0.0
+    hold_until: float = 0.0
+    request_mode: int = -1
+    request_since: float = 0.0
+    judge: bool = False
+    overshot: bool = False
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
-    VECTOR_SIZE = 9 + RAW_SIZE
+    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode")
+    _BOOL = ("requested_at_start", "started", "judge", "overshot")
+    _FIELDS = (
+        "busy_until",
+        "requested_at_start",
+        "unhelped_since",
+        "draws",
+        "presses",
+        "target_mode",
+        "progress_mode",
+        "progress_since",
+        "progress_best",
+        "started",
+        "start_until",
+        "hold_until",
+        "request_mode",
+        "request_since",
+        "judge",
+        "overshot",
+    )
+    VECTOR_SIZE = 16 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
-        progress_mode, progress_since, progress_best, raw (4)]``."""
-        head = [
-            self.busy_until,
-            float(self.requested_at_start),
-            self.unhelped_since,
-            self.draws,
-            self.presses,
-            self.target_mode,
-            self.progress_mode,
-            self.progress_since,
-            self.progress_best,
-        ]
+        progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
+        request_since, judge, overshot, raw (4)]``."""
+        head = [float(getattr(self, name)) for name in self._FIELDS]
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 
     @classmethod
@@ -225,19 +381,15 @@ class UserState:
         v = np.asarray(x, dtype=float)
         if v.shape != (cls.VECTOR_SIZE,):
             raise ValueError(f"UserState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
-        busy_until, requested, unhelped_since, draws, presses, target, watched, since, best = v[:9].tolist()
-        return cls(
-            busy_until=busy_until,
-            requested_at_start=requested > 0.5,
-            unhelped_since=unhelped_since,
-            draws=int(round(draws)),
-            presses=int(round(presses)),
-            target_mode=int(round(target)),
-            progress_mode=int(round(watched)),
-            progress_since=since,
-            progress_best=best,
-            raw=v[9:].copy(),
-        )
+        values: dict[str, object] = {}
+        for name, value in zip(cls._FIELDS, v[: len(cls._FIELDS)].tolist(), strict=True):
+            if name in cls._INT:
+                values[name] = int(round(value))
+            elif name in cls._BOOL:
+                values[name] = value > 0.5
+            else:
+                values[name] = value
+        return cls(**values, raw=v[len(cls._FIELDS) :].copy())
 
 
 def _evolve(state: UserState, **changes: object) -> UserState:
@@ -305,6 +457,63 @@ def _draw(config: UserConfig, counter: int) -> np.random.Generator:
     return np.random.default_rng([int(config.seed), int(counter)])
 
 
+def lognormal(median: float, log_sd: float, rng: np.random.Generator | None) -> float:
+    """``median * exp(log_sd * z)``, ``z`` standard normal from ``rng`` truncated to ``[-2, 2]`` (no
+    minute-long waits from the tail); ``median`` if ``log_sd`` is 0."""
+    if log_sd == 0 or rng is None:
+        return float(median)
+    return float(median * math.exp(log_sd * min(max(rng.standard_normal(), -2.0), 2.0)))
+
+
+def presses_to(mode: int, target: np.ndarray | int, n_modes: int) -> np.ndarray | int:
+    """Presses of the (forward-cycling) mode button from ``mode`` to ``target``."""
+    return (
+        (np.asarray(target) - mode) % n_modes if isinstance(target, np.ndarray) else (target - mode) % n_modes
+    )
+
+
+def mode_usefulness(remaining: ArrayLike, mode: int, n_modes: int, press_cost: float) -> NDArray[np.float64]:
+    """Expected usefulness of each arm mode: its remaining error as a share of the largest (0..1),
+    minus ``press_cost`` per press it takes to reach it from ``mode`` (arm modes only: the gripper
+    mode, last, is left out of ``remaining``)."""
+    r = np.asarray(remaining, dtype=float)
+    top = float(np.max(r)) if r.size else 0.0
+    share = r / top if top > 0 else np.zeros_like(r)
+    return share - press_cost * presses_to(mode, np.arange(r.size), n_modes)
+
+
+def choose_mode(
+    remaining: ArrayLike,
+    mode: int,
+    n_modes: int,
+    config: UserConfig,
+    rng: np.random.Generator | None,
+    exclude_current: bool = False,
+) -> int:
+    """The arm mode the user goes for next: Boltzmann choice over :func:`mode_usefulness`.
+
+    ``remaining`` holds the arm modes' remaining errors (:func:`mode_remaining` without the gripper
+    mode). With ``config.mode_temperature == 0`` (or no ``rng``) it is the mode with the most
+    remaining error (ties to the lowest index); else mode ``m`` has probability proportional to
+    ``exp(usefulness_m / temperature)``. ``exclude_current`` leaves ``mode`` out.
+    """
+    r = np.asarray(remaining, dtype=float).copy()
+    if exclude_current and mode < r.size:
+        r[mode] = -np.inf
+    if config.mode_temperature == 0 or rng is None:
+        return int(np.argmax(r))
+    ok = np.isfinite(r)
+    u = mode_usefulness(np.where(ok, r, 0.0), mode, n_modes, config.press_cost)
+    logits = np.where(ok, u / config.mode_temperature, -np.inf)
+    w = np.exp(logits - np.max(logits))
+    return int(rng.choice(r.size, p=w / w.sum()))
+
+
+def _drive(raw: NDArray[np.float64]) -> bool:
+    """Whether a raw signal drives the arm (joystick axes or head-array left/right)."""
+    return bool(raw[0] != 0.0 or raw[1] != 0.0)
+
+
 def user_step(
     state: UserState,
     time: float,
@@ -316,10 +525,10 @@ def user_step(
     config: UserConfig,
     belief: ArrayLike | None = None,
 ) -> UserState:
-    """One control tick of the simulated user. Returns the new state; its ``raw`` is the output.
+    """One decision of the simulated user. Returns the new state; its ``raw`` is the output.
 
     Args:
-        state: The state after the previous tick.
+        state: The state after the previous decision.
         time: Current time (s).
         mode: The interface's current mode index.
         ee_pose: End-effector pose ``[x, y, z, qw, qx, qy, qz]``.
@@ -328,7 +537,7 @@ def user_step(
         interface: The interface it operates (modes, raw layout, speeds).
         config: The user's behaviour.
         belief: The current belief over goals (``n``), or ``None`` if unavailable (then no
-            "unhelped" requests are made).
+            "unhelped" requests and no requests instead of mode switches are made).
     """
     goals = np.asarray(goal_poses, dtype=float).reshape(-1, 7)
     n = goals.shape[0]
@@ -339,11 +548,12 @@ def user_step(
         raise ValueError(
             f"mode: expected an integer in [0, {len(modes) - 1}] for {interface.kind}, got {mode!r}"
         )
-    zero = np.zeros(RAW_SIZE)
     err = goal_error(ee_pose, goals[goal_index], config.use_orientation)
 
     if goal_reached(err, config):
-        return _evolve(state, raw=zero, unhelped_since=NOT_COUNTING, target_mode=-1)
+        return _evolve(
+            state, raw=np.zeros(RAW_SIZE), unhelped_since=NOT_COUNTING, target_mode=-1, hold_until=0.0
+        )
 
     # The "unhelped" timer runs whenever the belief is known, also while reacting.
     unhelped_since = NOT_COUNTING
@@ -353,46 +563,151 @@ def user_step(
             unhelped_since = time if state.unhelped_since == NOT_COUNTING else state.unhelped_since
     state = _evolve(state, unhelped_since=unhelped_since)
 
+    if not state.started:
+        start_until = 0.0
+        draws = state.draws
+        if config.start_delay > 0:
+            rng = _draw(config, draws) if config.start_delay_log_sd > 0 else None
+            draws += rng is not None
+            start_until = time + lognormal(config.start_delay, config.start_delay_log_sd, rng)
+        state = _evolve(state, started=True, start_until=start_until, draws=draws)
+
     if time < state.busy_until - 1e-9:
-        return _evolve(state, raw=zero)
+        return _evolve(state, raw=np.zeros(RAW_SIZE))
+    if time < state.hold_until - 1e-9:
+        return state  # letting go late: the drive is held
+    lag_done = state.hold_until > 0.0
+    new = _decide(state, time, mode, err, interface, config, belief)
+    if config.release_lag > 0 and not lag_done and _drive(state.raw) and not _drive(new.raw):
+        rng = _draw(config, state.draws)
+        lag = float(rng.exponential(config.release_lag))
+        return _evolve(state, hold_until=time + lag, draws=state.draws + 1)
+    if new.hold_until != 0.0:
+        new = _evolve(new, hold_until=0.0)
+    return new
+
+
+def _decide(
+    state: UserState,
+    time: float,
+    mode: int,
+    err: NDArray[np.float64],
+    interface: InterfaceConfig,
+    config: UserConfig,
+    belief: ArrayLike | None,
+) -> UserState:
+    """Rules 3 to 6 at a free decision (not reacting, not letting go late)."""
+    modes = interface.modes
+    n_modes = len(modes)
+    zero = np.zeros(RAW_SIZE)
+    period = config.period(interface)
+    draws = state.draws
+
+    def rng() -> np.random.Generator:
+        nonlocal draws
+        g = _draw(config, draws)
+        draws += 1
+        return g
+
+    def request_chance(p: float) -> bool:
+        if config.request_decay_time is not None:
+            p *= math.exp(-time / config.request_decay_time)
+        return p >= 1.0 or (p > 0 and rng().random() < p)
 
     def press(button: int, **changes: object) -> UserState:
         wait = config.reaction_time
-        draws = state.draws
-        if config.reaction_time_jitter > 0:
-            wait += _draw(config, draws).uniform(-config.reaction_time_jitter, config.reaction_time_jitter)
-            draws += 1
+        if config.reaction_time_jitter > 0 or config.reaction_log_sd > 0:
+            g = rng()
+            if config.reaction_time_jitter > 0:
+                wait += g.uniform(-config.reaction_time_jitter, config.reaction_time_jitter)
+            wait = lognormal(wait, config.reaction_log_sd, g)
         raw = zero.copy()
         raw[button] = 1.0
         return _evolve(
             state,
             raw=raw,
-            busy_until=time + wait,
+            busy_until=time + max(wait, 2.0 * period),
             draws=draws,
             presses=state.presses + 1,
             progress_mode=-1,  # every press restarts the stall watch (rule 5)
             **changes,
         )
 
-    # Every request restarts the "unhelped" timer and drops a mode-cycling target.
+    def request(**changes: object) -> UserState:
+        # Every request restarts the "unhelped" timer and drops a mode-cycling target.
+        return press(REQUEST_BUTTON, target_mode=-1, request_mode=mode, request_since=time, **changes)
+
+    def settle(**changes: object) -> UserState | None:
+        if config.settle_time <= 0 or (config.settle_prob < 1.0 and rng().random() >= config.settle_prob):
+            return None
+        wait = lognormal(
+            config.settle_time, config.settle_log_sd, rng() if config.settle_log_sd > 0 else None
+        )
+        return _evolve(state, raw=zero, busy_until=time + max(wait, period), draws=draws, **changes)
+
+    # A request was made: wait for the mode it chooses, then settle into it and judge it.
+    if state.request_mode >= 0:
+        if mode == state.request_mode and time - state.request_since < config.request_wait - 1e-9:
+            return _evolve(state, raw=zero)
+        changed = mode != state.request_mode
+        state = _evolve(state, request_mode=-1, judge=True)
+        if changed:
+            out = settle()
+            if out is not None:
+                return out
+
+    # Rule 3: requests.
     restart = NOT_COUNTING if state.unhelped_since == NOT_COUNTING else time
     if config.request_at_start and not state.requested_at_start:
-        return press(REQUEST_BUTTON, requested_at_start=True, unhelped_since=restart, target_mode=-1)
+        if request_chance(config.request_prob):
+            return request(requested_at_start=True, unhelped_since=restart)
+        state = _evolve(state, requested_at_start=True, draws=draws)
     if (
         config.request_when_unhelped_for is not None
         and state.unhelped_since != NOT_COUNTING
         and time - state.unhelped_since >= config.request_when_unhelped_for - 1e-9
     ):
-        return press(REQUEST_BUTTON, unhelped_since=time, target_mode=-1)
+        if request_chance(config.request_prob):
+            return request(unhelped_since=time)
+        state = _evolve(state, unhelped_since=time, draws=draws)  # let it pass; look again later
+
+    if time < state.start_until - 1e-9:
+        return _evolve(state, raw=zero, draws=draws)
 
     remaining = mode_remaining(err, modes, config)
+    arm_remaining = remaining[: n_modes - 1]
     target = state.target_mode
-    if target >= 0 and (target == mode or remaining[target] <= 1.0):
-        target = -1  # reached, or nothing left to do there
+
+    # The mode a request chose: keep it, or cycle away to one of its own choice.
+    if state.judge:
+        state = _evolve(state, judge=False)
+        if config.accept_prob < 1.0 and rng().random() >= config.accept_prob:
+            g = rng() if config.mode_temperature > 0 else None
+            target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True)
+            if target != mode and arm_remaining[target] > 1.0:
+                return press(MODE_BUTTON, target_mode=target, overshot=False)
+            target = -1
+
+    if target >= 0 and target == mode:
+        if config.overshoot_prob > 0 and not state.overshot and rng().random() < config.overshoot_prob:
+            return press(MODE_BUTTON, overshot=True)  # one too many: round again to the target
+        state = _evolve(state, target_mode=-1, overshot=False)
+        out = settle()
+        if out is not None:
+            return out
+        target = -1
+    if target >= 0 and remaining[target] <= 1.0:
+        target = -1  # nothing left to do there
+    use_requests = belief is not None and config.request_instead_prob > 0
     if target < 0 and remaining[mode] <= 1.0:
-        target = int(np.argmax(remaining[: len(modes) - 1]))
+        if use_requests and request_chance(config.request_instead_prob):
+            return request()
+        g = rng() if config.mode_temperature > 0 else None
+        # A Boltzmann user never "chooses" the exhausted mode it is in (the oracle cannot: it is the least).
+        target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=g is not None)
         if target == mode:  # unreachable with validated tolerances: nothing left anywhere
-            return _evolve(state, raw=zero, target_mode=-1)
+            return _evolve(state, raw=zero, target_mode=-1, draws=draws)
+        return press(MODE_BUTTON, target_mode=target, overshot=False)
     if target >= 0:
         return press(MODE_BUTTON, target_mode=target)
     state = _evolve(state, target_mode=-1)
@@ -403,30 +718,61 @@ def user_step(
         if state.progress_mode != mode or now_remaining <= state.progress_best - config.stall_progress:
             state = _evolve(state, progress_mode=mode, progress_since=time, progress_best=now_remaining)
         elif time - state.progress_since >= config.stall_time - 1e-9:
-            others = remaining[: len(modes) - 1].copy()  # arm modes (the gripper mode is last)
+            others = arm_remaining.copy()
             if mode < others.size:
                 others[mode] = -np.inf
-            best = int(np.argmax(others))
-            if others[best] > 1.0:
-                return press(MODE_BUTTON, target_mode=best)
+            if np.max(others) > 1.0:
+                if use_requests and request_chance(config.request_instead_prob):
+                    return request()
+                g = rng() if config.mode_temperature > 0 else None
+                best = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True)
+                if others[best] > 1.0:
+                    return press(MODE_BUTTON, target_mode=best, overshot=False)
             # Nothing else to do: keep at it, and watch again from here.
             state = _evolve(state, progress_since=time, progress_best=now_remaining)
 
+    # Reviews: while the mode still helps, is another one better now? (People interleave modes.)
+    if config.mode_review_rate > 0 and rng().random() < -math.expm1(-config.mode_review_rate * period):
+        g = rng() if config.mode_temperature > 0 else None
+        choice = choose_mode(arm_remaining, mode, n_modes, config, g)
+        if choice != mode and arm_remaining[choice] > 1.0:
+            return press(MODE_BUTTON, target_mode=choice, overshot=False)
+
+    # Pauses (fatigue, thinking).
+    if config.pause_rate > 0 and rng().random() < -math.expm1(-config.pause_rate * period):
+        g = rng() if config.pause_log_sd > 0 else None
+        wait = lognormal(config.pause_duration, config.pause_log_sd, g)
+        # The stall watch (rule 5) counts commanding time: it starts again after the pause.
+        return _evolve(state, raw=zero, busy_until=time + max(wait, period), draws=draws, progress_mode=-1)
+
+    # Rule 6: command.
     dims = modes[mode]
     tol = _dim_tolerances(config)
     speeds = interface.dim_speeds()
     raw = zero.copy()
-    draws = state.draws
     if interface.kind == "joystick":
+        axes = [0.0, 0.0]
+        active = []
         for k, d in enumerate(dims):
             if d == GRIPPER_DIM or abs(err[d]) <= tol[d]:
                 continue
             axis = float(np.clip(err[d] / config.approach_time / speeds[d], -1.0, 1.0))
             if abs(axis) < config.min_axis:
                 axis = math.copysign(config.min_axis, err[d])
-            if config.axis_noise > 0:
-                axis += float(_draw(config, draws).normal(0.0, config.axis_noise))
-                draws += 1
+            axes[k] = axis
+            active.append(k)
+        if active and (config.direction_kappa is not None or config.deflection_log_sd > 0):
+            g = rng()
+            stick = np.array(axes)
+            size = float(np.linalg.norm(stick))
+            if config.direction_kappa is not None:
+                stick = sample_von_mises_fisher(stick, config.direction_kappa, g)
+            stick = stick * lognormal(size, config.deflection_log_sd, g)
+            axes = stick.tolist()
+        for k in range(2):
+            axis = axes[k]
+            if config.axis_noise > 0 and k in active:
+                axis += float(rng().normal(0.0, config.axis_noise))
             raw[k] = float(np.clip(axis, -1.0, 1.0))
     else:
         d = dims[0]
@@ -435,4 +781,11 @@ def user_step(
                 raw[0] = 1.0
             elif err[d] < -tol[d]:
                 raw[1] = 1.0
+    if (
+        config.wrong_press_prob > 0
+        and _drive(raw)
+        and not _drive(state.raw)
+        and rng().random() < config.wrong_press_prob
+    ):
+        return press(MODE_BUTTON)  # meant to drive, hit the mode button
     return _evolve(state, raw=raw, draws=draws)

@@ -17,7 +17,7 @@ __all__ = ["SimulatedUser", "UserConfig"]
 
 
 class SimulatedUser(LeafSystem):
-    """A deterministic simulated user of a joystick or head array (policy in :mod:`drake_disamb.core.user`).
+    """A simulated user of a joystick or head array (policy in :mod:`drake_disamb.core.user`).
 
     .. pydrake_system::
 
@@ -45,15 +45,14 @@ class SimulatedUser(LeafSystem):
     Output ports:
         raw (4): the interface's raw signal, computed at the last update and held (no direct
             feedthrough). Joystick ``[axis_x, axis_y, mode_button, disambiguation_button]``; head
-            array ``[left, right, back, disambiguation_button]``. Button presses last one control
-            period and are followed by at least ``config.reaction_time - reaction_time_jitter``
-            seconds with everything released.
+            array ``[left, right, back, disambiguation_button]``. Button presses last one decision
+            period and are followed by at least two decision periods with everything released.
         sanitized_input_count (1): updates so far whose inputs were unusable (see below).
 
-    State: discrete ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
-    progress_mode, progress_since, progress_best, raw (4)]`` and ``raw`` again in a group of its own
-    (the state output port ``raw``), updated every ``interface.control_period`` seconds from t = 0
-    (give it the interface's period so each press is seen as exactly one rising edge); and
+    State: discrete :meth:`UserState.to_vector <drake_disamb.core.user.UserState.to_vector>` and
+    ``raw`` again in a group of its own (the state output port ``raw``), updated every decision
+    period (``config.decision_period``, default the interface's ``control_period``; at least the
+    control period, so each press is seen as exactly one rising edge) from t = 0; and
     ``[sanitised-input count]``, ``[time of the last warning]`` (s).
 
     **Unusable inputs.** A pose with a NaN/inf entry or an unusable quaternion
@@ -96,11 +95,16 @@ class SimulatedUser(LeafSystem):
             raise ValueError(f"config: expected a UserConfig, got {config!r}")
         cfg = UserConfig() if config is None else config
         self.config = replace(cfg, **overrides) if overrides else cfg
-        period = self.interface.control_period
+        period = self.config.period(self.interface)
+        if period < self.interface.control_period - 1e-12:
+            raise ValueError(
+                f"UserConfig.decision_period: expected at least the control period "
+                f"({self.interface.control_period} s), got {period!r}"
+            )
         if self.config.min_reaction_time < 2 * period:
             raise ValueError(
                 f"UserConfig.reaction_time: reaction_time - reaction_time_jitter must be at least two "
-                f"control periods ({2 * period} s) so presses are released and the new mode is seen, "
+                f"decision periods ({2 * period} s) so presses are released and the new mode is seen, "
                 f"got {self.config.min_reaction_time!r}"
             )
         self.goal_indices: tuple[int, ...] = tuple(int(g) for g in indices)

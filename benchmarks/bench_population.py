@@ -1,0 +1,136 @@
+"""The simulated population beside the people: mean user mode switches, requests and completion time
+per interface, task and paradigm (a check of the calibration, not a fit).
+
+Runs ``--trials`` trials per condition (interface x task x paradigm) with subjects drawn by
+:func:`drake_disamb.study.population.draw_subjects`, each with a random intended goal and initial
+mode, through :func:`drake_disamb.trial.run_trial` (the embedded reaching and pouring scenarios,
+``duration`` raised to ``--duration``), and prints their means beside the means of the authors'
+logs (:func:`drake_disamb.study.calibration.human_condition_means`, computed the authors' way)
+and the ratio simulated / human; the last column adds the people's median tail (last command to
+the end of the trial, which the experimenter stopped) to the simulated time. The issue's
+acceptance asks for every ratio within 0.5..1.5.
+
+    python benchmarks/bench_population.py [--trials 2] [--duration 180] [--seed 0] [--jsonl FILE]
+
+Results stream to ``--jsonl`` (one line per trial) so a long run can be read while it goes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drake_disamb.config import load_scenario, validate_scenario, with_overrides
+from drake_disamb.study.calibration import estimate_behaviour, human_condition_means, read_human_trials
+from drake_disamb.study.population import draw_subjects
+from drake_disamb.trial import run_trial
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
+CONDITIONS = [
+    (itf, task, par)
+    for itf in ("joystick", "head_array")
+    for task in ("reaching", "pouring")
+    for par in ("manual", "disambiguation")
+]
+
+
+def run_one(itf: str, task: str, par: str, subject, seed: int) -> dict:
+    rng = np.random.default_rng([seed, 7])
+    base = load_scenario(task)
+    goals = [int(rng.integers(len(base.stage_goals(k)))) for k in range(base.n_stages)]
+    s = with_overrides(base, interface=itf, paradigm=par, seed=seed, goal=goals)
+    n_modes = 5 if itf == "joystick" else 7
+    user = dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
+    s = validate_scenario(
+        dataclasses.replace(s, user=user, duration=ARGS.duration, initial_mode=int(rng.integers(n_modes)))
+    )
+    r = run_trial(s, progress=False)
+    return {
+        "interface": itf,
+        "task": task,
+        "paradigm": par,
+        "subject": subject.name,
+        "seed": seed,
+        "success": r.success,
+        "done": r.done,
+        "completion_time": r.time,
+        "mode_switches": r.mode_switches,
+        "requests": r.requests,
+        "wall_time": r.wall_time,
+    }
+
+
+def main() -> int:
+    global ARGS
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--trials", type=int, default=2, help="trials per condition")
+    p.add_argument("--duration", type=float, default=180.0, help="trial duration limit (s)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--subjects", type=int, default=8)
+    p.add_argument("--jsonl", type=Path, default=None, help="append each trial's result here")
+    p.add_argument("--from-jsonl", type=Path, default=None, help="only print the table of a finished run")
+    ARGS = p.parse_args()
+    rows = []
+    if ARGS.from_jsonl is not None:
+        rows = [json.loads(line) for line in ARGS.from_jsonl.read_text().splitlines() if line.strip()]
+    else:
+        subjects = draw_subjects(ARGS.subjects, ARGS.seed)
+        k = 0
+        start = time.perf_counter()
+        for r in range(ARGS.trials):
+            for c, (itf, task, par) in enumerate(CONDITIONS):
+                subject = subjects[(c + 3 * r) % len(subjects)]  # each condition meets other subjects
+                row = run_one(itf, task, par, subject, ARGS.seed * 1000 + k)
+                k += 1
+                rows.append(row)
+                print(json.dumps(row), flush=True)
+                if ARGS.jsonl is not None:
+                    with ARGS.jsonl.open("a") as f:
+                        f.write(json.dumps(row) + "\n")
+        print(f"{len(rows)} trials in {time.perf_counter() - start:.0f} s wall", file=sys.stderr)
+    human, tail = {}, 0.0
+    if DATA.is_dir():
+        trials = read_human_trials(DATA)
+        human = human_condition_means(trials)
+        tail = estimate_behaviour(trials).tail.median
+    else:
+        print(f"(no human logs at {DATA}: simulated means only)")
+    print(
+        f"{'interface':<11} {'task':<9} {'paradigm':<15} {'n':>3} {'succ':>5} | "
+        f"{'switches sim/hum':>17} {'requests sim/hum':>17} {'time sim/hum':>17} {'time+tail':>9}"
+    )
+    for itf, task, par in CONDITIONS:
+        rs = [r for r in rows if (r["interface"], r["task"], r["paradigm"]) == (itf, task, par)]
+        if not rs:
+            continue
+        h = human.get((itf, task, par), {})
+        cells = []
+        for key in ("mode_switches", "requests", "completion_time"):
+            sim = float(np.mean([r[key] for r in rs]))
+            hum = h.get(key, float("nan"))
+            ratio = sim / hum if hum else float("nan")
+            cells.append(f"{sim:6.1f}/{hum:5.1f} ({ratio:4.2f})")
+        succ = np.mean([r["success"] for r in rs])
+        hum_time = h.get("completion_time", float("nan"))
+        with_tail = (np.mean([r["completion_time"] for r in rs]) + tail) / hum_time
+        print(
+            f"{itf:<11} {task:<9} {par:<15} {len(rs):>3} {succ:>5.2f} | "
+            + " ".join(cells)
+            + f" ({with_tail:4.2f})"
+        )
+    if tail:
+        print(
+            f"time+tail: the simulated time plus the people's median {tail:.1f} s from their last command "
+            "to the end of the trial (the experimenter's stop; a simulated trial ends on success)"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

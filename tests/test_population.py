@@ -1,0 +1,509 @@
+"""The human-like simulated user: each behaviour of the core policy, the population drawn from it,
+and the calibration on the authors' human logs (skipped where the logs are absent)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update
+from drake_disamb.core.user import (
+    UserConfig,
+    UserState,
+    choose_mode,
+    lognormal,
+    mode_usefulness,
+    user_step,
+)
+from drake_disamb.study.population import (
+    LogNormal,
+    PopulationConfig,
+    Subject,
+    Uniform,
+    draw_subjects,
+)
+
+IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
+JOY = InterfaceConfig(kind="joystick")
+HEAD = InterfaceConfig(kind="head_array")
+QUIET = UserConfig(request_at_start=False, request_when_unhelped_for=None, stall_time=None)
+EE = np.array([0.0, -0.4, 0.3, *IDENTITY])
+GOALS = np.array([[0.2, -0.4, 0.25, *IDENTITY], [-0.2, -0.5, 0.3, *IDENTITY]])
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
+needs_data = pytest.mark.skipif(
+    not DATA.is_dir(), reason=f"the authors' human logs are not at {DATA} (../shared/data, never copied here)"
+)
+
+
+def step(state, t, mode, config, *, interface=JOY, ee=EE, belief=None):
+    return user_step(state, t, mode, ee, GOALS, 0, interface, config, belief)
+
+
+def run_fixed_mode(config, mode, interface=JOY, until=3.0, ee=EE, belief=None):
+    """Decisions every ``config.period`` in a fixed mode; the list of states."""
+    s, out = UserState(), []
+    period = config.period(interface)
+    for k in range(int(round(until / period))):
+        s = step(s, k * period, mode, config, interface=interface, ee=ee, belief=belief)
+        out.append(s)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# core: every new behaviour, off by default
+# ---------------------------------------------------------------------------------------------
+
+
+def test_new_fields_default_to_the_deterministic_user() -> None:
+    cfg = UserConfig()
+    assert cfg.decision_period is None and cfg.direction_kappa is None and cfg.request_decay_time is None
+    assert cfg.mode_temperature == 0 and cfg.pause_rate == 0 and cfg.wrong_press_prob == 0
+    assert cfg.request_prob == 1 and cfg.accept_prob == 1 and cfg.request_instead_prob == 0
+    # No draw is made by the default user (the draw counter keys every random number).
+    states = run_fixed_mode(QUIET, 1, until=1.0)
+    assert all(s.draws == 0 for s in states)
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("decision_period", 0.0),
+        ("direction_kappa", -1.0),
+        ("request_decay_time", float("nan")),
+        ("pause_rate", -0.1),
+        ("release_lag", float("inf")),
+        ("wrong_press_prob", 1.5),
+        ("accept_prob", -0.1),
+        ("pause_duration", 0.0),
+    ],
+)
+def test_new_fields_are_validated(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=f"UserConfig.{field}"):
+        UserConfig(**{field: value})
+
+
+def test_without_requests_turns_every_request_off() -> None:
+    cfg = UserConfig(request_instead_prob=0.5).without_requests()
+    assert (
+        not cfg.request_at_start and cfg.request_when_unhelped_for is None and cfg.request_instead_prob == 0
+    )
+
+
+def test_lognormal_draws_are_truncated_and_seeded() -> None:
+    assert lognormal(2.0, 0.0, None) == 2.0
+    values = [lognormal(1.0, 0.5, np.random.default_rng(i)) for i in range(500)]
+    assert min(values) >= np.exp(-1.0) - 1e-12 and max(values) <= np.exp(1.0) + 1e-12
+    assert np.median(values) == pytest.approx(1.0, abs=0.1)
+    assert lognormal(1.0, 0.5, np.random.default_rng(3)) == lognormal(1.0, 0.5, np.random.default_rng(3))
+
+
+def test_decision_period_sets_the_shortest_wait_after_a_press() -> None:
+    cfg = dataclasses.replace(QUIET, decision_period=0.1, reaction_time=0.3, reaction_log_sd=1.0, seed=1)
+    waits = []
+    for seed in range(40):
+        s = step(UserState(), 0.0, 3, dataclasses.replace(cfg, seed=seed))  # {wy}: nothing to do -> press
+        assert s.raw[2] == 1.0
+        waits.append(s.busy_until)
+    assert min(waits) >= 0.2 - 1e-12  # two decision periods
+    assert len(set(waits)) > 20  # drawn per press (those below two periods clipped)
+
+
+def test_start_delay_holds_every_command() -> None:
+    cfg = dataclasses.replace(QUIET, start_delay=1.0, decision_period=0.1)
+    states = run_fixed_mode(cfg, 1, until=2.0)
+    first = next(k for k, s in enumerate(states) if s.raw[0] != 0) * 0.1
+    assert first == pytest.approx(1.0)
+
+
+def test_settle_prob_skips_some_settles() -> None:
+    waits = 0
+    for seed in range(100):
+        cfg = dataclasses.replace(QUIET, settle_time=0.8, settle_prob=0.6, decision_period=0.1, seed=seed)
+        s = step(UserState(), 0.0, 3, cfg)
+        s = step(s, 0.4, s.target_mode, cfg)
+        waits += not np.any(s.raw)
+    assert 45 < waits < 75
+
+
+def test_settle_time_after_reaching_the_target_mode() -> None:
+    cfg = dataclasses.replace(QUIET, settle_time=0.8, decision_period=0.1)
+    s = step(UserState(), 0.0, 3, cfg)  # press toward a useful mode
+    assert s.raw[2] == 1.0 and s.target_mode >= 0
+    target = s.target_mode
+    s = step(s, 0.4, target, cfg)  # target reached: settle, everything released
+    assert not np.any(s.raw) and s.busy_until == pytest.approx(1.2)
+    s = step(s, 1.2, target, cfg)
+    assert s.raw[0] != 0 or s.raw[1] != 0
+
+
+def test_joystick_direction_noise_is_von_mises_about_the_intended_direction() -> None:
+    exact = step(UserState(), 0.0, 1, QUIET).raw[:2]  # {vx, vz}: [1, -0.77]
+    angles, sizes = [], []
+    for seed in range(300):
+        cfg = dataclasses.replace(QUIET, direction_kappa=10.0, seed=seed)
+        raw = step(UserState(), 0.0, 1, cfg).raw[:2]
+        angles.append(np.arctan2(raw[1], raw[0]) - np.arctan2(exact[1], exact[0]))
+        sizes.append(np.linalg.norm(raw))
+    angles = np.angle(np.exp(1j * np.asarray(angles)))
+    assert abs(np.mean(angles)) < 0.05
+    assert np.mean(np.cos(angles)) == pytest.approx(0.9486, abs=0.02)  # I1(10) / I0(10)
+    cfg = dataclasses.replace(QUIET, deflection_log_sd=0.5, seed=2)
+    assert np.linalg.norm(step(UserState(), 0.0, 1, cfg).raw[:2]) != pytest.approx(np.linalg.norm(exact))
+
+
+def test_release_lag_holds_the_switch_after_the_goal_line() -> None:
+    cfg = dataclasses.replace(QUIET, release_lag=0.3, decision_period=0.1, seed=4)
+    s = step(UserState(), 0.0, 0, cfg, interface=HEAD)  # vx: +0.2 m to go -> left
+    assert s.raw[0] == 1.0
+    ee_done = EE.copy()
+    ee_done[0] = GOALS[0, 0]  # x done, z not: the vx drive should stop
+    late = step(s, 0.1, 0, cfg, interface=HEAD, ee=ee_done)
+    assert late.raw[0] == 1.0 and late.hold_until > 0.1  # still held: a timing error
+    later = step(late, late.hold_until + 1e-6, 0, cfg, interface=HEAD, ee=ee_done)
+    assert later.raw[0] == 0.0 and later.hold_until == 0.0
+
+
+def test_wrong_presses_hit_the_mode_button_when_starting_to_drive() -> None:
+    hits = 0
+    for seed in range(200):
+        cfg = dataclasses.replace(QUIET, wrong_press_prob=0.3, seed=seed)
+        hits += step(UserState(), 0.0, 0, cfg, interface=HEAD).raw[2] == 1.0
+    assert 40 < hits < 80
+    # ... only at the onset of a drive, never while already driving.
+    cfg = dataclasses.replace(QUIET, wrong_press_prob=1.0)
+    driving = UserState(raw=np.array([1.0, 0.0, 0.0, 0.0]))
+    assert step(driving, 0.0, 0, cfg, interface=HEAD).raw[0] == 1.0
+
+
+def test_mode_usefulness_and_softmax_choice() -> None:
+    remaining = np.array([40.0, 20.0, 0.0, 10.0, 30.0, 5.0])
+    u = mode_usefulness(remaining, 2, 7, 0.1)
+    np.testing.assert_allclose(u, [1.0 - 0.5, 0.5 - 0.6, 0.0, 0.25 - 0.1, 0.75 - 0.2, 0.125 - 0.3])
+    best = choose_mode(remaining, 2, 7, QUIET, None)
+    assert best == 0
+    warm = dataclasses.replace(QUIET, mode_temperature=0.2)
+    picks = [choose_mode(remaining, 2, 7, warm, np.random.default_rng(i)) for i in range(400)]
+    counts = np.bincount(picks, minlength=6)
+    assert counts[0] > counts[3] > 0 and counts[4] > 0  # graded, not an oracle
+    assert 2 not in picks or counts[2] < counts[0]
+    assert choose_mode(remaining, 0, 7, warm, np.random.default_rng(0), exclude_current=True) != 0
+
+
+def test_mode_review_leaves_a_useful_mode_for_a_better_one() -> None:
+    # Head array in vz (5 tolerances to go) while vx has 20: without reviews it drives vz to the
+    # end; with them it leaves vz for vx at the first review.
+    s = step(UserState(), 0.0, 2, QUIET, interface=HEAD)
+    assert s.raw[1] == 1.0  # driving -z
+    cfg = dataclasses.replace(QUIET, mode_review_rate=1000.0)  # review at every decision
+    s = step(UserState(), 0.0, 2, cfg, interface=HEAD)
+    assert s.raw[2] == 1.0 and s.target_mode == 0
+    s = step(UserState(), 0.0, 0, cfg, interface=HEAD)  # already in the best mode: stays
+    assert s.raw[0] == 1.0
+
+
+def test_overshoot_presses_once_too_many_and_goes_round_again() -> None:
+    cfg = dataclasses.replace(QUIET, overshoot_prob=1.0)
+    s = step(UserState(), 0.0, 1, cfg, interface=HEAD)  # vy has nothing to do: target vx (0)
+    assert s.raw[2] == 1.0 and s.target_mode == 0
+    s = step(dataclasses.replace(s, busy_until=0.0), 1.0, 0, cfg, interface=HEAD)  # on the target
+    assert s.raw[2] == 1.0 and s.overshot and s.target_mode == 0  # one too many
+    s = step(dataclasses.replace(s, busy_until=0.0), 2.0, 1, cfg, interface=HEAD)
+    assert s.raw[2] == 1.0 and s.target_mode == 0  # round again
+
+
+def test_pauses_release_everything_for_a_drawn_duration() -> None:
+    cfg = dataclasses.replace(
+        QUIET, pause_rate=2.0, pause_duration=1.0, pause_log_sd=0.3, decision_period=0.1
+    )
+    states = run_fixed_mode(cfg, 1, until=10.0)
+    idle = np.mean([not np.any(s.raw) for s in states])
+    assert 0.4 < idle < 0.9  # expected 2 / s x ~1 s pauses: about 2/3 idle
+    assert not any(not np.any(s.raw) for s in run_fixed_mode(QUIET, 1, until=1.0))
+
+
+def test_a_pause_is_not_a_stall() -> None:
+    # A stalled arm (the pose never changes) with long pauses: every pause restarts the stall watch,
+    # which counts commanding time only.
+    cfg = dataclasses.replace(
+        QUIET, stall_time=2.0, pause_rate=5.0, pause_duration=3.0, decision_period=0.1, seed=2
+    )
+    states = run_fixed_mode(cfg, 0, interface=HEAD, until=6.0)
+    paused = [k for k, s in enumerate(states[1:], 1) if not np.any(s.raw) and np.any(states[k - 1].raw)]
+    assert paused and all(states[k].progress_mode == -1 for k in paused)
+
+
+def test_request_probability_decay_and_instead_of_cycling() -> None:
+    flat = np.array([0.5, 0.5])
+    base = dataclasses.replace(QUIET, request_at_start=True, request_prob=0.5)
+    made = sum(
+        step(UserState(), 0.0, 0, dataclasses.replace(base, seed=i), belief=flat).raw[3] for i in range(200)
+    )
+    assert 60 < made < 140
+    decayed = dataclasses.replace(base, request_prob=1.0, request_decay_time=1.0)
+    made_late = sum(
+        step(UserState(), 5.0, 0, dataclasses.replace(decayed, seed=i), belief=flat).raw[3]
+        for i in range(200)
+    )
+    assert made_late < 10  # exp(-5) ~ 0.7 %
+    # A mode change made by a request instead of cycling (needs the belief).
+    instead = dataclasses.replace(QUIET, request_instead_prob=1.0)
+    assert step(UserState(), 0.0, 3, instead, belief=flat).raw[3] == 1.0
+    assert step(UserState(), 0.0, 3, instead).raw[2] == 1.0  # no belief (manual): cycle
+
+
+def test_request_wait_then_accept_or_cycle_away() -> None:
+    flat = np.array([0.5, 0.5])
+    cfg = dataclasses.replace(QUIET, request_instead_prob=1.0, request_wait=2.0, accept_prob=0.0, seed=1)
+    s = step(UserState(), 0.0, 3, cfg, belief=flat)  # {wy}: request
+    assert s.raw[3] == 1.0 and s.request_mode == 3
+    s = step(s, 1.0, 3, cfg, belief=flat)  # the mode has not changed yet: wait
+    assert not np.any(s.raw) and s.request_mode == 3
+    s = step(s, 1.5, 1, cfg, belief=flat)  # switched to {vx, vz}: judged and left (accept_prob 0)
+    assert s.raw[2] == 1.0 and s.target_mode not in (-1, 1)
+    keep = dataclasses.replace(cfg, accept_prob=1.0)
+    s = step(UserState(), 0.0, 3, keep, belief=flat)
+    s = step(s, 1.5, 1, keep, belief=flat)
+    assert s.raw[0] != 0 and s.raw[2] == 0  # kept: drives in the chosen mode
+
+
+def test_human_user_is_seeded() -> None:
+    subject = draw_subjects(1, 5)[0]
+    cfg = subject.config(dataclasses.replace(QUIET, seed=11, stall_time=2.0))
+
+    def run(config: UserConfig) -> list[float]:
+        s, si, out = UserState(), initial_state(HEAD), []
+        for k in range(300):
+            t = k * 0.1
+            s = step(s, t, si.mode, config, interface=HEAD, belief=np.array([0.5, 0.5]))
+            si, _ = interface_update(si, s.raw, t, HEAD)
+            out.extend([*s.raw, s.busy_until])
+        return out
+
+    assert run(cfg) == run(cfg)
+    assert run(cfg) != run(dataclasses.replace(cfg, seed=12))
+
+
+# ---------------------------------------------------------------------------------------------
+# population
+# ---------------------------------------------------------------------------------------------
+
+
+def test_same_seed_same_subjects_and_subjects_differ() -> None:
+    a, b = draw_subjects(8, 3), draw_subjects(8, 3)
+    assert a == b
+    assert [s.name for s in a] == [f"S{i:02d}" for i in range(1, 9)]
+    assert draw_subjects(3, 3) == a[:3]  # a subject does not depend on n
+    assert a != draw_subjects(8, 4)
+    for key in PopulationConfig().distributions:
+        assert len({s.user[key] for s in a}) == 8, key
+    import json
+
+    json.dumps([s.user for s in a])  # plain JSON values
+    for s in a:
+        s.config()  # each a valid UserConfig
+
+
+def test_population_config_is_checked() -> None:
+    with pytest.raises(ValueError, match="not a UserConfig field"):
+        PopulationConfig(distributions={"reaction_speed": Uniform(0, 1)})
+    with pytest.raises(ValueError, match="both drawn and fixed"):
+        PopulationConfig(distributions={"release_lag": Uniform(0, 1)}, fixed={"release_lag": 0.1})
+    with pytest.raises(ValueError, match="LogNormal"):
+        LogNormal(-1.0)
+    with pytest.raises(ValueError, match="n:"):
+        draw_subjects(-1, 0)
+    with pytest.raises(ValueError, match="seed"):
+        draw_subjects(2, -1)
+    one = PopulationConfig(distributions={"mode_temperature": LogNormal(0.2, 0.0)}, fixed={})
+    assert draw_subjects(2, 0, one) == [
+        Subject("S01", {"mode_temperature": 0.2}),
+        Subject("S02", {"mode_temperature": 0.2}),
+    ]
+
+
+def test_a_subjects_mode_choices_are_not_always_the_best_mode() -> None:
+    # Head array in mode wx (nothing to do there), 0.20 m to go along +x and 0.16 m along -z: the
+    # best mode is vx (0), vz (2) is nearly as useful. Each drawn subject mostly picks vx, not always.
+    ee = EE.copy()
+    ee[2] = GOALS[0, 2] + 0.16
+    for subject in draw_subjects(3, 0):
+        best = other = 0
+        for seed in range(200):
+            cfg = dataclasses.replace(
+                subject.config(dataclasses.replace(QUIET, seed=seed)),
+                start_delay=0.0,  # choose at once: no start delay, request, pause or wrong press
+                request_at_start=False,
+                pause_rate=0.0,
+                wrong_press_prob=0.0,
+            )
+            s = step(UserState(), 0.0, 3, cfg, interface=HEAD, ee=ee)
+            assert s.raw[2] == 1.0 and s.target_mode >= 0
+            best += s.target_mode == 0
+            other += s.target_mode != 0
+        assert best > other > 0, subject
+
+
+# ---------------------------------------------------------------------------------------------
+# calibration on the authors' logs
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def human_trials():
+    if not DATA.is_dir():
+        pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
+    from drake_disamb.study.calibration import read_human_trials
+
+    return read_human_trials(DATA)
+
+
+@needs_data
+def test_reads_every_trial_with_its_paradigm(human_trials) -> None:
+    assert len(human_trials) == 127
+    assert sum(not t.valid for t in human_trials) == 8  # the failed ones among H2..H5
+    per = {}
+    for t in human_trials:
+        per.setdefault((t.subject, t.task, t.interface, t.paradigm), 0)
+        per[(t.subject, t.task, t.interface, t.paradigm)] += 1
+    assert set(per.values()) <= {3, 4, 5}  # 3 Manual, 5 Disambiguation (one H5 file missing)
+    assert all(t.request_times.size == 0 for t in human_trials if t.paradigm == "manual")
+    t = human_trials[0]
+    assert t.dt == pytest.approx(t.total_time / t.user_vel.shape[1])
+
+
+@needs_data
+def test_authors_metrics_and_condition_means(human_trials) -> None:
+    from drake_disamb.study.calibration import authors_metrics, human_condition_means, merge_times
+
+    assert merge_times([1.0, 2.5, 4.1, 10.0]) == [1.0, 4.1, 10.0]
+    first = human_trials[0]  # H2 pouring head array, Disambiguation: 13 switches, 2 requests
+    m = authors_metrics(first)
+    assert m == {
+        "mode_switches": 11.0,
+        "requests": 2.0,
+        "button_presses": 13.0,
+        "completion_time": first.total_time,
+    }
+    means = human_condition_means(human_trials)
+    assert len(means) == 8
+    ha_po_manual = means[("head_array", "pouring", "manual")]
+    assert 25 < ha_po_manual["mode_switches"] < 50  # the paper's 8 subjects: 34.5
+    assert means[("joystick", "reaching", "manual")]["mode_switches"] < 5  # 8 subjects: 2.38
+
+
+@needs_data
+def test_behaviour_estimates_are_human_scale(human_trials) -> None:
+    from drake_disamb.study.calibration import estimate_behaviour, format_estimates
+
+    est = estimate_behaviour(human_trials)
+    assert 2.0 < est.start_delay.median < 15.0
+    assert 0.2 < est.press_interval.median < 1.0
+    assert 1.0 < est.settle.median < 4.0
+    assert 0.1 < est.held_through_switch < 0.6
+    assert 0.5 < est.pause_duration.median < 5.0
+    assert all(0.05 < r < 1.0 for r in est.pause_rate.values())
+    assert 3.0 < est.direction_kappa < 30.0
+    assert 0.0 < est.request_share["joystick"] < 1.0
+    assert 0.5 < est.accept_share < 1.0
+    assert set(est.start_delay.subject_medians) == {"H2", "H3", "H4", "H5"}
+    assert "press interval" in format_estimates(est)
+
+
+@needs_data
+def test_population_defaults_follow_the_estimates(human_trials) -> None:
+    from drake_disamb.study.calibration import estimate_behaviour
+
+    est = estimate_behaviour(human_trials)
+    d = PopulationConfig().distributions
+    assert d["reaction_time"].median == pytest.approx(est.press_interval.median, rel=0.05)
+    assert d["start_delay"].median == pytest.approx(est.start_delay.median, rel=0.05)
+    assert d["pause_duration"].median == pytest.approx(est.pause_duration.median, rel=0.05)
+    settle = d["settle_time"].median + d["reaction_time"].median
+    assert settle == pytest.approx(est.settle.median, rel=0.05)
+    assert d["settle_prob"].low < 1.0 - est.held_through_switch < d["settle_prob"].high
+    assert d["direction_kappa"].median == pytest.approx(est.direction_kappa, rel=0.05)
+    rates = list(est.pause_rate.values())
+    assert min(rates) <= d["pause_rate"].median <= max(rates)
+    assert d["accept_prob"].low < est.accept_share < d["accept_prob"].high
+    shares = list(est.request_share_by_subject.values())
+    assert d["request_instead_prob"].low == pytest.approx(min(shares), abs=0.01)
+
+
+@needs_data
+def test_calibrate_command_prints_the_estimates(capsys: pytest.CaptureFixture[str]) -> None:
+    from drake_disamb.cli import main
+
+    assert main(["study", "calibrate", str(DATA)]) == 0
+    out = capsys.readouterr().out
+    for text in ("start delay", "press interval", "pause rate", "von Mises kappa", "request mode kept"):
+        assert text in out
+    assert "head_array  pouring   manual" in out
+
+
+def test_calibrate_command_refuses_a_folder_without_logs(tmp_path: Path, capsys) -> None:
+    from drake_disamb.cli import main
+
+    assert main(["study", "calibrate", str(tmp_path)]) == 2
+    assert "trial_order_testing_8.mat" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# the SimulatedUser system at its decision period
+# ---------------------------------------------------------------------------------------------
+
+
+def test_system_decides_at_its_decision_period_and_holds_the_raw_signal() -> None:
+    from pydrake.systems.analysis import Simulator
+
+    from drake_disamb.systems.user import SimulatedUser
+
+    cfg = dataclasses.replace(QUIET, decision_period=0.1, direction_kappa=10.0, seed=3)
+    user = SimulatedUser("joystick", 0, 2, cfg)
+    attrs = user.GetUniquePeriodicDiscreteUpdateAttribute()
+    assert attrs is not None and attrs.period_sec() == pytest.approx(0.1)
+    sim = Simulator(user)
+    ctx = sim.get_mutable_context()
+    user.GetInputPort("mode").FixValue(ctx, [1.0])
+    user.GetInputPort("ee_pose").FixValue(ctx, EE)
+    user.GetInputPort("goal_poses").FixValue(ctx, GOALS.reshape(-1))
+    sim.Initialize()
+    seen = []
+    for k in range(1, 30):
+        sim.AdvanceTo(k * 0.01 + 0.001)
+        seen.append(tuple(user.GetOutputPort("raw").Eval(ctx)))
+    assert len(set(seen[:9])) == 1 and len(set(seen)) == 3  # held 0.1 s; redrawn at 0.1 and 0.2
+    with pytest.raises(ValueError, match="decision_period"):
+        SimulatedUser("joystick", 0, 2, dataclasses.replace(QUIET, decision_period=0.005))
+
+
+def test_subjects_apply_to_a_scenario_and_survive_yaml() -> None:
+    from drake_disamb.config import (
+        dump_scenario,
+        load_scenario,
+        resolve_scenario,
+        scenario_from_yaml,
+        with_overrides,
+    )
+
+    subject = draw_subjects(1, 9)[0]
+    for paradigm in ("manual", "disambiguation"):
+        s = with_overrides(load_scenario("reaching"), paradigm=paradigm)
+        s = dataclasses.replace(
+            s, user=dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
+        )
+        assert scenario_from_yaml(dump_scenario(s)) == s
+        user = resolve_scenario(s).user
+        for key, value in subject.user.items():
+            if paradigm == "manual" and key in (
+                "request_at_start",
+                "request_instead_prob",
+                "request_when_unhelped_for",
+            ):
+                continue
+            assert getattr(user, key) == value, key
+        if paradigm == "manual":
+            assert not user.request_at_start and user.request_instead_prob == 0
+            assert user.request_when_unhelped_for is None
