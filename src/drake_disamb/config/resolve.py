@@ -16,8 +16,8 @@ and returns a :class:`TrialConfig`:
 - the mode-selection method, the request latency (the interface's: it delays the switch) and, in
   the Automatic paradigm, the trigger (its ``confidence_threshold`` written out as ``rho1`` when
   left out; without its request button the interface logs presses but serves none);
-- the simulated user's config (its seed is the scenario's; in the manual paradigm it never asks
-  for disambiguation), the interface's, the station's (Drake's ``MultibodyPlantConfig``, the start
+- the simulated user's config (its seed is the scenario's; in the manual and automatic paradigms
+  it never asks for disambiguation), the interface's, the station's (Drake's ``MultibodyPlantConfig``, the start
   posture and the scene objects) and Drake's ``SimulatorConfig``.
 
 An error from a core config's own checks is raised as a ``ValueError`` that names the scenario
@@ -144,9 +144,12 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     _check_dft_sizes(dft, n, f"{name}.inference.dft")
     user = _named(f"{name}.user.config", lambda: s.user.config.to_config(seed=s.seed, rho1=rhos[0]))
     disambiguation = None
-    if s.paradigm == "manual":
+    if s.paradigm != "disambiguation":
+        # Manual: there is no request button. Automatic: the system switches by itself, so the
+        # simulated user does not ask (a person may still press, if the trigger's request_button
+        # allows it).
         user = user.without_requests()
-    else:
+    if s.paradigm != "manual":
         disambiguation = projection_config(s.disambiguation.preset, s.inference.method, dft, autonomy, name)
     latency = s.disambiguation.request_latency
     if not (is_real(latency) and latency >= 0):
