@@ -49,16 +49,20 @@ class TrialConfig:
     """The frozen configs of one trial, resolved from a scenario by :func:`resolve_scenario`.
 
     Attributes:
-        n_goals: Goals per stage (the size of the belief).
+        n_goals: The size of the belief (:attr:`Scenario.n_goals`: goals per stage, or every goal
+            of the task with ``inference.goal_set`` ``"task"``).
         rhos: The blending thresholds ``(rho1, rho2, rho3)`` for ``n_goals``.
         blending: The blender's config, ``rho1`` and ``rho2`` written out.
         autonomy: The potential field of the autonomy, the live inference's agreement term and the
             forward projection.
         inference_method: ``"dft"``, ``"bayes"`` or ``"memory"``.
-        dft: The DFT parameters of the live inference and of the forward projection.
+        dft: The DFT parameters of the live inference and of the forward projection (the agreement
+            term's form from ``inference.agreement``).
         disambiguation: The forward projection's config (``None`` in the manual paradigm): the
             preset's probing with the live inference's method, ``dft`` and ``autonomy``.
         user: The simulated user's config (seed and ``rho1`` set).
+        user_goals: Per stage, the belief slot of the user's intended goal
+            (:meth:`Scenario.belief_slot`).
         interface: The interface's config.
         station: The station's config (plant config, control period, start posture, scene objects).
         simulator: Drake's ``SimulatorConfig`` for ``ApplySimulatorConfig`` (a copy).
@@ -72,6 +76,7 @@ class TrialConfig:
     dft: DFTParams
     disambiguation: DisambiguationConfig | None
     user: UserConfig
+    user_goals: tuple[int, ...]
     interface: InterfaceConfig
     station: Any
     simulator: Any
@@ -95,9 +100,16 @@ def _check_dft_sizes(dft: DFTParams, n: int, path: str) -> None:
 
 
 def projection_config(
-    preset_name: str, method: str, dft: DFTParams, autonomy: PotentialFieldConfig, path: str = "scenario"
+    preset_name: str,
+    method: str,
+    dft: DFTParams,
+    autonomy: PotentialFieldConfig,
+    path: str = "scenario",
+    upsilon_normalization: str | None = None,
 ) -> DisambiguationConfig:
     """The forward projection's config: preset ``preset_name``'s probing, the live belief update.
+
+    ``upsilon_normalization`` replaces the preset's unless ``None``.
 
     Raises:
         ValueError: for the ``memory`` method, which has no forward projection.
@@ -108,9 +120,13 @@ def projection_config(
             f"live inference's update, which exists for 'dft' and 'bayes' (use the manual paradigm), "
             f"got 'memory'"
         )
+    base = preset(preset_name)
+    ups = base.upsilon_normalization if upsilon_normalization is None else upsilon_normalization
     return _named(
         f"{path}.disambiguation",
-        lambda: dataclasses.replace(preset(preset_name), inference=method, dft=dft, potential_field=autonomy),
+        lambda: dataclasses.replace(
+            base, inference=method, dft=dft, potential_field=autonomy, upsilon_normalization=ups
+        ),
     )
 
 
@@ -130,14 +146,23 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     rhos = _named(f"{name}.blending", lambda: resolve_rhos(n, blending.rho1, blending.rho2, blending.rho3))
     blending = dataclasses.replace(blending, rho1=rhos[0], rho2=rhos[1])
     autonomy = _named(f"{name}.autonomy", s.autonomy.to_config)
-    dft = _named(f"{name}.inference.dft", s.inference.dft.to_config)
+    dft = _named(
+        f"{name}.inference.dft", lambda: s.inference.dft.to_config(agreement_measure=s.inference.agreement)
+    )
     _check_dft_sizes(dft, n, f"{name}.inference.dft")
     user = _named(f"{name}.user.config", lambda: s.user.config.to_config(seed=s.seed, rho1=rhos[0]))
     disambiguation = None
     if s.paradigm == "manual":
         user = dataclasses.replace(user, request_at_start=False, request_when_unhelped_for=None)
     else:
-        disambiguation = projection_config(s.disambiguation.preset, s.inference.method, dft, autonomy, name)
+        disambiguation = projection_config(
+            s.disambiguation.preset,
+            s.inference.method,
+            dft,
+            autonomy,
+            name,
+            s.disambiguation.upsilon_normalization,
+        )
     interface = _named(
         f"{name}.initial_mode",
         lambda: InterfaceConfig(
@@ -163,6 +188,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         dft=dft,
         disambiguation=disambiguation,
         user=user,
+        user_goals=tuple(s.belief_slot(k, int(g)) for k, g in enumerate(s.user.goals)),
         interface=interface,
         station=station,
         simulator=copy.copy(s.simulator_config),
