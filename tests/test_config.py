@@ -196,7 +196,7 @@ def test_dump_keeps_every_change() -> None:
     s.user.config.stall_time = None  # an optional field whose embedded value is not None
     s.inference.goal_set = "stage"  # 2 goals per stage ...
     s.inference.dft.rest = [0.3, 0.7]  # ... so a rest state of 2
-    s.inference.agreement = "cosine"
+    s.inference.agreement = "dot" if s.inference.agreement == "cosine" else "cosine"
     s.disambiguation.upsilon_normalization = "displacement"
     s.blending.assist_without_input = not s.blending.assist_without_input
     s.simulator_config.integration_scheme = "runge_kutta3"
