@@ -93,14 +93,18 @@ def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "task") -> 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    ("interface", "goals"),
+    ("interface", "goals", "goal_set"),
     [
-        ("head_array", (0, 0)),
-        ("joystick", (0, 0)),
-        ("head_array", (0, 1)),
+        ("head_array", (0, 0), "task"),
+        ("joystick", (0, 0), "task"),
+        ("head_array", (0, 1), "task"),
+        # With one belief over the 4 goals (the default) the arm takes another way and arrives ...
+        ("head_array", (1, 0), "task"),
+        # ... with a belief over each stage's 2 goals it does not:
         pytest.param(
             "head_array",
             (1, 0),
+            "stage",
             marks=pytest.mark.xfail(
                 strict=True,
                 reason="direction-preserving IK (issue 11): from the left container the path to the "
@@ -110,19 +114,20 @@ def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "task") -> 
                 "joint-limit-aware autonomy.",
             ),
         ),
-        ("head_array", (1, 1)),
+        ("head_array", (1, 1), "task"),
     ],
     ids=[
         "head_array-right-low",
         "joystick-right-low",
         "head_array-right-high",
         "head_array-left-low",
+        "head_array-left-low-stage",
         "head_array-left-high",
     ],
 )
-def test_pouring_every_combination(interface: str, goals: tuple[int, int]) -> None:
+def test_pouring_every_combination(interface: str, goals: tuple[int, int], goal_set: str) -> None:
     """Both stages at the intended (container, location) within the 60 s limit."""
-    r = _pouring(interface, goals)
+    r = _pouring(interface, goals, goal_set)
     assert np.all(np.isfinite(r.stage_times)), f"{interface} {goals}: stage times {r.stage_times}"
     assert r.success and r.reached_goals == list(goals), f"{interface} {goals}: reached {r.reached_goals}"
     assert r.time <= 60.0
