@@ -85,7 +85,7 @@ def test_manual_paradigm_has_no_requests() -> None:
 
 
 @functools.cache
-def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "task") -> TrialResult:
+def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "stage") -> TrialResult:
     scenario = with_overrides(load_scenario("pouring"), interface=interface, goal=list(goals))
     scenario.inference.goal_set = goal_set
     return run_trial(scenario, progress=False)
@@ -95,12 +95,12 @@ def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "task") -> 
 @pytest.mark.parametrize(
     ("interface", "goals", "goal_set"),
     [
-        ("head_array", (0, 0), "task"),
-        ("joystick", (0, 0), "task"),
-        ("head_array", (0, 1), "task"),
-        # With one belief over the 4 goals (the default) the arm takes another way and arrives ...
+        ("head_array", (0, 0), "stage"),
+        ("joystick", (0, 0), "stage"),
+        ("head_array", (0, 1), "stage"),
+        # With one belief over the 4 goals (the paper's) the arm takes another way and arrives ...
         ("head_array", (1, 0), "task"),
-        # ... with a belief over each stage's 2 goals it does not:
+        # ... with a belief over each stage's 2 goals (the default) it does not:
         pytest.param(
             "head_array",
             (1, 0),
@@ -114,7 +114,7 @@ def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "task") -> 
                 "joint-limit-aware autonomy.",
             ),
         ),
-        ("head_array", (1, 1), "task"),
+        ("head_array", (1, 1), "stage"),
     ],
     ids=[
         "head_array-right-low",
@@ -143,9 +143,9 @@ def test_pouring_completes_both_stages() -> None:
     assert r.success and r.reached_goals == [0, 0]
 
 
-def test_pouring_keeps_one_belief_over_the_four_goals_by_default() -> None:
+def test_pouring_task_goal_set_keeps_one_belief_over_the_four_goals() -> None:
     """The paper's study: one belief over the task's 4 goals, uniform at the start only."""
-    r = _pouring("joystick", (0, 0))
+    r = _pouring("joystick", (0, 0), "task")
     assert r.scenario.inference.goal_set == "task" and r.success
     t, belief = r.logs["belief"]
     assert belief.shape[1] == 4

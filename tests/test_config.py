@@ -194,8 +194,8 @@ def test_dump_loads_back_equal(task: str, overrides: dict, tmp_path: Path) -> No
 def test_dump_keeps_every_change() -> None:
     s = load_scenario("pouring")
     s.user.config.stall_time = None  # an optional field whose embedded value is not None
-    s.inference.goal_set = "stage"  # 2 goals per stage ...
-    s.inference.dft.rest = [0.3, 0.7]  # ... so a rest state of 2
+    s.inference.goal_set = "task"  # one belief over the 4 goals ...
+    s.inference.dft.rest = [0.3, 0.3, 0.2, 0.2]  # ... so a rest state of 4
     s.inference.agreement = "dot" if s.inference.agreement == "cosine" else "cosine"
     s.disambiguation.upsilon_normalization = "displacement"
     s.blending.assist_without_input = not s.blending.assist_without_input
@@ -204,7 +204,7 @@ def test_dump_keeps_every_change() -> None:
     s.goals[1].position[2] += 0.01
     back = scenario_from_yaml(dump_scenario(s))
     assert back == s and back != load_scenario("pouring")
-    assert back.user.config.stall_time is None and back.inference.dft.rest == [0.3, 0.7]
+    assert back.user.config.stall_time is None and back.inference.dft.rest == [0.3, 0.3, 0.2, 0.2]
 
 
 def test_demo_dump_scenario_prints_the_resolved_scenario(capsys, tmp_path: Path) -> None:

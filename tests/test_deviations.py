@@ -191,7 +191,7 @@ def test_stage_goal_set_is_two_goals_per_stage() -> None:
 def test_bad_goal_set_names_the_field_and_the_value() -> None:
     s = _pouring("all")
     with pytest.raises(
-        ValueError, match=r"scenario\.inference\.goal_set: expected one of task, stage, got 'all'"
+        ValueError, match=r"scenario\.inference\.goal_set: expected one of stage, task, got 'all'"
     ):
         resolve_scenario(s)
 
