@@ -10,9 +10,10 @@ and returns a :class:`TrialConfig`:
 - the DFT parameters and the potential field, one instance each, shared by the live inference,
   the autonomy and the disambiguation's forward projection. Whatever the preset, the projection
   runs the live belief update: the preset fixes how it probes (dimensions, probe speeds, step,
-  horizons, weights), and its method, DFT parameters and potential field are replaced by the
-  scenario's. The ``memory`` method has no forward projection, so the disambiguation paradigm
-  refuses it;
+  horizons, weights), and its method, DFT parameters (with ``inference.agreement``, the agreement
+  term's form) and potential field are replaced by the scenario's, as is its Upsilon normalisation
+  when ``disambiguation.upsilon_normalization`` is set. The ``memory`` method has no forward
+  projection, so the disambiguation paradigm refuses it;
 - the simulated user's config (its seed is the scenario's; in the manual paradigm it never asks
   for disambiguation), the interface's, the station's (Drake's ``MultibodyPlantConfig``, the start
   posture and the scene objects) and Drake's ``SimulatorConfig``.
