@@ -1,7 +1,11 @@
 """Every goal of the study tasks with the simulated user: success, time, presses.
 
 Usage: ``python benchmarks/bench_tasks.py [--task reaching pouring] [--interface head_array
-joystick] [--paradigm disambiguation]``
+joystick] [--paradigm disambiguation] [--set inference.agreement=cosine ...]``
+
+``--set PATH=VALUE`` sets a scenario field by its dotted path (``inference.goal_set=stage``,
+``blending.assist_without_input=false``; the value is read as YAML), so one command measures a
+deviation from the paper (the README's table "Where we differ from the paper").
 
 For each task, interface and intended goal (reaching: each of the 5 objects; pouring: each
 (container, location) pair) it runs one trial of the embedded scenario with the default simulated
@@ -15,12 +19,32 @@ machine.
 from __future__ import annotations
 
 import argparse
+import copy
 import itertools
 import statistics
 import time
 
-from drake_disamb.config import load_scenario, with_overrides
+import yaml
+
+from drake_disamb.config import Scenario, load_scenario, validate_scenario, with_overrides
 from drake_disamb.trial import run_trial
+
+
+def with_settings(scenario: Scenario, settings: list[str]) -> Scenario:
+    """A copy of ``scenario`` with each ``PATH=VALUE`` of ``settings`` applied (validated)."""
+    s = copy.deepcopy(scenario)
+    for item in settings:
+        path, sep, text = item.partition("=")
+        if not sep:
+            raise SystemExit(f"--set: expected PATH=VALUE, got {item!r}")
+        *parents, leaf = path.split(".")
+        node = s
+        for name in parents:
+            node = getattr(node, name)
+        if not hasattr(node, leaf):
+            raise SystemExit(f"--set: no scenario field {path!r}")
+        setattr(node, leaf, yaml.safe_load(text))
+    return validate_scenario(s)
 
 
 def goal_choices(task: str) -> list[list[int]]:
@@ -37,30 +61,39 @@ def main() -> None:
         "--interface", nargs="+", default=["head_array", "joystick"], help="interfaces to run"
     )
     parser.add_argument("--paradigm", default="disambiguation", help="disambiguation or manual")
+    parser.add_argument(
+        "--set", nargs="*", default=[], metavar="PATH=VALUE", help="scenario fields to set (dotted paths)"
+    )
     args = parser.parse_args()
+    if args.set:
+        print("settings: " + ", ".join(args.set))
 
-    header = ("task", "interface", "goal", "ok", "stage times (s)", "switches", "requests")
-    print("{:<9} {:<11} {:<7} {:<4} {:<18} {:>8} {:>8}".format(*header))
+    header = ("task", "interface", "goal", "ok", "stage times (s)", "switches", "requests", "alpha")
+    print("{:<9} {:<11} {:<7} {:<4} {:<18} {:>8} {:>8} {:>6}".format(*header))
     start = time.perf_counter()
     for task in args.task:
         for interface in args.interface:
-            totals = []
+            totals, successes, presses = [], 0, []
             for goals in goal_choices(task):
                 scenario = with_overrides(
                     load_scenario(task), interface=interface, paradigm=args.paradigm, goal=goals
                 )
-                r = run_trial(scenario, progress=False)
+                r = run_trial(with_settings(scenario, args.set), progress=False)
+                successes += r.success
+                presses.append(r.button_presses)
+                _, alpha = r.logs["alpha"]
                 stages = ", ".join(f"{t:.2f}" for t in r.stage_times)
                 goal = ",".join(str(g) for g in goals)
                 print(
                     f"{task:<9} {interface:<11} {goal:<7} {'yes' if r.success else 'NO':<4} {stages:<18} "
-                    f"{r.mode_switches:>8} {r.requests:>8}",
+                    f"{r.mode_switches:>8} {r.requests:>8} {float(alpha.mean()):>6.3f}",
                     flush=True,
                 )
                 totals.append(r.time)
             print(
-                f"{task:<9} {interface:<11} mean completion {statistics.fmean(totals):.2f} s, "
-                f"worst {max(totals):.2f} s over {len(totals)} trials",
+                f"{task:<9} {interface:<11} success {successes}/{len(totals)}, mean completion "
+                f"{statistics.fmean(totals):.2f} s, worst {max(totals):.2f} s, mean button presses "
+                f"{statistics.fmean(presses):.1f} over {len(totals)} trials",
                 flush=True,
             )
     print(f"wall time {time.perf_counter() - start:.0f} s")

@@ -16,6 +16,7 @@ from drake_disamb.cli import main
 from drake_disamb.config import (
     EMBEDDED_TASKS,
     DFTSpec,
+    InferenceSpec,
     UserBehaviorSpec,
     dump_scenario,
     embedded_scenario_text,
@@ -157,11 +158,13 @@ def test_what_drakes_loader_would_let_through_is_refused(old: str, new: str, mes
 
 
 def test_core_configs_are_declared_once() -> None:
-    """The scenario forms of the core configs have the core's fields (less those the resolver sets)."""
-    assert [f.name for f in dataclasses.fields(DFTSpec)] == [f.name for f in dataclasses.fields(DFTParams)]
+    """The scenario forms of the core configs have the core's fields (less those the resolver sets:
+    the agreement term's form is ``inference.agreement``)."""
+    dft = [f.name for f in dataclasses.fields(DFTParams) if f.name != "agreement_measure"]
+    assert [f.name for f in dataclasses.fields(DFTSpec)] == dft
     core = [f.name for f in dataclasses.fields(UserConfig) if f.name not in ("seed", "rho1")]
     assert [f.name for f in dataclasses.fields(UserBehaviorSpec)] == core
-    assert DFTSpec().to_config() == preset("mico").dft
+    assert DFTSpec().to_config(agreement_measure=InferenceSpec().agreement) == preset("mico").dft
 
 
 # ------------------------------------------------------------------------------------------------
@@ -191,13 +194,17 @@ def test_dump_loads_back_equal(task: str, overrides: dict, tmp_path: Path) -> No
 def test_dump_keeps_every_change() -> None:
     s = load_scenario("pouring")
     s.user.config.stall_time = None  # an optional field whose embedded value is not None
-    s.inference.dft.rest = [0.3, 0.7]
+    s.inference.goal_set = "task"  # one belief over the 4 goals ...
+    s.inference.dft.rest = [0.3, 0.3, 0.2, 0.2]  # ... so a rest state of 4
+    s.inference.agreement = "dot" if s.inference.agreement == "cosine" else "cosine"
+    s.disambiguation.upsilon_normalization = "displacement"
+    s.blending.assist_without_input = not s.blending.assist_without_input
     s.simulator_config.integration_scheme = "runge_kutta3"
     s.plant_config.time_step = 0.005
     s.goals[1].position[2] += 0.01
     back = scenario_from_yaml(dump_scenario(s))
     assert back == s and back != load_scenario("pouring")
-    assert back.user.config.stall_time is None and back.inference.dft.rest == [0.3, 0.7]
+    assert back.user.config.stall_time is None and back.inference.dft.rest == [0.3, 0.3, 0.2, 0.2]
 
 
 def test_demo_dump_scenario_prints_the_resolved_scenario(capsys, tmp_path: Path) -> None:
@@ -246,17 +253,17 @@ def test_a_non_mico_preset_projects_with_the_live_inference(method: str) -> None
     s.inference.dft.tau1 = 5.0  # the live parameters differ from both presets'
     handles = build_shared_control_diagram(s)
     projection = handles.systems["disambiguation"].config
-    live_dft = s.inference.dft.to_config()
+    live_dft = s.inference.dft.to_config(agreement_measure=s.inference.agreement)
     assert projection.dft == live_dft and projection.dft is handles.config.dft
     assert projection.dft != preset("authors-r3").dft
     assert projection.inference == method
     assert projection.potential_field == handles.systems["autonomy"].config == s.autonomy.to_config()
     # The preset still decides how the projection probes.
     authors = preset("authors-r3")
-    assert (projection.dimensions, projection.probe_speed_translation, projection.divide_upsilon) == (
+    assert (projection.dimensions, projection.probe_speed_translation, projection.upsilon_normalization) == (
         authors.dimensions,
         authors.probe_speed_translation,
-        authors.divide_upsilon,
+        authors.upsilon_normalization,
     )
     if method == "bayes":
         assert type(handles.systems["inference"]).__name__ == "RecursiveBayesIntentInference"

@@ -66,7 +66,8 @@ def _reference(belief, position, orientation, goals, goal_quats, modes, cfg: Dis
                 disp = x_c[k] - x_b[k]
             else:
                 disp = orientation_error(q_b, q_c)[k - 3]
-            grad = (p_c - p_b) / abs(disp) if cfg.divide_upsilon else (p_c - p_b)
+            divisor = {"displacement": abs(disp), "unit_probe": cfg.t_c - cfg.t_b, "none": 1.0}
+            grad = (p_c - p_b) / divisor[cfg.upsilon_normalization]
             ups = sum(abs(grad[i] - grad[j]) for i in range(n) for j in range(i + 1, n))
             for name, value in zip(
                 ("gamma", "omega", "lambda", "upsilon"), (gamma, omega, lam, ups), strict=True
@@ -93,7 +94,9 @@ def _random_scene(rng: np.random.Generator, n: int):  # type: ignore[no-untyped-
     return belief, position, orientation, goals, goal_quats
 
 
-@pytest.mark.parametrize("name", ["mico", "authors-r3", "mico-bayes", "mico-undivided"])
+@pytest.mark.parametrize(
+    "name", ["mico", "authors-r3", "mico-bayes", "mico-undivided", "mico-displacement", "mico-cosine"]
+)
 def test_vectorised_core_matches_loop_reference(name: str) -> None:
     rng = np.random.default_rng(zlib.crc32(name.encode()))  # str hash() changes per process
     for trial in range(6):
@@ -105,7 +108,11 @@ def test_vectorised_core_matches_loop_reference(name: str) -> None:
         elif name == "mico-bayes":
             cfg = mico_config(inference="bayes")
         elif name == "mico-undivided":
-            cfg = mico_config(divide_upsilon=False, w=0.3)
+            cfg = mico_config(upsilon_normalization="none", w=0.3)
+        elif name == "mico-displacement":
+            cfg = mico_config(upsilon_normalization="displacement", t_c=2.5)
+        elif name == "mico-cosine":
+            cfg = mico_config(dft=dataclasses.replace(mico_config().dft, agreement_measure="cosine"))
         else:
             cfg = preset("mico")
         modes = HEAD_ARRAY_MODES if trial % 2 else JOYSTICK_MODES
@@ -257,15 +264,29 @@ def test_partial_tie_keeps_current_mode_if_among_best() -> None:
     assert res.mode == 1
 
 
-def test_divide_upsilon_uses_displacement() -> None:
+def test_upsilon_normalizations() -> None:
+    """The paper's unit probe divides every dimension by t_c - t_b; ours by the probe's own
+    displacement (m or rad); the authors' code not at all."""
     rng = np.random.default_rng(3)
     belief, position, orientation, goals, goal_quats = _random_scene(rng, 4)
     kw = {"orientation": orientation, "goal_orientations": goal_quats}
-    a = disambiguate(belief, position, goals, HEAD_ARRAY_MODES, mico_config(divide_upsilon=True), **kw)
-    b = disambiguate(belief, position, goals, HEAD_ARRAY_MODES, mico_config(divide_upsilon=False), **kw)
+
+    def upsilon(normalization: str, **overrides: float) -> np.ndarray:
+        cfg = mico_config(upsilon_normalization=normalization, **overrides)
+        return disambiguate(belief, position, goals, HEAD_ARRAY_MODES, cfg, **kw).features["upsilon"]
+
+    none = upsilon("none")
+    assert np.all(none > 0)
     # Displacement between t_b and t_c: 0.1 m (translation) and 0.2 rad (rotation).
     scale = np.array([0.1, 0.1, 0.1, 0.2, 0.2, 0.2])
-    np.testing.assert_allclose(a.features["upsilon"] * scale, b.features["upsilon"], rtol=1e-9)
+    np.testing.assert_allclose(upsilon("displacement") * scale, none, rtol=1e-9)
+    # The paper's unit probe: t_c - t_b = 1 s here, so the same numbers as the authors' code ...
+    np.testing.assert_allclose(upsilon("unit_probe"), none, rtol=1e-12)
+    # ... and with t_c - t_b = 1.5 s, 1.5 units for every dimension (no unit enters).
+    np.testing.assert_allclose(upsilon("unit_probe", t_c=2.5) * 1.5, upsilon("none", t_c=2.5), rtol=1e-12)
+    assert mico_config().upsilon_normalization == "unit_probe"  # the paper's by default
+    with pytest.raises(ValueError, match=r"upsilon_normalization: expected one of .*got 'metres'"):
+        mico_config(upsilon_normalization="metres")
 
 
 def test_result_to_dict_and_explain() -> None:
@@ -333,7 +354,8 @@ def test_config_validation(overrides: dict, message: str) -> None:
 
 def test_presets() -> None:
     r3 = authors_r3_config()
-    assert r3.dimensions == (0, 1, 2) and r3.probe_speed_translation == 0.2 and not r3.divide_upsilon
+    assert r3.dimensions == (0, 1, 2) and r3.probe_speed_translation == 0.2
+    assert r3.upsilon_normalization == "none"
     assert (r3.dft.tau1, r3.dft.tau2, r3.dft.lam) == (10.0, 10.0, 200.0)
     assert r3.dft.directedness and not r3.dft.agreement and not r3.dft.proximity
     assert (r3.steps_b, r3.steps_c, r3.w) == (10, 20, 0.5)

@@ -14,6 +14,8 @@
     interface.gripper_command -------------> station.gripper_command
     station.ee_pose -----------------------> everyone
     task.goal_poses -----------------------> everyone (the goal set switches between stages)
+      (inference.goal_set "task": a constant source of every goal instead; the task manager still
+      completes a stage only at one of its own goals)
 
 The interface, user, autonomy, blender, disambiguation and task manager tick every
 ``scenario.control_period`` (100 Hz by default, the MICO's Cartesian velocity interface); the DFT
@@ -22,9 +24,10 @@ belief is continuous state, integrated between ticks by the integrator of the sc
 config comes from :func:`~drake_disamb.config.resolve_scenario`. Running a trial is
 :func:`drake_disamb.trial.run_trial`; this module only wires.
 
-Belief slot ``i`` in stage ``k`` is goal ``i`` of :meth:`Scenario.stage_goals(k)
-<drake_disamb.config.Scenario.stage_goals>`; the simulated user gets one intended goal per
-stage and the task manager's ``stage``.
+Belief slot ``i`` in stage ``k`` is goal ``i`` of :meth:`Scenario.belief_goals(k)
+<drake_disamb.config.Scenario.belief_goals>` (the stage's goals, or every goal of the task); the
+simulated user gets the belief slot of its intended goal per stage
+(:attr:`~drake_disamb.config.TrialConfig.user_goals`) and the task manager's ``stage``.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder, System
-from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
+from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
@@ -163,7 +166,7 @@ def build_shared_control_diagram(
     blender.set_name("blender")
 
     if input_source is None:
-        user = builder.AddSystem(SimulatedUser(config.interface, list(scenario.user.goals), n, config.user))
+        user = builder.AddSystem(SimulatedUser(config.interface, list(config.user_goals), n, config.user))
         user.set_name("user")
         builder.Connect(interface.GetOutputPort("mode"), user.GetInputPort("mode"))
     else:
@@ -181,6 +184,10 @@ def build_shared_control_diagram(
     builder.Connect(station.diagram.GetOutputPort("ee_pose"), sampler.get_input_port())
     ee_pose = sampler.get_output_port()
     goal_poses = task.GetOutputPort("goal_poses")
+    if scenario.inference.goal_set == "task" and scenario.n_stages > 1:  # one belief over every goal
+        goal_source = builder.AddSystem(ConstantVectorSource(scenario.belief_goal_poses(0).ravel()))
+        goal_source.set_name("task_goal_poses")
+        goal_poses = goal_source.get_output_port()
     builder.Connect(ee_pose, task.GetInputPort("ee_pose"))
     if input_source is None:
         builder.Connect(ee_pose, user.GetInputPort("ee_pose"))

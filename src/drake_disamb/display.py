@@ -68,15 +68,21 @@ def css_color(rgb: Sequence[float]) -> str:
 
 
 def goal_colors(scenario: Any) -> list[list[tuple[float, float, float, float]]]:
-    """``colors[k][i]``: the ``(r, g, b, a)`` of goal ``i`` of stage ``k`` (its object's colour).
+    """``colors[k][i]``: the ``(r, g, b, a)`` of belief slot ``i`` while stage ``k`` runs (its goal's
+    object's colour; :meth:`~drake_disamb.config.Scenario.belief_goals`).
 
     Args:
         scenario: A :class:`~drake_disamb.config.Scenario`.
     """
     return [
-        [tuple(float(c) for c in g.object.color) for g in scenario.stage_goals(k)]  # type: ignore[misc]
+        [tuple(float(c) for c in g.object.color) for g in scenario.belief_goals(k)]  # type: ignore[misc]
         for k in range(scenario.n_stages)
     ]
+
+
+def _rgb(goal: Any) -> tuple[float, float, float]:
+    r, g, b = (float(c) for c in goal.object.color[:3])
+    return r, g, b
 
 
 def legend_rows(scenario: Any) -> list[LegendRow]:
@@ -87,7 +93,6 @@ def legend_rows(scenario: Any) -> list[LegendRow]:
         scenario: A :class:`~drake_disamb.config.Scenario` (``scenario.user.goals`` names the
             intended goal of each stage).
     """
-    colors = goal_colors(scenario)
     rows: list[LegendRow] = []
     multi = scenario.n_stages > 1
     for k in range(scenario.n_stages):
@@ -96,10 +101,10 @@ def legend_rows(scenario: Any) -> list[LegendRow]:
         if multi:
             rows.append(LegendRow(f"stage {k + 1}, {scenario.stages[k].name}:"))
         word = "" if multi else " goal"
-        rows.append(LegendRow(f"intended{word}: {goals[intended].name}", colors[k][intended][:3], True))
+        rows.append(LegendRow(f"intended{word}: {goals[intended].name}", _rgb(goals[intended]), True))
         for i in range(len(goals)):
             if i != intended:
-                rows.append(LegendRow(f"other{word}: {goals[i].name}", colors[k][i][:3]))
+                rows.append(LegendRow(f"other{word}: {goals[i].name}", _rgb(goals[i])))
     rows.extend(LegendRow(text) for text in EXPLANATIONS)
     return rows
 

@@ -291,7 +291,7 @@ def trial_figure(result: Any) -> Any:
     sc = result.scenario
     t, belief = result.logs["belief"]
     _, uh = result.logs["u_h"]
-    names = [[g.name for g in sc.stage_goals(k)] for k in range(sc.n_stages)]
+    names = [[g.name for g in sc.belief_goals(k)] for k in range(sc.n_stages)]
     colors = goal_colors(sc)
     multi = sc.n_stages > 1
     outcome = trial_outcome(result)
@@ -307,7 +307,9 @@ def trial_figure(result: Any) -> Any:
         commands=uh,
         stage_times=result.stage_times if multi else (),
         stage_names=[s.name for s in sc.stages] if multi else (),
-        intended_goal=list(sc.user.goals) if multi else sc.user.goals[0],
+        intended_goal=[sc.belief_slot(k, g) for k, g in enumerate(sc.user.goals)]
+        if multi
+        else sc.user.goals[0],
         end_time=result.time,
         end_label=f"{outcome} ({result.time:.1f} s)",
         title=f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm: "

@@ -10,15 +10,16 @@ and returns a :class:`TrialConfig`:
 - the DFT parameters and the potential field, one instance each, shared by the live inference,
   the autonomy and the disambiguation's forward projection. Whatever the preset, the projection
   runs the live belief update: the preset fixes how it probes (dimensions, probe speeds, step,
-  horizons, weights), and its method, DFT parameters and potential field are replaced by the
-  scenario's. The ``memory`` method has no forward projection, so the disambiguation paradigm
-  refuses it;
+  horizons, weights), and its method, DFT parameters (with ``inference.agreement``, the agreement
+  term's form) and potential field are replaced by the scenario's, as is its Upsilon normalisation
+  when ``disambiguation.upsilon_normalization`` is set. The ``memory`` method has no forward
+  projection, so the disambiguation paradigm refuses it;
 - the mode-selection method, the request latency (the interface's: it delays the switch) and, in
   the Automatic paradigm, the trigger (its ``confidence_threshold`` written out as ``rho1`` when
   left out; without its request button the interface logs presses but serves none);
 - the simulated user's config (its seed is the scenario's; in the manual and automatic paradigms
-  it never asks for disambiguation), the interface's, the station's (Drake's ``MultibodyPlantConfig``, the start
-  posture and the scene objects) and Drake's ``SimulatorConfig``.
+  it never asks for disambiguation), the interface's, the station's (Drake's
+  ``MultibodyPlantConfig``, the start posture and the scene objects) and Drake's ``SimulatorConfig``.
 
 An error from a core config's own checks is raised as a ``ValueError`` that names the scenario
 field first, e.g. ``scenario.inference.dft: DFTParams.tau1 must be a finite positive number, got -1.0``.
@@ -54,19 +55,23 @@ class TrialConfig:
     """The frozen configs of one trial, resolved from a scenario by :func:`resolve_scenario`.
 
     Attributes:
-        n_goals: Goals per stage (the size of the belief).
+        n_goals: The size of the belief (:attr:`Scenario.n_goals`: goals per stage, or every goal
+            of the task with ``inference.goal_set`` ``"task"``).
         rhos: The blending thresholds ``(rho1, rho2, rho3)`` for ``n_goals``.
         blending: The blender's config, ``rho1`` and ``rho2`` written out.
         autonomy: The potential field of the autonomy, the live inference's agreement term and the
             forward projection.
         inference_method: ``"dft"``, ``"bayes"`` or ``"memory"``.
-        dft: The DFT parameters of the live inference and of the forward projection.
+        dft: The DFT parameters of the live inference and of the forward projection (the agreement
+            term's form from ``inference.agreement``).
         disambiguation: The forward projection's config (``None`` in the manual paradigm): the
             preset's probing with the live inference's method, ``dft`` and ``autonomy``.
         disambiguation_method: The mode-selection method (``"algorithm1"``, ``"entropy"``, ``"kl"``).
         automatic: The Automatic paradigm's trigger, ``confidence_threshold`` written out
             (``None`` in the other paradigms).
         user: The simulated user's config (seed and ``rho1`` set).
+        user_goals: Per stage, the belief slot of the user's intended goal
+            (:meth:`Scenario.belief_slot`).
         interface: The interface's config.
         station: The station's config (plant config, control period, start posture, scene objects).
         simulator: Drake's ``SimulatorConfig`` for ``ApplySimulatorConfig`` (a copy).
@@ -80,6 +85,7 @@ class TrialConfig:
     dft: DFTParams
     disambiguation: DisambiguationConfig | None
     user: UserConfig
+    user_goals: tuple[int, ...]
     interface: InterfaceConfig
     station: Any
     simulator: Any
@@ -105,9 +111,16 @@ def _check_dft_sizes(dft: DFTParams, n: int, path: str) -> None:
 
 
 def projection_config(
-    preset_name: str, method: str, dft: DFTParams, autonomy: PotentialFieldConfig, path: str = "scenario"
+    preset_name: str,
+    method: str,
+    dft: DFTParams,
+    autonomy: PotentialFieldConfig,
+    path: str = "scenario",
+    upsilon_normalization: str | None = None,
 ) -> DisambiguationConfig:
     """The forward projection's config: preset ``preset_name``'s probing, the live belief update.
+
+    ``upsilon_normalization`` replaces the preset's unless ``None``.
 
     Raises:
         ValueError: for the ``memory`` method, which has no forward projection.
@@ -118,9 +131,13 @@ def projection_config(
             f"live inference's update, which exists for 'dft' and 'bayes' (use the manual paradigm), "
             f"got 'memory'"
         )
+    base = preset(preset_name)
+    ups = base.upsilon_normalization if upsilon_normalization is None else upsilon_normalization
     return _named(
         f"{path}.disambiguation",
-        lambda: dataclasses.replace(preset(preset_name), inference=method, dft=dft, potential_field=autonomy),
+        lambda: dataclasses.replace(
+            base, inference=method, dft=dft, potential_field=autonomy, upsilon_normalization=ups
+        ),
     )
 
 
@@ -140,7 +157,9 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     rhos = _named(f"{name}.blending", lambda: resolve_rhos(n, blending.rho1, blending.rho2, blending.rho3))
     blending = dataclasses.replace(blending, rho1=rhos[0], rho2=rhos[1])
     autonomy = _named(f"{name}.autonomy", s.autonomy.to_config)
-    dft = _named(f"{name}.inference.dft", s.inference.dft.to_config)
+    dft = _named(
+        f"{name}.inference.dft", lambda: s.inference.dft.to_config(agreement_measure=s.inference.agreement)
+    )
     _check_dft_sizes(dft, n, f"{name}.inference.dft")
     user = _named(f"{name}.user.config", lambda: s.user.config.to_config(seed=s.seed, rho1=rhos[0]))
     disambiguation = None
@@ -150,7 +169,14 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         # allows it).
         user = user.without_requests()
     if s.paradigm != "manual":
-        disambiguation = projection_config(s.disambiguation.preset, s.inference.method, dft, autonomy, name)
+        disambiguation = projection_config(
+            s.disambiguation.preset,
+            s.inference.method,
+            dft,
+            autonomy,
+            name,
+            s.disambiguation.upsilon_normalization,
+        )
     latency = s.disambiguation.request_latency
     if not (is_real(latency) and latency >= 0):
         raise ValueError(
@@ -190,6 +216,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         dft=dft,
         disambiguation=disambiguation,
         user=user,
+        user_goals=tuple(s.belief_slot(k, int(g)) for k, g in enumerate(s.user.goals)),
         interface=interface,
         station=station,
         simulator=copy.copy(s.simulator_config),

@@ -44,8 +44,8 @@ from drake_disamb.config.checks import schema_fields
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
-from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS
-from drake_disamb.core.inference import DFTParams
+from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
+from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
 from drake_disamb.core.user import UserConfig
 from drake_disamb.station import default_plant_config
 
@@ -57,6 +57,9 @@ PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 
 INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
 """Intent-inference methods accepted by :attr:`InferenceSpec.method`."""
+
+GOAL_SETS: tuple[str, ...] = ("stage", "task")
+"""What the belief is over (:attr:`InferenceSpec.goal_set`)."""
 
 SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
 """Object shapes; their ``size`` has 3, 2 and 1 entries (:data:`SHAPE_SIZES`)."""
@@ -114,9 +117,11 @@ DFTSpec = _spec_class(
     "DFTSpec",
     MICO_DFT,
     types={"lam": float, "transition": list[list[float]] | None, "rest": list[float] | None},
+    exclude=("agreement_measure",),
     doc="""The field-theoretic update's parameters: the fields of
     :class:`drake_disamb.core.inference.DFTParams`, defaults those of the ``mico`` preset
-    (:data:`~drake_disamb.core.disambiguation.MICO_DFT`). ``lam`` is a scalar gain here.""",
+    (:data:`~drake_disamb.core.disambiguation.MICO_DFT`). ``lam`` is a scalar gain here. The
+    agreement term's form is :attr:`InferenceSpec.agreement`.""",
 )
 BlendingSpec = _spec_class(
     BlendingConfig,
@@ -229,10 +234,26 @@ class InferenceSpec:
         method: ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
         dft: Parameters of the field-theoretic update (default the ``mico`` preset's). The
             disambiguation's forward projection runs the same update with the same parameters.
+        agreement: Form of the DFT's agreement term (when ``dft.agreement`` is on), live and in
+            the forward projection: ``"dot"`` the paper's ``u_h^rot . u_a^rot`` (rad^2/s^2, at
+            most about 0.08 with the head array) or ``"cosine"`` the cosine of their angle (in
+            ``[-1, 1]``; the default, the ``mico`` preset's: with the dot product 2 of the 5
+            joystick reaching trials stall, README "Where we differ from the paper"). See
+            :attr:`drake_disamb.core.inference.DFTParams.agreement_measure`.
+        goal_set: What the belief is over in a multi-step task: ``"stage"`` (the default) the
+            current stage's goals, reset to the rest state when a stage completes, or ``"task"``
+            every goal of the task from start to end (the paper's study: one belief over the
+            pouring task's 4 goals, uniform at the start only). Either way a stage completes only
+            at one of its own goals; the same for a single-stage task. Measured with the simulated
+            user, ``"task"`` keeps the belief (and the assistance) on the goal just completed, where
+            the gripper still is (proximity term): it pulls the cup back toward the container and
+            2 of the 4 joystick pouring trials fail (README "Where we differ from the paper").
     """
 
     method: str = field(default="dft", metadata=_meta(choices=INFERENCE_METHODS))
     dft: DFTSpec = field(default_factory=DFTSpec)
+    agreement: str = field(default=MICO_DFT.agreement_measure, metadata=_meta(choices=AGREEMENT_MEASURES))
+    goal_set: str = field(default="stage", metadata=_meta(choices=GOAL_SETS))
 
 
 @dataclass
@@ -254,12 +275,19 @@ class DisambiguationSpec:
             the mode switch; the mode is the one chosen at the switch time. The paper's system took
             2 to 2.5 s; 0 (default) switches in the press's control tick.
         automatic: The Automatic paradigm's trigger (used only with ``paradigm: automatic``).
+        upsilon_normalization: What ``p(t_c) - p(t_b)`` is divided by in the feature
+            ``Upsilon``: ``"unit_probe"`` (the paper: the displacement of its unit-speed probe,
+            ``t_c - t_b`` for every dimension), ``"displacement"`` (our probe's displacement, m or
+            rad, which weighs dimensions by their units) or ``"none"`` (the authors' code);
+            ``None`` keeps the preset's (``mico``: ``"unit_probe"``, ``authors-r3``: ``"none"``).
+            See :attr:`drake_disamb.core.disambiguation.DisambiguationConfig.upsilon_normalization`.
     """
 
     preset: str = field(default="mico", metadata=_meta(choices=PRESETS))
     method: str = field(default="algorithm1", metadata=_meta(choices=MODE_SELECTION_METHODS))
     request_latency: float = 0.0
     automatic: AutomaticSpec = field(default_factory=AutomaticSpec)
+    upsilon_normalization: str | None = field(default=None, metadata=_meta(choices=UPSILON_NORMALIZATIONS))
 
 
 @dataclass
@@ -380,16 +408,34 @@ class Scenario:
         """The goals of ``stage``, in the order they appear in :attr:`goals`."""
         return [g for g in self.goals if g.stage == stage]
 
+    def belief_goals(self, stage: int) -> list[GoalSpec]:
+        """The goals of the belief's slots while ``stage`` runs: the stage's goals, or every goal of
+        the task (in :attr:`goals` order) with :attr:`InferenceSpec.goal_set` ``"task"``."""
+        return list(self.goals) if self.inference.goal_set == "task" else self.stage_goals(stage)
+
+    def belief_slot(self, stage: int, index: int) -> int:
+        """The belief slot of goal ``index`` of ``stage`` (an index into :meth:`belief_goals`)."""
+        goal = self.stage_goals(stage)[index]
+        return next(i for i, g in enumerate(self.belief_goals(stage)) if g is goal)
+
     @property
     def n_goals(self) -> int:
-        """Number of goals per stage (the size of the belief)."""
-        return len(self.stage_goals(0))
+        """The size of the belief: goals per stage, or all goals with ``inference.goal_set`` ``"task"``."""
+        return len(self.belief_goals(0))
+
+    def belief_goal_poses(self, stage: int) -> np.ndarray:
+        """``(n_goals, 7)`` poses of :meth:`belief_goals` (unit quaternions)."""
+        return self._poses(self.belief_goals(stage))
 
     def stage_goal_poses(self, stage: int) -> np.ndarray:
-        """``(n_goals, 7)`` array of ``[x, y, z, qw, qx, qy, qz]`` for ``stage`` (unit quaternions)."""
+        """``(m, 7)`` array of ``[x, y, z, qw, qx, qy, qz]`` of the goals of ``stage`` (unit quaternions)."""
+        return self._poses(self.stage_goals(stage))
+
+    @staticmethod
+    def _poses(goals: list[GoalSpec]) -> np.ndarray:
         rows = [
             [*g.position, *(np.asarray(g.orientation, dtype=float) / np.linalg.norm(g.orientation))]
-            for g in self.stage_goals(stage)
+            for g in goals
         ]
         return np.array(rows, dtype=float).reshape(-1, 7)
 

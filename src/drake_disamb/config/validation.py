@@ -117,9 +117,9 @@ the DFT belief's linearised flow (the interval of absolute stability on the nega
 def belief_rate_bound(s: Scenario) -> float:
     """An upper bound (1/s) on how fast the DFT belief's flow relaxes: ``1/tau1 + 1/tau2 +
     n |lambda| / 2`` (``sum(drive) = 1/tau2 + sum(lambda sigma(xi))`` with ``|sigma| <= 1/2``), for the
-    largest stage's ``n`` goals."""
+    belief's ``n`` goals (the largest stage's, or every goal with ``inference.goal_set`` ``"task"``)."""
     d = s.inference.dft
-    n = max(len(s.stage_goals(k)) for k in range(len(s.stages)))
+    n = max(len(s.belief_goals(k)) for k in range(len(s.stages)))
     lam = np.abs(np.asarray(d.lam, dtype=float))
     excitation = n * float(lam) / 2 if lam.ndim == 0 else float(np.max(lam.sum(axis=1))) * n / 2
     return 1.0 / d.tau1 + 1.0 / d.tau2 + excitation

@@ -202,9 +202,25 @@ def _cosine_to_unit(
 
 
 @njit(cache=True)
-def _xi_rows(u, x_r, x_g, u_a, directed, agree, near, zero_excites, R, xi):  # pragma: no cover
+def _finite_dot3(
+    a0: float, a1: float, a2: float, b0: float, b1: float, b2: float
+) -> float:  # pragma: no cover - compiled
+    """``a . b`` over the components where both are finite (a non-finite one adds nothing)."""
+    total = 0.0
+    if np.isfinite(a0) and np.isfinite(b0):
+        total += a0 * b0
+    if np.isfinite(a1) and np.isfinite(b1):
+        total += a1 * b1
+    if np.isfinite(a2) and np.isfinite(b2):
+        total += a2 * b2
+    return total
+
+
+@njit(cache=True)
+def _xi_rows(u, x_r, x_g, u_a, directed, agree, agree_cosine, near, zero_excites, R, xi):  # pragma: no cover
     """``xi`` for every row ``r``: a sanitised command ``u[r]``, ``x_r[r]``, the goals ``x_g[r]``
-    (or ``x_g[0]`` for every row when it has one) and ``u_a[r]``."""
+    (or ``x_g[0]`` for every row when it has one) and ``u_a[r]``. The agreement term is the plain
+    dot product of the rotational parts (``agree_cosine`` False, the paper) or their cosine."""
     B, n = xi.shape
     rotation = u.shape[1] >= 6
     for r in range(B):
@@ -223,7 +239,10 @@ def _xi_rows(u, x_r, x_g, u_a, directed, agree, near, zero_excites, R, xi):  # p
             if directed:
                 total += 0.5 * (1.0 + cos)
             if agree and rotation:
-                total += _cosine_to_unit(u_a[r, i, 3], u_a[r, i, 4], u_a[r, i, 5], w0, w1, w2)[0]
+                if agree_cosine:
+                    total += _cosine_to_unit(u_a[r, i, 3], u_a[r, i, 4], u_a[r, i, 5], w0, w1, w2)[0]
+                else:
+                    total += _finite_dot3(u[r, 3], u[r, 4], u[r, 5], u_a[r, i, 3], u_a[r, i, 4], u_a[r, i, 5])
             if not zero_excites and not moving:
                 total = 0.0
             if near and dist < np.inf:  # a non-finite distance gives no proximity

@@ -155,7 +155,10 @@ class BlendingConfig:
             law taken literally: a stationary user is driven toward ``g*`` at up to
             ``rho3 * |u_a|``). If False (default), the autonomy only assists while the user
             commands the arm; with no input the blended command is zero. See
-            :class:`drake_disamb.systems.blending.SharedControlBlender` for why.
+            :class:`drake_disamb.systems.blending.SharedControlBlender` for why; measured with
+            the simulated user (``benchmarks/bench_tasks.py --set
+            blending.assist_without_input=true``), the paper's law fails reaching trials the
+            default completes (README, "Where we differ from the paper").
         max_linear_speed: Limit (m/s) on the norm of the blended translation. The default is the
             largest blended translation seen in the study logs (FACTS section 5).
         max_angular_speed: Limit (rad/s) on the norm of the blended rotation; default the largest

@@ -17,9 +17,13 @@ From the projected beliefs (paper Section "Features of D_k", FACTS section 4):
 - at ``t_b``: ``Gamma = max p``, ``Omega = max p - second max p`` and
   ``Lambda = sum_{i<j} |p_i - p_j|``;
 - between ``t_b`` and ``t_c``: ``Upsilon = sum_{i<j} |g_i - g_j|`` with
-  ``g = (p(t_c) - p(t_b)) / dx_k`` when ``divide_upsilon`` (paper) or ``g = p(t_c) - p(t_b)``
-  (authors' code). ``dx_k`` is the projected displacement along ``k``: metres for a translational
-  dimension, the rotation angle about axis ``k`` (rad) for a rotational one;
+  ``g = (p(t_c) - p(t_b)) / dx_k``, where ``dx_k`` depends on ``upsilon_normalization``
+  (:data:`UPSILON_NORMALIZATIONS`): ``"unit_probe"`` (the paper) the displacement along ``k`` of
+  the paper's unit probe ``e_k`` (1 m/s or 1 rad/s) between ``t_b`` and ``t_c``, i.e. ``t_c - t_b``
+  units for every dimension; ``"displacement"`` the displacement of our probe, metres for a
+  translational dimension and the rotation angle about axis ``k`` (rad) for a rotational one (so
+  with probes of 0.1 m/s and 0.2 rad/s a translation's gradient counts twice a rotation's);
+  ``"none"`` (the authors' code) ``dx_k = 1``;
 - ``D = w Gamma Lambda Omega + (1 - w) Upsilon`` per probe, ``D_k = D_k+ + D_k-``,
   ``D_m = sum_{k in m} D_k``, ``m* = argmax D_m`` and ``k* = argmax D_k``.
 
@@ -86,6 +90,10 @@ INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes")
 PRESETS: tuple[str, ...] = ("mico", "authors-r3")
 """Names accepted by :func:`preset`."""
 
+UPSILON_NORMALIZATIONS: tuple[str, ...] = ("unit_probe", "displacement", "none")
+"""What ``p(t_c) - p(t_b)`` is divided by in ``Upsilon``
+(:attr:`DisambiguationConfig.upsilon_normalization`)."""
+
 FEATURE_NAMES: tuple[str, ...] = ("gamma", "omega", "lambda", "upsilon")
 
 _MIN_DISPLACEMENT = 1e-12
@@ -111,6 +119,7 @@ MICO_DFT = DFTParams(
     lam=3.0,
     directedness=True,
     agreement=True,
+    agreement_measure="cosine",
     proximity=True,
     R=0.2,
     zero_command_excitation=False,
@@ -131,8 +140,10 @@ class DisambiguationConfig:
         t_b: Short-term horizon (s after ``t_a``), an integer multiple of ``delta_t``.
         t_c: Long-term horizon (s), a multiple of ``delta_t`` larger than ``t_b``.
         w: Weight of the short-term term, in ``[0, 1]``.
-        divide_upsilon: Divide ``p(t_c) - p(t_b)`` by the displacement along ``k`` (paper) or not
-            (authors' code).
+        upsilon_normalization: What ``p(t_c) - p(t_b)`` is divided by in ``Upsilon``
+            (:data:`UPSILON_NORMALIZATIONS`): ``"unit_probe"`` (the paper: the displacement of its
+            unit-speed probe ``e_k``, ``t_c - t_b`` units for every ``k``), ``"displacement"`` (our
+            probe's displacement, m or rad) or ``"none"`` (the authors' code).
         tie_tolerance: Relative tolerance under which two ``D_m`` are equal (>= 0).
         inference: ``"dft"`` (:func:`~drake_disamb.core.inference.dft_euler_step`) or ``"bayes"``
             (:func:`~drake_disamb.core.inference.bayes_step`).
@@ -149,7 +160,7 @@ class DisambiguationConfig:
     t_b: float = 1.0
     t_c: float = 2.0
     w: float = 0.5
-    divide_upsilon: bool = True
+    upsilon_normalization: str = "unit_probe"
     tie_tolerance: float = 1e-3
     inference: str = "dft"
     dft: DFTParams = MICO_DFT
@@ -203,6 +214,11 @@ class DisambiguationConfig:
                 "DisambiguationConfig.tie_tolerance: expected a finite number >= 0, "
                 f"got {self.tie_tolerance!r}"
             )
+        if self.upsilon_normalization not in UPSILON_NORMALIZATIONS:
+            raise ValueError(
+                "DisambiguationConfig.upsilon_normalization: expected one of "
+                f"{', '.join(UPSILON_NORMALIZATIONS)}, got {self.upsilon_normalization!r}"
+            )
         if self.inference not in INFERENCE_METHODS:
             raise ValueError(
                 f"DisambiguationConfig.inference: expected one of {INFERENCE_METHODS}, got {self.inference!r}"
@@ -253,7 +269,7 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
     - All six dimensions; probes of 0.1 m/s and 0.2 rad/s, the head array's speeds (FACTS section
       5), so the projection explores motions the user can actually make.
     - ``delta_t = 0.1 s``, ``t_b = 1 s``, ``t_c = 2 s``, ``w = 0.5`` (paper and authors' code);
-      ``Upsilon`` divided by the displacement (paper), rotations measured as the angle about ``k``.
+      ``Upsilon`` per unit probe displacement (paper, ``upsilon_normalization="unit_probe"``).
     - DFT with directedness, agreement and proximity (paper equation dft_ii) and
       ``tau1 = tau2 = 4 s``: with no input the study logs show the belief relaxing to uniform over a
       few seconds. That needs ``zero_command_excitation=False``: with the authors' convention a zero
@@ -268,7 +284,10 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
       in simulation but would make the live belief jump to the latest command direction.
     - ``R = 0.2 m``: about the spacing of the study's goals (FACTS section 8), so proximity only
       favours a goal once the gripper is clearly nearer to it than to its neighbours.
-    - Agreement uses the per-goal potential-field commands
+    - Agreement is the cosine of the rotational parts (``agreement_measure="cosine"``; the paper's
+      plain dot product is ``"dot"``: measured with the simulated user it leaves the first
+      requests in a translation mode and 2 of the 5 joystick reaching trials stall, see the
+      README's "Where we differ from the paper") with the per-goal potential-field commands
       (:func:`~drake_disamb.core.autonomy.potential_field_commands`, default gains) recomputed at
       every projected pose: this is what makes goals that differ only in orientation pick a
       rotational mode.
@@ -292,7 +311,7 @@ def authors_r3_config(**overrides: Any) -> DisambiguationConfig:
         t_b=1.0,
         t_c=2.0,
         w=0.5,
-        divide_upsilon=False,
+        upsilon_normalization="none",
         tie_tolerance=1e-3,
         inference="dft",
         dft=DFTParams(tau1=10.0, tau2=10.0, lam=200.0, directedness=True, agreement=False, proximity=False),
@@ -753,7 +772,7 @@ def forward_projection(
     if config.inference == "dft":
         UA = None
         if config.dft.agreement:
-            # Agreement term: cos(u_h[3:6], u_a_i[3:6]) with u_h the probe. For a probe without
+            # Agreement term: u_h[3:6] . u_a_i[3:6] (or their cosine) with u_h the probe. For a probe without
             # rotation u_h[3:6] = 0, so the term is 0 whatever u_a is: its u_a stay zero (no
             # potential field there). For a rotational probe only u_a[3:6] enters (dft_drive
             # reads nothing else), and that rotational part depends on the orientation alone
@@ -817,6 +836,22 @@ def belief_features(
         diff = np.where(ok, diff / np.where(ok, d, 1.0), 0.0)
     lam, ups = _pairwise_abs_sum(np.stack((p_b, diff)))  # both spreads in one pass
     return {"gamma": gamma, "omega": gamma - second, "lambda": lam, "upsilon": ups}
+
+
+def upsilon_divisor(config: DisambiguationConfig, displacement: NDArray[np.float64]) -> NDArray[np.float64]:
+    """What ``p(t_c) - p(t_b)`` of each probe is divided by (``config.upsilon_normalization``).
+
+    ``displacement`` is the projection's ``(2, n_k)`` displacement along ``k`` (m or rad). For
+    ``"unit_probe"`` every probe gets ``t_c - t_b``: the displacement of the paper's unit-speed
+    probe ``e_k`` (1 m/s or 1 rad/s) over that time, one value for every dimension. ``"none"``
+    gives ones (the caller does not divide).
+    """
+    mode = config.upsilon_normalization
+    if mode == "displacement":
+        return displacement
+    if mode == "unit_probe":
+        return np.full(np.shape(displacement), config.t_c - config.t_b)
+    return np.ones(np.shape(displacement))
 
 
 def select_mode(
@@ -883,7 +918,9 @@ def disambiguate(
     )
 
     proj = forward_projection(p, x, q, gp, gq, cfg)
-    feats = belief_features(proj.p_b, proj.p_c, proj.displacement, cfg.divide_upsilon)
+    feats = belief_features(
+        proj.p_b, proj.p_c, upsilon_divisor(cfg, proj.displacement), cfg.upsilon_normalization != "none"
+    )
     D = (
         cfg.w * feats["gamma"] * feats["lambda"] * feats["omega"] + (1.0 - cfg.w) * feats["upsilon"]
     )  # (2, n_k)

@@ -70,6 +70,10 @@ BAYES_SIGMA = np.pi / 2.0
 BAYES_COS_DECIMALS = 5
 """The authors round the cosine to this many decimals before ``arccos``."""
 
+AGREEMENT_MEASURES: tuple[str, ...] = ("dot", "cosine")
+"""Forms of the DFT's agreement term (:attr:`DFTParams.agreement_measure`): the paper's plain dot
+product of the rotational parts, or their cosine."""
+
 
 @dataclass(frozen=True)
 class DFTParams:
@@ -80,8 +84,15 @@ class DFTParams:
         tau2: Time constant (s) of the rest-state term.
         lam: Excitation gain (1/s): a scalar (``lam * I``) or an ``n x n`` matrix.
         directedness: Include the directedness term ``(1 + eta_i)/2``.
-        agreement: Include the agreement term (cosine between the rotational parts of the human
-            command and of goal i's autonomy command; 0 when either is zero).
+        agreement: Include the agreement term between the rotational parts of the human command
+            and of goal i's autonomy command (0 when either is zero); its form is
+            ``agreement_measure``.
+        agreement_measure: ``"dot"`` (the paper, equation dft_ii): the plain dot product
+            ``u_h^rot . u_a,i^rot`` (rad^2/s^2), at most ``|u_h^rot| |u_a^rot|``, e.g. about 0.08
+            for the head array's 0.2 rad/s against an autonomy rotation of 0.4 rad/s, so small
+            beside the directedness term's ``[0, 1]``. ``"cosine"``: the cosine of the angle
+            between them, in ``[-1, 1]`` whatever the speeds (the rotational counterpart of the
+            directedness term).
         proximity: Include the proximity term ``max(0, 1 - |x_g - x_r| / R)``.
         R: Proximity radius (m).
         transition: Goal-transition matrix ``P`` (row-stochastic, ``n x n``, or a batch
@@ -108,6 +119,7 @@ class DFTParams:
     lam: float | NDArray[np.float64] = 200.0
     directedness: bool = True
     agreement: bool = False
+    agreement_measure: str = "dot"
     proximity: bool = False
     R: float = 0.2
     transition: NDArray[np.float64] | None = field(default=None, compare=False)
@@ -122,6 +134,11 @@ class DFTParams:
                 raise ValueError(f"DFTParams.{name} must be a finite positive number, got {value!r}")
             if not value > 0:
                 raise ValueError(f"DFTParams.{name} must be a finite positive number, got {value!r}")
+        if self.agreement_measure not in AGREEMENT_MEASURES:
+            raise ValueError(
+                f"DFTParams.agreement_measure: expected one of {', '.join(AGREEMENT_MEASURES)}, "
+                f"got {self.agreement_measure!r}"
+            )
         h = self.euler_equivalent_step
         if h is not None and not (isinstance(h, int | float | np.floating) and np.isfinite(h) and h > 0):
             raise ValueError(
@@ -139,7 +156,9 @@ class DFTParams:
 
 
 _DIRECTEDNESS_ONLY = DFTParams()
-_AGREEMENT_ONLY = DFTParams(directedness=False, agreement=True)
+_AGREEMENT_ONLY = {
+    m: DFTParams(directedness=False, agreement=True, agreement_measure=m) for m in AGREEMENT_MEASURES
+}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -283,14 +302,18 @@ def directedness(u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike) -> NDArray[np.f
     return dft_xi(u_h, x_r, x_g, _DIRECTEDNESS_ONLY)
 
 
-def agreement(u_h: ArrayLike, u_a: ArrayLike) -> NDArray[np.float64]:
-    """Cosine between the rotational parts of ``u_h`` and of each goal's autonomy command.
+def agreement(u_h: ArrayLike, u_a: ArrayLike, measure: str = "dot") -> NDArray[np.float64]:
+    """The agreement term between the rotational parts of ``u_h`` and of each goal's autonomy command.
 
-    Zero when the human gives no rotation, when ``u_h`` has only 3 entries, or when a goal's
-    autonomy command has no rotation. Returns shape ``(..., n)``.
+    ``measure`` (:data:`AGREEMENT_MEASURES`): ``"dot"`` the paper's ``u_h^rot . u_a^rot``,
+    ``"cosine"`` the cosine of their angle. Zero when the human gives no rotation, when ``u_h``
+    has only 3 entries, or when a goal's autonomy command has no rotation. Returns shape
+    ``(..., n)``.
     """
+    if measure not in _AGREEMENT_ONLY:
+        raise ValueError(f"measure: expected one of {', '.join(AGREEMENT_MEASURES)}, got {measure!r}")
     ua = np.asarray(u_a, dtype=float)
-    return dft_xi(u_h, np.zeros(3), np.zeros(ua.shape[:-1] + (3,)), _AGREEMENT_ONLY, ua)
+    return dft_xi(u_h, np.zeros(3), np.zeros(ua.shape[:-1] + (3,)), _AGREEMENT_ONLY[measure], ua)
 
 
 def proximity(x_r: ArrayLike, x_g: ArrayLike, R: float) -> NDArray[np.float64]:
@@ -310,8 +333,9 @@ def dft_xi(
 ) -> NDArray[np.float64]:
     """The input nonlinearity ``xi`` of equation (dft_ii), shape ``(..., n)``.
 
-    ``xi_i = directedness_i + agreement_i + proximity_i`` (the terms ``params`` switches on), the
-    first two zeroed for a zero command unless ``params.zero_command_excitation``.
+    ``xi_i = directedness_i + agreement_i + proximity_i`` (the terms ``params`` switches on; the
+    agreement's form is ``params.agreement_measure``), the first two zeroed for a zero command
+    unless ``params.zero_command_excitation``.
     """
     x_g = np.asarray(x_g, dtype=float)
     x_r = np.asarray(x_r, dtype=float)
@@ -347,6 +371,7 @@ def dft_xi(
         as_rows(u_a, batch, (n, 6)) if agree else np.empty((0, n, 6)),
         params.directedness,
         agree,
+        params.agreement_measure == "cosine",
         params.proximity,
         params.zero_command_excitation,
         float(params.R),
@@ -356,8 +381,10 @@ def dft_xi(
 
 
 def biased_sigmoid(xi: ArrayLike) -> NDArray[np.float64]:
-    """``sigma(xi) = 1 / (1 + exp(-xi)) - 0.5``."""
-    return 1.0 / (1.0 + np.exp(-np.asarray(xi, dtype=float))) - 0.5
+    """``sigma(xi) = 1 / (1 + exp(-xi)) - 0.5``, evaluated as ``tanh(xi / 2) / 2`` (the same
+    function, without overflow for a large negative ``xi``: the dot-product agreement term is
+    unbounded for huge commands)."""
+    return 0.5 * np.tanh(0.5 * np.asarray(xi, dtype=float))
 
 
 def dft_drive(
