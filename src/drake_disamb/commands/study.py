@@ -12,7 +12,10 @@ import importlib
 HELP = "Run the user study with simulated users, import the authors' human logs, and report on them."
 
 # ``study`` sub-command name -> module in drake_disamb.commands.
-STUDY_COMMANDS: dict[str, str] = {}
+STUDY_COMMANDS: dict[str, str] = {
+    "run": "study_run",
+    "ablate": "study_ablate",
+}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
