@@ -133,6 +133,7 @@ def record_from_result(
     start_pose: int | None = None,
     source: str = "simulated",
     trace: dict[str, NDArray[np.float64]] | None = None,
+    wall_time: float | None = None,
     extra: dict[str, Any] | None = None,
 ) -> TrialRecord:
     """The :class:`TrialRecord` of a finished trial (``result``: a ``TrialResult``).
@@ -141,6 +142,7 @@ def record_from_result(
         result: The trial.
         trial_id, subject, repetition, seed, start_pose, source: As in the record.
         trace: Its :func:`trace_arrays` if already computed.
+        wall_time: The record's ``wall_time`` (default the simulation's; 0 for a person's trial).
         extra: Merged into the record's ``extra`` (after ``stage_times``, ``intended_goal_names``,
             ``reached_goal_names``, ``assistance_onsets``, ``disambiguation_switch_times`` and
             ``interrupted``).
@@ -191,7 +193,7 @@ def record_from_result(
         automatic_switch_times=automatic,
         mean_alpha=float(result.mean_alpha) if np.any(commanding) else None,
         assistance_onset=onsets[0] if onsets else None,
-        wall_time=float(result.wall_time),
+        wall_time=float(result.wall_time if wall_time is None else wall_time),
         source=source,
         extra=info,
     )
