@@ -416,3 +416,32 @@ def test_demo_record_needs_live_and_a_subject(tmp_path: Path) -> None:
     assert res.returncode == 2 and "--record records a person's trial: it needs --live" in res.stderr
     res = cli("demo", "--live", "--record", str(tmp_path), "--subject", "a/b", "--out", str(tmp_path / "d"))
     assert res.returncode == 2 and "--subject" in res.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("task", ["reaching", "pouring"])
+def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
+    """The protocol's start poses pass the scenario's start-posture checks (building the scenario)
+    and a trial from each succeeds (head array, disambiguation, the first goal of every stage)."""
+    import dataclasses
+
+    from drake_disamb.study.runner import StudyContext, build_scenario
+    from drake_disamb.trial import run_trial
+
+    data = compatible_protocol_data()
+    data["paradigms"] = [{"name": "disambiguation", "trials": 1}]
+    protocol = P.protocol_from_dict(data)
+    context = StudyContext(protocol=P.protocol_to_dict(protocol))
+    spec = next(s for s in P.expand_trials(protocol, 0) if s.task == task)
+    postures = []
+    for pose in range(3):
+        one = dataclasses.replace(
+            spec, interface="head_array", start_pose=pose, initial_mode=0, goals=(0,) * len(spec.goals)
+        )
+        scenario = build_scenario(one, context)
+        postures.append(scenario.start_joint_positions)
+        result = run_trial(scenario, progress=False)
+        assert result.success, (
+            f"{task} start pose {pose}: reached {result.reached_goal_names} at {result.time} s"
+        )
+    assert len({tuple(p) if p else None for p in postures}) == 3
