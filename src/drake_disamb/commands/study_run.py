@@ -118,6 +118,13 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
             ) from None
         try:
             n = len(client.scheduler_info().get("workers", {}))
+            if n == 0:
+                print(
+                    f"warning: the scheduler at {scheduler} has no workers yet: the trials wait for "
+                    f"`dask worker {scheduler}`",
+                    file=sys.stderr,
+                    flush=True,
+                )
             yield client.get_executor(), f"Dask scheduler {scheduler} ({n} workers now)"
         finally:
             client.close()

@@ -376,6 +376,8 @@ def plan_study(
         tmp.write_text(yaml.safe_dump(header, sort_keys=False), encoding="utf-8")
         tmp.replace(study_yaml)
     (out / "traces").mkdir(exist_ok=True)
+    for stale in (out / "traces").glob(".*.npz.tmp"):  # a trace being written when a run was killed
+        stale.unlink(missing_ok=True)
     records_path = out / "trials.jsonl"
     finished = read_records(records_path, repair=True) if records_path.exists() else []
     known = {s.trial_id for s in specs}
