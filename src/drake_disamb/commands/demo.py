@@ -16,6 +16,12 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 (:class:`~drake_disamb.systems.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
+``--live --record DIR --subject NAME`` also appends the person's trial to ``DIR/trials.jsonl`` as a
+study record (``source: "human"``, the same :class:`~drake_disamb.study.records.TrialRecord` the
+simulated study writes, made by the same function) and its time series to
+``DIR/traces/<trial_id>.npz``, so ``study report DIR`` treats people like simulated subjects. A trial
+ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``).
+
 ``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
 every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
 same scenario. Nothing is run and ``--out`` is not touched.
@@ -150,6 +156,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="simulated-time limit in s (default: the scenario's, 600 with --live)",
     )
     parser.add_argument(
+        "--record",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="with --live: append the trial to DIR/trials.jsonl (source human) and its trace to DIR/traces/",
+    )
+    parser.add_argument(
+        "--subject", default=None, metavar="NAME", help="with --record: the person's name or code (e.g. P01)"
+    )
+    parser.add_argument(
         "--dump-scenario",
         action="store_true",
         help="print the resolved scenario (with the options above) as YAML and exit without running",
@@ -236,6 +252,56 @@ def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN00
     return path
 
 
+def _valid_subject(name: str | None) -> bool:
+    return bool(name) and len(name) <= 64 and all(c.isalnum() or c in "_-" for c in name)
+
+
+def check_record_dir(path: Path) -> Path:
+    """``--record``: a writable folder whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
+    from drake_disamb.study.records import read_records
+
+    folder = check_output_dir(path, "--record")
+    records = folder / "trials.jsonl"
+    if records.exists():
+        read_records(records, repair=True)
+    return folder
+
+
+def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN001 (TrialResult)
+    """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
+    ``folder/traces/``; returns its ``trial_id`` (``<subject>-<interface>-<task>-<paradigm>-h<n>``,
+    ``n`` counting that person's earlier trials of the condition, also its ``repetition``)."""
+    from drake_disamb.study.outcome import record_from_result, save_trace, trace_arrays
+    from drake_disamb.study.records import append_record, read_records
+
+    sc = result.scenario
+    records_path = folder / "trials.jsonl"
+    existing = read_records(records_path, repair=True) if records_path.exists() else []
+    stem = f"{subject}-{sc.interface}-{sc.task}-{sc.paradigm}-h"
+    ids = {r.trial_id for r in existing}
+    n = 0
+    while f"{stem}{n}" in ids:
+        n += 1
+    trial_id = f"{stem}{n}"
+    trace = trace_arrays(result)
+    record = record_from_result(
+        result,
+        trial_id=trial_id,
+        subject=subject,
+        repetition=n,
+        seed=None,
+        start_pose=0 if sc.start_joint_positions is None else None,
+        source="human",
+        trace=trace,
+        wall_time=0.0,
+        extra={"live": True, "scenario_seed": sc.seed},
+    )
+    (folder / "traces").mkdir(exist_ok=True)
+    save_trace(folder / "traces" / f"{trial_id}.npz", trace)
+    append_record(records_path, record)
+    return trial_id
+
+
 def _say(line: str) -> None:
     print(line, flush=True)
 
@@ -314,9 +380,19 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return 0
     if args.live and args.no_meshcat:
         return _error("--live needs Meshcat (drop --no-meshcat)")
+    if args.record is not None and not args.live:
+        return _error("--record records a person's trial: it needs --live")
+    if args.record is not None and not _valid_subject(args.subject):
+        return _error(
+            f"--subject: --record needs a subject name of letters, digits, '_' or '-', got {args.subject!r}"
+        )
+    if args.subject is not None and args.record is None:
+        return _error("--subject names the person of a recorded trial: it needs --record DIR")
     # First, before the heavy imports and anything is built: a bad folder costs nothing.
     try:
         out = check_output_dir(args.out, "--out")
+        if args.record is not None:
+            check_record_dir(args.record)
     except ValueError as exc:
         return _error(exc)
     try:
@@ -378,6 +454,13 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         written += write_trial_figures(result, handles, out)
     except OSError as exc:
         return _error(f"--out: writing into {out} failed ({exc})")
+    if args.record is not None:
+        try:
+            trial_id = record_human_trial(result, args.record, args.subject)
+        except (OSError, ValueError) as exc:
+            return _error(f"--record: writing into {args.record} failed ({exc})")
+        written.append(args.record / "trials.jsonl")
+        print(f"recorded trial {trial_id} of {args.subject}")
     for path in written:
         print(f"wrote {path}")
     if result.interrupted:

@@ -13,8 +13,10 @@ HELP = "Run the user study with simulated users, import the authors' human logs,
 
 # ``study`` sub-command name -> module in drake_disamb.commands.
 STUDY_COMMANDS: dict[str, str] = {
-    "import-authors": "study_import_authors",
+    "run": "study_run",
+    "ablate": "study_ablate",
     "report": "study_report",
+    "import-authors": "study_import_authors",
     "calibrate": "study_calibrate",
 }
 

@@ -1,0 +1,256 @@
+"""``drake-disamb study run``: run the study protocol with simulated subjects into a folder.
+
+``study run --out DIR`` runs every trial of the protocol (default: the paper's, embedded in
+``drake_disamb/study/protocol.yaml``; ``--protocol FILE`` another) and writes ``DIR/study.yaml``,
+one record per finished trial to ``DIR/trials.jsonl`` and its time series to
+``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.runner`). Rerunning the same command
+resumes: finished trials are skipped, a half-written last record (a killed run) is cut and its
+trial run again. ``--quick``: 2 subjects, both interfaces, reaching only, one trial per paradigm.
+
+Trials run in parallel: ``--workers N`` processes on this machine (default: the core count), or
+``--scheduler ADDRESS`` on an existing Dask cluster (``dask scheduler`` and ``dask worker ADDRESS``
+on the machines; each worker needs drake-disamb installed; the results come back to this process,
+which writes them). Every input (protocol, options, ``--out``, the scheduler) is checked before the
+first trial runs.
+
+Exit status: 0 every trial ran (whatever its success), 1 some trial raised an error (its message is
+printed; rerun to retry it), 2 bad input, 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any, TextIO
+
+HELP = "Run the study protocol with simulated subjects (records in DIR/trials.jsonl, traces in DIR/traces)."
+
+SCHEDULER_TIMEOUT = 5.0
+"""Seconds to wait for a Dask scheduler before giving up."""
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return value
+
+
+def add_common_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options ``study run`` and ``study ablate`` share."""
+    parser.add_argument(
+        "--out", type=Path, required=True, help="the study folder (created; resumed if it exists)"
+    )
+    parser.add_argument("--protocol", type=Path, default=None, help="protocol YAML (default: the paper's)")
+    parser.add_argument(
+        "--subjects", type=_positive_int, default=None, help="number of subjects (default: the protocol's)"
+    )
+    parser.add_argument("--seed", type=_seed, default=0, help="study seed (default: 0)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers", type=_positive_int, default=None, help="worker processes (default: the core count)"
+    )
+    where.add_argument(
+        "--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster (tcp://host:8786)"
+    )
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="2 subjects, both interfaces, reaching only, one trial per paradigm",
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Register the ``study run`` options."""
+    add_common_arguments(parser)
+
+
+def build_protocol(args: argparse.Namespace) -> Any:
+    """The protocol of ``--protocol``, ``--quick`` and ``--subjects`` (raises ``ValueError``)."""
+    import dataclasses
+
+    from drake_disamb.study.protocol import load_protocol, quick_protocol, validate_protocol
+
+    protocol = load_protocol(args.protocol)
+    if args.quick:
+        protocol = quick_protocol(protocol)
+    if args.subjects is not None:
+        protocol = validate_protocol(dataclasses.replace(protocol, subjects=args.subjects))
+    return protocol
+
+
+@contextlib.contextmanager
+def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[Any, str]]:
+    """A ``concurrent.futures.Executor`` and its description: a spawn-started process pool of
+    ``workers`` processes, or the executor of a Dask client connected to ``scheduler``.
+
+    Raises:
+        ValueError: the scheduler cannot be reached within :data:`SCHEDULER_TIMEOUT` seconds.
+    """
+    if scheduler is not None:
+        from distributed import Client
+
+        try:
+            client = Client(scheduler, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
+        except Exception as exc:  # OSError, TimeoutError, ValueError for a malformed address
+            raise ValueError(
+                f"--scheduler: cannot reach a Dask scheduler at {scheduler!r} within {SCHEDULER_TIMEOUT:g} s "
+                f"({type(exc).__name__}: {exc}); start one with `dask scheduler` and workers with "
+                "`dask worker ADDRESS`"
+            ) from None
+        try:
+            n = len(client.scheduler_info().get("workers", {}))
+            if n == 0:
+                print(
+                    f"warning: the scheduler at {scheduler} has no workers yet: the trials wait for "
+                    f"`dask worker {scheduler}`",
+                    file=sys.stderr,
+                    flush=True,
+                )
+            yield client.get_executor(), f"Dask scheduler {scheduler} ({n} workers now)"
+        finally:
+            client.close()
+        return
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from drake_disamb.study.runner import default_workers
+
+    n = workers or default_workers()
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
+    try:
+        yield pool, f"{n} worker process{'es' if n > 1 else ''}"
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+class StudyProgress:
+    """Trials done, unsuccessful and errors, with an ETA: a ``tqdm`` bar on a terminal, else a line
+    every ``interval`` seconds and at the end."""
+
+    def __init__(
+        self, total: int, stream: TextIO | None = None, quiet: bool = False, interval: float = 10.0
+    ) -> None:
+        self.total = total
+        self.done = 0
+        self.unsuccessful = 0
+        self.errors = 0
+        self._stream = sys.stderr if stream is None else stream
+        self._quiet = quiet
+        self._interval = interval
+        self._start = time.monotonic()
+        self._next = self._start + interval
+        self._bar: Any = None
+        if not quiet and getattr(self._stream, "isatty", lambda: False)():
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, file=self._stream, unit="trial", dynamic_ncols=True)
+            self._bar.set_postfix(unsuccessful=0, errors=0)
+
+    def update(self, record: Any, error: str | None) -> None:
+        """One trial finished (``record``), or raised (``error``)."""
+        self.done += 1
+        if error is not None:
+            self.errors += 1
+            self.write(f"error: {error}")
+        elif not record.success:
+            self.unsuccessful += 1
+        if self._bar is not None:
+            self._bar.update(1)
+            self._bar.set_postfix(unsuccessful=self.unsuccessful, errors=self.errors)
+            return
+        now = time.monotonic()
+        if not self._quiet and (now >= self._next or self.done == self.total):
+            self._next = now + self._interval
+            self.write(self.line(now))
+
+    def line(self, now: float | None = None) -> str:
+        elapsed = (time.monotonic() if now is None else now) - self._start
+        eta = elapsed / self.done * (self.total - self.done) if self.done else float("nan")
+        eta_text = f", ETA {eta:.0f} s" if self.done < self.total and self.done else ""
+        return (
+            f"trials {self.done}/{self.total}, {self.unsuccessful} unsuccessful, {self.errors} errors, "
+            f"{elapsed:.0f} s{eta_text}"
+        )
+
+    def write(self, text: str) -> None:
+        if self._quiet and not text.startswith("error"):
+            return
+        if self._bar is not None:
+            self._bar.write(text, file=self._stream)
+        else:
+            print(text, file=self._stream, flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+
+def error(command: str, message: object) -> int:
+    print(f"drake-disamb study {command}: error: {message}", file=sys.stderr)
+    return 2
+
+
+def execute(plans: list[Any], args: argparse.Namespace, command: str) -> int:
+    """Run the pending trials of ``plans`` on one executor, with a progress display."""
+    from drake_disamb.study.runner import run_study
+
+    total = sum(len(p.pending) for p in plans)
+    skipped = sum(len(p.finished) for p in plans)
+    try:
+        with open_executor(args.workers, args.scheduler) as (executor, where):
+            print(f"{total} trials to run ({skipped} already done) on {where}", flush=True)
+            progress = StudyProgress(total, quiet=args.quiet)
+            errors = 0
+            try:
+                for plan in plans:
+                    result = run_study(plan, executor, on_result=progress.update)
+                    errors += len(result.errors)
+            finally:
+                progress.close()
+    except ValueError as exc:
+        return error(command, exc)
+    except KeyboardInterrupt:
+        print(f"drake-disamb study {command}: interrupted; rerun the same command to resume", file=sys.stderr)
+        return 130
+    print(progress.line(), flush=True)
+    for plan in plans:
+        print(f"wrote {plan.records_path} and {plan.traces_dir}", flush=True)
+    return 1 if errors else 0
+
+
+def run(args: argparse.Namespace) -> int:
+    """``study run``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
+    from drake_disamb.study.runner import plan_study
+
+    try:
+        protocol = build_protocol(args)
+        plan = plan_study(args.out, protocol, args.seed)
+    except ValueError as exc:
+        return error("run", exc)
+    print(
+        f"study in {plan.out}: {len(plan.specs)} trials, seed {plan.seed}, subjects from {plan.population}",
+        flush=True,
+    )
+    return execute([plan], args, "run")

@@ -1,0 +1,199 @@
+"""From a finished trial to its record and trace: the one function every producer of records uses.
+
+:func:`record_from_result` turns a :class:`~drake_disamb.trial.TrialResult` into a
+:class:`~drake_disamb.study.records.TrialRecord` (the study runner for simulated subjects,
+``demo --live --record`` for a person); :func:`trace_arrays` gives the trial's time series in the
+layout of ``DIR/traces/<trial_id>.npz`` and :func:`save_trace` writes them (to a temporary file,
+then renamed, so a trace file is whole or absent).
+
+Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,) s; ``belief``
+(T, n_goals); ``u_h`` and ``u`` (T, 6): spatial velocities in the paper's order
+``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, world frame W); ``alpha`` (T,); ``mode`` (T,) mode
+index; ``ee_pose`` (T, 7) ``[x, y, z, qw, qx, qy, qz]`` of the end effector in W; ``stage`` (T,)
+the task's stage index.
+
+**Assistance onset** (:func:`assistance_onset`): the blender assists only while the user commands
+(``alpha`` is 0 with no input, by design), so the onset looks at the samples where the user
+commands (``u_h != 0``): it is the time of the first such sample from which, on every commanding
+sample to the end of its stage, the belief's argmax is the intended goal and ``alpha > 0``. Per
+stage (``extra.assistance_onsets``, s from the trial start); the record's ``assistance_onset`` is
+the first stage's.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from drake_disamb.core.interfaces import DIM_NAMES, interface_modes
+from drake_disamb.study.records import TrialRecord
+
+__all__ = [
+    "TRACE_ARRAYS",
+    "assistance_onset",
+    "mode_name",
+    "record_from_result",
+    "save_trace",
+    "trace_arrays",
+]
+
+TRACE_ARRAYS: tuple[str, ...] = ("t", "belief", "u_h", "u", "alpha", "mode", "ee_pose", "stage")
+"""Arrays of a trace file (module docstring)."""
+
+
+def mode_name(interface: str, mode: int) -> str:
+    """Name of mode index ``mode`` of ``interface``: its dimensions joined by ``_`` (``vx_vy``)."""
+    return "_".join(DIM_NAMES[d] for d in interface_modes(interface)[int(mode)])
+
+
+def trace_arrays(result: Any) -> dict[str, NDArray[np.float64]]:
+    """The trace of a :class:`~drake_disamb.trial.TrialResult` (module docstring for the layout)."""
+    logs = result.logs
+    t, belief = logs["belief"]
+    out = {
+        "t": np.asarray(t, dtype=float),
+        "belief": np.asarray(belief, dtype=float),
+        "u_h": np.asarray(logs["u_h"][1], dtype=float),
+        "u": np.asarray(logs["u"][1], dtype=float),
+        "alpha": np.asarray(logs["alpha"][1], dtype=float)[:, 0],
+        "mode": np.asarray(logs["mode"][1], dtype=float)[:, 0],
+        "ee_pose": np.asarray(logs["ee_pose"][1], dtype=float),
+        "stage": np.asarray(logs["stage"][1], dtype=float)[:, 0],
+    }
+    n = len(out["t"])
+    for name, arr in out.items():
+        if len(arr) != n:  # the loggers share one period: a mismatch is a wiring error
+            raise RuntimeError(f"trace: {name} has {len(arr)} samples, t has {n}")
+    return out
+
+
+def save_trace(path: str | Path, arrays: dict[str, NDArray[np.float64]]) -> Path:
+    """Write ``arrays`` to the ``.npz`` file ``path`` (compressed) through a temporary file."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".npz.tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _intended_index(n_belief: int, stage_sizes: list[int], stage: int, goal: int) -> int:
+    """Belief index of the intended goal: within the stage, or among all goals (a task-wide belief)."""
+    if n_belief == stage_sizes[stage]:
+        return goal
+    return sum(stage_sizes[:stage]) + goal
+
+
+def assistance_onset(
+    trace: dict[str, NDArray[np.float64]], intended_goals: list[int], stage_sizes: list[int]
+) -> list[float | None]:
+    """Per stage, the assistance onset (module docstring) in s from the trial start, or None."""
+    t, belief, alpha, stage = trace["t"], trace["belief"], trace["alpha"], trace["stage"]
+    commanding = np.any(np.abs(trace["u_h"]) > 1e-9, axis=1)
+    argmax = np.argmax(belief, axis=1) if len(t) else np.zeros(0, dtype=int)
+    onsets: list[float | None] = []
+    for k, goal in enumerate(intended_goals):
+        idx = np.flatnonzero((stage.astype(int) == k) & commanding)
+        if len(idx) == 0:
+            onsets.append(None)
+            continue
+        target = _intended_index(belief.shape[1], stage_sizes, k, goal)
+        ok = (argmax[idx] == target) & (alpha[idx] > 0)
+        if not ok[-1]:
+            onsets.append(None)
+            continue
+        bad = np.flatnonzero(~ok)
+        first = 0 if len(bad) == 0 else int(bad[-1]) + 1
+        onsets.append(float(t[idx[first]]))
+    return onsets
+
+
+def _finite(value: float) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def record_from_result(
+    result: Any,
+    *,
+    trial_id: str,
+    subject: str,
+    repetition: int = 0,
+    seed: int | None = None,
+    start_pose: int | None = None,
+    source: str = "simulated",
+    trace: dict[str, NDArray[np.float64]] | None = None,
+    wall_time: float | None = None,
+    extra: dict[str, Any] | None = None,
+) -> TrialRecord:
+    """The :class:`TrialRecord` of a finished trial (``result``: a ``TrialResult``).
+
+    Args:
+        result: The trial.
+        trial_id, subject, repetition, seed, start_pose, source: As in the record.
+        trace: Its :func:`trace_arrays` if already computed.
+        wall_time: The record's ``wall_time`` (default the simulation's; 0 for a person's trial).
+        extra: Merged into the record's ``extra`` (after ``stage_times``, ``intended_goal_names``,
+            ``reached_goal_names``, ``assistance_onsets``, ``disambiguation_switch_times`` and
+            ``interrupted``).
+    """
+    sc = result.scenario
+    trace = trace_arrays(result) if trace is None else trace
+    stage_sizes = [len(sc.stage_goals(k)) for k in range(sc.n_stages)]
+    onsets = assistance_onset(trace, list(result.intended_goals), stage_sizes)
+    events = result.events
+    switches = [e for e in events if e.kind == "mode_switch"]
+    automatic = [float(e.time) for e in events if e.kind == "automatic_switch"]
+    paradigm = sc.paradigm
+    method = None if paradigm == "manual" else getattr(sc.disambiguation, "method", "algorithm1")
+    commanding = np.any(np.abs(trace["u_h"]) > 1e-9, axis=1)
+    info: dict[str, Any] = {
+        "stage_times": [_finite(t) for t in result.stage_times],
+        "intended_goal_names": list(result.intended_goal_names),
+        "reached_goal_names": list(result.reached_goal_names),
+        "assistance_onsets": onsets,
+        "disambiguation_switch_times": [float(t) for t in result.disambiguation_switch_times],
+        "interrupted": bool(result.interrupted),
+    }
+    info.update(extra or {})
+    return TrialRecord(
+        trial_id=trial_id,
+        subject=subject,
+        interface=sc.interface,
+        task=sc.task,
+        paradigm=paradigm,
+        disambiguation_method=method,
+        repetition=int(repetition),
+        seed=seed,
+        start_pose=start_pose,
+        initial_mode=mode_name(sc.interface, sc.initial_mode),
+        intended_goals=[int(g) for g in result.intended_goals],
+        reached_goals=[int(g) for g in result.reached_goals],
+        success=bool(result.success),
+        done=bool(result.done),
+        duration=float(result.time),
+        completion_time=float(result.time) if result.done else None,
+        mode_switches=len(switches),
+        requests=int(result.requests),
+        automatic_switches=len(automatic),
+        button_presses=len(switches) + int(result.requests),
+        request_times=[float(t) for t in result.request_times],
+        mode_switch_times=[float(e.time) for e in switches],
+        mode_switch_modes=[mode_name(sc.interface, e.to_mode) for e in switches],
+        automatic_switch_times=automatic,
+        mean_alpha=float(result.mean_alpha) if np.any(commanding) else None,
+        assistance_onset=onsets[0] if onsets else None,
+        wall_time=float(result.wall_time if wall_time is None else wall_time),
+        source=source,
+        extra=info,
+    )

@@ -1,0 +1,481 @@
+"""The study protocol: a typed config, and its expansion into one :class:`TrialSpec` per trial.
+
+A :class:`Protocol` says who is tested on what: subjects x interfaces x tasks x paradigms x trials
+per condition, the mode-selection method, the request latency, each task's start poses and how
+the order of conditions is counterbalanced. The embedded default (``study/protocol.yaml``,
+:func:`default_protocol`) is the paper's (FACTS section 9): 8 subjects, joystick and head array,
+reaching and pouring, Manual 3 + Disambiguation 5 + Automatic 5 trials per condition (416 trials),
+Algorithm 1, a request latency uniform in [2.0, 2.5] s, 3 start poses per task.
+
+Protocol files are read like scenarios: the text hardening of :mod:`drake_disamb.yaml_safety`,
+the strict type check :func:`~drake_disamb.config.checks.check_data` (errors name the field path
+and the value, e.g. ``protocol.paradigms[1].trials: expected an integer, got 'five'``), then
+Drake's :func:`~pydrake.common.yaml.yaml_load_typed`, then :func:`validate_protocol` (values:
+known interfaces, tasks, paradigms and methods of *this build's* scenario schema, counts,
+ranges). This module has no ``from __future__ import annotations``: Drake's loader reads the
+fields' real types.
+
+:func:`expand_trials` turns (protocol, seed) into the trials, deterministically: the trials are
+enumerated in a canonical order (subject, interface, task, paradigm, repetition) and each gets its
+own seed from ``numpy.random.SeedSequence(seed).spawn(n)``; everything random about a trial (its
+intended goals, initial mode, start pose, request latency and the scenario's seed) is drawn from
+that seed alone, so a trial does not depend on the others, on the worker count or on the executor.
+
+**Counterbalancing** (``counterbalance: rotation``): subject ``i`` (0-based) takes the interfaces
+in the protocol's order rotated by ``i``, the tasks rotated by ``i // n_interfaces``, and the
+paradigms in row ``i`` (mod the row count) of a Williams balanced Latin square (each paradigm
+precedes every other equally often; for an odd number of paradigms the square and its mirror, so
+3 paradigms cycle through 6 orders). Within a subject the blocks run interface-major, then task,
+then paradigm, the repetitions of a condition together. A simulated trial does not depend on its
+position, but every record keeps it (``extra.order``, 0-based within the subject), so an analysis
+of order effects (or a human session's schedule) can use it. ``counterbalance: none`` keeps the
+protocol's order for everyone.
+"""
+
+import dataclasses
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from pydrake.common.yaml import yaml_load_typed
+
+from drake_disamb.config.checks import check_data, cut, fmt
+from drake_disamb.yaml_safety import check_yaml_text, decode_yaml_bytes, read_yaml_file, yaml_error_message
+
+__all__ = [
+    "COUNTERBALANCE",
+    "METHODS",
+    "ParadigmSpec",
+    "Protocol",
+    "StartPoseSpec",
+    "TaskProtocol",
+    "TrialSpec",
+    "default_protocol",
+    "expand_trials",
+    "load_protocol",
+    "protocol_from_dict",
+    "protocol_from_yaml",
+    "protocol_to_dict",
+    "quick_protocol",
+    "schema_support",
+    "validate_protocol",
+]
+
+METHODS: tuple[str, ...] = ("algorithm1", "entropy", "kl")
+"""Mode-selection methods of the contract's ``Scenario.disambiguation.method``."""
+
+COUNTERBALANCE: tuple[str, ...] = ("rotation", "none")
+"""Counterbalancing schemes (module docstring)."""
+
+
+def _meta(**kwargs: Any) -> dict[str, Any]:
+    return {"check": kwargs}
+
+
+@dataclass
+class StartPoseSpec:
+    """One start pose of a task.
+
+    Attributes:
+        name: Name of the pose (in records' ``extra.start_pose_name``).
+        joint_offsets: Added to the task's own start posture (its ``start_joint_positions``, or the
+            station's home posture when it has none), rad per joint; ``None`` = that posture.
+    """
+
+    name: str = field(default="", metadata=_meta(required=True))
+    joint_offsets: list[float] | None = field(default=None, metadata=_meta(size=(6,)))
+
+
+@dataclass
+class TaskProtocol:
+    """A task of the study and its start poses.
+
+    Attributes:
+        task: An embedded task (``reaching``, ``pouring``).
+        start_poses: The poses a trial starts from (one drawn per trial, uniformly).
+    """
+
+    task: str = field(default="", metadata=_meta(required=True))
+    start_poses: list[StartPoseSpec] = field(default_factory=lambda: [StartPoseSpec(name="default")])
+
+
+@dataclass
+class ParadigmSpec:
+    """A paradigm and its trials per (subject, interface, task) condition."""
+
+    name: str = field(default="", metadata=_meta(required=True))
+    trials: int = 1
+
+
+@dataclass
+class Protocol:
+    """The study protocol (see the module docstring and ``study/protocol.yaml``).
+
+    Attributes:
+        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.population``).
+        interfaces: Interfaces every subject uses.
+        tasks: Tasks and their start poses.
+        paradigms: Paradigms and their trials per condition.
+        disambiguation_method: Mode-selection method (``Scenario.disambiguation.method``) of the
+            paradigms that disambiguate.
+        request_latency: ``[min, max]`` s: each trial's request latency (from the request press to
+            the mode switch, ``Scenario.disambiguation.request_latency``) is uniform in it;
+            ``None`` = the same tick (no latency).
+        counterbalance: ``rotation`` or ``none`` (module docstring).
+        duration: Simulated-time limit (s) of every trial; ``None`` = the task's.
+    """
+
+    subjects: int = 8
+    interfaces: list[str] = field(default_factory=lambda: ["joystick", "head_array"])
+    tasks: list[TaskProtocol] = field(default_factory=list)
+    paradigms: list[ParadigmSpec] = field(default_factory=list)
+    disambiguation_method: str = field(default="algorithm1", metadata=_meta(choices=METHODS))
+    request_latency: list[float] | None = field(default=None, metadata=_meta(size=(2,)))
+    counterbalance: str = field(default="rotation", metadata=_meta(choices=COUNTERBALANCE))
+    duration: float | None = None
+
+    @property
+    def n_trials(self) -> int:
+        """Trials in the whole protocol."""
+        per_subject = len(self.interfaces) * len(self.tasks) * sum(p.trials for p in self.paradigms)
+        return self.subjects * per_subject
+
+
+# -- what this build's scenario schema supports ----------------------------------------------------
+
+
+def schema_support() -> dict[str, Any]:
+    """What the scenario schema of this build accepts, for the protocol's checks.
+
+    ``paradigms``: the accepted ``Scenario.paradigm`` values; ``method``: whether
+    ``Scenario.disambiguation.method`` exists; ``request_latency``: whether
+    ``Scenario.disambiguation.request_latency`` exists.
+    """
+    from drake_disamb.config import schema
+
+    names = {f.name for f in dataclasses.fields(schema.DisambiguationSpec)}
+    return {
+        "paradigms": tuple(schema.PARADIGMS),
+        "method": "method" in names,
+        "request_latency": "request_latency" in names,
+    }
+
+
+def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
+    """Check the protocol's values; returns it. Raises ``ValueError`` naming the field and value."""
+    from drake_disamb.config.schema import INTERFACES
+    from drake_disamb.config.yaml_io import EMBEDDED_TASKS
+
+    support = schema_support()
+    if not (isinstance(protocol.subjects, int) and 1 <= protocol.subjects <= 999):
+        raise ValueError(f"{name}.subjects: expected an integer in [1, 999], got {fmt(protocol.subjects)}")
+    if not protocol.interfaces:
+        raise ValueError(f"{name}.interfaces: expected at least one interface, got []")
+    for i, itf in enumerate(protocol.interfaces):
+        if itf not in INTERFACES:
+            raise ValueError(
+                f"{name}.interfaces[{i}]: expected one of {', '.join(INTERFACES)}, got {fmt(itf)}"
+            )
+    if len(set(protocol.interfaces)) != len(protocol.interfaces):
+        raise ValueError(f"{name}.interfaces: an interface is listed twice: {protocol.interfaces}")
+    if not protocol.tasks:
+        raise ValueError(f"{name}.tasks: expected at least one task, got []")
+    for i, t in enumerate(protocol.tasks):
+        if t.task not in EMBEDDED_TASKS:
+            raise ValueError(
+                f"{name}.tasks[{i}].task: expected one of {', '.join(EMBEDDED_TASKS)}, got {fmt(t.task)}"
+            )
+        if not t.start_poses:
+            raise ValueError(f"{name}.tasks[{i}].start_poses: expected at least one start pose, got []")
+        pose_names = [p.name for p in t.start_poses]
+        if len(set(pose_names)) != len(pose_names):
+            raise ValueError(f"{name}.tasks[{i}].start_poses: a name is used twice: {pose_names}")
+    if len({t.task for t in protocol.tasks}) != len(protocol.tasks):
+        raise ValueError(f"{name}.tasks: a task is listed twice: {[t.task for t in protocol.tasks]}")
+    if not protocol.paradigms:
+        raise ValueError(f"{name}.paradigms: expected at least one paradigm, got []")
+    known = ("manual", "disambiguation", "automatic")
+    for i, p in enumerate(protocol.paradigms):
+        if p.name not in known:
+            raise ValueError(
+                f"{name}.paradigms[{i}].name: expected one of {', '.join(known)}, got {fmt(p.name)}"
+            )
+        if p.name not in support["paradigms"]:
+            raise ValueError(
+                f"{name}.paradigms[{i}].name: {p.name!r} is not a paradigm of this build's scenario schema "
+                f"(Scenario.paradigm accepts {', '.join(support['paradigms'])}); leave it out of the protocol"
+            )
+        if not (isinstance(p.trials, int) and 1 <= p.trials <= 1000):
+            raise ValueError(
+                f"{name}.paradigms[{i}].trials: expected an integer in [1, 1000], got {fmt(p.trials)}"
+            )
+    if len({p.name for p in protocol.paradigms}) != len(protocol.paradigms):
+        raise ValueError(
+            f"{name}.paradigms: a paradigm is listed twice: {[p.name for p in protocol.paradigms]}"
+        )
+    if protocol.disambiguation_method not in METHODS:
+        raise ValueError(
+            f"{name}.disambiguation_method: expected one of {', '.join(METHODS)}, "
+            f"got {fmt(protocol.disambiguation_method)}"
+        )
+    if protocol.disambiguation_method != "algorithm1" and not support["method"]:
+        raise ValueError(
+            f"{name}.disambiguation_method: {protocol.disambiguation_method!r} needs "
+            "Scenario.disambiguation.method, which this build's scenario schema does not have "
+            "(Algorithm 1 only)"
+        )
+    lat = protocol.request_latency
+    if lat is not None:
+        if len(lat) != 2 or not (0.0 <= lat[0] <= lat[1] <= 60.0):
+            raise ValueError(
+                f"{name}.request_latency: expected [min, max] s with 0 <= min <= max <= 60, got {lat}"
+            )
+        if not support["request_latency"] and lat[1] > 0.0:
+            raise ValueError(
+                f"{name}.request_latency: {lat} needs Scenario.disambiguation.request_latency, which this "
+                "build's scenario schema does not have yet; set request_latency: null (requests answered "
+                "in the same tick)"
+            )
+    if protocol.duration is not None and not 0.0 < protocol.duration <= 3600.0:
+        raise ValueError(
+            f"{name}.duration: expected a number of seconds in (0, 3600], got {fmt(protocol.duration)}"
+        )
+    return protocol
+
+
+# -- reading and writing ---------------------------------------------------------------------------
+
+
+def protocol_from_dict(data: Any, source: str = "protocol") -> Protocol:
+    """A validated protocol from plain data (as parsed from YAML); errors name ``source`` and the field."""
+    check_data(Protocol, data, "protocol")
+    text = yaml.safe_dump(data)
+    try:
+        protocol = yaml_load_typed(schema=Protocol, data=text, allow_yaml_with_no_schema=False)
+    except (RuntimeError, ValueError, TypeError) as exc:  # not expected once check_data has passed
+        raise ValueError(f"{source}: Drake's YAML loader failed: {cut(str(exc))}") from None
+    return validate_protocol(protocol)
+
+
+def protocol_from_yaml(text: str | bytes, source: str = "<string>") -> Protocol:
+    """Parse and validate a protocol's YAML text; errors name ``source``, the line or the field."""
+    if isinstance(text, bytes | bytearray):
+        text = decode_yaml_bytes(bytes(text), source)
+    check_yaml_text(text, source, root="protocol")
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ValueError(yaml_error_message(exc, source)) from None
+    if data is None:
+        raise ValueError(f"{source}: empty YAML document, expected a protocol mapping")
+    if not isinstance(data, dict):
+        raise ValueError(f"{source}: expected a mapping of Protocol fields, got {fmt(data)}")
+    try:
+        return protocol_from_dict(data, source)
+    except ValueError as exc:
+        raise ValueError(f"{source}: {exc}") from None
+
+
+def load_protocol(path: str | Path | None = None) -> Protocol:
+    """The protocol in the YAML file ``path``, or the embedded default for ``None``."""
+    if path is None:
+        return default_protocol()
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"--protocol: no such file: {fmt(str(path))}")
+    return protocol_from_yaml(read_yaml_file(p), str(p))
+
+
+def default_protocol_text() -> str:
+    """The YAML text of the embedded default protocol (the paper's)."""
+    return resources.files("drake_disamb.study").joinpath("protocol.yaml").read_text(encoding="utf-8")
+
+
+def default_protocol() -> Protocol:
+    """The paper's protocol (``study/protocol.yaml``).
+
+    Raises:
+        ValueError: this build's scenario schema lacks something the paper's protocol needs (the
+            Automatic paradigm, the request latency): the message names the field.
+    """
+    return protocol_from_yaml(default_protocol_text(), "<embedded study/protocol.yaml>")
+
+
+def _default_data() -> dict[str, Any]:
+    return yaml.safe_load(default_protocol_text())
+
+
+def quick_protocol(base: Protocol | None = None) -> Protocol:
+    """``--quick``: 2 subjects, the protocol's interfaces, reaching only, one trial per paradigm."""
+    data = protocol_to_dict(base) if base is not None else _default_data()
+    data["subjects"] = 2
+    data["tasks"] = [t for t in data["tasks"] if t["task"] == "reaching"] or data["tasks"][:1]
+    for p in data["paradigms"]:
+        p["trials"] = 1
+    return protocol_from_dict(data, "--quick")
+
+
+def protocol_to_dict(protocol: Protocol) -> dict[str, Any]:
+    """Plain data of a protocol (loads back with :func:`protocol_from_dict`)."""
+    return _plain(protocol)
+
+
+def _plain(value: Any) -> Any:
+    if dataclasses.is_dataclass(value):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+# -- expansion -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """Everything that defines one trial (plain values; JSON-able with :func:`dataclasses.asdict`).
+
+    Attributes:
+        trial_id: ``<subject>-<interface>-<task>-<paradigm>-r<repetition>``.
+        subject: Subject name (``S01``...).
+        subject_index: 0-based subject index.
+        interface, task, paradigm: The condition.
+        repetition: 0-based repetition within the condition.
+        seed: The trial's own seed (from the study's SeedSequence); every draw below comes from it.
+        scenario_seed: The scenario's ``seed`` (the simulated user's randomness).
+        goals: Intended goal per stage.
+        initial_mode: Index into the interface's mode list (arm modes only).
+        start_pose: Index into the task's ``start_poses``.
+        request_latency: s, or ``None`` (no latency).
+        order: 0-based position of the trial in its subject's session (counterbalanced).
+    """
+
+    trial_id: str
+    subject: str
+    subject_index: int
+    interface: str
+    task: str
+    paradigm: str
+    repetition: int
+    seed: int
+    scenario_seed: int
+    goals: tuple[int, ...]
+    initial_mode: int
+    start_pose: int
+    request_latency: float | None
+    order: int
+
+
+def _rotate(items: list[Any], k: int) -> list[Any]:
+    k %= len(items)
+    return items[k:] + items[:k]
+
+
+def williams_rows(n: int) -> list[list[int]]:
+    """Rows of a Williams balanced Latin square of order ``n`` (with its mirror for odd ``n``)."""
+    first = [0]
+    lo, hi = 1, n - 1
+    for j in range(1, n):
+        if j % 2 == 1:
+            first.append(lo)
+            lo += 1
+        else:
+            first.append(hi)
+            hi -= 1
+    rows = [[(v + r) % n for v in first] for r in range(n)]
+    if n % 2 == 1:
+        rows += [list(reversed(row)) for row in rows]
+    return rows
+
+
+def condition_order(protocol: Protocol, subject_index: int) -> list[tuple[str, str, str]]:
+    """The (interface, task, paradigm) blocks of a subject in session order (module docstring)."""
+    interfaces = list(protocol.interfaces)
+    tasks = [t.task for t in protocol.tasks]
+    paradigms = [p.name for p in protocol.paradigms]
+    if protocol.counterbalance == "rotation":
+        interfaces = _rotate(interfaces, subject_index)
+        tasks = _rotate(tasks, subject_index // len(protocol.interfaces))
+        rows = williams_rows(len(paradigms))
+        paradigms = [paradigms[j] for j in rows[subject_index % len(rows)]]
+    return [(i, t, p) for i in interfaces for t in tasks for p in paradigms]
+
+
+def _n_stages(task: str) -> list[int]:
+    """Goals per stage of an embedded task."""
+    from drake_disamb.config import load_scenario
+
+    sc = load_scenario(task)
+    return [len(sc.stage_goals(k)) for k in range(sc.n_stages)]
+
+
+def _n_arm_modes(interface: str) -> int:
+    from drake_disamb.core.interfaces import arm_modes
+
+    return len(arm_modes(interface))
+
+
+def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None = None) -> list[TrialSpec]:
+    """Every trial of ``protocol`` with its draws, deterministically from ``seed``.
+
+    Returned in session order (subject by subject, each in its counterbalanced order). Trial ``k``
+    of the canonical enumeration (subject, interface, task, paradigm, repetition in the protocol's
+    order) takes child ``k`` of ``SeedSequence(seed)``; its draws, in this order: one goal per
+    stage (uniform), the initial mode (uniform over the interface's arm modes), the start pose
+    (uniform), the request latency (uniform in ``protocol.request_latency``; drawn even when
+    ``None``, so the other draws do not depend on it), the scenario seed (a 31-bit integer).
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
+    names = subject_names or [f"S{i + 1:02d}" for i in range(protocol.subjects)]
+    if len(names) != protocol.subjects:
+        raise ValueError(f"subject_names: expected {protocol.subjects} names, got {len(names)}")
+    stages = {t.task: _n_stages(t.task) for t in protocol.tasks}
+    poses = {t.task: len(t.start_poses) for t in protocol.tasks}
+    canonical = [
+        (s, i, t.task, p.name, r)
+        for s in range(protocol.subjects)
+        for i in protocol.interfaces
+        for t in protocol.tasks
+        for p in protocol.paradigms
+        for r in range(p.trials)
+    ]
+    children = np.random.SeedSequence(seed).spawn(len(canonical))
+    specs: dict[tuple[int, str, str, str, int], TrialSpec] = {}
+    for (s, itf, task, par, rep), child in zip(canonical, children, strict=True):
+        trial_seed = int(child.generate_state(1, np.uint32)[0])
+        rng = np.random.default_rng(trial_seed)
+        goals = tuple(int(rng.integers(n)) for n in stages[task])
+        mode = int(rng.integers(_n_arm_modes(itf)))
+        pose = int(rng.integers(poses[task]))
+        latency = float(rng.uniform(0.0, 1.0))
+        scenario_seed = int(rng.integers(2**31 - 1))
+        lat = protocol.request_latency
+        specs[(s, itf, task, par, rep)] = TrialSpec(
+            trial_id=f"{names[s]}-{itf}-{task}-{par}-r{rep}",
+            subject=names[s],
+            subject_index=s,
+            interface=itf,
+            task=task,
+            paradigm=par,
+            repetition=rep,
+            seed=trial_seed,
+            scenario_seed=scenario_seed,
+            goals=goals,
+            initial_mode=mode,
+            start_pose=pose,
+            request_latency=None if lat is None else float(lat[0] + latency * (lat[1] - lat[0])),
+            order=-1,
+        )
+    ordered: list[TrialSpec] = []
+    reps = {p.name: p.trials for p in protocol.paradigms}
+    for s in range(protocol.subjects):
+        k = 0
+        for itf, task, par in condition_order(protocol, s):
+            for r in range(reps[par]):
+                ordered.append(dataclasses.replace(specs[(s, itf, task, par, r)], order=k))
+                k += 1
+    return ordered

@@ -1,0 +1,488 @@
+"""Running a study: trial specs to scenarios, trials behind a ``concurrent.futures.Executor``, records.
+
+The study folder ``DIR``:
+
+- ``study.yaml``: the protocol (plain data), the study seed, the scenario overrides (an ablation
+  setting's), the subjects (names and user overrides), the package version, written when the study
+  starts. Rerunning into an existing folder resumes it; a different protocol, seed, overrides or
+  subjects there is an error (:class:`StudyMismatch`), the version is informative only.
+- ``trials.jsonl``: one :class:`~drake_disamb.study.records.TrialRecord` per finished trial,
+  appended (flushed, fsync-ed) by the parent process as each trial finishes, so the lines come
+  in completion order: read them as a set keyed by ``trial_id``.
+- ``traces/<trial_id>.npz``: the trial's time series (:mod:`drake_disamb.study.outcome`), written
+  (whole, by rename) before its record.
+
+A trial is a pure function of its :class:`~drake_disamb.study.protocol.TrialSpec` and the
+:class:`StudyContext` (:func:`run_trial_job`, run in a worker: a process of a
+``ProcessPoolExecutor`` or a Dask worker), so its record is the same (apart from ``wall_time``)
+whatever the executor, the worker count and the order of completion. Resume: the finished
+``trial_id`` s of ``trials.jsonl`` (read with ``repair=True``: a half-written last line, which a
+kill can leave, is cut and its trial run again) are skipped.
+
+A trial's scenario (:func:`build_scenario`): the embedded task, then the trial's interface,
+paradigm, intended goals, initial mode, start posture (the task's start posture plus the start
+pose's joint offsets), seed, the protocol's duration, mode-selection method and the drawn request
+latency (the contract's ``Scenario.disambiguation.method`` and ``.request_latency``, set only
+where the schema has them: :func:`~drake_disamb.study.protocol.validate_protocol` refuses a
+protocol that needs them on a build without), the subject's overrides of ``Scenario.user.config``
+and last the study's overrides (dotted field paths, ``study ablate``). Built through
+:func:`~drake_disamb.config.scenario_from_dict`: every value passes the scenario's checks.
+
+Subjects come from ``drake_disamb.study.population.draw_subjects(n, seed)``; a build without that
+module runs subjects with no user overrides (today's deterministic simulated user), and
+``study.yaml`` says so (``population: none``).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import copy
+import dataclasses
+import functools
+import os
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from drake_disamb.study.protocol import (
+    Protocol,
+    TrialSpec,
+    expand_trials,
+    protocol_to_dict,
+    schema_support,
+)
+from drake_disamb.study.records import TrialRecord, append_record, read_records
+
+__all__ = [
+    "StudyContext",
+    "StudyMismatch",
+    "StudyPlan",
+    "StudyResult",
+    "TrialOutput",
+    "apply_override",
+    "build_scenario",
+    "check_overrides",
+    "draw_study_subjects",
+    "plan_study",
+    "run_study",
+    "run_trial_job",
+]
+
+STUDY_FORMAT = 1
+"""Version of the ``study.yaml`` layout."""
+
+
+class StudyMismatch(ValueError):
+    """The study folder holds another study (protocol, seed, overrides or subjects differ)."""
+
+
+# -- subjects --------------------------------------------------------------------------------------
+
+
+def draw_study_subjects(n: int, seed: int) -> tuple[list[tuple[str, dict[str, Any]]], str]:
+    """``[(name, user overrides)]`` of ``n`` subjects and the population's provenance.
+
+    With ``drake_disamb.study.population`` (the contract's ``draw_subjects(n, seed)``) the subjects
+    are drawn from it (``"drake_disamb.study.population"``); without it every subject is today's
+    deterministic simulated user (no overrides; ``"none"``).
+    """
+    try:
+        from drake_disamb.study.population import draw_subjects  # type: ignore[import-not-found]
+    except ModuleNotFoundError as exc:
+        if exc.name != "drake_disamb.study.population":
+            raise
+        return [(f"S{i + 1:02d}", {}) for i in range(n)], "none"
+    subjects = draw_subjects(n, seed)
+    return [(s.name, dict(s.user)) for s in subjects], "drake_disamb.study.population"
+
+
+# -- scenarios -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StudyContext:
+    """What every trial of a study shares (plain data, cheap to send to a worker).
+
+    Attributes:
+        protocol: The protocol (plain data, :func:`~drake_disamb.study.protocol.protocol_to_dict`).
+        overrides: Scenario overrides ``{dotted path: value}`` applied to every trial last.
+        subject_users: Subject name -> overrides of ``Scenario.user.config`` fields.
+    """
+
+    protocol: dict[str, Any]
+    overrides: dict[str, Any] = field(default_factory=dict)
+    subject_users: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+@functools.lru_cache(maxsize=8)
+def _task_plain(task: str) -> dict[str, Any]:
+    from drake_disamb.config import load_scenario, scenario_to_dict
+
+    return scenario_to_dict(load_scenario(task))
+
+
+def _field_path_types(path: str) -> Any:
+    """The schema type at the dotted ``path`` of :class:`Scenario` (raises ``ValueError``)."""
+    import typing
+
+    from drake_disamb.config.checks import schema_fields
+    from drake_disamb.config.schema import Scenario
+
+    tp: Any = Scenario
+    walked = "scenario"
+    for part in path.split("."):
+        origin = typing.get_origin(tp)
+        if origin is not None and type(None) in typing.get_args(tp):
+            (tp,) = [a for a in typing.get_args(tp) if a is not type(None)]
+        fields = schema_fields(tp) if isinstance(tp, type) else None
+        if not fields:
+            raise ValueError(f"{path}: {walked} has no fields (only nested settings can be switched)")
+        names = {n: t for n, t, _ in fields}
+        if part not in names:
+            raise ValueError(f"{path}: {walked} has no field {part!r} (known: {', '.join(sorted(names))})")
+        tp = names[part]
+        walked = f"{walked}.{part}"
+    return tp
+
+
+def apply_override(plain: dict[str, Any], path: str, value: Any) -> None:
+    """Set the dotted field ``path`` of plain scenario data to ``value`` (in place)."""
+    _field_path_types(path)
+    node = plain
+    parts = path.split(".")
+    for part in parts[:-1]:
+        if node.get(part) is None:
+            node[part] = {}
+        node = node[part]
+    node[parts[-1]] = copy.deepcopy(value)
+
+
+def check_overrides(overrides: dict[str, Any], option: str = "--switch") -> None:
+    """Check that every dotted path names a scenario field and its value passes the scenario's checks
+    on every embedded task (raises ``ValueError`` naming ``option``, the path and the value)."""
+    from drake_disamb.config import scenario_from_dict
+
+    for path, value in overrides.items():
+        try:
+            _field_path_types(path)
+        except ValueError as exc:
+            raise ValueError(f"{option} {exc}") from None
+        for task in ("reaching", "pouring"):
+            plain = copy.deepcopy(_task_plain(task))
+            apply_override(plain, path, value)
+            try:
+                scenario_from_dict(plain, f"{option} {path}={value!r}")
+            except ValueError as exc:
+                raise ValueError(f"{option} {path}={value!r}: {exc}") from None
+
+
+def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
+    """The validated :class:`~drake_disamb.config.Scenario` of a trial (module docstring)."""
+    from drake_disamb.config import scenario_from_dict
+    from drake_disamb.station.config import MICO_HOME_Q
+
+    protocol = context.protocol
+    plain = copy.deepcopy(_task_plain(spec.task))
+    plain["interface"] = spec.interface
+    plain["paradigm"] = spec.paradigm
+    plain["seed"] = spec.scenario_seed
+    plain["initial_mode"] = spec.initial_mode
+    plain["user"]["goals"] = list(spec.goals)
+    task = _task_protocol(context, spec.task)
+    offsets = task["start_poses"][spec.start_pose].get("joint_offsets")
+    if offsets is not None:
+        base = plain.get("start_joint_positions") or [float(q) for q in MICO_HOME_Q]
+        plain["start_joint_positions"] = [round(float(q + d), 10) for q, d in zip(base, offsets, strict=True)]
+    if protocol.get("duration") is not None:
+        plain["duration"] = float(protocol["duration"])
+    support = schema_support()
+    if support["method"] and spec.paradigm != "manual":
+        plain["disambiguation"]["method"] = protocol["disambiguation_method"]
+    if support["request_latency"]:
+        plain["disambiguation"]["request_latency"] = spec.request_latency or 0.0
+    user = context.subject_users.get(spec.subject, {})
+    config = plain["user"]["config"]
+    for key, value in user.items():
+        if key not in config:
+            raise ValueError(
+                f"subject {spec.subject}.user.{key}: not a field of Scenario.user.config "
+                f"(known: {', '.join(sorted(config))})"
+            )
+        config[key] = value
+    for path, value in context.overrides.items():
+        apply_override(plain, path, value)
+    return scenario_from_dict(plain, f"trial {spec.trial_id}")
+
+
+# -- one trial -------------------------------------------------------------------------------------
+
+
+@dataclass
+class TrialOutput:
+    """What a worker sends back: the record and the trace arrays."""
+
+    record: TrialRecord
+    trace: dict[str, np.ndarray]
+
+
+def run_trial_job(spec: TrialSpec, context: StudyContext) -> TrialOutput:
+    """Run one trial (in a worker) and make its record and trace."""
+    from drake_disamb.study.outcome import record_from_result, trace_arrays
+    from drake_disamb.trial import run_trial
+
+    scenario = build_scenario(spec, context)
+    result = run_trial(scenario, progress=False)
+    trace = trace_arrays(result)
+    task = _task_protocol(context, spec.task)
+    extra = {
+        "order": spec.order,
+        "start_pose_name": task["start_poses"][spec.start_pose]["name"],
+        "request_latency": spec.request_latency,
+        "scenario_seed": spec.scenario_seed,
+    }
+    if context.overrides:
+        extra["overrides"] = dict(context.overrides)
+    record = record_from_result(
+        result,
+        trial_id=spec.trial_id,
+        subject=spec.subject,
+        repetition=spec.repetition,
+        seed=spec.seed,
+        start_pose=spec.start_pose,
+        trace=trace,
+        extra=extra,
+    )
+    return TrialOutput(record=record, trace=trace)
+
+
+# -- the study -------------------------------------------------------------------------------------
+
+
+@dataclass
+class StudyPlan:
+    """A study ready to run: its folder, context and the trials still to run.
+
+    Attributes:
+        out: The study folder.
+        protocol: The protocol.
+        seed: The study seed.
+        context: Shared by every trial.
+        specs: Every trial of the protocol (session order).
+        pending: The trials without a record yet.
+        finished: The records already in ``trials.jsonl``.
+        population: Where the subjects came from (:func:`draw_study_subjects`).
+    """
+
+    out: Path
+    protocol: Protocol
+    seed: int
+    context: StudyContext
+    specs: list[TrialSpec]
+    pending: list[TrialSpec]
+    finished: list[TrialRecord]
+    population: str
+
+    @property
+    def records_path(self) -> Path:
+        return self.out / "trials.jsonl"
+
+    @property
+    def traces_dir(self) -> Path:
+        return self.out / "traces"
+
+
+def _study_header(
+    protocol: Protocol, seed: int, overrides: dict[str, Any], subjects: list, population: str
+) -> dict:
+    from drake_disamb import __version__
+
+    return {
+        "format": STUDY_FORMAT,
+        "package": "drake-disamb",
+        "version": __version__,
+        "seed": seed,
+        "population": population,
+        "subjects": [{"name": n, "user": u} for n, u in subjects],
+        "overrides": dict(overrides),
+        "protocol": protocol_to_dict(protocol),
+    }
+
+
+_IDENTITY = ("format", "seed", "population", "subjects", "overrides", "protocol")
+
+
+def _check_header(path: Path, header: dict[str, Any]) -> None:
+    try:
+        old = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError, UnicodeDecodeError) as exc:
+        raise StudyMismatch(f"{path}: cannot read the existing study's description ({exc})") from None
+    if not isinstance(old, dict):
+        raise StudyMismatch(f"{path}: not a study description (expected a mapping)")
+    for key in _IDENTITY:
+        if old.get(key) != header[key]:
+            raise StudyMismatch(
+                f"{path}: this folder holds another study ({key} differs: {_short(old.get(key))} there, "
+                f"{_short(header[key])} now); choose another --out, or rerun with the same protocol and seed"
+            )
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
+def plan_study(
+    out: str | Path,
+    protocol: Protocol,
+    seed: int,
+    overrides: dict[str, Any] | None = None,
+    *,
+    check_scenarios: bool = True,
+) -> StudyPlan:
+    """Prepare (or resume) the study in ``out``; nothing runs yet.
+
+    Checks, before any trial: ``out`` is a writable folder, the overrides and every condition's
+    scenario are valid (one scenario per task, interface, paradigm and start pose, and one per
+    subject), and an existing ``study.yaml`` describes the same study. Then writes ``study.yaml``
+    (when new), creates ``traces/``, repairs ``trials.jsonl`` and lists the pending trials.
+
+    Raises:
+        ValueError: naming the option, field or path; :class:`StudyMismatch` for another study.
+    """
+    from drake_disamb.commands._outputs import check_output_dir
+
+    overrides = dict(overrides or {})
+    out = check_output_dir(out, "--out")
+    if overrides:
+        check_overrides(overrides)
+    subjects, population = draw_study_subjects(protocol.subjects, seed)
+    specs = expand_trials(protocol, seed, [n for n, _ in subjects])
+    context = StudyContext(
+        protocol=protocol_to_dict(protocol), overrides=overrides, subject_users={n: u for n, u in subjects}
+    )
+    if check_scenarios:
+        _check_conditions(specs, context)
+    header = _study_header(protocol, seed, overrides, subjects, population)
+    study_yaml = out / "study.yaml"
+    if study_yaml.exists():
+        _check_header(study_yaml, header)
+    else:
+        tmp = out / ".study.yaml.tmp"
+        tmp.write_text(yaml.safe_dump(header, sort_keys=False), encoding="utf-8")
+        tmp.replace(study_yaml)
+    (out / "traces").mkdir(exist_ok=True)
+    for stale in (out / "traces").glob(".*.npz.tmp"):  # a trace being written when a run was killed
+        stale.unlink(missing_ok=True)
+    records_path = out / "trials.jsonl"
+    finished = read_records(records_path, repair=True) if records_path.exists() else []
+    known = {s.trial_id for s in specs}
+    stray = [r.trial_id for r in finished if r.trial_id not in known]
+    if stray:
+        raise StudyMismatch(f"{records_path}: records of trials this study does not have: {stray[:5]}")
+    done = {r.trial_id for r in finished}
+    pending = [s for s in specs if s.trial_id not in done]
+    return StudyPlan(out, protocol, seed, context, specs, pending, finished, population)
+
+
+def _task_protocol(context: StudyContext, task: str) -> dict[str, Any]:
+    return next(t for t in context.protocol["tasks"] if t["task"] == task)
+
+
+def _check_conditions(specs: list[TrialSpec], context: StudyContext) -> None:
+    """Build one scenario per (task, interface, paradigm, start pose) and one per subject."""
+    seen: set[Any] = set()
+    for spec in specs:
+        for pose in range(len(_task_protocol(context, spec.task)["start_poses"])):
+            key = (spec.task, spec.interface, spec.paradigm, pose)
+            if key not in seen:
+                seen.add(key)
+                build_scenario(dataclasses.replace(spec, start_pose=pose), context)
+        if spec.subject not in seen:
+            seen.add(spec.subject)
+            build_scenario(spec, context)
+
+
+@dataclass
+class StudyResult:
+    """Outcome of :func:`run_study`.
+
+    Attributes:
+        ran: Records of the trials run now.
+        skipped: Trials already finished before (resume).
+        errors: ``(trial_id, message)`` of trials that raised (no record; a rerun retries them).
+        wall_time: Seconds :func:`run_study` took.
+    """
+
+    ran: list[TrialRecord]
+    skipped: int
+    errors: list[tuple[str, str]]
+    wall_time: float
+
+
+def run_study(
+    plan: StudyPlan,
+    executor: cf.Executor,
+    on_result: Callable[[TrialRecord | None, str | None], None] | None = None,
+) -> StudyResult:
+    """Run the plan's pending trials on ``executor``; the parent writes each result as it completes.
+
+    Args:
+        plan: From :func:`plan_study`.
+        executor: Any ``concurrent.futures.Executor`` (a process pool, Dask's ``get_executor()``).
+        on_result: Called after each trial with its record (or ``None`` and the error message).
+    """
+    start = time.perf_counter()
+    futures = {executor.submit(run_trial_job, spec, plan.context): spec for spec in plan.pending}
+    ran: list[TrialRecord] = []
+    errors: list[tuple[str, str]] = []
+    try:
+        for future in cf.as_completed(futures):
+            spec = futures[future]
+            try:
+                output: TrialOutput = future.result()
+            except Exception as exc:  # a trial that raised: reported, no record, retried by a rerun
+                message = f"{type(exc).__name__}: {exc}"
+                errors.append((spec.trial_id, message))
+                if on_result is not None:
+                    on_result(None, f"{spec.trial_id}: {message}")
+                continue
+            write_output(plan, output)
+            ran.append(output.record)
+            if on_result is not None:
+                on_result(output.record, None)
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+    return StudyResult(ran, len(plan.specs) - len(plan.pending), errors, time.perf_counter() - start)
+
+
+def write_output(plan: StudyPlan, output: TrialOutput) -> None:
+    """Write a trial's trace, then append its record."""
+    from drake_disamb.study.outcome import save_trace
+
+    save_trace(plan.traces_dir / f"{output.record.trial_id}.npz", output.trace)
+    append_record(plan.records_path, output.record)
+
+
+def records_by_id(
+    records: Iterable[TrialRecord], ignore: tuple[str, ...] = ("wall_time",)
+) -> dict[str, dict]:
+    """Records as ``{trial_id: fields}`` without the ``ignore`` fields, for comparing studies."""
+    out = {}
+    for r in records:
+        data = dataclasses.asdict(r)
+        for name in ignore:
+            data.pop(name, None)
+        out[r.trial_id] = data
+    return out
+
+
+def default_workers() -> int:
+    """The process pool's default size: the core count."""
+    return os.cpu_count() or 1

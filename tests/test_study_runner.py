@@ -1,0 +1,447 @@
+"""The study protocol and runner: protocol files and their errors, the trials' expansion, records
+identical whatever the executor (1 or 2 processes, a Dask LocalCluster), resume after SIGKILL,
+``study run --quick`` end to end, ``study ablate``, bad input failing before any trial, an
+unreachable scheduler failing fast, and a person's trial recorded by ``demo --live --record``.
+
+The paper's protocol needs the Automatic paradigm and the request latency (the methods worker's
+scenario fields); on a build whose schema lacks them the tests run the protocol without them
+(:func:`compatible_protocol_data`), and the default protocol's error is itself tested.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from support import SRC, cli_process, interrupt
+
+from drake_disamb.study import protocol as P
+from drake_disamb.study.outcome import TRACE_ARRAYS, assistance_onset
+from drake_disamb.study.records import read_records
+from drake_disamb.study.runner import plan_study, records_by_id, run_study
+
+
+def compatible_protocol_data() -> dict:
+    """The paper's protocol as plain data, less what this build's scenario schema cannot run."""
+    data = yaml.safe_load(P.default_protocol_text())
+    support = P.schema_support()
+    data["paradigms"] = [p for p in data["paradigms"] if p["name"] in support["paradigms"]]
+    if not support["request_latency"]:
+        data["request_latency"] = None
+    return data
+
+
+def tiny_protocol_data(duration: float = 2.5) -> dict:
+    """1 subject, both interfaces, reaching, one trial per paradigm, trials cut at ``duration`` s."""
+    data = compatible_protocol_data()
+    data.update(subjects=1, duration=duration)
+    data["tasks"] = [t for t in data["tasks"] if t["task"] == "reaching"]
+    for p in data["paradigms"]:
+        p["trials"] = 1
+    return data
+
+
+def write_yaml(path: Path, data: dict) -> Path:
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    return path
+
+
+def cli(*argv: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    return subprocess.run(
+        [sys.executable, "-m", "drake_disamb.cli", *argv],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+    )
+
+
+def run_local(out: Path, data: dict, workers: int, seed: int = 3) -> list:
+    plan = plan_study(out, P.protocol_from_dict(data), seed)
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        result = run_study(plan, pool)
+    assert not result.errors
+    return read_records(out / "trials.jsonl")
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
+    """The tiny protocol run with 1 worker process: the records every other run must equal."""
+    out = tmp_path_factory.mktemp("reference")
+    return out, records_by_id(run_local(out, tiny_protocol_data(), workers=1))
+
+
+# -- protocol ---------------------------------------------------------------------------------------
+
+
+def test_default_protocol_is_the_papers_or_names_what_the_schema_lacks() -> None:
+    support = P.schema_support()
+    if "automatic" in support["paradigms"] and support["request_latency"]:
+        protocol = P.default_protocol()
+        assert protocol.n_trials == 416 and protocol.request_latency == [2.0, 2.5]
+    else:
+        with pytest.raises(ValueError, match=r"protocol\.(paradigms\[2\]\.name|request_latency)"):
+            P.default_protocol()
+    data = yaml.safe_load(P.default_protocol_text())
+    assert data["subjects"] == 8 and data["interfaces"] == ["joystick", "head_array"]
+    assert {p["name"]: p["trials"] for p in data["paradigms"]} == {
+        "manual": 3,
+        "disambiguation": 5,
+        "automatic": 5,
+    }
+    assert [len(t["start_poses"]) for t in data["tasks"]] == [3, 3]
+    assert data["request_latency"] == [2.0, 2.5] and data["disambiguation_method"] == "algorithm1"
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            {"interfaces": ["joystick", "sip_puff"]},
+            r"protocol\.interfaces\[1\]: expected one of .*'sip_puff'",
+        ),
+        (
+            {"paradigms": [{"name": "telepathy", "trials": 1}]},
+            r"protocol\.paradigms\[0\]\.name: .*'telepathy'",
+        ),
+        (
+            {"paradigms": [{"name": "manual", "trials": "five"}]},
+            r"protocol\.paradigms\[0\]\.trials: .*'five'",
+        ),
+        ({"tasks": [{"task": "juggling"}]}, r"protocol\.tasks\[0\]\.task: expected one of .*'juggling'"),
+        ({"disambiguation_method": "coin_flip"}, r"protocol\.disambiguation_method: .*'coin_flip'"),
+        ({"subjects": 0}, r"protocol\.subjects: .*0"),
+        ({"colour": "red"}, r"protocol\.colour: unknown key"),
+        ({"request_latency": [2.5, 2.0]}, r"protocol\.request_latency"),
+    ],
+)
+def test_bad_protocol_names_the_field(change: dict, message: str) -> None:
+    data = compatible_protocol_data()
+    data.update(change)
+    with pytest.raises(ValueError, match=message):
+        P.protocol_from_dict(data)
+
+
+def test_malformed_protocol_file_names_the_file_and_line(tmp_path: Path) -> None:
+    path = tmp_path / "p.yaml"
+    path.write_text("subjects: 8\ninterfaces: [joystick\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"p\.yaml.*line"):
+        P.load_protocol(path)
+    with pytest.raises(ValueError, match=r"--protocol: no such file"):
+        P.load_protocol(tmp_path / "missing.yaml")
+
+
+def test_expansion_is_deterministic_counterbalanced_and_independent_per_trial() -> None:
+    protocol = P.protocol_from_dict(compatible_protocol_data())
+    a, b = P.expand_trials(protocol, 7), P.expand_trials(protocol, 7)
+    assert a == b and len(a) == protocol.n_trials
+    assert len({s.trial_id for s in a}) == len(a)
+    assert P.expand_trials(protocol, 8) != a
+    # a trial's draws depend on its seed alone: the same trial in a protocol with fewer subjects is equal
+    small = P.expand_trials(P.protocol_from_dict({**compatible_protocol_data(), "subjects": 1}), 7)
+    by_id = {s.trial_id: s for s in a}
+    assert all(by_id[s.trial_id].seed == s.seed and by_id[s.trial_id].goals == s.goals for s in small)
+    # every draw in range; the draws vary
+    assert {s.start_pose for s in a} == {0, 1, 2}
+    assert len({s.goals for s in a if s.task == "reaching"}) == 5
+    assert len({s.initial_mode for s in a if s.interface == "head_array"}) == 6
+    # counterbalanced: the first block differs between subjects, orders are 0..n-1 per subject
+    firsts = {(s.interface, s.paradigm) for s in a if s.order == 0}
+    assert len(firsts) > 1
+    for subject in {s.subject for s in a}:
+        assert sorted(s.order for s in a if s.subject == subject) == list(range(len(a) // protocol.subjects))
+
+
+def test_williams_square_balances_first_order_carry_over() -> None:
+    for n in (2, 3, 4):
+        rows = P.williams_rows(n)
+        pairs = [(r[i], r[i + 1]) for r in rows for i in range(n - 1)]
+        counts = {p: pairs.count(p) for p in set(pairs)}
+        assert len(counts) == n * (n - 1) and len(set(counts.values())) == 1
+        assert all(sorted(r) == list(range(n)) for r in rows)
+
+
+def test_assistance_onset_on_a_hand_made_trace() -> None:
+    t = np.arange(8) * 0.5
+    belief = np.array(
+        [[0.6, 0.4], [0.3, 0.7], [0.6, 0.4], [0.6, 0.4], [0.6, 0.4], [0.6, 0.4], [0.7, 0.3], [0.8, 0.2]]
+    )
+    alpha = np.array([0.1, 0.1, 0.0, 0.2, 0.0, 0.3, 0.3, 0.4])
+    u_h = np.zeros((8, 6))
+    u_h[[0, 1, 2, 3, 5, 6], 0] = 0.1  # not commanding at samples 4 and 7 (alpha 0 there is no lapse)
+    trace = {"t": t, "belief": belief, "alpha": alpha, "u_h": u_h, "stage": np.zeros(8)}
+    assert assistance_onset(trace, [0], [2]) == [1.5]  # sample 2 had alpha 0 while commanding
+    assert assistance_onset(trace, [1], [2]) == [None]
+    # two stages, a task-wide belief of 2 + 2 goals: stage 1's intended goal 1 is belief index 3
+    trace2 = {
+        **trace,
+        "belief": np.tile([0.1, 0.1, 0.2, 0.6], (8, 1)),
+        "stage": np.r_[np.zeros(4), np.ones(4)],
+    }
+    assert assistance_onset(trace2, [0, 1], [2, 2]) == [None, 2.5]
+
+
+# -- running ----------------------------------------------------------------------------------------
+
+
+def test_two_workers_give_the_records_of_one(reference: tuple[Path, dict], tmp_path: Path) -> None:
+    ref_dir, ref = reference
+    assert len(ref) == 2 * len(compatible_protocol_data()["paradigms"])
+    assert records_by_id(run_local(tmp_path, tiny_protocol_data(), workers=2)) == ref
+    for trial_id in ref:
+        a = np.load(ref_dir / "traces" / f"{trial_id}.npz")
+        b = np.load(tmp_path / "traces" / f"{trial_id}.npz")
+        assert set(a.files) == set(TRACE_ARRAYS)
+        for name in TRACE_ARRAYS:
+            np.testing.assert_array_equal(a[name], b[name])
+    record = next(iter(ref.values()))
+    T = len(a["t"])
+    assert a["belief"].shape == (T, 5) and a["u_h"].shape == (T, 6) and a["ee_pose"].shape == (T, 7)
+    assert a["alpha"].shape == a["mode"].shape == (T,)
+    assert record["source"] == "simulated" and record["extra"]["start_pose_name"]
+
+
+def test_dask_local_cluster_gives_the_records_of_a_local_run(
+    reference: tuple[Path, dict], tmp_path: Path
+) -> None:
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        data = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+        res = cli(
+            "study", "run", "--out", str(tmp_path / "dask"), "--protocol", str(data), "--seed", "3",
+            "--scheduler", cluster.scheduler_address, "--quiet",
+        )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert "Dask scheduler" in res.stdout
+    assert records_by_id(read_records(tmp_path / "dask" / "trials.jsonl")) == reference[1]
+
+
+def test_sigkill_then_rerun_completes_without_repeating_a_trial(
+    reference: tuple[Path, dict], tmp_path: Path
+) -> None:
+    out = tmp_path / "killed"
+    protocol = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+    argv = ["study", "run", "--out", str(out), "--protocol", str(protocol), "--seed", "3", "--workers", "1"]
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "drake_disamb.cli", *argv],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+        start_new_session=True,  # its worker processes too
+    )
+    records = out / "trials.jsonl"
+    try:
+        end = time.monotonic() + 180
+        while time.monotonic() < end and not (records.exists() and records.read_bytes().count(b"\n") >= 1):
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    before = read_records(records, repair=False)
+    assert 1 <= len(before) < len(reference[1])
+    with open(records, "ab") as f:  # what a kill during a write leaves
+        f.write(b'{"trial_id":"S01-head_array-reaching-manual-r0","subj')
+    res = cli(*argv)
+    assert res.returncode == 0, res.stderr
+    assert f"({len(before)} already done)" in res.stdout
+    after = read_records(records)
+    assert records_by_id(after) == reference[1]
+    # the finished trials were not run again: their records (wall_time included) are unchanged
+    by_id = {r.trial_id: r for r in after}
+    assert all(by_id[r.trial_id] == r for r in before)
+
+
+def test_quick_study_end_to_end(tmp_path: Path) -> None:
+    """``study run --quick`` (the paper's protocol less what the schema lacks): under 2 minutes."""
+    protocol = write_yaml(tmp_path / "protocol.yaml", compatible_protocol_data())
+    start = time.monotonic()
+    res = cli(
+        "study", "run", "--quick", "--out", str(tmp_path / "q"), "--protocol", str(protocol), "--workers", "2"
+    )
+    elapsed = time.monotonic() - start
+    assert res.returncode == 0, res.stderr
+    records = read_records(tmp_path / "q" / "trials.jsonl")
+    n_paradigms = len(compatible_protocol_data()["paradigms"])
+    assert len(records) == 2 * 2 * n_paradigms
+    assert {r.subject for r in records} == {"S01", "S02"} and {r.task for r in records} == {"reaching"}
+    assert {(r.interface, r.paradigm) for r in records} == {
+        (i, p["name"]) for i in ("joystick", "head_array") for p in compatible_protocol_data()["paradigms"]
+    }
+    for r in records:
+        assert (tmp_path / "q" / "traces" / f"{r.trial_id}.npz").is_file()
+        assert r.button_presses == r.mode_switches + r.requests
+        assert r.disambiguation_method == (None if r.paradigm == "manual" else "algorithm1")
+    study = yaml.safe_load((tmp_path / "q" / "study.yaml").read_text())
+    assert study["seed"] == 0 and study["protocol"]["subjects"] == 2 and study["version"]
+    assert "trials 8/8" in res.stdout or f"trials {len(records)}/{len(records)}" in res.stdout
+    assert elapsed < 120, f"study run --quick took {elapsed:.0f} s"
+    # rerunning a finished study runs nothing; another seed in the same folder is refused
+    res = cli(
+        "study", "run", "--quick", "--out", str(tmp_path / "q"), "--protocol", str(protocol), "--workers", "1"
+    )
+    assert res.returncode == 0 and "0 trials to run" in res.stdout, res.stderr
+    res = cli(
+        "study", "run", "--quick", "--out", str(tmp_path / "q"), "--protocol", str(protocol), "--seed", "1"
+    )
+    assert res.returncode == 2 and "another study (seed differs" in res.stderr
+
+
+def test_ablate_runs_one_study_per_setting(tmp_path: Path) -> None:
+    data = tiny_protocol_data(duration=1.0)
+    data["interfaces"] = ["head_array"]
+    data["paradigms"] = [{"name": "manual", "trials": 1}]
+    protocol = write_yaml(tmp_path / "protocol.yaml", data)
+    out = tmp_path / "abl"
+    res = cli(
+        "study", "ablate", "--out", str(out), "--protocol", str(protocol), "--workers", "1",
+        "--switch", "user.config.reaction_time=0.3,0.5",
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    manifest = json.loads((out / "ablation.json").read_text())
+    assert manifest == {
+        "format": 1,
+        "settings": [
+            {"name": f"user.config.reaction_time={v}", "dir": f"user.config.reaction_time={v}",
+             "overrides": {"user.config.reaction_time": float(v)}}
+            for v in ("0.3", "0.5")
+        ],
+    }  # fmt: skip
+    for s in manifest["settings"]:
+        (record,) = read_records(out / s["dir"] / "trials.jsonl")
+        assert record.extra["overrides"] == s["overrides"]
+        assert yaml.safe_load((out / s["dir"] / "study.yaml").read_text())["overrides"] == s["overrides"]
+
+
+# -- bad input ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("paradigm", r"protocol\.paradigms\[0\]\.name: .*'telepathy'"),
+        ("interface", r"protocol\.interfaces\[0\]: .*'sip_puff'"),
+        ("task", r"protocol\.tasks\[0\]\.task: .*'juggling'"),
+        ("method", r"protocol\.disambiguation_method: .*'coin_flip'"),
+        ("malformed", r"protocol\.yaml.*line"),
+        ("out_is_a_file", r"--out: .* is a file"),
+        ("switch_path", r"--switch inference\.agreemnt: .*no field 'agreemnt'"),
+        ("switch_value", r"--switch user\.config\.reaction_time='slow'"),
+    ],
+)
+def test_bad_input_fails_before_any_trial(case: str, message: str, tmp_path: Path) -> None:
+    data = tiny_protocol_data()
+    change = {
+        "paradigm": {"paradigms": [{"name": "telepathy", "trials": 1}]},
+        "interface": {"interfaces": ["sip_puff"]},
+        "task": {"tasks": [{"task": "juggling"}]},
+        "method": {"disambiguation_method": "coin_flip"},
+    }.get(case, {})
+    data.update(change)
+    protocol = write_yaml(tmp_path / "protocol.yaml", data)
+    if case == "malformed":
+        protocol.write_text("subjects: [1\n", encoding="utf-8")
+    out = tmp_path / "out"
+    if case == "out_is_a_file":
+        out.write_text("not a folder")
+    argv = ["study", "run", "--out", str(out), "--protocol", str(protocol)]
+    if case.startswith("switch"):
+        switch = "inference.agreemnt=dot" if case == "switch_path" else "user.config.reaction_time=slow"
+        argv = ["study", "ablate", "--out", str(out), "--protocol", str(protocol), "--switch", switch]
+    res = cli(*argv)
+    assert res.returncode == 2, res.stderr
+    assert "Traceback" not in res.stderr
+    assert __import__("re").search(message, res.stderr), res.stderr
+    assert not list(tmp_path.rglob("trials.jsonl"))
+
+
+def test_unreachable_scheduler_fails_fast(tmp_path: Path) -> None:
+    protocol = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+    start = time.monotonic()
+    res = cli(
+        "study", "run", "--out", str(tmp_path / "o"), "--protocol", str(protocol),
+        "--scheduler", "tcp://127.0.0.1:9",
+    )  # fmt: skip
+    elapsed = time.monotonic() - start
+    assert (
+        res.returncode == 2
+        and "--scheduler: cannot reach a Dask scheduler at 'tcp://127.0.0.1:9'" in res.stderr
+    )
+    assert elapsed < 20, f"took {elapsed:.0f} s"  # the 5 s timeout plus the interpreter's start
+    assert not (tmp_path / "o" / "trials.jsonl").exists()
+
+
+# -- a person's trial --------------------------------------------------------------------------------
+
+
+def test_demo_live_record_appends_a_human_record(tmp_path: Path) -> None:
+    rec = tmp_path / "people"
+    for _ in range(2):
+        proc = cli_process(
+            "demo", "--quiet", "--live", "--record", str(rec), "--subject", "P01",
+            "--out", str(tmp_path / "demo"),
+        )  # fmt: skip
+        interrupt(proc, signal.SIGINT, after=1.5)
+    records = read_records(rec / "trials.jsonl")
+    assert [r.trial_id for r in records] == [
+        "P01-head_array-reaching-disambiguation-h0",
+        "P01-head_array-reaching-disambiguation-h1",
+    ]
+    for r in records:
+        assert r.source == "human" and r.subject == "P01" and r.wall_time == 0.0 and r.seed is None
+        assert r.extra["interrupted"] is True and r.done is False and r.duration > 0.5
+        trace = np.load(rec / "traces" / f"{r.trial_id}.npz")
+        assert set(trace.files) == set(TRACE_ARRAYS) and len(trace["t"]) > 10
+
+
+def test_demo_record_needs_live_and_a_subject(tmp_path: Path) -> None:
+    res = cli(
+        "demo", "--no-meshcat", "--record", str(tmp_path), "--subject", "P01", "--out", str(tmp_path / "d")
+    )
+    assert res.returncode == 2 and "--record records a person's trial: it needs --live" in res.stderr
+    res = cli("demo", "--live", "--record", str(tmp_path), "--subject", "a/b", "--out", str(tmp_path / "d"))
+    assert res.returncode == 2 and "--subject" in res.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("task", ["reaching", "pouring"])
+def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
+    """The protocol's start poses pass the scenario's start-posture checks (building the scenario)
+    and a trial from each succeeds (head array, disambiguation, the first goal of every stage)."""
+    import dataclasses
+
+    from drake_disamb.study.runner import StudyContext, build_scenario
+    from drake_disamb.trial import run_trial
+
+    data = compatible_protocol_data()
+    data["paradigms"] = [{"name": "disambiguation", "trials": 1}]
+    protocol = P.protocol_from_dict(data)
+    context = StudyContext(protocol=P.protocol_to_dict(protocol))
+    spec = next(s for s in P.expand_trials(protocol, 0) if s.task == task)
+    postures = []
+    for pose in range(3):
+        one = dataclasses.replace(
+            spec, interface="head_array", start_pose=pose, initial_mode=0, goals=(0,) * len(spec.goals)
+        )
+        scenario = build_scenario(one, context)
+        postures.append(scenario.start_joint_positions)
+        result = run_trial(scenario, progress=False)
+        assert result.success, (
+            f"{task} start pose {pose}: reached {result.reached_goal_names} at {result.time} s"
+        )
+    assert len({tuple(p) if p else None for p in postures}) == 3
