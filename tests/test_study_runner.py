@@ -32,13 +32,8 @@ from drake_disamb.study.runner import plan_study, records_by_id, run_study
 
 
 def compatible_protocol_data() -> dict:
-    """The paper's protocol as plain data, less what this build's scenario schema cannot run."""
-    data = yaml.safe_load(P.default_protocol_text())
-    support = P.schema_support()
-    data["paradigms"] = [p for p in data["paradigms"] if p["name"] in support["paradigms"]]
-    if not support["request_latency"]:
-        data["request_latency"] = None
-    return data
+    """The paper's protocol as plain data."""
+    return yaml.safe_load(P.default_protocol_text())
 
 
 def tiny_protocol_data(duration: float = 2.5) -> dict:
@@ -85,14 +80,9 @@ def reference(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
 # -- protocol ---------------------------------------------------------------------------------------
 
 
-def test_default_protocol_is_the_papers_or_names_what_the_schema_lacks() -> None:
-    support = P.schema_support()
-    if "automatic" in support["paradigms"] and support["request_latency"]:
-        protocol = P.default_protocol()
-        assert protocol.n_trials == 416 and protocol.request_latency == [2.0, 2.5]
-    else:
-        with pytest.raises(ValueError, match=r"protocol\.(paradigms\[2\]\.name|request_latency)"):
-            P.default_protocol()
+def test_default_protocol_is_the_papers() -> None:
+    protocol = P.default_protocol()
+    assert protocol.n_trials == 416 and protocol.request_latency == [2.0, 2.5]
     data = yaml.safe_load(P.default_protocol_text())
     assert data["subjects"] == 8 and data["interfaces"] == ["joystick", "head_array"]
     assert {p["name"]: p["trials"] for p in data["paradigms"]} == {

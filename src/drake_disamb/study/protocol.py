@@ -43,6 +43,7 @@ import yaml
 from pydrake.common.yaml import yaml_load_typed
 
 from drake_disamb.config.checks import check_data, cut, fmt
+from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
 from drake_disamb.yaml_safety import check_yaml_text, decode_yaml_bytes, read_yaml_file, yaml_error_message
 
 __all__ = [
@@ -60,11 +61,10 @@ __all__ = [
     "protocol_from_yaml",
     "protocol_to_dict",
     "quick_protocol",
-    "schema_support",
     "validate_protocol",
 ]
 
-METHODS: tuple[str, ...] = ("algorithm1", "entropy", "kl")
+METHODS: tuple[str, ...] = MODE_SELECTION_METHODS
 """Mode-selection methods of the contract's ``Scenario.disambiguation.method``."""
 
 COUNTERBALANCE: tuple[str, ...] = ("rotation", "none")
@@ -144,32 +144,11 @@ class Protocol:
         return self.subjects * per_subject
 
 
-# -- what this build's scenario schema supports ----------------------------------------------------
-
-
-def schema_support() -> dict[str, Any]:
-    """What the scenario schema of this build accepts, for the protocol's checks.
-
-    ``paradigms``: the accepted ``Scenario.paradigm`` values; ``method``: whether
-    ``Scenario.disambiguation.method`` exists; ``request_latency``: whether
-    ``Scenario.disambiguation.request_latency`` exists.
-    """
-    from drake_disamb.config import schema
-
-    names = {f.name for f in dataclasses.fields(schema.DisambiguationSpec)}
-    return {
-        "paradigms": tuple(schema.PARADIGMS),
-        "method": "method" in names,
-        "request_latency": "request_latency" in names,
-    }
-
-
 def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
     """Check the protocol's values; returns it. Raises ``ValueError`` naming the field and value."""
-    from drake_disamb.config.schema import INTERFACES
+    from drake_disamb.config.schema import INTERFACES, PARADIGMS
     from drake_disamb.config.yaml_io import EMBEDDED_TASKS
 
-    support = schema_support()
     if not (isinstance(protocol.subjects, int) and 1 <= protocol.subjects <= 999):
         raise ValueError(f"{name}.subjects: expected an integer in [1, 999], got {fmt(protocol.subjects)}")
     if not protocol.interfaces:
@@ -197,16 +176,10 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
         raise ValueError(f"{name}.tasks: a task is listed twice: {[t.task for t in protocol.tasks]}")
     if not protocol.paradigms:
         raise ValueError(f"{name}.paradigms: expected at least one paradigm, got []")
-    known = ("manual", "disambiguation", "automatic")
     for i, p in enumerate(protocol.paradigms):
-        if p.name not in known:
+        if p.name not in PARADIGMS:
             raise ValueError(
-                f"{name}.paradigms[{i}].name: expected one of {', '.join(known)}, got {fmt(p.name)}"
-            )
-        if p.name not in support["paradigms"]:
-            raise ValueError(
-                f"{name}.paradigms[{i}].name: {p.name!r} is not a paradigm of this build's scenario schema "
-                f"(Scenario.paradigm accepts {', '.join(support['paradigms'])}); leave it out of the protocol"
+                f"{name}.paradigms[{i}].name: expected one of {', '.join(PARADIGMS)}, got {fmt(p.name)}"
             )
         if not (isinstance(p.trials, int) and 1 <= p.trials <= 1000):
             raise ValueError(
@@ -221,23 +194,11 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
             f"{name}.disambiguation_method: expected one of {', '.join(METHODS)}, "
             f"got {fmt(protocol.disambiguation_method)}"
         )
-    if protocol.disambiguation_method != "algorithm1" and not support["method"]:
-        raise ValueError(
-            f"{name}.disambiguation_method: {protocol.disambiguation_method!r} needs "
-            "Scenario.disambiguation.method, which this build's scenario schema does not have "
-            "(Algorithm 1 only)"
-        )
     lat = protocol.request_latency
     if lat is not None:
         if len(lat) != 2 or not (0.0 <= lat[0] <= lat[1] <= 60.0):
             raise ValueError(
                 f"{name}.request_latency: expected [min, max] s with 0 <= min <= max <= 60, got {lat}"
-            )
-        if not support["request_latency"] and lat[1] > 0.0:
-            raise ValueError(
-                f"{name}.request_latency: {lat} needs Scenario.disambiguation.request_latency, which this "
-                "build's scenario schema does not have yet; set request_latency: null (requests answered "
-                "in the same tick)"
             )
     if protocol.duration is not None and not 0.0 < protocol.duration <= 3600.0:
         raise ValueError(

@@ -22,15 +22,13 @@ kill can leave, is cut and its trial run again) are skipped.
 A trial's scenario (:func:`build_scenario`): the embedded task, then the trial's interface,
 paradigm, intended goals, initial mode, start posture (the task's start posture plus the start
 pose's joint offsets), seed, the protocol's duration, mode-selection method and the drawn request
-latency (the contract's ``Scenario.disambiguation.method`` and ``.request_latency``, set only
-where the schema has them: :func:`~drake_disamb.study.protocol.validate_protocol` refuses a
-protocol that needs them on a build without), the subject's overrides of ``Scenario.user.config``
-and last the study's overrides (dotted field paths, ``study ablate``). Built through
+latency (``Scenario.disambiguation.method`` and ``.request_latency``), the subject's overrides
+of ``Scenario.user.config`` and last the study's overrides (dotted field paths, ``study
+ablate``). Built through
 :func:`~drake_disamb.config.scenario_from_dict`: every value passes the scenario's checks.
 
-Subjects come from ``drake_disamb.study.population.draw_subjects(n, seed)``; a build without that
-module runs subjects with no user overrides (today's deterministic simulated user), and
-``study.yaml`` says so (``population: none``).
+Subjects come from :func:`drake_disamb.study.population.draw_subjects` (``study.yaml`` names the
+population).
 """
 
 from __future__ import annotations
@@ -49,12 +47,12 @@ from typing import Any
 import numpy as np
 import yaml
 
+from drake_disamb.study.population import draw_subjects
 from drake_disamb.study.protocol import (
     Protocol,
     TrialSpec,
     expand_trials,
     protocol_to_dict,
-    schema_support,
 )
 from drake_disamb.study.records import TrialRecord, append_record, read_records
 
@@ -87,16 +85,8 @@ class StudyMismatch(ValueError):
 def draw_study_subjects(n: int, seed: int) -> tuple[list[tuple[str, dict[str, Any]]], str]:
     """``[(name, user overrides)]`` of ``n`` subjects and the population's provenance.
 
-    With ``drake_disamb.study.population`` (the contract's ``draw_subjects(n, seed)``) the subjects
-    are drawn from it (``"drake_disamb.study.population"``); without it every subject is today's
-    deterministic simulated user (no overrides; ``"none"``).
+    The subjects are drawn by :func:`drake_disamb.study.population.draw_subjects`.
     """
-    try:
-        from drake_disamb.study.population import draw_subjects  # type: ignore[import-not-found]
-    except ModuleNotFoundError as exc:
-        if exc.name != "drake_disamb.study.population":
-            raise
-        return [(f"S{i + 1:02d}", {}) for i in range(n)], "none"
     subjects = draw_subjects(n, seed)
     return [(s.name, dict(s.user)) for s in subjects], "drake_disamb.study.population"
 
@@ -200,11 +190,9 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
         plain["start_joint_positions"] = [round(float(q + d), 10) for q, d in zip(base, offsets, strict=True)]
     if protocol.get("duration") is not None:
         plain["duration"] = float(protocol["duration"])
-    support = schema_support()
-    if support["method"] and spec.paradigm != "manual":
+    if spec.paradigm != "manual":
         plain["disambiguation"]["method"] = protocol["disambiguation_method"]
-    if support["request_latency"]:
-        plain["disambiguation"]["request_latency"] = spec.request_latency or 0.0
+    plain["disambiguation"]["request_latency"] = spec.request_latency or 0.0
     user = context.subject_users.get(spec.subject, {})
     config = plain["user"]["config"]
     for key, value in user.items():
