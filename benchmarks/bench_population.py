@@ -5,10 +5,10 @@ Runs ``--trials`` trials per condition (interface x task x paradigm) with subjec
 :func:`drake_disamb.study.population.draw_subjects`, each with a random intended goal and initial
 mode, through :func:`drake_disamb.trial.run_trial` (the embedded reaching and pouring scenarios,
 ``duration`` raised to ``--duration``), and prints their means beside the means of the authors'
-logs (:func:`drake_disamb.study.calibration.human_condition_means`, computed the authors' way)
-and the ratio simulated / human; the last column adds the people's median tail (last command to
-the end of the trial, which the experimenter stopped) to the simulated time. The issue's
-acceptance asks for every ratio within 0.5..1.5.
+logs (:func:`drake_disamb.study.metrics.summarize` of :func:`drake_disamb.study.authors.read_trials`,
+the authors' metric definitions) and the ratio simulated / human; the last column adds the people's
+median tail (last command to the end of the trial, which the experimenter stopped) to the simulated
+time. The issue's acceptance asks for every ratio within 0.5..1.5.
 
     python benchmarks/bench_population.py [--trials 2] [--duration 180] [--seed 0] [--jsonl FILE]
 
@@ -27,7 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from drake_disamb.config import load_scenario, validate_scenario, with_overrides
-from drake_disamb.study.calibration import estimate_behaviour, human_condition_means, read_human_trials
+from drake_disamb.study.authors import read_trials
+from drake_disamb.study.calibration import estimate_behaviour
+from drake_disamb.study.metrics import summarize
 from drake_disamb.study.population import draw_subjects
 from drake_disamb.trial import run_trial
 
@@ -96,8 +98,8 @@ def main() -> int:
         print(f"{len(rows)} trials in {time.perf_counter() - start:.0f} s wall", file=sys.stderr)
     human, tail = {}, 0.0
     if DATA.is_dir():
-        trials = read_human_trials(DATA)
-        human = human_condition_means(trials)
+        trials = read_trials(DATA)
+        human = {(r["interface"], r["task"], r["paradigm"]): r for r in summarize([t.record for t in trials])}
         tail = estimate_behaviour(trials).tail.median
     else:
         print(f"(no human logs at {DATA}: simulated means only)")
@@ -113,11 +115,11 @@ def main() -> int:
         cells = []
         for key in ("mode_switches", "requests", "completion_time"):
             sim = float(np.mean([r[key] for r in rs]))
-            hum = h.get(key, float("nan"))
+            hum = h.get(f"mean_{key}", float("nan"))
             ratio = sim / hum if hum else float("nan")
             cells.append(f"{sim:6.1f}/{hum:5.1f} ({ratio:4.2f})")
         succ = np.mean([r["success"] for r in rs])
-        hum_time = h.get("completion_time", float("nan"))
+        hum_time = h.get("mean_completion_time", float("nan"))
         with_tail = (np.mean([r["completion_time"] for r in rs]) + tail) / hum_time
         print(
             f"{itf:<11} {task:<9} {par:<15} {len(rs):>3} {succ:>5.2f} | "

@@ -355,43 +355,48 @@ def test_a_subjects_mode_choices_are_not_always_the_best_mode() -> None:
 def human_trials():
     if not DATA.is_dir():
         pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
-    from drake_disamb.study.calibration import read_human_trials
+    from drake_disamb.study.authors import read_trials
 
-    return read_human_trials(DATA)
+    return read_trials(DATA)
 
 
 @needs_data
 def test_reads_every_trial_with_its_paradigm(human_trials) -> None:
     assert len(human_trials) == 127
-    assert sum(not t.valid for t in human_trials) == 8  # the failed ones among H2..H5
-    per = {}
+    assert sum(not t.record.valid for t in human_trials) == 8  # the failed ones among H2..H5
+    per: dict[tuple[str, str, str, str], int] = {}
     for t in human_trials:
-        per.setdefault((t.subject, t.task, t.interface, t.paradigm), 0)
-        per[(t.subject, t.task, t.interface, t.paradigm)] += 1
+        key = (t.record.subject, t.record.task, t.record.interface, t.record.paradigm)
+        per[key] = per.get(key, 0) + 1
     assert set(per.values()) <= {3, 4, 5}  # 3 Manual, 5 Disambiguation (one H5 file missing)
-    assert all(t.request_times.size == 0 for t in human_trials if t.paradigm == "manual")
-    t = human_trials[0]
-    assert t.dt == pytest.approx(t.total_time / t.user_vel.shape[1])
+    assert all(not t.record.request_times for t in human_trials if t.record.paradigm == "manual")
+    # One switch of the system's per request, and every switch is the user's or a request's.
+    for t in human_trials:
+        assert len(t.request_switch_times) == len(t.record.request_times)
+        assert len(t.switch_times) == t.record.mode_switches + t.record.requests
+        assert np.all(t.request_switch_times >= np.asarray(t.record.request_times))
 
 
 @needs_data
-def test_authors_metrics_and_condition_means(human_trials) -> None:
-    from drake_disamb.study.calibration import authors_metrics, human_condition_means, merge_times
+def test_behaviour_uses_the_shared_reader_and_metrics(human_trials) -> None:
+    from drake_disamb.study.calibration import estimate_behaviour, format_condition_means
+    from drake_disamb.study.metrics import summarize
 
-    assert merge_times([1.0, 2.5, 4.1, 10.0]) == [1.0, 4.1, 10.0]
-    first = human_trials[0]  # H2 pouring head array, Disambiguation: 13 switches, 2 requests
-    m = authors_metrics(first)
-    assert m == {
-        "mode_switches": 11.0,
-        "requests": 2.0,
-        "button_presses": 13.0,
-        "completion_time": first.total_time,
-    }
-    means = human_condition_means(human_trials)
-    assert len(means) == 8
-    ha_po_manual = means[("head_array", "pouring", "manual")]
-    assert 25 < ha_po_manual["mode_switches"] < 50  # the paper's 8 subjects: 34.5
-    assert means[("joystick", "reaching", "manual")]["mode_switches"] < 5  # 8 subjects: 2.38
+    # H3PH1REHAT16: a button press 1.4 s after the request, 3.3 s before the system's switch,
+    # is the user's (the reader matches the switch logged with the request's scores).
+    h3 = next(t for t in human_trials if t.record.trial_id == "H3PH1REHAT16")
+    assert h3.record.mode_switch_times == pytest.approx([2.33], abs=0.01)
+    assert h3.request_switch_times == pytest.approx([4.16], abs=0.01)
+    # The start delay counts that press: H3's median is below the 3.75 s of the old first-switch rule.
+    est = estimate_behaviour(human_trials)
+    assert est.start_delay.subject_medians["H3"] == pytest.approx(3.71, abs=0.01)
+    rows = summarize([t.record for t in human_trials])
+    assert len(rows) == 8
+    means = {(r["interface"], r["task"], r["paradigm"]): r for r in rows}
+    assert 25 < means[("head_array", "pouring", "manual")]["mean_mode_switches"] < 50  # 8 subjects: 34.5
+    assert means[("joystick", "reaching", "manual")]["mean_mode_switches"] < 5  # 8 subjects: 2.38
+    table = format_condition_means(rows)
+    assert "joystick    reaching  manual           12      2.50" in table
 
 
 @needs_data

@@ -14,7 +14,7 @@ from scipy.io import loadmat
 from scipy.stats import skew
 
 from drake_disamb.cli import main
-from drake_disamb.study.authors import load_trial_order, parse_trial_name, read_trial
+from drake_disamb.study.authors import load_trial_order, parse_trial_name, read_trial, read_trials
 from drake_disamb.study.records import read_records
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2020_human_study"
@@ -131,6 +131,13 @@ def test_summary_matches_an_independent_computation(imported: Path) -> None:
     assert any(r["mean_requests"] < r["mean_requests_raw"] for r in summary)
 
 
+def test_read_trials_gives_the_imported_records(imported: Path) -> None:
+    # The one reader of the logs: import-authors writes what read_trials returns (study calibrate
+    # reads the logs with it too).
+    trials = read_trials(DATA)
+    assert [t.record for t in trials] == read_records(imported / "trials.jsonl")
+
+
 def test_report_on_the_authors_data(imported: Path) -> None:
     out = imported / "report"
     page = (out / "index.html").read_text()
@@ -179,6 +186,8 @@ def test_one_trial_field_by_field() -> None:
     assert r.mode_switches == 11 and r.button_presses == 13
     assert r.mode_switch_times[0] == pytest.approx(18.01, abs=0.01) and r.mode_switch_modes[0] == "vy"
     assert all(abs(t - 4.21) > 0.01 and abs(t - 39.49) > 0.01 for t in r.mode_switch_times)
+    assert trial.request_switch_times == pytest.approx([4.21, 39.49], abs=0.01)
+    assert len(trial.switch_times) == 13 and np.all(np.diff(trial.switch_times) >= 0)
     assert r.duration == r.completion_time == pytest.approx(67.708, abs=1e-3)
     assert r.success is None and r.reached_goals is None and r.valid and r.source == "authors"
     assert r.assistance_onset is None  # pouring: the stage goals are not logged

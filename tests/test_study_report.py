@@ -147,6 +147,8 @@ def test_request_merging_follows_the_authors_consecutive_gaps() -> None:
     # Each request is compared with the one before it in the raw list (loadData.m: diff(t) < 3).
     assert clean_requests([0.0, 2.9, 5.8, 8.9]) == [0.0, 8.9]
     assert clean_requests([5.0, 0.0]) == [0.0, 5.0]
+    # Not merged into the last kept request: 4.1 is 3.1 s after 1.0 but 1.6 s after 2.5.
+    assert clean_requests([1.0, 2.5, 4.1, 10.0]) == [1.0, 10.0]
     assert clean_requests([]) == []
 
 

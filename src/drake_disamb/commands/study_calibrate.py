@@ -28,16 +28,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.calibration import (
-        estimate_behaviour,
-        format_condition_means,
-        format_estimates,
-        human_condition_means,
-        read_human_trials,
-    )
+    from drake_disamb.study.authors import read_trials
+    from drake_disamb.study.calibration import estimate_behaviour, format_condition_means, format_estimates
+    from drake_disamb.study.metrics import summarize
 
     try:
-        trials = read_human_trials(args.data_dir)
+        trials = read_trials(args.data_dir)
         estimates = estimate_behaviour(trials)
     except (ValueError, OSError) as exc:
         print(f"drake-disamb study calibrate: {exc}", file=sys.stderr)
@@ -46,5 +42,5 @@ def run(args: argparse.Namespace) -> int:
     print(format_estimates(estimates))
     print()
     print("The authors' metrics per condition (valid trials; a check, not an input):")
-    print(format_condition_means(human_condition_means(trials)))
+    print(format_condition_means(summarize([t.record for t in trials])))
     return 0

@@ -2,7 +2,8 @@
 
 The logs (``../shared/data/tnsre2020_human_study/``, its README gives the format) are MATLAB files,
 one per trial, ``H<s>/H<s>PH<b><TASK><IF>T<n>.mat``, and ``trial_order_testing_8.mat`` with each
-trial's condition. :func:`import_authors` turns every trial into a record with ``source="authors"``
+trial's condition. :func:`read_trials` reads them all (the one reader: ``study calibrate`` uses it
+too), and :func:`import_authors` turns every trial into a record with ``source="authors"``
 appended to ``DIR/trials.jsonl`` and its time series in ``DIR/traces/<trial_id>.npz``. Nothing is
 overwritten: trials whose ``trial_id`` (the file's stem, e.g. ``H2PH1POHAT1``) is already in
 ``DIR/trials.jsonl`` are skipped, so a second import (or one after an interruption) adds only the
@@ -80,6 +81,7 @@ __all__ = [
     "mode_name",
     "parse_trial_name",
     "read_trial",
+    "read_trials",
 ]
 
 FAILED_TRIALS: frozenset[tuple[str, int, int]] = frozenset(
@@ -189,10 +191,21 @@ def load_trial_order(path: str | Path) -> dict[tuple[str, int, int], dict[str, A
 
 @dataclass
 class AuthorsTrial:
-    """One imported trial: its record and its trace arrays (see the module docstring)."""
+    """One imported trial: its record and its trace arrays (see the module docstring).
+
+    ``request_switch_times`` are the mode switches the requests made (the system's, one per
+    request, s from ``start_time``), which the record leaves out of ``mode_switch_times``.
+    """
 
     record: TrialRecord
     trace: dict[str, NDArray[Any]]
+    request_switch_times: NDArray[np.float64]
+
+    @property
+    def switch_times(self) -> NDArray[np.float64]:
+        """Every mode switch after the initial mode, the user's and the requests', in time order (s)."""
+        own = np.asarray(self.record.mode_switch_times, dtype=float)
+        return np.sort(np.concatenate((own, self.request_switch_times)))
 
 
 def _events(data: dict[str, Any], name: str, path: Path, width: int) -> NDArray[np.float64]:
@@ -259,7 +272,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
     initial_mode = name_of(initial_id)
     switch_t = switches[1:, 1] - start  # without the initial-mode row
     request_t = requested[:, 1] - start
-    own: set[int] = set()
+    own: list[int] = []
     for score_t in scores[:, -1] - start:
         gaps = np.abs(switch_t - score_t)
         k = int(np.argmin(gaps)) if len(gaps) else -1
@@ -267,7 +280,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
             raise ValueError(
                 f"{path}: no mode switch of its own for the request scored at t = {score_t:.3f} s"
             )
-        own.add(k)
+        own.append(k)
     user = [k for k in range(len(switch_t)) if k not in own]
     cm_t = current[:, 1] - start
     user_modes = [name_of(current[int(np.argmin(np.abs(cm_t - switch_t[k]))), 0]) for k in user]
@@ -347,7 +360,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
         "u_h": user_vel,
         "t_u_h": t_u_h,
     }
-    return AuthorsTrial(record, trace)
+    return AuthorsTrial(record, trace, request_switch_times=switch_t[own])
 
 
 @dataclass
@@ -380,6 +393,26 @@ def _repetitions(records: list[TrialRecord]) -> None:
             r.repetition = i
 
 
+def read_trials(data_dir: str | Path) -> list[AuthorsTrial]:
+    """Every trial file of ``data_dir`` read with :func:`read_trial`, in trial order (subject,
+    block, interface, trial), with ``repetition`` numbered within each condition.
+
+    Raises:
+        ValueError: ``data_dir`` has no trial files or no trial order, or a file is malformed.
+    """
+    data_dir = Path(data_dir)
+    order_path = data_dir / "trial_order_testing_8.mat"
+    if not order_path.is_file():
+        raise ValueError(f"{order_path}: the trial-order file is missing (is {data_dir} the data folder?)")
+    files = _trial_files(data_dir)
+    if not files:
+        raise ValueError(f"{data_dir}: no trial files H<s>/H<s>PH<b><TASK><IF>T<n>.mat")
+    order = load_trial_order(order_path)
+    trials = [read_trial(p, order) for p in files]
+    _repetitions([t.record for t in trials])
+    return trials
+
+
 def import_authors(
     data_dir: str | Path, out_dir: str | Path, progress: Callable[[str], None] | None = None
 ) -> ImportSummary:
@@ -392,23 +425,14 @@ def import_authors(
         ValueError: ``data_dir`` has no trial files or no trial order, or a file is malformed.
         RecordError: ``out_dir/trials.jsonl`` exists but cannot be read (names file and line).
     """
-    data_dir = Path(data_dir)
     out_dir = Path(out_dir)
-    order_path = data_dir / "trial_order_testing_8.mat"
-    if not order_path.is_file():
-        raise ValueError(f"{order_path}: the trial-order file is missing (is {data_dir} the data folder?)")
-    files = _trial_files(data_dir)
-    if not files:
-        raise ValueError(f"{data_dir}: no trial files H<s>/H<s>PH<b><TASK><IF>T<n>.mat")
-    order = load_trial_order(order_path)
+    # Read everything first: repetitions are numbered within each condition, and a malformed file
+    # stops the import before anything is written.
+    trials = read_trials(data_dir)
     records_path = out_dir / "trials.jsonl"
     done: set[str] = set()
     if records_path.exists():
         done = {r.trial_id for r in read_records(records_path)}
-    # Read everything first: repetitions are numbered within each condition, and a malformed file
-    # stops the import before anything is written.
-    trials = [read_trial(p, order) for p in files]
-    _repetitions([t.record for t in trials])
     traces = out_dir / "traces"
     try:
         traces.mkdir(parents=True, exist_ok=True)

@@ -1,8 +1,8 @@
 """Behaviour estimates from the paper's human logs: what the simulated-user population is drawn from.
 
 The logs (``../shared/data/tnsre2020_human_study/``, 4 of the paper's 8 subjects; their README gives
-the format) are read with :func:`read_human_trials`. :func:`estimate_behaviour` measures behaviour
-only, never the Manual-versus-Disambiguation outcome the study must predict:
+the format) are read with :func:`drake_disamb.study.authors.read_trials`. :func:`estimate_behaviour`
+measures behaviour only, never the Manual-versus-Disambiguation outcome the study must predict:
 
 - **Times.** ``user_vel`` (the user's command, about 100 Hz) has no timestamps: sample ``k`` is
   taken at ``k * total_time / M`` after ``start_time`` (``M`` samples), i.e. spread evenly over the
@@ -27,47 +27,27 @@ only, never the Manual-versus-Disambiguation outcome the study must predict:
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
   the chosen mode) or a mode switch (cycled away).
 
-The authors' metrics of a trial (:func:`authors_metrics`) follow their README: user mode switches =
-rows of ``mode_switches`` minus 2 minus the requests; requests less than 3 s apart merged; for the
-joystick, a switch into the same mode as the switch before it within 2 s is dropped (we implement
-the stated rule; their script used a stale variable).
+The logs are read by :func:`drake_disamb.study.authors.read_trials` (the reader of ``study
+import-authors``: the mode switch a request made is the one logged with the request's scores) and
+the authors' metrics (user mode switches, merged requests, the joystick's cleaning) are those of
+:mod:`drake_disamb.study.metrics`.
 """
 
 from __future__ import annotations
 
 import math
-import re
-from collections.abc import Iterable
-from dataclasses import dataclass, field
-from pathlib import Path
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-FAILED_TRIALS: frozenset[tuple[str, int, int]] = frozenset(
-    {
-        ("H3", 2, 12),
-        ("H4", 2, 9),
-        ("H4", 2, 12),
-        ("H5", 1, 3),
-        ("H5", 1, 4),
-        ("H5", 1, 11),
-        ("H5", 1, 14),
-        ("H5", 1, 16),
-        ("H6", 1, 8),
-        ("H6", 2, 6),
-        ("H7", 1, 3),
-        ("H7", 1, 13),
-        ("H8", 1, 13),
-        ("H8", 1, 15),
-    }
-)
-"""The 14 failed trials the authors excluded, as (subject, block, trial)."""
+from drake_disamb.study.authors import AuthorsTrial
+from drake_disamb.study.metrics import clean_requests, trial_metrics
 
-MERGE_REQUESTS = 3.0
-"""Requests less than this many seconds apart count as one (the authors' analysis)."""
-JOYSTICK_REPEAT = 2.0
-"""A joystick switch into the same mode as the one before it within this many seconds is dropped."""
+EARLY_REQUEST = 3.0
+"""A first request before this time (s from the start) counts as early."""
 BURST_GAP = 3.0
 """Switches less than this apart with no command between them are one mode change (s)."""
 MIN_SETTLE = 0.1
@@ -76,164 +56,6 @@ MIN_PAUSE = 0.5
 """Shortest run of zero command that counts as a pause (s)."""
 SPEEDS = {"joystick": (0.13, 0.4), "head_array": (0.1, 0.2)}
 """Full-deflection linear (m/s) and angular (rad/s) speeds of the study's interfaces."""
-
-_NAME = re.compile(r"^H(\d)PH(\d)(RE|PO)(J2|HA)T(\d+)\.mat$")
-_TASKS = {"RE": "reaching", "PO": "pouring"}
-_INTERFACES = {"J2": "joystick", "HA": "head_array"}
-_PARADIGMS = {"on": "disambiguation", "wo": "manual"}
-
-
-@dataclass(frozen=True)
-class HumanTrial:
-    """One trial of the authors' logs (times in s after ``start_time``).
-
-    Attributes:
-        subject: ``"H2"`` ... ``"H5"``.
-        block, trial: Testing block (1, 2) and trial number within it (1..16).
-        task: ``"reaching"`` or ``"pouring"``; interface: ``"joystick"`` or ``"head_array"``;
-        paradigm: ``"manual"`` or ``"disambiguation"`` (from the trial-order file).
-        valid: Not one of the :data:`FAILED_TRIALS`.
-        total_time: ``end_time - start_time`` (s).
-        switch_times, switch_modes: Every mode switch after the initial mode (requests' included)
-            and the mode it went to.
-        request_times: Every request press (unmerged).
-        user_vel: ``(6, M)`` user command, spread evenly over ``total_time``.
-    """
-
-    subject: str
-    block: int
-    trial: int
-    task: str
-    interface: str
-    paradigm: str
-    valid: bool
-    total_time: float
-    switch_times: NDArray[np.float64]
-    switch_modes: NDArray[np.int64]
-    request_times: NDArray[np.float64]
-    user_vel: NDArray[np.float64] = field(repr=False)
-
-    @property
-    def dt(self) -> float:
-        """Seconds per ``user_vel`` sample (``total_time / M``; the log has no times)."""
-        return self.total_time / max(self.user_vel.shape[1], 1)
-
-    @property
-    def commanding(self) -> NDArray[np.bool_]:
-        """Per ``user_vel`` sample, whether the user commanded anything."""
-        return np.any(self.user_vel != 0.0, axis=0)
-
-
-def _events(value: NDArray[np.float64]) -> NDArray[np.float64]:
-    a = np.atleast_2d(np.asarray(value, dtype=float))
-    return a[1:] if a.shape[0] > 1 else np.zeros((0, a.shape[1]))
-
-
-def read_human_trials(data_dir: str | Path) -> list[HumanTrial]:
-    """Every trial file under ``data_dir`` (``H<s>/H<s>PH<b><TASK><IF>T<n>.mat``), sorted by name.
-
-    Raises:
-        ValueError: ``data_dir`` (or its ``trial_order_testing_8.mat``) is missing or holds no trial.
-    """
-    import scipy.io
-
-    root = Path(data_dir)
-    order_file = root / "trial_order_testing_8.mat"
-    if not order_file.is_file():
-        raise ValueError(f"data_dir: expected the authors' logs with {order_file.name}, got {str(root)!r}")
-    order = scipy.io.loadmat(order_file)
-    trials = []
-    for path in sorted(root.glob("H*/H*.mat")):
-        m = _NAME.match(path.name)
-        if m is None:
-            continue
-        s, b, task, itf, n = m.groups()
-        table = order[f"ph{b}_trial_mat"]
-        paradigm = _PARADIGMS[str(np.squeeze(table[int(n) - 1, 2, int(s) - 2]))]
-        d = scipy.io.loadmat(path)
-        start = float(np.squeeze(d["start_time"]))
-        switches = _events(d["mode_switches"])[1:]  # the first row left is the initial mode
-        modes = _events(d["current_mode"])
-        # The mode a switch went to: the last current_mode entry logged at or before it.
-        after = []
-        for t in switches[:, 1]:
-            k = np.searchsorted(modes[:, 1], t + 1e-6, side="right") - 1
-            after.append(int(modes[k, 0]) if k >= 0 else -1)
-        trials.append(
-            HumanTrial(
-                subject=f"H{s}",
-                block=int(b),
-                trial=int(n),
-                task=_TASKS[task],
-                interface=_INTERFACES[itf],
-                paradigm=paradigm,
-                valid=(f"H{s}", int(b), int(n)) not in FAILED_TRIALS,
-                total_time=float(np.squeeze(d["total_time"])),
-                switch_times=switches[:, 1] - start,
-                switch_modes=np.array(after, dtype=np.int64),
-                request_times=_events(d["assistance_requested"])[:, 1] - start,
-                user_vel=np.asarray(d["user_vel"], dtype=float),
-            )
-        )
-    if not trials:
-        raise ValueError(f"data_dir: no trial files H<s>/H<s>PH<b>...mat under {str(root)!r}")
-    return trials
-
-
-def merge_times(times: Iterable[float], gap: float = MERGE_REQUESTS) -> list[float]:
-    """Times with every time less than ``gap`` after the last kept one dropped."""
-    kept: list[float] = []
-    for t in sorted(times):
-        if not kept or t - kept[-1] >= gap:
-            kept.append(float(t))
-    return kept
-
-
-def request_switch_indices(trial: HumanTrial) -> set[int]:
-    """Indices of the switches the requests caused: the first switch after each request."""
-    out: set[int] = set()
-    for r in trial.request_times:
-        later = np.flatnonzero(
-            (trial.switch_times > r) & ~np.isin(np.arange(len(trial.switch_times)), list(out))
-        )
-        if later.size:
-            out.add(int(later[0]))
-    return out
-
-
-def authors_metrics(trial: HumanTrial) -> dict[str, float]:
-    """The paper's metrics of one trial the authors' way: ``mode_switches`` (the user's),
-    ``requests`` (merged), ``button_presses`` and ``completion_time`` (``total_time``)."""
-    requests = merge_times(trial.request_times)
-    switches = max(len(trial.switch_times) - len(trial.request_times), 0)
-    if trial.interface == "joystick":
-        caused = request_switch_indices(trial)
-        user = [k for k in range(len(trial.switch_times)) if k not in caused]
-        dropped = 0
-        for a, b in zip(user, user[1:], strict=False):
-            same = trial.switch_modes[a] == trial.switch_modes[b]
-            if same and trial.switch_times[b] - trial.switch_times[a] < JOYSTICK_REPEAT:
-                dropped += 1
-        switches = max(switches - dropped, 0)
-    return {
-        "mode_switches": float(switches),
-        "requests": float(len(requests)),
-        "button_presses": float(switches + len(requests)),
-        "completion_time": trial.total_time,
-    }
-
-
-def human_condition_means(trials: Iterable[HumanTrial]) -> dict[tuple[str, str, str], dict[str, float]]:
-    """Mean :func:`authors_metrics` of the valid trials per ``(interface, task, paradigm)`` (with
-    ``n``, the trial count)."""
-    groups: dict[tuple[str, str, str], list[dict[str, float]]] = {}
-    for t in trials:
-        if t.valid:
-            groups.setdefault((t.interface, t.task, t.paradigm), []).append(authors_metrics(t))
-    return {
-        key: {**{k: float(np.mean([m[k] for m in ms])) for k in ms[0]}, "n": float(len(ms))}
-        for key, ms in sorted(groups.items())
-    }
 
 
 @dataclass(frozen=True)
@@ -312,9 +134,17 @@ class BehaviourEstimates:
     n_trials: int
 
 
-def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
-    """The behaviour estimates of the valid trials (module docstring)."""
-    valid = [t for t in trials if t.valid]
+def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
+    """The ``(6, M)`` user command ``[vx, vy, vz, wx, wy, wz]`` and the seconds per sample
+    (``total_time / M``: the log has no times)."""
+    u = np.asarray(trial.trace["u_h"], dtype=float).T
+    return u, trial.record.duration / max(u.shape[1], 1)
+
+
+def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
+    """The behaviour estimates of the valid trials (module docstring), from
+    :func:`drake_disamb.study.authors.read_trials`."""
+    valid = [t for t in trials if t.record.valid]
     if not valid:
         raise ValueError("trials: expected at least one valid trial, got none")
     start: dict[str, list[float]] = {}
@@ -334,24 +164,27 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
     early, req_norm = [], []
     accepted = rejected = 0
     commanding_total = time_total = 0.0
-    for t in valid:
-        s = t.subject
-        cmd = t.commanding
-        dt = t.dt
+    for trial in valid:
+        r = trial.record
+        s = r.subject
+        user_vel, dt = _user_vel(trial)
+        cmd = np.any(user_vel != 0.0, axis=0)
         on = np.flatnonzero(cmd)
         times_cmd = on * dt
         commanding_total += cmd.sum() * dt
-        time_total += t.total_time
-        caused = request_switch_indices(t)
-        events = np.sort(np.concatenate((t.switch_times, t.request_times)))
-        user_sw = np.array([x for k, x in enumerate(t.switch_times) if k not in caused and x > 0])
+        time_total += r.duration
+        request_times = np.asarray(r.request_times, dtype=float)
+        switch_times = trial.switch_times
+        events = np.sort(np.concatenate((switch_times, request_times)))
+        user_switches = np.asarray(r.mode_switch_times, dtype=float)
+        user_sw = np.sort(user_switches[user_switches > 0])
         first = [x for x in (times_cmd[:1].tolist() + user_sw[:1].tolist()) if x > 0]
         if first:
             start.setdefault(s, []).append(min(first))
         if on.size:
-            tail.setdefault(s, []).append(t.total_time - times_cmd[-1])
+            tail.setdefault(s, []).append(r.duration - times_cmd[-1])
         # Mode changes: bursts of switches with no command between them.
-        sw = np.sort(t.switch_times[t.switch_times > 0])
+        sw = switch_times[switch_times > 0]
         burst = 1
         for a, b in zip(sw, sw[1:], strict=False):
             between = np.any(cmd[int(a / dt) + 1 : int(b / dt) + 1])
@@ -359,10 +192,10 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
                 press.setdefault(s, []).append(b - a)
                 burst += 1
             else:
-                bursts[t.interface].append(burst)
+                bursts[r.interface].append(burst)
                 burst = 1
         if sw.size:
-            bursts[t.interface].append(burst)
+            bursts[r.interface].append(burst)
         # Settle: last switch of a change -> next command, nothing else first.
         for x in sw:
             later_cmd = times_cmd[times_cmd > x]
@@ -383,15 +216,15 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
                     pause_count[s] = pause_count.get(s, 0.0) + 1
             command_time[s] = command_time.get(s, 0.0) + cmd.sum() * dt
         # Joystick: deflection and direction spread.
-        if t.interface == "joystick" and on.size:
+        if r.interface == "joystick" and on.size:
             lin, ang = SPEEDS["joystick"]
-            v = t.user_vel[:, on]
+            v = user_vel[:, on]
             size = np.maximum(np.linalg.norm(v[:3], axis=0) / lin, np.linalg.norm(v[3:], axis=0) / ang)
             deflect.setdefault(s, []).extend(np.clip(size, 0, None).tolist())
             for a, b in _runs(cmd):
                 if b - a < 10:
                     continue
-                run = t.user_vel[:, a:b]
+                run = user_vel[:, a:b]
                 if np.count_nonzero(np.any(run != 0, axis=1)) != 2:
                     continue  # a 2-D mode: the stick's direction is free
                 unit = run / np.linalg.norm(run, axis=0, keepdims=True)
@@ -399,21 +232,20 @@ def estimate_behaviour(trials: Iterable[HumanTrial]) -> BehaviourEstimates:
                 norm = np.linalg.norm(mean)
                 if norm > 0:
                     cos_by_subject.setdefault(s, []).extend((mean / norm @ unit).tolist())
-        if t.paradigm == "disambiguation":
-            merged = merge_times(t.request_times)
-            req_count[t.interface].append(len(merged))
-            n_user = authors_metrics(t)["mode_switches"]
+        if r.paradigm == "disambiguation":
+            merged = clean_requests(r.request_times)
+            req_count[r.interface].append(len(merged))
+            n_user = trial_metrics(r).mode_switches
             changes = len(merged) + n_user
             if changes:
-                req_share[t.interface].append(len(merged) / changes)
+                req_share[r.interface].append(len(merged) / changes)
                 req_share_subject.setdefault(s, []).append(len(merged) / changes)
-            early.append(float(bool(merged) and merged[0] < 3.0))
-            req_norm.extend((np.asarray(merged) / t.total_time).tolist())
-            for k in caused:
-                x = t.switch_times[k]
+            early.append(float(bool(merged) and merged[0] < EARLY_REQUEST))
+            req_norm.extend((np.asarray(merged) / r.duration).tolist())
+            for x in trial.request_switch_times:
                 later_cmd = times_cmd[times_cmd > x]
-                later_sw = np.array([y for j, y in enumerate(t.switch_times) if j not in caused and y > x])
-                later_req = t.request_times[t.request_times > x]
+                later_sw = user_switches[user_switches > x]
+                later_req = request_times[request_times > x]
                 nxt_cmd = later_cmd[0] if later_cmd.size else math.inf
                 nxt_sw = later_sw.min() if later_sw.size else math.inf
                 nxt_req = later_req.min() if later_req.size else math.inf
@@ -493,14 +325,16 @@ def format_estimates(est: BehaviourEstimates) -> str:
     return "\n".join(lines)
 
 
-def format_condition_means(means: dict[tuple[str, str, str], dict[str, float]]) -> str:
-    """Per-condition means of the authors' metrics as a table."""
+def format_condition_means(rows: Sequence[dict[str, Any]]) -> str:
+    """The authors' metrics per condition as a table: the rows of
+    :func:`drake_disamb.study.metrics.summarize` (means of the valid trials)."""
     lines = [
         f"{'interface':<11} {'task':<9} {'paradigm':<15} {'n':>3} {'switches':>9} {'requests':>9} {'time':>7}"
     ]
-    for (itf, task, par), m in means.items():
+    for row in rows:
         lines.append(
-            f"{itf:<11} {task:<9} {par:<15} {int(m['n']):>3} {m['mode_switches']:>9.2f} "
-            f"{m['requests']:>9.2f} {m['completion_time']:>7.1f}"
+            f"{row['interface']:<11} {row['task']:<9} {row['paradigm']:<15} {row['n_valid']:>3} "
+            f"{row['mean_mode_switches']:>9.2f} {row['mean_requests']:>9.2f} "
+            f"{row['mean_completion_time']:>7.1f}"
         )
     return "\n".join(lines)
