@@ -80,7 +80,9 @@ class TrialRecord:
         mode_switch_times: Time (s) of each user mode switch.
         mode_switch_modes: The mode (name) each user mode switch entered, in order.
         automatic_switch_times: Time (s) of each automatic switch.
-        mean_alpha: Mean blending factor over the samples where the user commanded the arm.
+        mean_alpha: Mean blending factor: over the control ticks where the user commanded the arm
+            (simulated and recorded trials; the blender gives 0 without a command), or over every
+            logged sample (the authors' logs, whose command and alpha are not sampled together).
         assistance_onset: First time (s) from which the belief's argmax is the intended goal with
             alpha above 0 and stays so to the end of the stage, or None if never.
         wall_time: Wall-clock seconds the trial took to simulate (0 for human trials).
