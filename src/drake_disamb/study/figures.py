@@ -11,7 +11,7 @@ mean alpha); :func:`trace_figures` one goal-probability trace per condition from
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +24,7 @@ __all__ = ["ablation_figure", "save_figure", "source_figures", "trace_figures"]
 
 PARADIGMS = ("manual", "disambiguation", "automatic")
 PARADIGM_COLORS = {"manual": "#9e9e9e", "disambiguation": "#1f77b4", "automatic": "#2ca02c"}
+CONDITIONS = tuple((i, t) for i in ("joystick", "head_array") for t in ("reaching", "pouring"))
 
 
 def _plt() -> Any:
@@ -45,9 +46,41 @@ def save_figure(fig: Any, path: Path) -> Path:
     return path
 
 
-def _paradigms(trials: Sequence[TrialMetrics]) -> list[str]:
+def _side_by_side(trials: Sequence[TrialMetrics]) -> tuple[list[str], float]:
+    """The paradigms of ``trials`` (in :data:`PARADIGMS` order) and the width of one's slot when
+    they stand side by side in a group 0.8 wide."""
     present = {m.record.paradigm for m in trials}
-    return [p for p in PARADIGMS if p in present]
+    paradigms = [p for p in PARADIGMS if p in present]
+    return paradigms, 0.8 / max(1, len(paradigms))
+
+
+def _slot(group: int, k: int, paradigms: Sequence[str], width: float) -> float:
+    """The x of the ``k``-th of ``paradigms`` in the group at x = ``group``."""
+    return group + (k - (len(paradigms) - 1) / 2) * width
+
+
+def _by_condition(
+    trials: Sequence[TrialMetrics], paradigms: Sequence[str], width: float
+) -> Iterator[tuple[float, str, list[TrialMetrics]]]:
+    """(x, paradigm, its valid trials) for every condition of :data:`CONDITIONS` (groups at x = 0,
+    1, ...) and every paradigm with trials in it."""
+    for gi, (interface, task) in enumerate(CONDITIONS):
+        sel = select_trials(trials, interface, task)
+        for pi, paradigm in enumerate(paradigms):
+            ms = [m for m in sel if m.record.paradigm == paradigm]
+            if ms:
+                yield _slot(gi, pi, paradigms, width), paradigm, ms
+
+
+def _condition_ticks(ax: Any) -> None:
+    """Label the groups of :func:`_by_condition` on ``ax``'s x axis."""
+    ax.set_xticks(range(len(CONDITIONS)))
+    ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in CONDITIONS])
+
+
+def _paradigm_handles(plt: Any, paradigms: Sequence[str], alpha: float) -> list[Any]:
+    """Legend patches in the colours of ``paradigms``."""
+    return [plt.Rectangle((0, 0), 1, 1, color=PARADIGM_COLORS[p], alpha=alpha) for p in paradigms]
 
 
 def _box_panels(
@@ -61,9 +94,8 @@ def _box_panels(
     """Boxes of ``metric`` per paradigm, grouped by interface (left) and by task (right), with the
     rank-sum stars of every pair of paradigms (bracket over the pair)."""
     plt = _plt()
-    paradigms = _paradigms(trials)
+    paradigms, width = _side_by_side(trials)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
-    width = 0.8 / max(1, len(paradigms))
     for ax, (kind, groups) in zip(
         axes, (("interface", ("joystick", "head_array")), ("task", ("reaching", "pouring"))), strict=True
     ):
@@ -74,8 +106,7 @@ def _box_panels(
             for pi, paradigm in enumerate(paradigms):
                 values = [m.value(metric) for m in sel if m.record.paradigm == paradigm]
                 values = [v for v in values if v is not None]
-                x = gi + (pi - (len(paradigms) - 1) / 2) * width
-                xs[paradigm] = x
+                x = xs[paradigm] = _slot(gi, pi, paradigms, width)
                 if not values:
                     continue
                 top = max(top, max(values))
@@ -108,7 +139,7 @@ def _box_panels(
         ax.set_ylim(0, max(1.0, top * 1.08))
         ax.grid(axis="y", alpha=0.3)
     axes[0].set_ylabel(ylabel)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=PARADIGM_COLORS[p], alpha=0.75) for p in paradigms]
+    handles = _paradigm_handles(plt, paradigms, 0.75)
     axes[1].legend(handles, [p.capitalize() for p in paradigms], loc="upper left", fontsize=8)
     fig.suptitle(
         title + "  (boxes: full range and quartiles, diamond: mean; stars: rank-sum test)", fontsize=10
@@ -119,30 +150,21 @@ def _box_panels(
 
 def _stacked(trials: Sequence[TrialMetrics], source: str) -> Any:
     plt = _plt()
-    paradigms = _paradigms(trials)
-    groups = [(i, t) for i in ("joystick", "head_array") for t in ("reaching", "pouring")]
+    paradigms, width = _side_by_side(trials)
     fig, ax = plt.subplots(figsize=(11, 4.2))
-    width = 0.8 / max(1, len(paradigms))
-    for gi, (interface, task) in enumerate(groups):
-        sel = select_trials(trials, interface, task)
-        for pi, paradigm in enumerate(paradigms):
-            ms = [m for m in sel if m.record.paradigm == paradigm]
-            if not ms:
-                continue
-            x = gi + (pi - (len(paradigms) - 1) / 2) * width
-            sw = float(np.mean([m.mode_switches for m in ms]))
-            rq = float(np.mean([m.requests for m in ms]))
-            au = float(np.mean([m.record.automatic_switches for m in ms]))
-            color = PARADIGM_COLORS[paradigm]
-            ax.bar(x, sw, width * 0.9, color=color, alpha=0.75, edgecolor="k")
-            ax.bar(x, rq, width * 0.9, bottom=sw, color="#d62728", alpha=0.8, edgecolor="k")
-            if au > 0:
-                ax.bar(x, au, width * 0.9, bottom=sw + rq, color="white", hatch="//", edgecolor="k")
-    ax.set_xticks(range(len(groups)))
-    ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in groups])
+    for x, paradigm, ms in _by_condition(trials, paradigms, width):
+        sw = float(np.mean([m.mode_switches for m in ms]))
+        rq = float(np.mean([m.requests for m in ms]))
+        au = float(np.mean([m.record.automatic_switches for m in ms]))
+        color = PARADIGM_COLORS[paradigm]
+        ax.bar(x, sw, width * 0.9, color=color, alpha=0.75, edgecolor="k")
+        ax.bar(x, rq, width * 0.9, bottom=sw, color="#d62728", alpha=0.8, edgecolor="k")
+        if au > 0:
+            ax.bar(x, au, width * 0.9, bottom=sw + rq, color="white", hatch="//", edgecolor="k")
+    _condition_ticks(ax)
     ax.set_ylabel("mean per trial (after the authors' cleaning)")
     ax.margins(y=0.12)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=PARADIGM_COLORS[p], alpha=0.75) for p in paradigms]
+    handles = _paradigm_handles(plt, paradigms, 0.75)
     labels = [f"user mode switches ({p})" for p in paradigms]
     handles += [plt.Rectangle((0, 0), 1, 1, color="#d62728", alpha=0.8)]
     labels += ["disambiguation requests"]
@@ -203,31 +225,25 @@ def _raster(trials: Sequence[TrialMetrics], source: str) -> Any:
 
 def _alpha(trials: Sequence[TrialMetrics], source: str) -> Any:
     plt = _plt()
-    paradigms = _paradigms(trials)
-    groups = [(i, t) for i in ("joystick", "head_array") for t in ("reaching", "pouring")]
+    paradigms, width = _side_by_side(trials)
     fig, ax = plt.subplots(figsize=(11, 4))
-    width = 0.8 / max(1, len(paradigms))
-    for gi, (interface, task) in enumerate(groups):
-        sel = select_trials(trials, interface, task)
-        for pi, paradigm in enumerate(paradigms):
-            v = [m.mean_alpha for m in sel if m.record.paradigm == paradigm and m.mean_alpha is not None]
-            if not v:
-                continue
-            x = gi + (pi - (len(paradigms) - 1) / 2) * width
-            if len(set(v)) < 2:  # no spread for a density: the values as points
-                ax.plot([x] * len(v), v, "o", color=PARADIGM_COLORS[paradigm])
-                continue
-            parts = ax.violinplot([v], positions=[x], widths=width * 0.9, showmeans=True)
-            for body in parts["bodies"]:
-                body.set_facecolor(PARADIGM_COLORS[paradigm])
-                body.set_alpha(0.7)
-            for name in ("cmeans", "cmins", "cmaxes", "cbars"):
-                parts[name].set_color("k")
-                parts[name].set_linewidth(0.8)
-    ax.set_xticks(range(len(groups)))
-    ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in groups])
+    for x, paradigm, ms in _by_condition(trials, paradigms, width):
+        v = [m.mean_alpha for m in ms if m.mean_alpha is not None]
+        if not v:
+            continue
+        if len(set(v)) < 2:  # no spread for a density: the values as points
+            ax.plot([x] * len(v), v, "o", color=PARADIGM_COLORS[paradigm])
+            continue
+        parts = ax.violinplot([v], positions=[x], widths=width * 0.9, showmeans=True)
+        for body in parts["bodies"]:
+            body.set_facecolor(PARADIGM_COLORS[paradigm])
+            body.set_alpha(0.7)
+        for name in ("cmeans", "cmins", "cmaxes", "cbars"):
+            parts[name].set_color("k")
+            parts[name].set_linewidth(0.8)
+    _condition_ticks(ax)
     ax.set_ylabel("mean alpha per trial")
-    handles = [plt.Rectangle((0, 0), 1, 1, color=PARADIGM_COLORS[p], alpha=0.7) for p in paradigms]
+    handles = _paradigm_handles(plt, paradigms, 0.7)
     ax.legend(handles, [p.capitalize() for p in paradigms], fontsize=8)
     ax.grid(axis="y", alpha=0.3)
     ax.set_title(
