@@ -94,6 +94,13 @@ def _p(t: dict[str, Any] | None) -> str:
     return f"p = {t['p_value']:.3g} {t['stars']}"
 
 
+def _fewer(t: dict[str, Any] | None) -> bool | None:
+    """Significantly fewer with ``b`` than ``a`` (lower mean and p < 0.05); None without a test."""
+    if t is None or t["p_value"] is None:
+        return None
+    return t["mean_b"] < t["mean_a"] and t["p_value"] < 0.05
+
+
 def _verdict(ok: bool | None) -> str:
     return "n/a" if ok is None else ("yes" if ok else "no")
 
@@ -119,23 +126,21 @@ def findings(
     add(
         "Head array: significantly fewer button presses with Disambiguation than Manual",
         f"{means(t)}, {_p(t)}",
-        None if t is None or t["p_value"] is None else t["mean_b"] < t["mean_a"] and t["p_value"] < 0.05,
+        _fewer(t),
         "fewer with Disambiguation and p < 0.05 (rank-sum, both tasks)",
     )
     t = test("mode_switches", "joystick", "all")
     add(
         "Joystick: significantly fewer user mode switches with Disambiguation (p < 0.05)",
         f"{means(t)}, {_p(t)}",
-        None if t is None or t["p_value"] is None else t["mean_b"] < t["mean_a"] and t["p_value"] < 0.05,
+        _fewer(t),
         "fewer with Disambiguation and p < 0.05",
     )
     t = test("button_presses", "joystick", "all")
     add(
         "Joystick: the gain is offset by the requests (no significant decrease in button presses)",
         f"button presses {means(t)}, {_p(t)}",
-        None
-        if t is None or t["p_value"] is None
-        else not (t["mean_b"] < t["mean_a"] and t["p_value"] < 0.05),
+        None if _fewer(t) is None else not _fewer(t),
         "no significant decrease in button presses",
     )
     tr, tp = test("button_presses", "all", "reaching"), test("button_presses", "all", "pouring")
