@@ -128,6 +128,13 @@ def _page(title: str, sections: Sequence[str]) -> str:
     )
 
 
+def _write_page(out: Path, title: str, sections: Sequence[str], figures: list[Path]) -> ReportFiles:
+    """Write ``out/index.html`` (``title`` and ``sections``) beside the JSON files already there."""
+    index = out / "index.html"
+    index.write_text(_page(title, sections), encoding="utf-8")
+    return ReportFiles(index=index, figures=figures, stats=out / "stats.json", summary=out / "summary.json")
+
+
 def _write_json(path: Path, data: Any) -> None:
     path.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n", encoding="utf-8")
 
@@ -162,13 +169,11 @@ SUMMARY_COLUMNS = (
     "mean_requests_raw",
     "mean_button_presses_raw",
 )
+TEST_KEY = ("metric", "interface", "task", "a", "b")
+"""The columns naming a test: the metric, the trials' interface and task, the paradigms a and b."""
 TEST_COLUMNS = (
     "source",
-    "metric",
-    "interface",
-    "task",
-    "a",
-    "b",
+    *TEST_KEY,
     "n_a",
     "n_b",
     "mean_a",
@@ -303,11 +308,7 @@ def write_report(
             per_subject,
             (
                 "source",
-                "metric",
-                "interface",
-                "task",
-                "a",
-                "b",
+                *TEST_KEY,
                 "test",
                 "n_a",
                 "n_b",
@@ -331,9 +332,7 @@ def write_report(
         for name in COMPARED:
             cols += [name, f"other_{name}", f"ratio_{name}", f"within_{name}"]
         sections.append(_table(rows, cols))
-    index = out / "index.html"
-    index.write_text(_page(f"Study report: {folder.name}", sections), encoding="utf-8")
-    return ReportFiles(index=index, figures=figures, stats=out / "stats.json", summary=out / "summary.json")
+    return _write_page(out, f"Study report: {folder.name}", sections, figures)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -393,11 +392,7 @@ def _write_ablation_report(folder: Path) -> ReportFiles:
             effect,
             (
                 "setting",
-                "metric",
-                "interface",
-                "task",
-                "a",
-                "b",
+                *TEST_KEY,
                 "n_a",
                 "n_b",
                 "mean_a",
@@ -411,6 +406,4 @@ def _write_ablation_report(folder: Path) -> ReportFiles:
         "<h2>Summary per setting</h2>",
         _table(summary, ("setting", *SUMMARY_COLUMNS)),
     ]
-    index = out / "index.html"
-    index.write_text(_page(f"Ablation report: {folder.name}", sections), encoding="utf-8")
-    return ReportFiles(index=index, figures=figures, stats=out / "stats.json", summary=out / "summary.json")
+    return _write_page(out, f"Ablation report: {folder.name}", sections, figures)
