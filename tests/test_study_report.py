@@ -15,6 +15,7 @@ from scipy.stats import mannwhitneyu, skew
 from support import screenshot_script
 
 from drake_disamb.cli import main
+from drake_disamb.study.findings import compare_summaries
 from drake_disamb.study.metrics import (
     assistance_onset,
     clean_mode_switches,
@@ -24,7 +25,7 @@ from drake_disamb.study.metrics import (
     trial_metrics,
 )
 from drake_disamb.study.records import RecordError, TrialRecord, append_record
-from drake_disamb.study.report import compare_summaries, write_report
+from drake_disamb.study.report import write_report
 from drake_disamb.study.stats import rank_biserial, run_tests, stars
 
 JOYSTICK_MODES = ("vx_vy", "vx_vz", "wx_wz", "wy", "gripper")

@@ -1,0 +1,329 @@
+"""The paper's findings beside ours, and one study folder's means beside another's.
+
+:func:`findings` is the table "the paper's finding / ours / agree?" of ``study report`` (FACTS
+section 9 and the data README's manual means); :func:`compare_summaries` is its ``--compare``
+section (issue 13's acceptance: simulated means within 50 % of the people's).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from drake_disamb.study.metrics import TrialMetrics, request_time_skewness
+
+__all__ = [
+    "COMPARED",
+    "INTERFACE_NAMES",
+    "PAPER_MANUAL_SWITCHES",
+    "PAPER_SKEWNESS",
+    "TASK_NAMES",
+    "WITHIN",
+    "compare_summaries",
+    "find_ranksum",
+    "findings",
+    "fmt",
+    "select_trials",
+]
+
+INTERFACE_NAMES = {"joystick": "Joystick", "head_array": "Head array", "all": "both interfaces"}
+TASK_NAMES = {"reaching": "Single-step (reaching)", "pouring": "Multi-step (pouring)", "all": "both tasks"}
+
+PAPER_SKEWNESS = {
+    ("joystick", "reaching"): 0.63,
+    ("joystick", "pouring"): 0.57,
+    ("head_array", "reaching"): 0.35,
+    ("head_array", "pouring"): 0.22,
+}
+"""The paper's request-time skewness (Table "skewness", FACTS section 9)."""
+
+PAPER_MANUAL_SWITCHES = {
+    ("joystick", "reaching"): 2.38,
+    ("joystick", "pouring"): 6.88,
+    ("head_array", "reaching"): 14.30,
+    ("head_array", "pouring"): 34.48,
+}
+"""Manual user-mode-switch means over the paper's 8 subjects (data README)."""
+
+WITHIN = 0.5
+"""``--compare`` flags a ratio outside ``[1 - WITHIN, 1 + WITHIN]`` (issue 13: within 50 %)."""
+
+
+def select_trials(
+    trials: Sequence[TrialMetrics], interface: str = "all", task: str = "all"
+) -> list[TrialMetrics]:
+    """The valid trials of ``interface`` and ``task`` (``"all"``: any)."""
+    return [
+        m
+        for m in trials
+        if m.record.valid
+        and (interface == "all" or m.record.interface == interface)
+        and (task == "all" or m.record.task == task)
+    ]
+
+
+def find_ranksum(
+    tests: Sequence[dict[str, Any]], metric: str, interface: str, task: str, a: str, b: str, source: str
+) -> dict[str, Any] | None:
+    """The rank-sum test of ``metric``, paradigm ``a`` against ``b``, among ``tests`` (None: none)."""
+    for t in tests:
+        if (
+            t["test"] == "ranksum"
+            and t["metric"] == metric
+            and t["interface"] == interface
+            and t["task"] == task
+            and t["a"] == a
+            and t["b"] == b
+            and t["source"] == source
+        ):
+            return t
+    return None
+
+
+def fmt(v: float | None, digits: int = 2) -> str:
+    """``v`` with ``digits`` decimals; ``"n/a"`` for None, NaN or inf."""
+    return "n/a" if v is None or (isinstance(v, float) and not math.isfinite(v)) else f"{v:.{digits}f}"
+
+
+def _p(t: dict[str, Any] | None) -> str:
+    if t is None or t["p_value"] is None:
+        return "no test"
+    return f"p = {t['p_value']:.3g} {t['stars']}"
+
+
+def _fewer(t: dict[str, Any] | None) -> bool | None:
+    """Significantly fewer with ``b`` than ``a`` (lower mean and p < 0.05); None without a test."""
+    if t is None or t["p_value"] is None:
+        return None
+    return t["mean_b"] < t["mean_a"] and t["p_value"] < 0.05
+
+
+def _verdict(ok: bool | None) -> str:
+    return "n/a" if ok is None else ("yes" if ok else "no")
+
+
+def findings(
+    trials: Sequence[TrialMetrics], tests: Sequence[dict[str, Any]], source: str
+) -> list[dict[str, str]]:
+    """The table "the paper's finding / ours / agree?": one row per result of FACTS section 9 (and
+    the data README's manual means), each computed from ``trials`` of ``source`` with the
+    criterion used for "agree"."""
+    rows: list[dict[str, str]] = []
+
+    def add(paper: str, ours: str, ok: bool | None, criterion: str) -> None:
+        rows.append({"paper": paper, "ours": ours, "agree": _verdict(ok), "criterion": criterion})
+
+    def test(metric: str, interface: str, task: str) -> dict[str, Any] | None:
+        return find_ranksum(tests, metric, interface, task, "manual", "disambiguation", source)
+
+    def means(t: dict[str, Any] | None) -> str:
+        return "no data" if t is None else f"Manual {fmt(t['mean_a'])} vs Disambiguation {fmt(t['mean_b'])}"
+
+    t = test("button_presses", "head_array", "all")
+    add(
+        "Head array: significantly fewer button presses with Disambiguation than Manual",
+        f"{means(t)}, {_p(t)}",
+        _fewer(t),
+        "fewer with Disambiguation and p < 0.05 (rank-sum, both tasks)",
+    )
+    t = test("mode_switches", "joystick", "all")
+    add(
+        "Joystick: significantly fewer user mode switches with Disambiguation (p < 0.05)",
+        f"{means(t)}, {_p(t)}",
+        _fewer(t),
+        "fewer with Disambiguation and p < 0.05",
+    )
+    t = test("button_presses", "joystick", "all")
+    add(
+        "Joystick: the gain is offset by the requests (no significant decrease in button presses)",
+        f"button presses {means(t)}, {_p(t)}",
+        None if _fewer(t) is None else not _fewer(t),
+        "no significant decrease in button presses",
+    )
+    tr, tp = test("button_presses", "all", "reaching"), test("button_presses", "all", "pouring")
+    if tr is not None and tp is not None:
+        dr, dp = tr["mean_a"] - tr["mean_b"], tp["mean_a"] - tp["mean_b"]
+        ours = (
+            f"decrease Manual - Disambiguation: pouring {fmt(dp)} ({fmt(100 * dp / tp['mean_a'], 0)} %, "
+            f"{_p(tp)}), reaching {fmt(dr)} ({fmt(100 * dr / tr['mean_a'], 0)} %, {_p(tr)})"
+            if tp["mean_a"] and tr["mean_a"]
+            else f"decrease pouring {fmt(dp)}, reaching {fmt(dr)}"
+        )
+        ok: bool | None = dp > dr
+    else:
+        ours, ok = "no data for both tasks", None
+    add(
+        "The decrease in button presses is larger for the multi-step task",
+        ours,
+        ok,
+        "mean decrease (both interfaces) larger for pouring than for reaching",
+    )
+    parts, sig, seen = [], False, False
+    for interface, task in (
+        ("joystick", "all"),
+        ("head_array", "all"),
+        ("all", "reaching"),
+        ("all", "pouring"),
+    ):
+        t = test("completion_time", interface, task)
+        if t is None or t["p_value"] is None:
+            continue
+        seen = True
+        sig = sig or t["p_value"] < 0.05
+        name = INTERFACE_NAMES[interface] if task == "all" else TASK_NAMES[task]
+        parts.append(f"{name}: {fmt(t['mean_a'], 1)} s vs {fmt(t['mean_b'], 1)} s, {_p(t)}")
+    add(
+        "No significant difference in completion time between Manual and Disambiguation",
+        "; ".join(parts) or "no data",
+        (not sig) if seen else None,
+        "no rank-sum p < 0.05 by interface or by task",
+    )
+    rate = {}
+    for paradigm in ("disambiguation", "manual"):
+        known = [m.success for m in trials if m.record.paradigm == paradigm and m.success is not None]
+        rate[paradigm] = (sum(known), len(known))
+    if all(n for _, n in rate.values()):
+        (sd, nd), (sm, nm) = rate["disambiguation"], rate["manual"]
+        ours = f"Disambiguation {100 * sd / nd:.2f} % ({sd}/{nd}) vs Manual {100 * sm / nm:.2f} % ({sm}/{nm})"
+        ok = sd / nd <= sm / nm
+    else:
+        ours, ok = "success not known for both paradigms", None
+    add(
+        "Success 92.50 % (148/160) with Disambiguation vs 97.92 % (94/96) Manual",
+        ours,
+        ok,
+        "success rate not higher with Disambiguation",
+    )
+    failed = [m for m in trials if m.success is False]
+    if [m for m in trials if m.success is not None]:
+        n_pour = sum(1 for m in failed if m.record.task == "pouring")
+        ours, ok = (
+            f"{n_pour} of {len(failed)} unsuccessful trials in pouring",
+            (n_pour > len(failed) / 2 if failed else None),
+        )
+    else:
+        ours, ok = "success not known", None
+    add("13 of the 14 unsuccessful trials were multi-step", ours, ok, "most failures in the multi-step task")
+    t = test("mean_alpha", "all", "all")
+    if t is not None:
+        sa = np.std(
+            [
+                m.mean_alpha
+                for m in select_trials(trials)
+                if m.record.paradigm == "manual" and m.mean_alpha is not None
+            ]
+        )
+        sb = np.std(
+            [
+                m.mean_alpha
+                for m in select_trials(trials)
+                if m.record.paradigm == "disambiguation" and m.mean_alpha is not None
+            ]
+        )
+        ours = (
+            f"Disambiguation {fmt(t['mean_b'])} +/- {fmt(float(sb))} vs "
+            f"Manual {fmt(t['mean_a'])} +/- {fmt(float(sa))}, {_p(t)}"
+        )
+        ok = None if t["p_value"] is None else t["mean_b"] > t["mean_a"] and t["p_value"] >= 0.05
+    else:
+        ours, ok = "no data", None
+    add(
+        "alpha higher with Disambiguation (0.27 +/- 0.16 vs 0.25 +/- 0.16), not significant",
+        ours,
+        ok,
+        "higher mean alpha with Disambiguation, p >= 0.05",
+    )
+    skew = {}
+    for (interface, task), paper in PAPER_SKEWNESS.items():
+        sel = [m for m in select_trials(trials, interface, task) if m.record.paradigm == "disambiguation"]
+        skew[(interface, task)] = s = request_time_skewness(sel)
+        add(
+            f"Request-time skewness {INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}: "
+            f"{paper:.2f} (requests early)",
+            fmt(s),
+            None if s is None else s > 0,
+            "positive skewness (requests concentrated early)",
+        )
+    pairs = [(skew[("head_array", k)], skew[("joystick", k)]) for k in ("reaching", "pouring")]
+    add(
+        "Head-array requests less skewed than joystick requests (both tasks)",
+        ", ".join(
+            f"{k}: head array {fmt(h)} vs joystick {fmt(j)}"
+            for k, (h, j) in zip(("reaching", "pouring"), pairs, strict=True)
+        ),
+        None if any(h is None or j is None for h, j in pairs) else all(h < j for h, j in pairs),
+        "head-array skewness below joystick skewness for both tasks",
+    )
+    req = {}
+    for key in ("joystick", "head_array", "reaching", "pouring"):
+        sel = select_trials(trials, *((key, "all") if key in INTERFACE_NAMES else ("all", key)))
+        v = [m.requests for m in sel if m.record.paradigm == "disambiguation"]
+        req[key] = float(np.mean(v)) if v else None
+    add(
+        "More requests with the more limited interface and the more complex task",
+        f"mean requests: head array {fmt(req['head_array'])} vs joystick {fmt(req['joystick'])}; "
+        f"pouring {fmt(req['pouring'])} vs reaching {fmt(req['reaching'])}",
+        None
+        if None in req.values()
+        else req["head_array"] > req["joystick"] and req["pouring"] > req["reaching"],
+        "more requests with the head array and with pouring",
+    )
+    for (interface, task), paper in PAPER_MANUAL_SWITCHES.items():
+        v = [m.mode_switches for m in select_trials(trials, interface, task) if m.record.paradigm == "manual"]
+        if v:
+            mean = float(np.mean(v))
+            ours, ok = f"{mean:.2f} (ratio {mean / paper:.2f})", abs(mean / paper - 1) <= WITHIN
+        else:
+            ours, ok = "no Manual trials", None
+        add(
+            f"Manual user mode switches, {INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}: {paper:.2f} "
+            "(8 subjects, data README)",
+            ours,
+            ok,
+            "within 50 %",
+        )
+    return rows
+
+
+# ----------------------------------------------------------------------------------------------
+# Comparison with another folder
+
+
+COMPARED = ("mean_mode_switches", "mean_requests", "mean_button_presses", "mean_completion_time")
+
+
+def compare_summaries(
+    ours: Sequence[dict[str, Any]], other: Sequence[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    """Per interface, task and paradigm in both: each of :data:`COMPARED` here and there, the ratio
+    (here / there) and ``within`` (ratio within 50 %, None where undefined)."""
+
+    def index(rows: Sequence[dict[str, Any]]) -> dict[tuple[str, str, str], dict[str, Any]]:
+        out: dict[tuple[str, str, str], dict[str, Any]] = {}
+        for r in rows:
+            out.setdefault((r["interface"], r["task"], r["paradigm"]), r)
+        return out
+
+    a, b = index(ours), index(other)
+    result = []
+    for key in sorted(set(a) & set(b)):
+        ra, rb = a[key], b[key]
+        row: dict[str, Any] = {
+            "interface": key[0],
+            "task": key[1],
+            "paradigm": key[2],
+            "source": ra["source"],
+            "other_source": rb["source"],
+        }
+        for name in COMPARED:
+            x, y = ra.get(name), rb.get(name)
+            ratio = x / y if x is not None and y not in (None, 0) else None
+            row[name] = x
+            row[f"other_{name}"] = y
+            row[f"ratio_{name}"] = ratio
+            row[f"within_{name}"] = None if ratio is None else abs(ratio - 1) <= WITHIN
+        result.append(row)
+    return result
