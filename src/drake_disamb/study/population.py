@@ -107,6 +107,8 @@ def _default_distributions() -> dict[str, Distribution]:
         "request_when_unhelped_for": LogNormal(8.0, 0.3),
         "request_decay_time": LogNormal(40.0, 0.3),
         "accept_prob": Uniform(0.66, 0.86),
+        # Literature (no pose in the logs): judging by eye where to stop, relative error 10-30 %.
+        "aim_error": LogNormal(0.2, 0.3, high=0.4),
     }
 
 
