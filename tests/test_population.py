@@ -415,6 +415,9 @@ def test_behaviour_estimates_are_human_scale(human_trials) -> None:
     assert 0.5 < est.accept_share < 1.0
     assert set(est.start_delay.subject_medians) == {"H2", "H3", "H4", "H5"}
     assert "press interval" in format_estimates(est)
+    # People drive seconds in a mode before changing it, longer with the joystick's 2-D modes.
+    assert 1.0 < est.commanding_per_change["head_array"] < est.commanding_per_change["joystick"] < 8.0
+    assert "commanding s per change" in format_estimates(est)
 
 
 @needs_data

@@ -476,3 +476,47 @@ def test_diagram_loop_reaches_goal() -> None:
     assert iface.GetOutputPort("mode_switch_count").Eval(iface_ctx)[0] >= 1
     alpha = blender.GetOutputPort("alpha").Eval(blender.GetMyContextFromRoot(ctx))[0]
     assert alpha in (0.0, pytest.approx(0.7))
+
+
+# ---------------------------------------------------------------------------------------------
+# judging where to stop (aim_error) and a stalled user who can ask for help
+# ---------------------------------------------------------------------------------------------
+
+AIMING = UserConfig(request_at_start=False, request_when_unhelped_for=None, aim_error=0.3)
+
+
+def test_aim_is_judged_on_entering_a_mode_and_stops_short() -> None:
+    s = step(UserState(), 0.0, 0, interface=HEAD, config=AIMING)
+    assert s.aim_mode == 0 and s.raw[0] == 1.0  # drives +x
+    # Stops short: the aim is a share (in [0, 2 * aim_error]) of the 0.2 m it saw, toward the robot.
+    assert 0.0 <= s.aim_0 <= 2 * 0.3 * 0.2 and s.aim_1 == 0.0
+    assert UserState.from_vector(s.to_vector()) == s
+
+
+def test_a_user_that_thinks_the_mode_is_done_moves_on_and_corrects_later() -> None:
+    # 4 cm still to go along x, but the user judged it would stop 4 cm short: x looks done, and it
+    # goes for vz (5 cm left) although x is not done (the exact user keeps driving x).
+    ee = EE.copy()
+    ee[0] = GOALS[0, 0] - 0.04
+    judged = UserState(aim_mode=0, aim_0=0.04)
+    s = step(judged, 1.0, 0, interface=HEAD, config=AIMING, ee=ee)
+    assert s.raw[2] == 1.0 and s.target_mode == 2
+    exact = step(UserState(aim_mode=0), 1.0, 0, interface=HEAD, config=NO_REQUESTS, ee=ee)
+    assert exact.raw[0] == 1.0
+    # With nothing else left it looks again (a correction) and keeps driving x.
+    ee[2] = GOALS[0, 2]
+    s = step(judged, 1.0, 0, interface=HEAD, config=AIMING, ee=ee)
+    assert s.raw[0] == 1.0 and s.aim_mode == 0 and s.aim_0 != 0.04
+
+
+def test_a_stalled_user_with_nothing_else_to_do_asks_for_help_when_it_can() -> None:
+    # Only the x error is left and the arm does not follow (the autonomy holding it at another
+    # goal): with requests available the user asks for disambiguation after stall_time.
+    ee = EE.copy()
+    ee[2] = GOALS[0, 2]
+    cfg = UserConfig(request_at_start=False, request_when_unhelped_for=None, request_instead_prob=0.4)
+    s, presses = UserState(), []
+    for k in range(301):
+        s = step(s, k * 0.01, 0, interface=HEAD, config=cfg, ee=ee, belief=np.array([0.1, 0.9]))
+        presses.append(s.raw[3])
+    assert max(presses) == 1.0 and s.presses >= 1

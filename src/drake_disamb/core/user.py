@@ -25,7 +25,9 @@ signal (:data:`drake_disamb.core.interfaces.RAW_LAYOUTS`):
    mode's remaining error has not fallen by ``stall_progress`` (tolerance units) -- the arm is held
    up by a joint limit, a singularity or the autonomy pulling elsewhere -- the mode no longer helps:
    the user targets the *other* arm mode with the largest remaining error (if any is above 1) and
-   cycles to it as in 4. Any press restarts the count.
+   cycles to it as in 4. Any press restarts the count. With no other mode left, a user who can ask
+   for disambiguation (a belief and ``request_instead_prob > 0``) does so: the autonomy is holding
+   the arm at another goal, or a limit holds it; otherwise it keeps trying.
 6. **Command**: otherwise it drives toward its goal along the current mode's dimensions.
    Joystick: axis k for the mode's k-th dimension, proportional to the error
    (``error / approach_time`` as a share of the interface's full-deflection speed), at least
@@ -68,6 +70,10 @@ values and where they come from):
   probability ``overshoot_prob`` (and must go round again). With ``mode_review_rate`` it also
   reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
   and leaves it for a clearly better one, as people interleave modes.
+- *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
+  its dimensions and stops short by a half-normal share (scale ``aim_error``) of the distance it
+  sees; the mode then looks done and it moves on, and comes back later to correct (when nothing
+  else is left it looks again at once).
 - *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``
   (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
@@ -161,6 +167,10 @@ class UserConfig:
         request_decay_time: Request probabilities are scaled by ``exp(-t / this)`` (``None`` = 1).
         request_wait: After a request, wait up to this (s) for the mode to change.
         accept_prob: Probability of keeping the mode a request chose (else cycle away from it).
+        aim_error: Relative error of the user's judgement of where to stop (0 = exact): on entering
+            a mode it aims each of the mode's dimensions at ``goal - eps * error`` with ``eps``
+            half-normal of scale this (truncated at 2), i.e. the primary movement stops short by a
+            share of the distance it sees, and the user corrects later.
     """
 
     position_tolerance: float = 0.01
@@ -202,6 +212,7 @@ class UserConfig:
     request_decay_time: float | None = None
     request_wait: float = 0.0
     accept_prob: float = 1.0
+    aim_error: float = 0.0
 
     def __post_init__(self) -> None:
         check_real_fields(
@@ -265,6 +276,7 @@ class UserConfig:
                 "mode_review_rate",
                 "pause_log_sd",
                 "request_wait",
+                "aim_error",
             ),
             allow_zero=True,
         )
@@ -325,6 +337,9 @@ class UserState:
         request_since: When that request was made (s).
         judge: The mode a request chose is to be accepted or left at the next free decision.
         overshot: It has pressed once too many toward the current target.
+        aim_mode: The mode whose stopping points it has judged (``aim_error``), or -1.
+        aim_0, aim_1: Its misjudgement of the goal along the mode's first and second dimension
+            (m or rad): it drives until the error along the dimension is this.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -344,9 +359,12 @@ class UserState:
     request_since: float = 0.0
     judge: bool = False
     overshot: bool = False
+    aim_mode: int = -1
+    aim_0: float = 0.0
+    aim_1: float = 0.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
-    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode")
+    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode")
     _BOOL = ("requested_at_start", "started", "judge", "overshot")
     _FIELDS = (
         "busy_until",
@@ -365,13 +383,16 @@ class UserState:
         "request_since",
         "judge",
         "overshot",
+        "aim_mode",
+        "aim_0",
+        "aim_1",
     )
-    VECTOR_SIZE = 16 + RAW_SIZE
+    VECTOR_SIZE = 19 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
-        request_since, judge, overshot, raw (4)]``."""
+        request_since, judge, overshot, aim_mode, aim_0, aim_1, raw (4)]``."""
         head = [float(getattr(self, name)) for name in self._FIELDS]
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 
@@ -507,6 +528,33 @@ def choose_mode(
     logits = np.where(ok, u / config.mode_temperature, -np.inf)
     w = np.exp(logits - np.max(logits))
     return int(rng.choice(r.size, p=w / w.sum()))
+
+
+def _aim(
+    state: UserState,
+    mode: int,
+    err: NDArray[np.float64],
+    modes: tuple[tuple[int, ...], ...],
+    config: UserConfig,
+    rng: np.random.Generator,
+) -> UserState:
+    """Judge where to stop along ``mode``'s dimensions: ``aim_k = eps_k * err_d`` (``eps_k``
+    half-normal of scale ``config.aim_error``, truncated at 2: it stops short)."""
+    aims = [0.0, 0.0]
+    for k, d in enumerate(modes[mode][:2]):
+        if d != GRIPPER_DIM:
+            eps = min(abs(rng.standard_normal()), 2.0) * config.aim_error
+            aims[k] = float(eps * err[d])
+    return _evolve(state, aim_mode=mode, aim_0=aims[0], aim_1=aims[1])
+
+
+def _seen_error(state: UserState, err: NDArray[np.float64], dims: tuple[int, ...]) -> NDArray[np.float64]:
+    """The error as the user judges it in its current mode: less its aim along the mode's dims."""
+    seen = err.copy()
+    for k, d in enumerate(dims[:2]):
+        if d != GRIPPER_DIM:
+            seen[d] -= state.aim_0 if k == 0 else state.aim_1
+    return seen
 
 
 def _drive(raw: NDArray[np.float64]) -> bool:
@@ -675,6 +723,22 @@ def _decide(
         return _evolve(state, raw=zero, draws=draws)
 
     remaining = mode_remaining(err, modes, config)
+    if config.aim_error > 0 and mode < n_modes - 1:
+        # Where to stop along the current mode's dimensions is judged by eye on entering it; once
+        # there, if nothing else is left to do, it looks again (a correction, judged anew).
+        if state.aim_mode != mode:
+            state = _aim(state, mode, err, modes, config, rng())
+        seen = _seen_error(state, err, modes[mode])
+        seen_remaining = float(mode_remaining(seen, (modes[mode],), config)[0])
+        if seen_remaining <= 1.0 < remaining[mode]:
+            others = np.delete(remaining[: n_modes - 1], mode)
+            if others.size == 0 or float(np.max(others)) <= 1.0:
+                state = _aim(state, mode, err, modes, config, rng())
+                seen = _seen_error(state, err, modes[mode])
+                seen_remaining = float(mode_remaining(seen, (modes[mode],), config)[0])
+        err = seen
+        remaining = remaining.copy()
+        remaining[mode] = seen_remaining
     arm_remaining = remaining[: n_modes - 1]
     target = state.target_mode
 
@@ -728,7 +792,10 @@ def _decide(
                 best = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True)
                 if others[best] > 1.0:
                     return press(MODE_BUTTON, target_mode=best, overshot=False)
-            # Nothing else to do: keep at it, and watch again from here.
+            # Nothing else to do: the arm does not follow (the autonomy holds it at another goal,
+            # or a limit): ask the system for help if it can, else keep at it and watch again.
+            if use_requests:
+                return request()
             state = _evolve(state, progress_since=time, progress_best=now_remaining)
 
     # Reviews: while the mode still helps, is another one better now? (People interleave modes.)

@@ -23,7 +23,8 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   in the first 3 s, the request times normalised by the trial duration, and the share of mode
   changes made by a request (requests / (requests + user mode changes)).
 - **Presses per mode change** (bursts of switches as above), and the share of head-array bursts
-  of 7 or more presses (a full round: at least one overshoot).
+  of 7 or more presses (a full round: at least one overshoot), and the seconds of commanding per
+  mode change (the user's and the requests') per interface: how long people drive in a mode.
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
   the chosen mode) or a mode switch (cycled away).
 
@@ -121,6 +122,7 @@ class BehaviourEstimates:
     direction_kappa: float
     direction_kappa_by_subject: dict[str, float]
     presses_per_change: dict[str, float]
+    commanding_per_change: dict[str, float]
     full_round_share: float
     request_share: dict[str, float]
     request_share_by_subject: dict[str, float]
@@ -164,6 +166,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     early, req_norm = [], []
     accepted = rejected = 0
     commanding_total = time_total = 0.0
+    commanding_by_interface = {"joystick": 0.0, "head_array": 0.0}
     for trial in valid:
         r = trial.record
         s = r.subject
@@ -172,6 +175,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         on = np.flatnonzero(cmd)
         times_cmd = on * dt
         commanding_total += cmd.sum() * dt
+        commanding_by_interface[r.interface] += cmd.sum() * dt
         time_total += r.duration
         request_times = np.asarray(r.request_times, dtype=float)
         switch_times = trial.switch_times
@@ -269,6 +273,9 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         direction_kappa=von_mises_kappa(mean_cos) if all_cos else math.nan,
         direction_kappa_by_subject={s: von_mises_kappa(float(np.mean(c))) for s, c in cos_by_subject.items()},
         presses_per_change={k: float(np.mean(v)) if v else math.nan for k, v in bursts.items()},
+        commanding_per_change={
+            k: commanding_by_interface[k] / len(v) if v else math.nan for k, v in bursts.items()
+        },
         full_round_share=float(np.mean(np.asarray(ha) >= 7)) if ha else math.nan,
         request_share={k: float(np.mean(v)) if v else math.nan for k, v in req_share.items()},
         request_share_by_subject={s: float(np.mean(v)) for s, v in sorted(req_share_subject.items())},
@@ -311,6 +318,8 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"{'presses per mode change':<28} joystick {est.presses_per_change['joystick']:.2f}, head array "
         f"{est.presses_per_change['head_array']:.2f}; head-array changes of >= 7 presses "
         f"{est.full_round_share:.2f}",
+        f"{'commanding s per change':<28} joystick {est.commanding_per_change['joystick']:.2f}, head array "
+        f"{est.commanding_per_change['head_array']:.2f}",
         f"{'requests per trial':<28} joystick {est.requests_per_trial['joystick']:.2f}, head array "
         f"{est.requests_per_trial['head_array']:.2f} (Disambiguation trials, merged)",
         f"{'request share of changes':<28} joystick {est.request_share['joystick']:.2f}, head array "
