@@ -1,4 +1,9 @@
-"""A simple, deterministic simulated user of a control interface (pure numpy).
+"""The simulated user of a control interface (pure numpy): deterministic by default, human-like
+(reaction times, noise, Boltzmann mode choice, pauses, requests) with the fields listed under
+"Human behaviour" below.
+
+The module is longer than the project's ~500 lines because it is one policy: its rules, its state
+and each human behaviour act on the same decision, and splitting them would scatter one algorithm.
 
 The user knows its goal pose. Every control tick it looks at the interface's current mode, the
 end-effector pose, the goal poses and (optionally) the belief, and produces the interface's raw
