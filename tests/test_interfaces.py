@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import (
+    DIRECT_SELECT_DEFLECTION,
     GRIPPER_DIM,
     InterfaceConfig,
     InterfaceState,
@@ -13,6 +14,8 @@ from drake_disamb.core.interfaces import (
     initial_state,
     interface_update,
     sanitize_raw,
+    sector_mode,
+    sector_stick,
 )
 
 DT = 0.01
@@ -315,3 +318,74 @@ def test_set_mode_and_attributes() -> None:
     assert len(head.arm_modes) == 6
     with pytest.raises(ValueError, match="kind"):
         JoystickInterface(InterfaceConfig(kind="head_array"))
+
+
+# ---------------------------------------------------------------------------------------------
+# direct mode selection (joystick)
+# ---------------------------------------------------------------------------------------------
+
+
+def test_sector_layout_is_clockwise_from_up() -> None:
+    # 5 joystick modes, 72 degrees each: {vx,vy} up, {vx,vz} up-right, {wx,wz} down-right,
+    # {wy} down-left, gripper up-left; a stick below the deflection threshold selects nothing.
+    assert sector_mode(0.0, 1.0, 5) == 0
+    assert sector_mode(0.9, 0.3, 5) == 1
+    assert sector_mode(0.6, -0.8, 5) == 2
+    assert sector_mode(-0.6, -0.8, 5) == 3
+    assert sector_mode(-0.9, 0.3, 5) == 4
+    assert sector_mode(0.0, DIRECT_SELECT_DEFLECTION * 0.99, 5) is None
+    for m in range(5):
+        x, y = sector_stick(m, 5)
+        assert np.hypot(x, y) == pytest.approx(1.0)
+        assert sector_mode(x, y, 5) == m
+
+
+def _press(state: InterfaceState, axes: tuple[float, float], t: float, config: InterfaceConfig):
+    """Press the mode button with the stick at ``axes`` for one tick, then release everything."""
+    state, events = interface_update(state, [*axes, 1.0, 0.0], t, config)
+    state2, events2 = interface_update(state, [0.0, 0.0, 0.0, 0.0], t + DT, config)
+    assert events2 == []
+    return state, state2, events
+
+
+def test_direct_selection_selects_the_sector_mode_with_one_event_per_press() -> None:
+    cfg = InterfaceConfig(kind="joystick", mode_selection="direct", initial_mode=0)
+    s = initial_state(cfg)
+    # Deflected toward {wy} (mode 3): one press, one switch 0 -> 3.
+    held, s, events = _press(s, sector_stick(3, 5), 0.0, cfg)
+    assert s.mode == 3 and s.mode_switch_count == 1
+    assert [(e.kind, e.from_mode, e.to_mode) for e in events] == [("mode_switch", 0, 3)]
+    # The stick selected: it does not drive while the button is held.
+    assert held.held_raw[:2].tolist() == [0.0, 0.0]
+    assert np.all(command_from_raw(held.held_raw, held.mode, cfg)[0] == 0.0)
+    # Centred: the press cycles as with "cycle" (3 -> 4).
+    _, s, events = _press(s, (0.0, 0.0), 0.1, cfg)
+    assert s.mode == 4 and [(e.from_mode, e.to_mode) for e in events] == [(3, 4)]
+    # Selecting the current mode keeps it and is still one logged press.
+    _, s, events = _press(s, sector_stick(4, 5), 0.2, cfg)
+    assert s.mode == 4 and s.mode_switch_count == 3
+    assert [(e.kind, e.from_mode, e.to_mode) for e in events] == [("mode_switch", 4, 4)]
+    # Held button with the stick moving: still one selection.
+    s, events = interface_update(s, [*sector_stick(1, 5), 1.0, 0.0], 0.3, cfg)
+    s, more = interface_update(s, [*sector_stick(2, 5), 1.0, 0.0], 0.31, cfg)
+    assert s.mode == 1 and len(events) == 1 and more == []
+
+
+def test_cycle_selection_ignores_the_stick_and_drives_while_pressing() -> None:
+    cfg = InterfaceConfig(kind="joystick", initial_mode=0)
+    assert cfg.mode_selection == "cycle"
+    s, events = interface_update(initial_state(cfg), [*sector_stick(3, 5), 1.0, 0.0], 0.0, cfg)
+    assert s.mode == 1 and [(e.from_mode, e.to_mode) for e in events] == [(0, 1)]
+    assert s.held_raw[:2].tolist() == pytest.approx(list(sector_stick(3, 5)))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"kind": "joystick", "mode_selection": "sector"}, "InterfaceConfig.mode_selection.*'sector'"),
+        ({"kind": "head_array", "mode_selection": "direct"}, "InterfaceConfig.mode_selection.*'direct'"),
+    ],
+)
+def test_mode_selection_validation(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        InterfaceConfig(**kwargs)

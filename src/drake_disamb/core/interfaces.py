@@ -3,7 +3,8 @@
 Two interfaces of the study (paper Section "Study Methods", FACTS section 5):
 
 - **2-axis joystick** (``"joystick"``): continuous axes in ``[-1, 1]``, a mode button that cycles
-  through 5 control modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper``.
+  through 5 control modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper`` (or, with
+  ``InterfaceConfig.mode_selection = "direct"``, selects one directly: see below).
 - **Switch-based head array** (``"head_array"``): three switches; *back* cycles through 7 modes
   ``vx, vy, vz, wx, wy, wz, gripper``; *left* / *right* drive the selected dimension in the
   positive / negative direction at a fixed speed.
@@ -22,11 +23,26 @@ can drive it), see :data:`RAW_LAYOUTS`:
 - head array: ``[left, right, back, disambiguation_button]``, every entry a 0/1 switch level.
   ``left - right`` drives the selected dimension (both pressed cancel).
 
+**Mode selection** (:data:`MODE_SELECTIONS`, ``InterfaceConfig.mode_selection``). ``"cycle"`` (the
+default, and the head array's only one): a mode-button press selects the next mode. ``"direct"``
+(joystick only): the study's joystick selected a mode with one action (consecutive logged modes
+step forward, back, two or three places about equally, and some repeat the mode: FACTS section 5),
+so here a press *with the stick deflected* (``|(axis_x, axis_y)| >=``
+:data:`DIRECT_SELECT_DEFLECTION`) selects the mode of the stick direction's sector, and a press with
+the stick centred cycles as before. The ``n`` modes have equal sectors of ``360 / n`` degrees,
+clockwise like a clock face from straight up (``+axis_y``): mode ``k``'s sector is centred on the
+compass bearing ``k * 360 / n`` (:func:`sector_mode`, :func:`sector_stick`). For the joystick's 5
+modes, 72 degrees each: ``{vx, vy}`` up (bearing 0), ``{vx, vz}`` up-right (72), ``{wx, wz}``
+down-right (144), ``{wy}`` down-left (216), gripper up-left (288). Every press is one logged
+``mode_switch`` (one press = one switch), also a press that selects the current mode (the mode is
+kept: the study's logs hold such repeats). While the mode button is held the stick selects and
+does not drive: the held raw signal's axes are 0 then.
+
 Non-finite raw entries never reach the arm: they are read as 0 (released / centred) and counted.
 
 The update (:func:`interface_update`) is what the Drake system runs every control period: it
-detects rising edges of the buttons (a held button counts once), cycles the mode on a mode-button
-press, handles a disambiguation request (or an automatic trigger) by asking for the disambiguation
+detects rising edges of the buttons (a held button counts once), cycles (or selects) the mode on a
+mode-button press, handles a disambiguation request (or an automatic trigger) by asking for the disambiguation
 system's choice ``request_latency`` after it (in the same update when that is 0), holds the
 sanitised raw signal, and returns the events it logged.
 """
@@ -81,6 +97,14 @@ DEFAULT_SPEEDS: dict[str, tuple[float, float]] = {
 }
 """Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs (FACTS 5)."""
 
+MODE_SELECTIONS: tuple[str, ...] = ("cycle", "direct")
+"""How a mode-button press chooses the mode: the next one (``"cycle"``) or, on the joystick, the
+mode of the stick's sector when it is deflected (``"direct"``; centred: the next one)."""
+
+DIRECT_SELECT_DEFLECTION = 0.5
+"""Stick deflection (norm of ``(axis_x, axis_y)``, of full deflection 1) from which a mode-button
+press selects the sector's mode (``mode_selection = "direct"``); below it the press cycles."""
+
 EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch", "automatic_switch"]
 
 _DUE_TOLERANCE = 1e-6
@@ -127,6 +151,9 @@ class InterfaceConfig:
         serve_requests: Whether a request press starts a disambiguation (default). False: presses
             are logged and counted but never switch the mode (the Automatic paradigm without its
             request button).
+        mode_selection: ``"cycle"`` (default): a mode-button press selects the next mode.
+            ``"direct"`` (joystick only): a press with the stick deflected selects the mode of the
+            stick's sector, a press with it centred cycles (see the module docstring).
     """
 
     kind: str = "joystick"
@@ -138,6 +165,7 @@ class InterfaceConfig:
     initial_mode: int = 0
     request_latency: float = 0.0
     serve_requests: bool = True
+    mode_selection: str = "cycle"
 
     def __post_init__(self) -> None:
         check_kind(self.kind)
@@ -162,6 +190,16 @@ class InterfaceConfig:
         if not isinstance(self.serve_requests, bool):
             raise ValueError(
                 f"InterfaceConfig.serve_requests: expected true or false, got {self.serve_requests!r}"
+            )
+        if self.mode_selection not in MODE_SELECTIONS:
+            raise ValueError(
+                f"InterfaceConfig.mode_selection: expected one of {MODE_SELECTIONS}, "
+                f"got {self.mode_selection!r}"
+            )
+        if self.mode_selection == "direct" and self.kind != "joystick":
+            raise ValueError(
+                f"InterfaceConfig.mode_selection: 'direct' needs a stick (the joystick); the {self.kind} "
+                f"only cycles, got {self.mode_selection!r}"
             )
 
     @property
@@ -336,6 +374,40 @@ def next_mode(mode: int, n_modes: int) -> int:
     return (int(mode) + 1) % int(n_modes)
 
 
+def sector_mode(axis_x: float, axis_y: float, n_modes: int) -> int | None:
+    """The mode whose stick sector ``(axis_x, axis_y)`` points into, or ``None`` when the stick is
+    centred (deflection below :data:`DIRECT_SELECT_DEFLECTION`).
+
+    ``n_modes`` equal sectors, clockwise from straight up (``+axis_y``): mode ``k`` is centred on
+    the bearing ``k * 360 / n_modes`` degrees (a boundary goes to the next mode clockwise).
+    """
+    if math.hypot(axis_x, axis_y) < DIRECT_SELECT_DEFLECTION:
+        return None
+    bearing = math.atan2(axis_x, axis_y) % (2.0 * math.pi)  # clockwise from +axis_y
+    width = 2.0 * math.pi / int(n_modes)
+    return int(math.floor(bearing / width + 0.5)) % int(n_modes)
+
+
+def sector_stick(mode: int, n_modes: int) -> tuple[float, float]:
+    """The full-deflection stick ``(axis_x, axis_y)`` at the centre of mode ``mode``'s sector (the
+    inverse of :func:`sector_mode`)."""
+    bearing = 2.0 * math.pi * int(mode) / int(n_modes)
+    return math.sin(bearing), math.cos(bearing)
+
+
+def selected_mode(mode: int, clean_raw: ArrayLike, config: InterfaceConfig) -> int:
+    """The mode a mode-button press selects from ``mode`` with the sanitised raw signal
+    ``clean_raw``: the next one (``"cycle"``, or a centred stick), or the stick sector's mode
+    (``"direct"``, the stick deflected; possibly ``mode`` itself)."""
+    n = len(config.modes)
+    if config.mode_selection == "direct":
+        r = np.asarray(clean_raw, dtype=float)
+        chosen = sector_mode(float(r[0]), float(r[1]), n)
+        if chosen is not None:
+            return chosen
+    return next_mode(mode, n)
+
+
 def parse_disambiguation_mode(value: float | None, n_arm_modes: int) -> int | None:
     """Read the disambiguation system's choice: an arm-mode index, or ``None`` to keep the mode.
 
@@ -379,7 +451,9 @@ def interface_update(
             starts a disambiguation like a request press does, with no press.
 
     Returns:
-        ``(new_state, events)``. A mode-button rising edge cycles the mode (``mode_switch``). A
+        ``(new_state, events)``. A mode-button rising edge cycles the mode, or selects the stick
+        sector's mode with ``config.mode_selection == "direct"`` (:func:`selected_mode`), logged
+        as one ``mode_switch`` per press (also when a direct selection keeps the mode). A
         request-button rising edge logs ``disambiguation_request`` (at the press) and, with
         ``config.serve_requests``, starts a disambiguation; so does a new automatic trigger. A
         started disambiguation is served by the first update at least ``config.request_latency``
@@ -411,11 +485,13 @@ def interface_update(
 
     mode_level = clean[MODE_BUTTON]
     if mode_level > 0.5 and state.prev_mode_button <= 0.5:
-        new = next_mode(mode, len(config.modes))
+        new = selected_mode(mode, clean, config)
         events.append(InterfaceEvent(float(time), "mode_switch", mode, new))
         mode = new
         switches += 1
 
+    if config.mode_selection == "direct" and mode_level > 0.5:
+        clean[0] = clean[1] = 0.0  # a held mode button: the stick selects, it does not drive
     due, automatic = state.pending_due, state.pending_automatic
     request_level = clean[REQUEST_BUTTON]
     if request_level > 0.5 and state.prev_request_button <= 0.5:
