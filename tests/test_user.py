@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 
 import numpy as np
@@ -21,6 +22,8 @@ from drake_disamb.core.user import (
     goal_error,
     goal_reached,
     mode_remaining,
+    mode_usefulness,
+    presses_to,
     user_step,
 )
 
@@ -520,3 +523,53 @@ def test_a_stalled_user_with_nothing_else_to_do_asks_for_help_when_it_can() -> N
         s = step(s, k * 0.01, 0, interface=HEAD, config=cfg, ee=ee, belief=np.array([0.1, 0.9]))
         presses.append(s.raw[3])
     assert max(presses) == 1.0 and s.presses >= 1
+
+
+# ---------------------------------------------------------------------------------------------
+# direct mode selection (joystick)
+# ---------------------------------------------------------------------------------------------
+
+JOY_DIRECT = InterfaceConfig(kind="joystick", mode_selection="direct")
+
+
+def _presses_to_target(interface: InterfaceConfig, config: UserConfig, mode: int, ee: np.ndarray):
+    """Run the user against the core interface (every 10 ms) until it commands the arm; return the
+    presses it made, the mode it ends in and the interface's logged switches."""
+    s, itf = UserState(), initial_state(dataclasses.replace(interface, initial_mode=mode))
+    events = []
+    for k in range(1000):
+        t = k * 0.01
+        s = step(s, t, itf.mode, interface=interface, config=config, ee=ee)
+        itf, ev = interface_update(itf, s.raw, t, interface)
+        events += ev
+        if command_from_raw(itf.held_raw, itf.mode, interface)[0].any():
+            break
+    return s.presses, itf.mode, events
+
+
+def test_user_reaches_a_target_mode_in_one_direct_press() -> None:
+    # Only wy is left to do (a rotation about y): the target is mode 3 ({wy}). From {vx, vy} the
+    # cycling joystick takes 3 presses (0 -> 1 -> 2 -> 3), direct selection one.
+    ee = np.array([0.2, -0.4, 0.25, *quat_from_rotvec(np.array([0.0, 0.3, 0.0]))])
+    presses, mode, events = _presses_to_target(JOY, NO_REQUESTS, 0, ee)
+    assert (presses, mode, len(events)) == (3, 3, 3)
+    presses, mode, events = _presses_to_target(JOY_DIRECT, NO_REQUESTS, 0, ee)
+    assert (presses, mode) == (1, 3)
+    assert [(e.kind, e.from_mode, e.to_mode) for e in events] == [("mode_switch", 0, 3)]
+
+
+def test_direct_overshoot_is_one_centred_press_then_one_selection() -> None:
+    ee = np.array([0.2, -0.4, 0.25, *quat_from_rotvec(np.array([0.0, 0.3, 0.0]))])
+    config = dataclasses.replace(NO_REQUESTS, overshoot_prob=1.0)
+    presses, mode, events = _presses_to_target(JOY_DIRECT, config, 0, ee)
+    # Select wy, one too many with the stick centred (wy -> gripper), select wy again.
+    assert [(e.from_mode, e.to_mode) for e in events] == [(0, 3), (3, 4), (4, 3)]
+    assert (presses, mode) == (3, 3)
+
+
+def test_press_cost_counts_one_press_per_direct_selection() -> None:
+    assert presses_to(0, np.arange(4), 5).tolist() == [0, 1, 2, 3]
+    assert presses_to(0, np.arange(4), 5, direct=True).tolist() == [0, 1, 1, 1]
+    assert presses_to(3, 1, 5) == 3 and presses_to(3, 1, 5, direct=True) == 1
+    u = mode_usefulness([1.0, 1.0, 1.0, 1.0], 0, 5, 0.1, direct=True)
+    assert u.tolist() == pytest.approx([1.0, 0.9, 0.9, 0.9])

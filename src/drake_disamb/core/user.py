@@ -23,7 +23,10 @@ signal (:data:`drake_disamb.core.interfaces.RAW_LAYOUTS`):
    is at most 1 (nothing left to do in it) the user picks the arm mode with the largest remaining
    error as its *target* and presses the mode button (joystick ``mode_button``, head array
    ``back``) once per reaction time until the target is active, also through modes on the way that
-   would help a little. The target is dropped when it is reached, when it has nothing left to do
+   would help a little. With a joystick that selects modes directly
+   (``InterfaceConfig.mode_selection == "direct"``) it instead deflects the stick into the
+   target's sector and presses once (:func:`~drake_disamb.core.interfaces.sector_stick`): one
+   press per change. The target is dropped when it is reached, when it has nothing left to do
    (the autonomy finished it), or after a disambiguation request (the user then re-evaluates the
    mode the disambiguation system chose).
 5. **Stall**: when it has been commanding in the current mode for ``stall_time`` seconds and the
@@ -72,7 +75,10 @@ values and where they come from):
   (:func:`mode_usefulness`: remaining error as a share of the largest, less ``press_cost`` per
   press it takes to get there) with temperature ``mode_temperature`` (0 = the best mode, rule 4);
   the presses are made one by one, and on reaching its target the user presses once more with
-  probability ``overshoot_prob`` (and must go round again). With ``mode_review_rate`` it also
+  probability ``overshoot_prob`` (and must go round again). With direct selection every other mode
+  is one press away (``press_cost`` once), and an overshoot is a press with the stick centred (one
+  step past the target) followed by one press selecting the target again; a wrong press, made with
+  the stick centred, cycles on either interface. With ``mode_review_rate`` it also
   reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
   and leaves it for a clearly better one, as people interleave modes.
 - *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
@@ -108,6 +114,7 @@ from drake_disamb.core.interfaces import (
     RAW_SIZE,
     REQUEST_BUTTON,
     InterfaceConfig,
+    sector_stick,
 )
 from drake_disamb.core.trials import sample_von_mises_fisher
 
@@ -491,21 +498,30 @@ def lognormal(median: float, log_sd: float, rng: np.random.Generator | None) -> 
     return float(median * math.exp(log_sd * min(max(rng.standard_normal(), -2.0), 2.0)))
 
 
-def presses_to(mode: int, target: np.ndarray | int, n_modes: int) -> np.ndarray | int:
-    """Presses of the (forward-cycling) mode button from ``mode`` to ``target``."""
+def presses_to(mode: int, target: np.ndarray | int, n_modes: int, direct: bool = False) -> np.ndarray | int:
+    """Presses of the mode button from ``mode`` to ``target``: forward cycling, or with ``direct``
+    selection (``InterfaceConfig.mode_selection == "direct"``) one for any other mode."""
+    if direct:
+        return (
+            (np.asarray(target) != mode).astype(int)
+            if isinstance(target, np.ndarray)
+            else int(target != mode)
+        )
     return (
         (np.asarray(target) - mode) % n_modes if isinstance(target, np.ndarray) else (target - mode) % n_modes
     )
 
 
-def mode_usefulness(remaining: ArrayLike, mode: int, n_modes: int, press_cost: float) -> NDArray[np.float64]:
+def mode_usefulness(
+    remaining: ArrayLike, mode: int, n_modes: int, press_cost: float, direct: bool = False
+) -> NDArray[np.float64]:
     """Expected usefulness of each arm mode: its remaining error as a share of the largest (0..1),
-    minus ``press_cost`` per press it takes to reach it from ``mode`` (arm modes only: the gripper
-    mode, last, is left out of ``remaining``)."""
+    minus ``press_cost`` per press it takes to reach it from ``mode`` (:func:`presses_to`; arm modes
+    only: the gripper mode, last, is left out of ``remaining``)."""
     r = np.asarray(remaining, dtype=float)
     top = float(np.max(r)) if r.size else 0.0
     share = r / top if top > 0 else np.zeros_like(r)
-    return share - press_cost * presses_to(mode, np.arange(r.size), n_modes)
+    return share - press_cost * presses_to(mode, np.arange(r.size), n_modes, direct)
 
 
 def choose_mode(
@@ -515,13 +531,15 @@ def choose_mode(
     config: UserConfig,
     rng: np.random.Generator | None,
     exclude_current: bool = False,
+    direct: bool = False,
 ) -> int:
     """The arm mode the user goes for next: Boltzmann choice over :func:`mode_usefulness`.
 
     ``remaining`` holds the arm modes' remaining errors (:func:`mode_remaining` without the gripper
     mode). With ``config.mode_temperature == 0`` (or no ``rng``) it is the mode with the most
     remaining error (ties to the lowest index); else mode ``m`` has probability proportional to
-    ``exp(usefulness_m / temperature)``. ``exclude_current`` leaves ``mode`` out.
+    ``exp(usefulness_m / temperature)``. ``exclude_current`` leaves ``mode`` out. ``direct``: the
+    interface selects modes directly (every other mode one press away, :func:`presses_to`).
     """
     r = np.asarray(remaining, dtype=float).copy()
     if exclude_current and mode < r.size:
@@ -529,7 +547,7 @@ def choose_mode(
     if config.mode_temperature == 0 or rng is None:
         return int(np.argmax(r))
     ok = np.isfinite(r)
-    u = mode_usefulness(np.where(ok, r, 0.0), mode, n_modes, config.press_cost)
+    u = mode_usefulness(np.where(ok, r, 0.0), mode, n_modes, config.press_cost, direct)
     logits = np.where(ok, u / config.mode_temperature, -np.inf)
     w = np.exp(logits - np.max(logits))
     return int(rng.choice(r.size, p=w / w.sum()))
@@ -563,8 +581,9 @@ def _seen_error(state: UserState, err: NDArray[np.float64], dims: tuple[int, ...
 
 
 def _drive(raw: NDArray[np.float64]) -> bool:
-    """Whether a raw signal drives the arm (joystick axes or head-array left/right)."""
-    return bool(raw[0] != 0.0 or raw[1] != 0.0)
+    """Whether a raw signal drives the arm (joystick axes or head-array left/right; a stick deflected
+    with the mode button pressed selects a mode, it does not drive)."""
+    return bool((raw[0] != 0.0 or raw[1] != 0.0) and raw[MODE_BUTTON] == 0.0)
 
 
 def user_step(
@@ -652,6 +671,7 @@ def _decide(
     """Rules 3 to 6 at a free decision (not reacting, not letting go late)."""
     modes = interface.modes
     n_modes = len(modes)
+    direct = interface.mode_selection == "direct"
     zero = np.zeros(RAW_SIZE)
     period = config.period(interface)
     draws = state.draws
@@ -667,7 +687,7 @@ def _decide(
             p *= math.exp(-time / config.request_decay_time)
         return p >= 1.0 or (p > 0 and rng().random() < p)
 
-    def press(button: int, **changes: object) -> UserState:
+    def press(button: int, select: int = -1, **changes: object) -> UserState:
         wait = config.reaction_time
         if config.reaction_time_jitter > 0 or config.reaction_log_sd > 0:
             g = rng()
@@ -676,6 +696,8 @@ def _decide(
             wait = lognormal(wait, config.reaction_log_sd, g)
         raw = zero.copy()
         raw[button] = 1.0
+        if select >= 0 and direct:  # the stick into the target's sector, then the press
+            raw[0], raw[1] = sector_stick(select, n_modes)
         return _evolve(
             state,
             raw=raw,
@@ -752,14 +774,16 @@ def _decide(
         state = _evolve(state, judge=False)
         if config.accept_prob < 1.0 and rng().random() >= config.accept_prob:
             g = rng() if config.mode_temperature > 0 else None
-            target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True)
+            target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct)
             if target != mode and arm_remaining[target] > 1.0:
-                return press(MODE_BUTTON, target_mode=target, overshot=False)
+                return press(MODE_BUTTON, target, target_mode=target, overshot=False)
             target = -1
 
     if target >= 0 and target == mode:
         if config.overshoot_prob > 0 and not state.overshot and rng().random() < config.overshoot_prob:
-            return press(MODE_BUTTON, overshot=True)  # one too many: round again to the target
+            # One too many (stick centred: one step on); cycling goes round again to the target,
+            # direct selection gets back to it with its next press.
+            return press(MODE_BUTTON, overshot=True)
         state = _evolve(state, target_mode=-1, overshot=False)
         out = settle()
         if out is not None:
@@ -773,12 +797,14 @@ def _decide(
             return request()
         g = rng() if config.mode_temperature > 0 else None
         # A Boltzmann user never "chooses" the exhausted mode it is in (the oracle cannot: it is the least).
-        target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=g is not None)
+        target = choose_mode(
+            arm_remaining, mode, n_modes, config, g, exclude_current=g is not None, direct=direct
+        )
         if target == mode:  # unreachable with validated tolerances: nothing left anywhere
             return _evolve(state, raw=zero, target_mode=-1, draws=draws)
-        return press(MODE_BUTTON, target_mode=target, overshot=False)
+        return press(MODE_BUTTON, target, target_mode=target, overshot=False)
     if target >= 0:
-        return press(MODE_BUTTON, target_mode=target)
+        return press(MODE_BUTTON, target, target_mode=target)
     state = _evolve(state, target_mode=-1)
 
     # Rule 5: a mode in which commanding has stopped paying off is left for another one.
@@ -794,9 +820,11 @@ def _decide(
                 if use_requests and request_chance(config.request_instead_prob):
                     return request()
                 g = rng() if config.mode_temperature > 0 else None
-                best = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True)
+                best = choose_mode(
+                    arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct
+                )
                 if others[best] > 1.0:
-                    return press(MODE_BUTTON, target_mode=best, overshot=False)
+                    return press(MODE_BUTTON, best, target_mode=best, overshot=False)
             # Nothing else to do: the arm does not follow (the autonomy holds it at another goal,
             # or a limit): ask the system for help if it can, else keep at it and watch again.
             if use_requests:
@@ -806,9 +834,9 @@ def _decide(
     # Reviews: while the mode still helps, is another one better now? (People interleave modes.)
     if config.mode_review_rate > 0 and rng().random() < -math.expm1(-config.mode_review_rate * period):
         g = rng() if config.mode_temperature > 0 else None
-        choice = choose_mode(arm_remaining, mode, n_modes, config, g)
+        choice = choose_mode(arm_remaining, mode, n_modes, config, g, direct=direct)
         if choice != mode and arm_remaining[choice] > 1.0:
-            return press(MODE_BUTTON, target_mode=choice, overshot=False)
+            return press(MODE_BUTTON, choice, target_mode=choice, overshot=False)
 
     # Pauses (fatigue, thinking).
     if config.pause_rate > 0 and rng().random() < -math.expm1(-config.pause_rate * period):
