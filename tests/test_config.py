@@ -29,6 +29,7 @@ from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.disambiguation import preset
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
+from drake_disamb.study.runner import check_overrides
 from drake_disamb.trial import run_trial
 
 
@@ -319,3 +320,30 @@ def test_an_unstable_fixed_step_belief_integrator_is_refused(
     else:
         with pytest.raises(ValueError, match=r"scenario\.simulator_config\.max_step_size: .* too long for"):
             check_scenario(s)
+
+
+def test_interface_mode_selection_reaches_the_joystick_only() -> None:
+    s = load_scenario("reaching")
+    assert s.interface_mode_selection == "cycle"
+    assert resolve_scenario(s).interface.mode_selection == "cycle"
+    s = scenario_from_yaml(_reaching_with("interface_mode_selection: direct\n"))
+    s.interface = "joystick"
+    assert resolve_scenario(s).interface.mode_selection == "direct"
+    # The head array has no stick: it cycles, so one setting serves both interfaces of a study.
+    s.interface = "head_array"
+    assert resolve_scenario(s).interface.mode_selection == "cycle"
+    with pytest.raises(
+        ValueError, match=r"scenario\.interface_mode_selection: expected one of cycle, direct, got 'sector'"
+    ):
+        scenario_from_yaml(_reaching_with("interface_mode_selection: sector\n"))
+    s.interface_mode_selection = "sector"
+    with pytest.raises(
+        ValueError, match=r"scenario\.interface_mode_selection: expected one of cycle, direct, got 'sector'"
+    ):
+        resolve_scenario(s)
+
+
+def test_interface_mode_selection_is_an_ablation_switch() -> None:
+    check_overrides({"interface_mode_selection": "direct"})
+    with pytest.raises(ValueError, match=r"--switch interface_mode_selection='sector'"):
+        check_overrides({"interface_mode_selection": "sector"})

@@ -17,6 +17,8 @@ and returns a :class:`TrialConfig`:
 - the mode-selection method, the request latency (the interface's: it delays the switch) and, in
   the Automatic paradigm, the trigger (its ``confidence_threshold`` written out as ``rho1`` when
   left out; without its request button the interface logs presses but serves none);
+- the interface's mode selection (``interface_mode_selection``: the joystick's; the head array
+  always cycles);
 - the simulated user's config (its seed is the scenario's; in the manual and automatic paradigms
   it never asks for disambiguation), the interface's, the station's (Drake's
   ``MultibodyPlantConfig``, the start posture and the scene objects) and Drake's ``SimulatorConfig``.
@@ -44,7 +46,7 @@ from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig, resolve_rhos
 from drake_disamb.core.disambiguation import DisambiguationConfig, preset
 from drake_disamb.core.inference import DFTParams
-from drake_disamb.core.interfaces import InterfaceConfig
+from drake_disamb.core.interfaces import MODE_SELECTIONS, InterfaceConfig
 from drake_disamb.core.user import UserConfig
 
 T = TypeVar("T")
@@ -187,6 +189,12 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         automatic = _named(f"{name}.disambiguation.automatic", s.disambiguation.automatic.to_config)
         if automatic.confidence_threshold is None:
             automatic = dataclasses.replace(automatic, confidence_threshold=rhos[0])
+    selection = s.interface_mode_selection
+    if selection not in MODE_SELECTIONS:
+        raise ValueError(
+            f"{name}.interface_mode_selection: expected one of {', '.join(MODE_SELECTIONS)}, "
+            f"got {fmt(selection)}"
+        )
     interface = _named(
         f"{name}.initial_mode",
         lambda: InterfaceConfig(
@@ -195,6 +203,8 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
             initial_mode=s.initial_mode,
             request_latency=float(latency),
             serve_requests=automatic is None or automatic.request_button,
+            # The head array has no stick to select with: it always cycles.
+            mode_selection=selection if s.interface == "joystick" else "cycle",
         ),
     )
     home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}

@@ -46,6 +46,7 @@ from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
 from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
+from drake_disamb.core.interfaces import MODE_SELECTIONS
 from drake_disamb.core.user import UserConfig
 from drake_disamb.station import default_plant_config
 
@@ -344,6 +345,12 @@ class Scenario:
         task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
         description: Free text.
         interface: ``"joystick"`` or ``"head_array"``.
+        interface_mode_selection: How the joystick's mode button selects a mode: ``"cycle"``
+            (default: the next mode) or ``"direct"`` (a press with the stick deflected selects the
+            mode of the stick's sector, one press per change; centred, it cycles: see
+            :mod:`drake_disamb.core.interfaces`). The simulated user selects the way the interface
+            offers. The head array, with no stick, always cycles: the setting applies to the
+            joystick's trials only, so one setting serves a protocol with both interfaces.
         paradigm: ``"manual"`` (mode button only), ``"disambiguation"`` (plus the request
             button) or ``"automatic"`` (plus the system's own switches, :class:`AutomaticSpec`).
         inference, disambiguation, blending, autonomy, user: Component settings.
@@ -374,6 +381,7 @@ class Scenario:
     task: str = "reaching"
     description: str = ""
     interface: str = field(default="head_array", metadata=_meta(choices=INTERFACES))
+    interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
     paradigm: str = field(default="disambiguation", metadata=_meta(choices=PARADIGMS))
     inference: InferenceSpec = field(default_factory=InferenceSpec)
     disambiguation: DisambiguationSpec = field(default_factory=DisambiguationSpec)
