@@ -220,3 +220,17 @@ def test_unknown_names_and_bad_scenarios() -> None:
     goals[0] = dataclasses.replace(goals[0], position=[0.0, -0.35, 0.3])  # the gripper's start
     with pytest.raises(ValueError, match=r"scenario\.goals\[0\]\.position: goal 'red_box' is on top of"):
         build_shared_control_diagram(dataclasses.replace(s, goals=goals))
+
+
+def test_direct_mode_selection_reaches_with_fewer_mode_button_presses() -> None:
+    # The same joystick trial (same seed), cycling vs direct selection: the simulated user reaches
+    # its target modes in one press each instead of cycling through the modes on the way.
+    results = {}
+    for selection in ("cycle", "direct"):
+        scenario = with_overrides(load_scenario("reaching"), interface="joystick", goal=1, seed=0)
+        scenario.interface_mode_selection = selection
+        scenario.duration = 20.0
+        results[selection] = run_trial(scenario, progress=False)
+    cycle, direct = results["cycle"], results["direct"]
+    assert cycle.success and direct.success
+    assert 0 < direct.mode_switches < cycle.mode_switches
