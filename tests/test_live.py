@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_disamb.core.interfaces import InterfaceConfig
+from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update, sector_stick
 from drake_disamb.systems.live import (
     AXIS_SLIDERS,
     LIVE_CONTROLS,
@@ -77,6 +77,15 @@ def test_gamepad_buttons_press_on_rising_edges_only() -> None:
         s = live_raw_step(s, k * 0.01, "joystick", np.zeros(4), pad_buttons=(level, 0))
         presses += int(s.raw[2])
     assert presses == 2
+
+
+def test_a_live_mode_click_with_the_stick_deflected_selects_directly() -> None:
+    # The page sends the axes with the Mode press, so direct selection needs no control of its own.
+    cfg = InterfaceConfig(kind="joystick", mode_selection="direct")
+    itf = initial_state(cfg)
+    s = live_raw_step(LiveState(), 0.0, "joystick", np.array([0, 0, 1, 0]), axes=sector_stick(3, 5))
+    itf, events = interface_update(itf, s.raw, 0.0, cfg)
+    assert itf.mode == 3 and [(e.from_mode, e.to_mode) for e in events] == [(0, 3)]
 
 
 def test_validation_and_state_round_trip() -> None:

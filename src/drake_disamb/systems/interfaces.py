@@ -241,6 +241,8 @@ class JoystickInterface(InterfaceSystem):
 
     Modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper``; ``axis_x`` drives the first dimension of
     the mode, ``axis_y`` the second. Speeds at full deflection: 0.13 m/s, 0.4 rad/s by default.
+    The mode button cycles the modes, or with ``config.mode_selection == "direct"`` selects the mode
+    of the stick's sector when the stick is deflected (:func:`~drake_disamb.core.interfaces.sector_mode`).
     Ports as :class:`InterfaceSystem`: inputs ``raw`` (4: axis_x, axis_y, mode_button,
     disambiguation_button), ``disambiguation_mode`` (1), ``automatic_request_count`` (1); outputs
     ``u_h`` (6), ``gripper_command`` (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count``

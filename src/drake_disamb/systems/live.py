@@ -183,6 +183,9 @@ class MeshcatLiveInput(LeafSystem):
     - joystick: two axis sliders in ``[-1, 1]`` (keys A/D and S/W step them), a button that
       re-centres them (C), Mode (M) and Request (space). A browser gamepad, when one is connected,
       takes over: left stick for the axes (up is +y), buttons 0 and 1 for mode and request.
+      The axes go out with the Mode press, so with ``interface.mode_selection == "direct"`` a
+      person sets the sliders (or the stick) into a mode's sector and presses Mode to select it,
+      and re-centres them (C) to cycle (:mod:`drake_disamb.core.interfaces`); no extra control.
 
     State: discrete :class:`LiveState` vector, updated every ``interface.control_period`` from
     t = 0; the page is read in that update. Run the simulator at real time (rate 1) so the person
