@@ -35,7 +35,6 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import yaml
 from _host import HostMeter, host_summary
 
 from drake_disamb.study import protocol as P
@@ -44,18 +43,8 @@ from drake_disamb.study.runner import default_workers, plan_study, records_by_id
 
 
 def protocol_of(args: argparse.Namespace) -> P.Protocol:
-    """The protocol to run, less what this build's scenario schema cannot run (said on stdout)."""
-    text = Path(args.protocol).read_text(encoding="utf-8") if args.protocol else P.default_protocol_text()
-    data = yaml.safe_load(text)
-    support = P.schema_support()
-    dropped = [p["name"] for p in data["paradigms"] if p["name"] not in support["paradigms"]]
-    data["paradigms"] = [p for p in data["paradigms"] if p["name"] in support["paradigms"]]
-    if not support["request_latency"] and data.get("request_latency") is not None:
-        dropped.append("request_latency")
-        data["request_latency"] = None
-    if dropped:
-        print(f"note: this build's scenario schema lacks {', '.join(dropped)}: run without", flush=True)
-    protocol = P.protocol_from_dict(data)
+    """The protocol to run: ``--protocol`` or the paper's, with ``--quick`` and ``--subjects``."""
+    protocol = P.load_protocol(args.protocol) if args.protocol else P.default_protocol()
     if args.quick:
         protocol = P.quick_protocol(protocol)
     if args.subjects:
