@@ -16,7 +16,7 @@ from drake_disamb.cli import main
 from drake_disamb.commands import demo
 from drake_disamb.commands._first_run import COMPILING, announce_kernel_compilation
 from drake_disamb.commands._meshcat import wait_for_browser
-from drake_disamb.progress import SimulationProgress
+from drake_disamb.progress import SimulationProgress, TrialProgress
 
 
 def test_compilation_is_announced_once_before_it_happens_and_not_when_cached() -> None:
@@ -65,6 +65,29 @@ def test_progress_off_a_terminal_writes_a_line_per_interval() -> None:
     lines = out.getvalue().splitlines()
     assert 1 <= len(lines) <= 4, lines
     assert all(line.startswith("simulated ") and "(limit 60 s)" in line for line in lines)
+
+
+def test_trial_progress_counts_and_writes_a_last_line() -> None:
+    from types import SimpleNamespace
+
+    out = io.StringIO()
+    progress = TrialProgress(3, stream=out, interval=3600.0)
+    progress.update(SimpleNamespace(success=True), None)
+    progress.update(SimpleNamespace(success=False), None)
+    assert out.getvalue() == ""  # no line due yet
+    progress.update(None, "S01-joystick-reaching-manual-r0: boom")
+    progress.close()
+    lines = out.getvalue().splitlines()
+    assert lines == [
+        "error: S01-joystick-reaching-manual-r0: boom",
+        lines[1],
+    ] and lines[1].startswith("trials 3/3, 1 unsuccessful, 1 errors, ")
+    quiet = io.StringIO()
+    progress = TrialProgress(1, stream=quiet, quiet=True)
+    progress.update(None, "boom")
+    assert quiet.getvalue() == "error: boom\n"  # quiet shows errors only
+    with pytest.raises(ValueError, match="interval"):
+        TrialProgress(1, interval=0.0)
 
 
 def test_progress_on_a_terminal_has_no_false_total() -> None:

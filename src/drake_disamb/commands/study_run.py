@@ -22,10 +22,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 HELP = "Run the study protocol with simulated subjects (records in DIR/trials.jsonl, traces in DIR/traces)."
 
@@ -144,69 +143,6 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
     pool.shutdown(wait=True)
 
 
-class StudyProgress:
-    """Trials done, unsuccessful and errors, with an ETA: a ``tqdm`` bar on a terminal, else a line
-    every ``interval`` seconds and at the end."""
-
-    def __init__(
-        self, total: int, stream: TextIO | None = None, quiet: bool = False, interval: float = 10.0
-    ) -> None:
-        self.total = total
-        self.done = 0
-        self.unsuccessful = 0
-        self.errors = 0
-        self._stream = sys.stderr if stream is None else stream
-        self._quiet = quiet
-        self._interval = interval
-        self._start = time.monotonic()
-        self._next = self._start + interval
-        self._bar: Any = None
-        if not quiet and getattr(self._stream, "isatty", lambda: False)():
-            from tqdm import tqdm
-
-            self._bar = tqdm(total=total, file=self._stream, unit="trial", dynamic_ncols=True)
-            self._bar.set_postfix(unsuccessful=0, errors=0)
-
-    def update(self, record: Any, error: str | None) -> None:
-        """One trial finished (``record``), or raised (``error``)."""
-        self.done += 1
-        if error is not None:
-            self.errors += 1
-            self.write(f"error: {error}")
-        elif not record.success:
-            self.unsuccessful += 1
-        if self._bar is not None:
-            self._bar.update(1)
-            self._bar.set_postfix(unsuccessful=self.unsuccessful, errors=self.errors)
-            return
-        now = time.monotonic()
-        if not self._quiet and (now >= self._next or self.done == self.total):
-            self._next = now + self._interval
-            self.write(self.line(now))
-
-    def line(self, now: float | None = None) -> str:
-        elapsed = (time.monotonic() if now is None else now) - self._start
-        eta = elapsed / self.done * (self.total - self.done) if self.done else float("nan")
-        eta_text = f", ETA {eta:.0f} s" if self.done < self.total and self.done else ""
-        return (
-            f"trials {self.done}/{self.total}, {self.unsuccessful} unsuccessful, {self.errors} errors, "
-            f"{elapsed:.0f} s{eta_text}"
-        )
-
-    def write(self, text: str) -> None:
-        if self._quiet and not text.startswith("error"):
-            return
-        if self._bar is not None:
-            self._bar.write(text, file=self._stream)
-        else:
-            print(text, file=self._stream, flush=True)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-            self._bar = None
-
-
 def error(command: str, message: object) -> int:
     print(f"drake-disamb study {command}: error: {message}", file=sys.stderr)
     return 2
@@ -214,6 +150,7 @@ def error(command: str, message: object) -> int:
 
 def execute(plans: list[Any], args: argparse.Namespace, command: str) -> int:
     """Run the pending trials of ``plans`` on one executor, with a progress display."""
+    from drake_disamb.progress import TrialProgress
     from drake_disamb.study.runner import run_study
 
     total = sum(len(p.pending) for p in plans)
@@ -221,7 +158,7 @@ def execute(plans: list[Any], args: argparse.Namespace, command: str) -> int:
     try:
         with open_executor(args.workers, args.scheduler) as (executor, where):
             print(f"{total} trials to run ({skipped} already done) on {where}", flush=True)
-            progress = StudyProgress(total, quiet=args.quiet)
+            progress = TrialProgress(total, quiet=args.quiet)
             errors = 0
             try:
                 for plan in plans:
