@@ -132,26 +132,17 @@ class TrialRecord:
                 f"TrialRecord {self.trial_id!r}: button_presses ({self.button_presses}) must be "
                 f"mode_switches + requests ({self.mode_switches} + {self.requests})"
             )
-        if len(self.mode_switch_times) != self.mode_switches:
-            raise RecordError(
-                f"TrialRecord {self.trial_id!r}: {len(self.mode_switch_times)} mode_switch_times for "
-                f"mode_switches={self.mode_switches}"
-            )
-        if len(self.mode_switch_modes) != self.mode_switches:
-            raise RecordError(
-                f"TrialRecord {self.trial_id!r}: {len(self.mode_switch_modes)} mode_switch_modes for "
-                f"mode_switches={self.mode_switches}"
-            )
-        if len(self.request_times) != self.requests:
-            raise RecordError(
-                f"TrialRecord {self.trial_id!r}: {len(self.request_times)} request_times for "
-                f"requests={self.requests}"
-            )
-        if len(self.automatic_switch_times) != self.automatic_switches:
-            raise RecordError(
-                f"TrialRecord {self.trial_id!r}: {len(self.automatic_switch_times)} "
-                f"automatic_switch_times for automatic_switches={self.automatic_switches}"
-            )
+        for times, count in (
+            ("mode_switch_times", "mode_switches"),
+            ("mode_switch_modes", "mode_switches"),
+            ("request_times", "requests"),
+            ("automatic_switch_times", "automatic_switches"),
+        ):
+            if len(getattr(self, times)) != getattr(self, count):
+                raise RecordError(
+                    f"TrialRecord {self.trial_id!r}: {len(getattr(self, times))} {times} for "
+                    f"{count}={getattr(self, count)}"
+                )
         for name in ("duration", "wall_time"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
