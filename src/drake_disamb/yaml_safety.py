@@ -26,6 +26,7 @@ Limits (module constants, overridable per call):
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -292,8 +293,54 @@ __all__ = [
     "MAX_YAML_NODES",
     "MAX_YAML_BYTES",
     "MAX_YAML_DEPTH",
+    "SafeYamlLoader",
     "check_yaml_text",
     "decode_yaml_bytes",
+    "load_yaml_document",
     "read_yaml_file",
     "yaml_error_message",
 ]
+
+
+class SafeYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
+    """PyYAML's safe loader (libyaml's parser when there is one) with two changes.
+
+    A number written with an exponent but no dot (``1e-6``) is a float, as in YAML 1.2 (YAML 1.1
+    reads it as a string, which Drake's loader then converts for a ``float`` field). A scalar the
+    constructor cannot convert (a date such as ``2020-13-45``) is reported with its line instead
+    of a bare ``ValueError``.
+    """
+
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        try:
+            return super().construct_object(node, deep)
+        except (ValueError, TypeError, OverflowError) as exc:
+            message = str(exc) if len(str(exc)) <= 200 else str(exc)[:197] + "..."
+            raise yaml.constructor.ConstructorError(None, None, message, node.start_mark) from None
+
+
+SafeYamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
+
+
+def load_yaml_document(text: str | bytes, source: str, *, root: str) -> Any:
+    """Check ``text`` (:func:`check_yaml_text`, bytes decoded first) and parse its one document
+    with :class:`SafeYamlLoader`: the plain data of a scenario, a protocol, ...
+
+    Raises:
+        ValueError: unsafe or malformed YAML (naming ``source`` and the line), or an empty
+            document (``expected a <root> mapping``).
+    """
+    if isinstance(text, bytes | bytearray):
+        text = decode_yaml_bytes(bytes(text), source)
+    check_yaml_text(text, source, root=root)
+    try:
+        data = yaml.load(text, Loader=SafeYamlLoader)  # noqa: S506 (a safe loader)
+    except yaml.YAMLError as exc:
+        raise ValueError(yaml_error_message(exc, source)) from None
+    if data is None:
+        raise ValueError(f"{source}: empty YAML document, expected a {root} mapping")
+    return data

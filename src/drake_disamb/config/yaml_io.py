@@ -23,7 +23,6 @@ written out but those that are ``None``; the text loads back to an equal scenari
 from __future__ import annotations
 
 import dataclasses
-import re
 from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
@@ -36,33 +35,10 @@ from drake_disamb.config.checks import check_data, cut, fmt
 from drake_disamb.config.resolve import validate_scenario
 from drake_disamb.config.schema import INTERFACES, PARADIGMS, Scenario, to_plain
 from drake_disamb.config.validation import check_counts
-from drake_disamb.yaml_safety import check_yaml_text, decode_yaml_bytes, read_yaml_file, yaml_error_message
+from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
 
 EMBEDDED_TASKS: tuple[str, ...] = ("reaching", "pouring")
 """Names of the scenarios shipped as package data in ``drake_disamb/tasks``."""
-
-
-class _YamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
-    """PyYAML's safe loader (libyaml's parser when there is one) with two changes.
-
-    A number written with an exponent but no dot (``1e-6``) is a float, as in YAML 1.2 (YAML 1.1
-    reads it as a string, which Drake's loader then converts for a ``float`` field). A scalar the
-    constructor cannot convert (a date such as ``2020-13-45``) is reported with its line instead
-    of a bare ``ValueError``.
-    """
-
-    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
-        try:
-            return super().construct_object(node, deep)
-        except (ValueError, TypeError, OverflowError) as exc:
-            raise yaml.constructor.ConstructorError(None, None, cut(str(exc), 200), node.start_mark) from None
-
-
-_YamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
 
 
 def _typed(data: Any, text: str | None, source: str) -> Scenario:
@@ -95,15 +71,7 @@ def scenario_from_yaml(text: str | bytes, source: str = "<string>") -> Scenario:
     Raises:
         ValueError: on malformed or unsafe YAML (naming ``source`` and the line) or any invalid field.
     """
-    if isinstance(text, bytes | bytearray):
-        text = decode_yaml_bytes(bytes(text), source)
-    check_yaml_text(text, source, root="scenario")
-    try:
-        data = yaml.load(text, Loader=_YamlLoader)  # noqa: S506 (a safe loader)
-    except yaml.YAMLError as exc:
-        raise ValueError(yaml_error_message(exc, source)) from None
-    if data is None:
-        raise ValueError(f"{source}: empty YAML document, expected a scenario mapping")
+    data = load_yaml_document(text, source, root="scenario")
     if not isinstance(data, dict):
         raise ValueError(f"scenario: expected a mapping of Scenario fields, got {fmt(data)}")
     return _typed(data, text, source)

@@ -44,7 +44,7 @@ from pydrake.common.yaml import yaml_load_typed
 
 from drake_disamb.config.checks import check_data, cut, fmt
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
-from drake_disamb.yaml_safety import check_yaml_text, decode_yaml_bytes, read_yaml_file, yaml_error_message
+from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
 
 __all__ = [
     "COUNTERBALANCE",
@@ -223,15 +223,7 @@ def protocol_from_dict(data: Any, source: str = "protocol") -> Protocol:
 
 def protocol_from_yaml(text: str | bytes, source: str = "<string>") -> Protocol:
     """Parse and validate a protocol's YAML text; errors name ``source``, the line or the field."""
-    if isinstance(text, bytes | bytearray):
-        text = decode_yaml_bytes(bytes(text), source)
-    check_yaml_text(text, source, root="protocol")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ValueError(yaml_error_message(exc, source)) from None
-    if data is None:
-        raise ValueError(f"{source}: empty YAML document, expected a protocol mapping")
+    data = load_yaml_document(text, source, root="protocol")
     if not isinstance(data, dict):
         raise ValueError(f"{source}: expected a mapping of Protocol fields, got {fmt(data)}")
     try:
