@@ -144,6 +144,20 @@ class Protocol:
         return self.subjects * per_subject
 
 
+def _check_choices(path: str, items: list[Any], choices: tuple[str, ...], what: str, attr: str = "") -> None:
+    """``items`` (or their ``attr``) are a non-empty list of distinct ``choices``; ``what`` names one
+    (with its article) in the messages, which name ``path``."""
+    keys = [getattr(item, attr) for item in items] if attr else list(items)
+    if not keys:
+        raise ValueError(f"{path}: expected at least one {what.split(' ', 1)[1]}, got []")
+    for i, key in enumerate(keys):
+        if key not in choices:
+            field_path = f"{path}[{i}].{attr}" if attr else f"{path}[{i}]"
+            raise ValueError(f"{field_path}: expected one of {', '.join(choices)}, got {fmt(key)}")
+    if len(set(keys)) != len(keys):
+        raise ValueError(f"{path}: {what} is listed twice: {keys}")
+
+
 def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
     """Check the protocol's values; returns it. Raises ``ValueError`` naming the field and value."""
     from drake_disamb.config.schema import INTERFACES, PARADIGMS
@@ -151,44 +165,20 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
 
     if not (isinstance(protocol.subjects, int) and 1 <= protocol.subjects <= 999):
         raise ValueError(f"{name}.subjects: expected an integer in [1, 999], got {fmt(protocol.subjects)}")
-    if not protocol.interfaces:
-        raise ValueError(f"{name}.interfaces: expected at least one interface, got []")
-    for i, itf in enumerate(protocol.interfaces):
-        if itf not in INTERFACES:
-            raise ValueError(
-                f"{name}.interfaces[{i}]: expected one of {', '.join(INTERFACES)}, got {fmt(itf)}"
-            )
-    if len(set(protocol.interfaces)) != len(protocol.interfaces):
-        raise ValueError(f"{name}.interfaces: an interface is listed twice: {protocol.interfaces}")
-    if not protocol.tasks:
-        raise ValueError(f"{name}.tasks: expected at least one task, got []")
+    _check_choices(f"{name}.interfaces", protocol.interfaces, INTERFACES, "an interface")
+    _check_choices(f"{name}.tasks", protocol.tasks, EMBEDDED_TASKS, "a task", attr="task")
     for i, t in enumerate(protocol.tasks):
-        if t.task not in EMBEDDED_TASKS:
-            raise ValueError(
-                f"{name}.tasks[{i}].task: expected one of {', '.join(EMBEDDED_TASKS)}, got {fmt(t.task)}"
-            )
         if not t.start_poses:
             raise ValueError(f"{name}.tasks[{i}].start_poses: expected at least one start pose, got []")
         pose_names = [p.name for p in t.start_poses]
         if len(set(pose_names)) != len(pose_names):
             raise ValueError(f"{name}.tasks[{i}].start_poses: a name is used twice: {pose_names}")
-    if len({t.task for t in protocol.tasks}) != len(protocol.tasks):
-        raise ValueError(f"{name}.tasks: a task is listed twice: {[t.task for t in protocol.tasks]}")
-    if not protocol.paradigms:
-        raise ValueError(f"{name}.paradigms: expected at least one paradigm, got []")
+    _check_choices(f"{name}.paradigms", protocol.paradigms, PARADIGMS, "a paradigm", attr="name")
     for i, p in enumerate(protocol.paradigms):
-        if p.name not in PARADIGMS:
-            raise ValueError(
-                f"{name}.paradigms[{i}].name: expected one of {', '.join(PARADIGMS)}, got {fmt(p.name)}"
-            )
         if not (isinstance(p.trials, int) and 1 <= p.trials <= 1000):
             raise ValueError(
                 f"{name}.paradigms[{i}].trials: expected an integer in [1, 1000], got {fmt(p.trials)}"
             )
-    if len({p.name for p in protocol.paradigms}) != len(protocol.paradigms):
-        raise ValueError(
-            f"{name}.paradigms: a paradigm is listed twice: {[p.name for p in protocol.paradigms]}"
-        )
     if protocol.disambiguation_method not in METHODS:
         raise ValueError(
             f"{name}.disambiguation_method: expected one of {', '.join(METHODS)}, "
