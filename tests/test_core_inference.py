@@ -18,6 +18,7 @@ from drake_disamb.core.inference import (
     dft_euler_step,
     dft_euler_update,
     dft_mass_conserving_rhs,
+    dft_mass_conserving_rhs_from_drive,
     dft_rhs,
     directedness,
     memory_step,
@@ -338,3 +339,33 @@ def test_bad_params_name_the_field(kwargs: dict, match: str) -> None:
 def test_rest_of_wrong_size_is_rejected() -> None:
     with pytest.raises(ValueError, match="rest"):
         dft_drive(np.zeros(3), np.zeros(3), np.ones((3, 3)), DFTParams(rest=np.array([0.5, 0.5])))
+
+
+@settings(max_examples=60, deadline=None)
+@given(scenes())
+def test_guard_time_keeps_an_euler_step_of_that_length_on_the_simplex(scene) -> None:  # noqa: ANN001
+    n, goals, x_r, u, p, P, rng = scene
+    params = DFTParams(transition=P, agreement=True, proximity=True)
+    u_a = rng.normal(size=(n, 6))
+    free = dft_mass_conserving_rhs(p, 20.0 * u, x_r, goals, params, u_a)  # fast: entries cross zero
+    guarded = dft_mass_conserving_rhs(p, 20.0 * u, x_r, goals, params, u_a, guard_time=0.01)
+    assert abs(guarded.sum()) < 1e-9 * max(1.0, np.abs(free).max())  # mass is still conserved
+    assert np.all(p + 0.01 * guarded >= -1e-12)  # one 10 ms Euler step stays >= 0
+    assert np.all(guarded >= np.minimum(free, -p / 0.01) - 1e-9)  # never falls faster than p / T
+    if np.all(p + 0.01 * free >= 0.0):  # nothing to guard: the flow is unchanged
+        np.testing.assert_allclose(guarded, free, rtol=1e-12, atol=1e-12)
+
+
+def test_guard_time_zero_is_the_plain_flow_and_bad_values_are_named() -> None:
+    p, drive = np.array([0.01, 0.49, 0.5]), np.array([-5.0, 2.0, 3.0])  # the first goal's share falls fast
+    params = DFTParams()
+    plain = dft_mass_conserving_rhs_from_drive(p, drive, params)
+    assert plain[0] < -p[0] / 0.01  # it would cross zero within 10 ms
+    np.testing.assert_array_equal(dft_mass_conserving_rhs_from_drive(p, drive, params, 0.0), plain)
+    guarded = dft_mass_conserving_rhs_from_drive(p, drive, params, 0.01)
+    assert guarded[0] == pytest.approx(-p[0] / 0.01) and guarded.sum() == pytest.approx(0.0, abs=1e-12)
+    # The mass it did not lose is taken from the others in proportion to their mass.
+    np.testing.assert_allclose(plain[1:] - guarded[1:], (plain[0] - guarded[0]) * p[1:] / p[1:].sum() * -1.0)
+    for bad in (-0.01, np.nan, np.inf, "0.01"):
+        with pytest.raises(ValueError, match="guard_time: expected a finite number >= 0"):
+            dft_mass_conserving_rhs_from_drive(p, drive, params, bad)  # type: ignore[arg-type]

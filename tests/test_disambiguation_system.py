@@ -79,20 +79,22 @@ def test_last_result_updates_when_request_count_grows() -> None:
     simulator.AdvanceTo(0.035)
     assert system.GetOutputPort("last_result").Eval(context) == LastResult(result=None, served=False)
     assert system.get_last_result(context) is None
-    # The interface served a request at the tick t = 0.03 (with belief [0.5, 0.5]) and its count
-    # grew; by the next tick the belief has changed: the logged result must be the one served.
+    # The interface serves a request at the tick t = 0.04 (with belief [0.5, 0.5] and mode 0): its
+    # update, which Drake runs before this system's discrete one, counts it and switches the mode.
+    # The logged result must be the one served: from mode 0, not from the mode switched to.
     system.GetInputPort("request_count").FixValue(context, [1.0])
-    system.GetInputPort("belief").FixValue(context, [0.9, 0.1])
-    simulator.AdvanceTo(0.045)
+    system.GetInputPort("current_mode").FixValue(context, [1.0])
+    simulator.AdvanceTo(0.041)
     last = system.GetOutputPort("last_result").Eval(context)
     assert isinstance(last, LastResult) and last.served
     result = last.result
     assert isinstance(result, DisambiguationResult) and system.get_last_result(context) is result
     served = disambiguate([0.5, 0.5], EE_POSE[:3], GOAL_POSES[:, :3], HEAD_ARRAY_ARM_MODES, current_mode=0)
-    assert result.mode == served.mode == 1
+    assert result.mode == served.mode == 1 and result.current_mode == 0
     np.testing.assert_array_equal(result.mode_scores, served.mode_scores)
     # No new request: the result stays, even though the inputs change.
     system.GetInputPort("belief").FixValue(context, [0.3, 0.7])
+    system.GetInputPort("current_mode").FixValue(context, [3.0])
     simulator.AdvanceTo(0.085)
     later = system.get_last_result(context)
     assert later.mode == 1
@@ -208,7 +210,5 @@ def test_interface_switches_mode_in_the_request_period() -> None:
     simulator.AdvanceTo(0.0501)  # just after the tick at t = 0.05
     assert interface.GetOutputPort("mode").Eval(icontext)[0] == 1.0  # switched in that same period
     assert interface.GetOutputPort("request_count").Eval(icontext)[0] == 1.0
-    assert disamb.get_last_result(dcontext) is None  # logged one period later
-    simulator.AdvanceTo(0.0601)
-    result = disamb.get_last_result(dcontext)
+    result = disamb.get_last_result(dcontext)  # logged in that same period
     assert result.mode == 1 and result.current_mode == 0

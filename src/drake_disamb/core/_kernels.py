@@ -284,9 +284,23 @@ def _euler_rate_factor(total: float, tau1: float, h: float) -> float:  # pragma:
 
 
 @njit(cache=True)
-def _dft_flow_rows(p, drive, P, tau1, conserve, h, out):  # pragma: no cover - compiled
+def _guard_floor(pj: float, guard_rate: float) -> float:  # pragma: no cover - compiled
+    """Lowest rate of change the positivity guard lets an entry ``pj`` have (1/s)."""
+    if pj <= 0.0:
+        return 0.0
+    return -guard_rate * pj if guard_rate > 0.0 else -np.inf
+
+
+@njit(cache=True)
+def _dft_flow_rows(p, drive, P, tau1, conserve, h, guard_rate, out):  # pragma: no cover - compiled
     """Per row: ``f(p)`` (``conserve`` False) or the mass-conserving flow ``f - p sum(f)`` with
-    the Euler-equivalent rate factor (``h > 0``) and the positivity guard (``conserve`` True)."""
+    the Euler-equivalent rate factor (``h > 0``) and the positivity guard (``conserve`` True).
+
+    The guard: an entry at (or below) zero may not decrease further, and with ``guard_rate`` ``g``
+    > 0 (1/s) a positive entry may not decrease faster than ``g p`` (it decays towards zero with a
+    time constant of at least ``1/g`` instead of reaching it in finite time), so that an explicit
+    step of up to ``1/g`` never leaves the simplex. The mass a guarded entry would have lost is
+    taken from the others in proportion to their mass."""
     B, n = out.shape
     for r in range(B):
         _dft_rhs_row(p, r, drive, r, P, r if P.shape[0] > 1 else 0, tau1, out, r)
@@ -302,21 +316,50 @@ def _dft_flow_rows(p, drive, P, tau1, conserve, h, out):  # pragma: no cover - c
             factor = _euler_rate_factor(total, tau1, h)
             for j in range(n):
                 f[j] = f[j] * factor
-        # Positivity guard: an entry at (or below) zero may not decrease further; the mass it
-        # would have lost is taken from the others in proportion to their mass.
+        _guard_row(p, r, guard_rate, f)
+
+
+@njit(cache=True)
+def _guard_row(p, r, guard_rate, f):  # pragma: no cover - compiled
+    """The positivity guard on the flow ``f`` of row ``r``, in place (see :func:`_dft_flow_rows`).
+
+    An entry falling faster than its floor is held at it; the mass it would have lost is taken
+    from the free entries in proportion to their mass (or, if only entries at zero are free, from
+    those rising, in proportion to their rate), which can push another one past its floor, so the
+    pass repeats (at most ``n`` times: each pass holds one more entry)."""
+    n = f.shape[0]
+    held = np.zeros(n, dtype=np.bool_)
+    for _ in range(n):
         excess = 0.0
+        for j in range(n):
+            if not held[j]:
+                floor = _guard_floor(p[r, j], guard_rate)
+                if f[j] < floor:
+                    excess += f[j] - floor
+                    f[j] = floor
+                    held[j] = True
+        if excess >= 0.0:
+            return
         free_mass = 0.0
         for j in range(n):
-            if p[r, j] <= 0.0 and f[j] < 0.0:
-                excess += f[j]
-            else:
+            if not held[j]:
                 free_mass += max(p[r, j], 0.0)
-        if excess < 0.0:
+        if free_mass <= 0.0:
+            # Only entries at zero are free: those rising rise less (by no more than they rise:
+            # the sum of the flow was zero, so they rise by at least the excess in all).
+            rising = 0.0
             for j in range(n):
-                if p[r, j] <= 0.0 and f[j] < 0.0:
-                    f[j] = 0.0
-                else:
-                    f[j] = f[j] + (max(p[r, j], 0.0) / free_mass if free_mass > 0.0 else 0.0) * excess
+                if not held[j]:
+                    rising += max(f[j], 0.0)
+            if rising > 0.0:
+                for j in range(n):
+                    if not held[j]:
+                        f[j] = f[j] + max(f[j], 0.0) / rising * excess
+            return
+        share = excess / free_mass
+        for j in range(n):
+            if not held[j]:
+                f[j] = f[j] + max(p[r, j], 0.0) * share
 
 
 @njit(cache=True)

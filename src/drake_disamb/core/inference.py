@@ -58,6 +58,7 @@ from drake_disamb.core._kernels import (
     _normalize_rows,
     _xi_rows,
 )
+from drake_disamb.core._validation import is_real
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
 
 TINY = np.finfo(float).tiny
@@ -419,7 +420,7 @@ def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDA
     """``f(p) = -(1/tau1) P^T p + drive`` (1/s), with ``drive`` from :func:`dft_drive`."""
     rows = _BeliefRows(p, drive, params)
     out = np.empty_like(rows.p)
-    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, False, 0.0, out)
+    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, False, 0.0, 0.0, out)
     return out.reshape(*rows.batch, rows.n)
 
 
@@ -442,28 +443,37 @@ def dft_mass_conserving_rhs(
     x_g: ArrayLike,
     params: DFTParams,
     u_a: ArrayLike | None = None,
+    guard_time: float = 0.0,
 ) -> NDArray[np.float64]:
     """``f(p) - p * sum(f(p))``: the DFT flow projected so that ``sum(p)`` is conserved.
 
     To first order in the step this equals the authors' "Euler step then renormalise". Entries
     that have reached zero are not driven further negative (positivity guard), and the removed
-    mass is taken proportionally from the others so the sum is still conserved.
+    mass is taken proportionally from the others so the sum is still conserved. With
+    ``guard_time`` ``T`` > 0 (s) the guard also keeps a positive entry from falling faster than
+    ``p / T``: it decays towards zero with a time constant of at least ``T`` instead of reaching it
+    in finite time, so an explicit integration step of up to ``T`` never takes it below zero
+    (where the authors clip; the live system passes its control period).
     """
-    return dft_mass_conserving_rhs_from_drive(p, dft_drive(u_h, x_r, x_g, params, u_a), params)
+    drive = dft_drive(u_h, x_r, x_g, params, u_a)
+    return dft_mass_conserving_rhs_from_drive(p, drive, params, guard_time)
 
 
 def dft_mass_conserving_rhs_from_drive(
-    p: ArrayLike, drive: ArrayLike, params: DFTParams
+    p: ArrayLike, drive: ArrayLike, params: DFTParams, guard_time: float = 0.0
 ) -> NDArray[np.float64]:
     """:func:`dft_mass_conserving_rhs` from a precomputed ``drive`` (:func:`dft_drive`).
 
     The drive does not depend on ``p``: an integrator that evaluates the right-hand side several
     times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
     """
+    if not (is_real(guard_time) and guard_time >= 0):
+        raise ValueError(f"guard_time: expected a finite number >= 0 (s), got {guard_time!r}")
     rows = _BeliefRows(p, drive, params)
     out = np.empty_like(rows.p)
     h = params.euler_equivalent_step
-    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), out)
+    rate = 1.0 / guard_time if guard_time > 0 else 0.0
+    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), rate, out)
     return out.reshape(*rows.batch, rows.n)
 
 

@@ -163,9 +163,21 @@ class SceneObject:
 
 def default_plant_config(time_step: float = 0.01) -> MultibodyPlantConfig:
     """The station's MultibodyPlantConfig: discrete steps of ``time_step`` (s), SAP (it integrates the
-    joint-actuator PD implicitly) and point contact (the fast choice); Drake's defaults otherwise."""
+    joint-actuator PD implicitly), point contact (the fast choice) and live output ports
+    (``use_sampled_output_ports=False``); Drake's defaults otherwise.
+
+    Live ports: with Drake's default (sampled) the plant's step is an *unrestricted* update, and a
+    diagram applies the unrestricted updates of all its subsystems at every tick at which any
+    of them writes, even of those that returned ``DidNothing``: the belief, the interface's and
+    the disambiguation system's states would be rewritten every 10 ms and everything computed from
+    them (the blending step, the belief's projection) computed twice per tick. The station reads
+    only the plant's state ports, whose values are the same either way.
+    """
     return MultibodyPlantConfig(
-        time_step=time_step, discrete_contact_approximation="sap", contact_model="point"
+        time_step=time_step,
+        discrete_contact_approximation="sap",
+        contact_model="point",
+        use_sampled_output_ports=False,
     )
 
 

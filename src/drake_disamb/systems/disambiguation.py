@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, EventStatus, LeafSystem, State
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import (
@@ -119,18 +119,20 @@ class DisambiguationSystem(LeafSystem):
     ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other
     error of the core propagates out of the port evaluation (and so out of the simulation).
 
-    State: numeric only. Two discrete groups updated by a periodic *unrestricted* update every
-    ``control_period`` seconds (first at t = 0; unrestricted so that it runs together with the
-    interface's update, from the same pre-update context): the *tick* group ``[request_count seen, has
-    snapshot, snapshot]`` and the *served* group ``[has request, request]``, where a snapshot /
-    request is ``[belief (n), ee_pose (7), goal_poses (7 n), current_mode (1)]``. Each tick stores
-    the inputs it saw; when ``request_count`` has grown since the previous tick, the request was
-    served by the interface in the previous tick, so that tick's snapshot -- exactly what the
-    interface used -- becomes the served request, and ``last_result`` (Algorithm 1 on it) shows it
-    one control period after the request. (No abstract state: Drake copies the whole state at
-    every unrestricted update in the diagram, and numbers copy cheaply.) Two more groups,
-    ``[sanitised-input count]`` and ``[time of the last warning]`` (s), are written only when an
-    unusable request was served.
+    State: numeric only. Two discrete groups updated by a periodic *discrete* update every
+    ``control_period`` seconds (first at t = 0; initialised from the inputs): the *tick* group
+    ``[request_count seen, current_mode seen]`` and the *served* group ``[has request, request]``,
+    where a request is ``[belief (n), ee_pose (7), goal_poses (7 n), current_mode (1)]``. Drake
+    runs a tick's discrete updates after its unrestricted ones, so when ``request_count`` has grown
+    since the previous tick, the interface served the request in this very tick, from inputs that
+    the discrete phase still sees unchanged (the belief, the sampled pose and the goals change
+    at discrete updates or by integration, later), except the mode, which the interface has just
+    switched: the request takes the mode seen at the previous tick, the one the interface had. So
+    the served request is exactly what the interface used (unless the belief was reset or
+    re-projected in that same tick), and ``last_result`` shows it from that tick on. The update
+    writes only when the count or the mode changed (at other ticks it does nothing, so nothing
+    computed from this system is recomputed). Two more groups, ``[sanitised-input count]`` and
+    ``[time of the last warning]`` (s), are written only when an unusable request was served.
 
     The constructor runs one request on a small scene: it loads the core's compiled kernels (a
     fraction of a second, once per process) so that the user's first request in a simulation or a
@@ -175,11 +177,10 @@ class DisambiguationSystem(LeafSystem):
         self._current_mode = self.DeclareVectorInputPort("current_mode", 1)
         self._request_count = self.DeclareVectorInputPort("request_count", 1)
 
-        self._snapshot_size = n + POSE_SIZE + n * POSE_SIZE + 1
-        # Tick group: [request_count seen, has snapshot (0/1), snapshot]; served group: [has
-        # request (0/1), request]. Snapshot and request layouts are those of _pack.
-        self._tick_index = self.DeclareDiscreteState(np.zeros(2 + self._snapshot_size))
-        self._served_index = self.DeclareDiscreteState(np.zeros(1 + self._snapshot_size))
+        # Tick group: [request_count seen, current_mode seen]; served group: [has request (0/1),
+        # request] (the request's layout is that of _pack).
+        self._tick_index = self.DeclareDiscreteState(np.zeros(2))
+        self._served_index = self.DeclareDiscreteState(np.zeros(1 + n + POSE_SIZE + n * POSE_SIZE + 1))
         self._memo: tuple[bytes, LastResult] | None = None
         feedthrough = {
             port.ticket() for port in (self._belief, self._ee_pose, self._goal_poses, self._current_mode)
@@ -194,7 +195,8 @@ class DisambiguationSystem(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._served_index)},
         )
         self._sanitized = SanitizedInputCounter(self)
-        self.DeclarePeriodicUnrestrictedUpdateEvent(control_period, 0.0, self._update)
+        self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
+        self.DeclarePeriodicDiscreteUpdateEvent(control_period, 0.0, self._update)
         # One request on a small scene now, so that the compiled kernels of the core are loaded
         # (a fraction of a second, once per process) before a simulation, not at the user's first
         # request in a live session.
@@ -302,21 +304,32 @@ class DisambiguationSystem(LeafSystem):
             self._memo = (key, LastResult(self._solve(self._unpack(served[1:])), served=True))
         output.set_value(self._memo[1])
 
-    def _update(self, context: Context, state: State) -> EventStatus:
-        tick = context.get_discrete_state(self._tick_index).get_value()
+    def _seen(self, context: Context, previous_count: float) -> NDArray[np.float64]:
+        """``[request_count, current_mode]`` now; a non-finite count keeps ``previous_count`` (a
+        non-finite mode is kept as it is: a request served with it is unusable, and counted)."""
         count = float(self._request_count.Eval(context)[0])
-        if np.isfinite(count) and count > tick[0] and tick[1] > 0.5:
-            state.get_mutable_discrete_state(self._served_index).SetFromVector(
-                np.concatenate(([1.0], tick[2:]))
+        mode = float(self._current_mode.Eval(context)[0])
+        return np.array([count if math.isfinite(count) else previous_count, mode])
+
+    def _initialize(self, context: Context, discrete_state: DiscreteValues) -> None:
+        discrete_state.get_mutable_vector(self._tick_index).SetFromVector(self._seen(context, 0.0))
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        tick = context.get_discrete_state(self._tick_index).get_value()
+        seen = self._seen(context, float(tick[0]))
+        if np.array_equal(seen, tick, equal_nan=True):  # no request served, the same mode: nothing to write
+            return EventStatus.DidNothing()
+        if seen[0] > tick[0]:  # served in this tick, with the mode the interface had before it
+            request = self._pack(context)
+            request[-1] = tick[1]
+            discrete_state.get_mutable_vector(self._served_index).SetFromVector(
+                np.concatenate(([1.0], request))
             )
-            reason = self._unusable(self._unpack(tick[2:]))
+            reason = self._unusable(self._unpack(request))
             if reason is not None:
                 message = f"request ignored, the mode is kept: {reason}"
-                self._sanitized.record(context, state.get_mutable_discrete_state(), message)
-        seen = count if np.isfinite(count) else tick[0]
-        state.get_mutable_discrete_state(self._tick_index).SetFromVector(
-            np.concatenate(([seen, 1.0], self._pack(context)))
-        )
+                self._sanitized.record(context, discrete_state, message)
+        discrete_state.get_mutable_vector(self._tick_index).SetFromVector(seen)
         return EventStatus.Succeeded()
 
 

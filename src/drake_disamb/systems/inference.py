@@ -65,7 +65,8 @@ from drake_disamb.core.inference import (
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
-"""Largest ``|sum(p) - 1|`` the DFT system's periodic projection leaves alone (p positive)."""
+"""Largest ``|sum(p) - 1|``, and largest ``-min(p)``, the DFT system's periodic projection leaves
+alone (the belief output is projected onto the simplex anyway)."""
 
 
 def _check_common(n_goals: object, control_period: object, goal_change_tolerance: object) -> None:
@@ -209,14 +210,18 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     State: continuous ``p`` (n) with time derivative
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
-    projected so that ``sum(p)`` stays 1, with a positivity guard), integrated by the simulator's
-    integrator (the drive, the part of the right-hand side that does not depend on ``p``, is a cache
+    projected so that ``sum(p)`` stays 1, with a positivity guard whose ``guard_time`` is the
+    control period: no entry falls faster than ``p / control_period``, so an explicit step of up to
+    one control period never takes it below zero), integrated by the simulator's integrator (the
+    drive, the part of the right-hand side that does not depend on ``p``, is a cache
     entry on the inputs: computed once per control tick, not at every integrator stage; it also
     holds whether ``u_h`` was finite, the verdict the periodic update counts);
     discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
-    it (an entry at or below zero, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard against
-    integrator error; otherwise it writes nothing) or, if ``goal_poses`` changed, resets ``p`` to
+    it (an entry below ``-SIMPLEX_TOLERANCE``, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard
+    against integrator error; otherwise it writes nothing, which matters for speed: any written
+    unrestricted update makes Drake rewrite every subsystem's state that has one in that tick, and
+    everything computed from them is computed again) or, if ``goal_poses`` changed, resets ``p`` to
     the rest state. At initialization ``p`` is the rest state.
 
     Args:
@@ -296,7 +301,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
         p = context.get_continuous_state_vector().CopyToVector()
-        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context)[0], self._params)
+        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context)[0], self._params, self._period)
         derivatives.get_mutable_vector().SetFromVector(dp)
 
     def _reset_update(self, context: Context, state: State) -> None:
@@ -311,9 +316,9 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
             self._reset_update(context, state)
             return EventStatus.Succeeded()
         p = context.get_continuous_state_vector().CopyToVector()
-        # The usual case: the flow conserves sum(p) up to rounding and keeps p positive. Nothing
+        # The usual case: the flow conserves sum(p) up to rounding and keeps p >= 0. Nothing
         # is written then, so the belief and what depends on it are not recomputed after the tick.
-        if np.minimum.reduce(p) > 0.0 and abs(math.fsum(p) - 1.0) <= SIMPLEX_TOLERANCE:
+        if np.minimum.reduce(p) >= -SIMPLEX_TOLERANCE and abs(math.fsum(p) - 1.0) <= SIMPLEX_TOLERANCE:
             return EventStatus.Succeeded() if counted else EventStatus.DidNothing()
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(normalize_belief(p))
         return EventStatus.Succeeded()
