@@ -304,24 +304,24 @@ class DisambiguationSystem(LeafSystem):
             self._memo = (key, LastResult(self._solve(self._unpack(served[1:])), served=True))
         output.set_value(self._memo[1])
 
-    def _seen(self, context: Context, previous_count: float) -> NDArray[np.float64]:
-        """``[request_count, current_mode]`` now; a non-finite count keeps ``previous_count`` (a
+    def _seen(self, context: Context, previous_count: float) -> tuple[float, float]:
+        """``(request_count, current_mode)`` now; a non-finite count keeps ``previous_count`` (a
         non-finite mode is kept as it is: a request served with it is unusable, and counted)."""
         count = float(self._request_count.Eval(context)[0])
         mode = float(self._current_mode.Eval(context)[0])
-        return np.array([count if math.isfinite(count) else previous_count, mode])
+        return (count if math.isfinite(count) else previous_count), mode
 
     def _initialize(self, context: Context, discrete_state: DiscreteValues) -> None:
         discrete_state.get_mutable_vector(self._tick_index).SetFromVector(self._seen(context, 0.0))
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        tick = context.get_discrete_state(self._tick_index).get_value()
-        seen = self._seen(context, float(tick[0]))
-        if np.array_equal(seen, tick, equal_nan=True):  # no request served, the same mode: nothing to write
-            return EventStatus.DidNothing()
-        if seen[0] > tick[0]:  # served in this tick, with the mode the interface had before it
+        seen_count, seen_mode = context.get_discrete_state(self._tick_index).get_value()
+        count, mode = self._seen(context, float(seen_count))
+        if count == seen_count and (mode == seen_mode or (mode != mode and seen_mode != seen_mode)):
+            return EventStatus.DidNothing()  # no request served, the same mode (NaN too): no write
+        if count > seen_count:  # served in this tick, with the mode the interface had before it
             request = self._pack(context)
-            request[-1] = tick[1]
+            request[-1] = seen_mode
             discrete_state.get_mutable_vector(self._served_index).SetFromVector(
                 np.concatenate(([1.0], request))
             )
@@ -329,7 +329,7 @@ class DisambiguationSystem(LeafSystem):
             if reason is not None:
                 message = f"request ignored, the mode is kept: {reason}"
                 self._sanitized.record(context, discrete_state, message)
-        discrete_state.get_mutable_vector(self._tick_index).SetFromVector(seen)
+        discrete_state.get_mutable_vector(self._tick_index).SetFromVector([count, mode])
         return EventStatus.Succeeded()
 
 
