@@ -26,6 +26,48 @@ _SMALL_ANGLE = 1e-8
 
 
 # ----------------------------------------------------------------------------------------------
+# Checks of a control tick's inputs (used by _validation and geometry)
+# ----------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _all_finite_flat(a: NDArray[np.float64]) -> bool:  # pragma: no cover - compiled
+    """True if every entry of the 1-D array ``a`` is finite (``x - x`` is NaN for NaN and inf)."""
+    for i in range(a.shape[0]):
+        x = a[i]
+        if not x - x == 0.0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _usable_pose_rows(a: NDArray[np.float64], max_entry: float, min_norm2: float) -> bool:  # pragma: no cover
+    """True if the poses ``[x, y, z, qw, qx, qy, qz]`` laid end to end in the 1-D ``a`` have every
+    entry within ``+-max_entry`` (NaN is not) and every quaternion's squared norm ``>= min_norm2``."""
+    for i in range(a.shape[0]):
+        x = a[i]
+        if not (x <= max_entry and x >= -max_entry):
+            return False
+    for r in range(a.shape[0] // 7):
+        b = 7 * r + 3
+        if not a[b] * a[b] + a[b + 1] * a[b + 1] + a[b + 2] * a[b + 2] + a[b + 3] * a[b + 3] >= min_norm2:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _normalize_quaternion_rows(q: NDArray[np.float64], out: NDArray[np.float64]) -> None:  # pragma: no cover
+    """``out[r] = q[r] / |q[r]|`` for the rows of ``(B, 4)`` arrays (norms summed in index order)."""
+    for r in range(q.shape[0]):
+        s = q[r, 0] * q[r, 0]
+        for k in range(1, 4):
+            s += q[r, k] * q[r, k]
+        s = np.sqrt(s)
+        for k in range(4):
+            out[r, k] = q[r, k] / s
+
+
+# ----------------------------------------------------------------------------------------------
 # Quaternions, orientation errors, saturation (used by geometry, autonomy, blending)
 # ----------------------------------------------------------------------------------------------
 

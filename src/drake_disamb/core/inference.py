@@ -58,7 +58,7 @@ from drake_disamb.core._kernels import (
     _normalize_rows,
     _xi_rows,
 )
-from drake_disamb.core._validation import is_real
+from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
 
 TINY = np.finfo(float).tiny
@@ -231,7 +231,7 @@ def sanitize_command(u_h: ArrayLike) -> NDArray[np.float64]:
     "no input" (CONTRIBUTING: such commands are treated as zero).
     """
     u = np.asarray(u_h, dtype=float)
-    if np.isfinite(u).all():
+    if all_finite(u):
         return u
     return np.where(np.all(np.isfinite(u), axis=-1, keepdims=True), u, 0.0)
 

@@ -276,6 +276,8 @@ class InterfaceState:
     automatic_seen: int = 0
 
     VECTOR_SIZE = 10 + RAW_SIZE
+    PENDING_DUE_INDEX = 6 + RAW_SIZE
+    """Where ``pending_due`` is in :meth:`to_vector` (read without building the state)."""
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat vector ``[mode, prev_mode, prev_req, n_switch, n_req, n_bad, raw (4), pending_due,

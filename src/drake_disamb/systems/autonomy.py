@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import (
     BasicVector,
     Context,
     DiscreteValues,
     EventStatus,
     LeafSystem,
-    ValueProducer,
 )
 
 from drake_disamb.core._validation import is_real
@@ -74,39 +72,30 @@ class PotentialFieldAutonomy(LeafSystem):
         self.config = PotentialFieldConfig() if config is None else config
         self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
-        # Depends on the two inputs only (not on time or state): computed once per input change, and
-        # read both by the output and by the per-tick input check (which needs the same verdict).
+        # Depends on the two inputs only (not on time or state): computed once per input change.
         inputs = {self._ee_port.ticket(), self._goal_port.ticket()}
-        self._field = self.DeclareCacheEntry(
-            "potential field (usable inputs, u_a)",
-            ValueProducer(allocate=lambda: AbstractValue.Make((True, np.zeros(0))), calc=self._calc_field),
-            prerequisites_of_calc=inputs,
-        )
-        self.DeclareVectorOutputPort(
-            "u_a", 6 * self.n_goals, self._calc_u_a, prerequisites_of_calc={self._field.ticket()}
-        )
+        self.DeclareVectorOutputPort("u_a", 6 * self.n_goals, self._calc_u_a, prerequisites_of_calc=inputs)
         self._sanitized = SanitizedInputCounter(self)
         self.DeclarePeriodicDiscreteUpdateEvent(float(control_period), 0.0, self._check_inputs)
 
     def _inputs(self, context: Context) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return self._ee_port.Eval(context), self._goal_port.Eval(context)
 
-    def _calc_field(self, context: Context, value: AbstractValue) -> None:
+    def _calc_u_a(self, context: Context, output: BasicVector) -> None:
         ee, goals = self._inputs(context)
         if not usable_poses(ee, goals):  # counted and warned by _check_inputs
-            value.set_value((False, np.zeros(6 * self.n_goals)))
+            output.SetFromVector(np.zeros(6 * self.n_goals))
             return
         # Checked once, just above: the core's own checks are skipped (checked=False).
         u_a = potential_field_commands_from_poses(ee, goals.reshape(self.n_goals, 7), self.config, False)
-        value.set_value((True, u_a.reshape(-1)))
-
-    def _calc_u_a(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._field.Eval(context)[1])
+        output.SetFromVector(u_a.reshape(-1))
 
     def _check_inputs(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        if self._field.Eval(context)[0]:
-            return EventStatus.DidNothing()
+        # Its own check of the inputs (a compiled pass over 7 (n + 1) numbers), not the output's:
+        # the count does not need the core, and the output is not computed just for the check.
         ee, goals = self._inputs(context)
+        if usable_poses(ee, goals):
+            return EventStatus.DidNothing()
         message = f"unusable pose (ee_pose={ee.tolist()}, goal_poses={goals.tolist()}); u_a set to zero"
         self._sanitized.record(context, discrete_state, message)
         return EventStatus.Succeeded()

@@ -176,17 +176,18 @@ class InterfaceSystem(LeafSystem):
         automatic = (
             float(self._automatic_port.Eval(context)[0]) if self._automatic_port.HasValue(context) else None
         )
-        before = InterfaceState.from_vector(vector)
         # With no disambiguation pending the update is a pure function of the state, the raw signal
         # and the automatic trigger's count (time only stamps events): such a triple that last gave
         # no change and no event is a fixed point, and the common period -- the same raw signal,
-        # mode and counts as the previous one -- ends here. A pending disambiguation is served at
-        # its due time, so time matters then and nothing is remembered.
+        # mode and counts as the previous one -- ends here (before the state is even unpacked). A
+        # pending disambiguation is served at its due time, so time matters then and nothing is
+        # remembered.
         key = None
-        if before.pending_due < 0.0:
+        if vector[InterfaceState.PENDING_DUE_INDEX] < 0.0:
             key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes() + repr(automatic).encode()
             if key == self._fixed_point:
                 return EventStatus.DidNothing()
+        before = InterfaceState.from_vector(vector)
 
         def read_disambiguation_mode() -> float | None:
             if not self._disamb_port.HasValue(context):

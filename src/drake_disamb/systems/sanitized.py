@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 
 from drake_disamb.core._validation import is_real
+from drake_disamb.core.geometry import poses_usable
 
 __all__ = [
     "MAX_POSE_ENTRY",
@@ -48,13 +49,9 @@ WARN_INTERVAL = 1.0
 def usable_poses(*poses: NDArray[np.float64]) -> bool:
     """True if every pose ``[x, y, z, qw, qx, qy, qz]`` (or every row of a flat ``n * 7`` vector)
     is in range: no NaN, no entry beyond :data:`MAX_POSE_ENTRY` in magnitude (infinities
-    included), and each quaternion's norm at least :data:`MIN_QUATERNION_NORM`."""
-    pose = poses[0] if len(poses) == 1 else np.concatenate(poses)  # one pass over all of them
-    # max and min are NaN if any entry is: a comparison with NaN is False.
-    if not (np.maximum.reduce(pose) <= MAX_POSE_ENTRY and np.minimum.reduce(pose) >= -MAX_POSE_ENTRY):
-        return False
-    q = pose.reshape(-1, 7)[:, 3:]
-    return bool(np.minimum.reduce(np.einsum("ij,ij->i", q, q)) >= MIN_QUATERNION_NORM**2)
+    included), and each quaternion's norm at least :data:`MIN_QUATERNION_NORM`
+    (:func:`~drake_disamb.core.geometry.poses_usable` on each)."""
+    return all(poses_usable(pose, MAX_POSE_ENTRY, MIN_QUATERNION_NORM) for pose in poses)
 
 
 class SanitizedInputCounter:
