@@ -207,3 +207,34 @@ def test_dft_projection_writes_only_when_the_belief_left_the_simplex() -> None:
             assert abs(out.sum() - 1.0) < 1e-15 and np.all(out > 0)
         else:
             np.testing.assert_array_equal(out, p)
+
+
+def test_full_loop_blends_and_projects_about_once_per_tick(monkeypatch: pytest.MonkeyPatch) -> None:
+    """In the whole reaching diagram (station, loggers and all), a tick at which no state changes
+    but the arm's and the belief's must not recompute the blending step or the belief. Twice per
+    tick is what an unrestricted update that writes at every tick (a sampled-port plant, a
+    snapshot kept in state, a projection of a belief that Euler pushed below zero) causes."""
+    import dataclasses
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.systems import blending, inference
+    from drake_disamb.trial import run_trial
+
+    counts = {"step": 0, "belief": 0}
+
+    def counting(cls: type, name: str, key: str) -> None:
+        method = getattr(cls, name)
+
+        def counted(self, *args):  # type: ignore[no-untyped-def]
+            counts[key] += 1
+            return method(self, *args)
+
+        monkeypatch.setattr(cls, name, counted)
+
+    counting(blending.SharedControlBlender, "_calc_step", "step")
+    counting(inference.FieldTheoreticIntentInference, "_calc_belief", "belief")
+    scenario = dataclasses.replace(load_scenario("reaching"), duration=3.0)
+    result = run_trial(build_shared_control_diagram(scenario), progress=False, stop_at_success=False)
+    ticks = round(result.time / scenario.control_period)
+    assert counts["step"] <= 1.15 * ticks and counts["belief"] <= 1.15 * ticks, (counts, ticks)
