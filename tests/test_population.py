@@ -62,6 +62,7 @@ def test_new_fields_default_to_the_deterministic_user() -> None:
     assert cfg.decision_period is None and cfg.direction_kappa is None and cfg.request_decay_time is None
     assert cfg.mode_temperature == 0 and cfg.pause_rate == 0 and cfg.wrong_press_prob == 0
     assert cfg.request_prob == 1 and cfg.accept_prob == 1 and cfg.request_instead_prob == 0
+    assert cfg.aim_error == 0 and cfg.correction_prob == 0
     # No draw is made by the default user (the draw counter keys every random number).
     states = run_fixed_mode(QUIET, 1, until=1.0)
     assert all(s.draws == 0 for s in states)
@@ -78,6 +79,8 @@ def test_new_fields_default_to_the_deterministic_user() -> None:
         ("wrong_press_prob", 1.5),
         ("accept_prob", -0.1),
         ("pause_duration", 0.0),
+        ("correction_prob", 1.01),
+        ("correction_prob", float("nan")),
     ],
 )
 def test_new_fields_are_validated(field: str, value: float) -> None:
@@ -267,6 +270,7 @@ def test_request_wait_then_accept_or_cycle_away() -> None:
     s = step(UserState(), 0.0, 3, keep, belief=flat)
     s = step(s, 1.5, 1, keep, belief=flat)
     assert s.raw[0] != 0 and s.raw[2] == 0  # kept: drives in the chosen mode
+    assert s.kept_mode == 1  # ... and keeps using it while the assistance helps (test_user.py)
 
 
 def test_human_user_is_seeded() -> None:
