@@ -227,6 +227,22 @@ def test_pauses_release_everything_for_a_drawn_duration() -> None:
     assert not any(not np.any(s.raw) for s in run_fixed_mode(QUIET, 1, until=1.0))
 
 
+def test_a_late_release_carries_out_the_pause_it_was_decided_for() -> None:
+    # With a release lag the user stops driving late, but it does stop: the pause decided at the
+    # start of the lag is the one made at its end (not drawn anew, which all but suppressed pauses).
+    cfg = dataclasses.replace(
+        QUIET, pause_rate=0.5, pause_duration=1.0, pause_log_sd=0.3, decision_period=0.1, seed=4
+    )
+
+    def pauses(config: UserConfig) -> int:
+        states = run_fixed_mode(config, 1, until=60.0)
+        return sum(not np.any(b.raw) and np.any(a.raw) for a, b in zip(states, states[1:], strict=False))
+
+    without_lag = pauses(cfg)
+    with_lag = pauses(dataclasses.replace(cfg, release_lag=0.06))
+    assert without_lag >= 10 and with_lag >= 0.6 * without_lag
+
+
 def test_a_pause_is_not_a_stall() -> None:
     # A stalled arm (the pose never changes) with long pauses: every pause restarts the stall watch,
     # which counts commanding time only.

@@ -685,9 +685,14 @@ def user_step(
         away = pulled_away(belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1)
     new = _decide(state, time, mode, err, interface, config, belief, away)
     if config.release_lag > 0 and not lag_done and _drive(state.raw) and not _drive(new.raw):
-        rng = _draw(config, state.draws)
+        # The lag has a stream of its own keyed by this decision's counter, and the counter is not
+        # advanced: the decision made when the lag ends replays this one's draws, so the user
+        # carries out late what it decided (a pause, a review's or a correction's outcome) instead
+        # of drawing it anew (which made every random reason to stop driving twice as likely, or,
+        # for a rate per decision, almost never carried out).
+        rng = np.random.default_rng([int(config.seed), int(state.draws), 1])
         lag = float(rng.exponential(config.release_lag))
-        return _evolve(state, hold_until=time + lag, draws=state.draws + 1)
+        return _evolve(state, hold_until=time + lag)
     if new.hold_until != 0.0:
         new = _evolve(new, hold_until=0.0)
     return new
