@@ -62,7 +62,7 @@ def test_new_fields_default_to_the_deterministic_user() -> None:
     assert cfg.decision_period is None and cfg.direction_kappa is None and cfg.request_decay_time is None
     assert cfg.mode_temperature == 0 and cfg.pause_rate == 0 and cfg.wrong_press_prob == 0
     assert cfg.request_prob == 1 and cfg.accept_prob == 1 and cfg.request_instead_prob == 0
-    assert cfg.aim_error == 0 and cfg.correction_prob == 0
+    assert cfg.aim_error == 0 and cfg.correction_prob == 0 and not cfg.keep_assisted_mode
     # No draw is made by the default user (the draw counter keys every random number).
     states = run_fixed_mode(QUIET, 1, until=1.0)
     assert all(s.draws == 0 for s in states)
@@ -286,7 +286,11 @@ def test_request_wait_then_accept_or_cycle_away() -> None:
     s = step(UserState(), 0.0, 3, keep, belief=flat)
     s = step(s, 1.5, 1, keep, belief=flat)
     assert s.raw[0] != 0 and s.raw[2] == 0  # kept: drives in the chosen mode
-    assert s.kept_mode == 1  # ... and keeps using it while the assistance helps (test_user.py)
+    assert s.kept_mode == -1  # not kept beyond its own dimensions (keep_assisted_mode: test_user.py)
+    keep = dataclasses.replace(keep, keep_assisted_mode=True)
+    helping = np.array([0.9, 0.1])
+    s = step(step(UserState(), 0.0, 3, keep, belief=helping), 1.5, 1, keep, belief=helping)
+    assert s.kept_mode == 1 and s.raw[0] != 0
 
 
 def test_human_user_is_seeded() -> None:

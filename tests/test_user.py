@@ -65,6 +65,10 @@ def test_config_validation() -> None:
         ValueError, match=r"UserConfig\.correction_prob: expected a probability in \[0, 1\], got 1\.5"
     ):
         UserConfig(correction_prob=1.5)
+    with pytest.raises(
+        ValueError, match=r"UserConfig\.keep_assisted_mode: expected true or false, got 'yes'"
+    ):
+        UserConfig(keep_assisted_mode="yes")
 
 
 def test_state_vector_round_trip() -> None:
@@ -546,17 +550,19 @@ def test_a_user_that_sees_the_shortfall_corrects_it_in_the_same_mode() -> None:
 def test_a_kept_request_mode_is_used_while_the_assistance_helps(interface: InterfaceConfig) -> None:
     # The request chose mode 0 (x first) and the user kept it, but x is done (z is left): while the
     # autonomy assists its goal it keeps pushing toward the goal in the mode (the arm approaches
-    # the goal through the assistance); once the autonomy pulls toward the other goal, or the
-    # mode is not the kept one, x is done as before and it goes for z.
+    # the goal through the assistance); once the autonomy pulls toward the other goal or gives no
+    # assistance, or the mode is not the kept one, x is done as before and it goes for z.
     ee = EE.copy()
     ee[0] = GOALS[0, 0] - 0.005
     kept = UserState(kept_mode=0, requested_at_start=True)
-    s = step(kept, 1.0, 0, interface=interface, ee=ee, belief=np.array([0.9, 0.1]))
+    cfg = dataclasses.replace(NO_REQUESTS, keep_assisted_mode=True)
+    s = step(kept, 1.0, 0, interface=interface, config=cfg, ee=ee, belief=np.array([0.9, 0.1]))
     assert s.raw[0] > 0.0 and s.raw[2] == 0.0 and s.kept_mode == 0  # toward +x, no press
     assert UserState.from_vector(s.to_vector()) == s
-    away = step(kept, 1.0, 0, interface=interface, ee=ee, belief=np.array([0.1, 0.9]))
-    assert away.raw[2] == 1.0 and away.kept_mode == -1
-    plain = step(
+    for belief in ([0.1, 0.9], [0.5, 0.5]):  # pulled toward the other goal; no assistance
+        away = step(kept, 1.0, 0, interface=interface, config=cfg, ee=ee, belief=np.array(belief))
+        assert away.raw[2] == 1.0 and away.kept_mode == -1
+    plain = step(  # not the kept mode
         UserState(requested_at_start=True), 1.0, 0, interface=interface, ee=ee, belief=np.array([0.9, 0.1])
     )
     assert plain.raw[2] == 1.0

@@ -93,7 +93,10 @@ values and where they come from):
   of cycling with probability ``request_instead_prob``; both scaled by ``exp(-t /
   request_decay_time)`` (requests concentrate early). After a request it waits up to
   ``request_wait`` seconds for the mode to change, then keeps the mode the system chose with
-  probability ``accept_prob`` or cycles away from it to a mode of its own choice.
+  probability ``accept_prob`` or cycles away from it to a mode of its own choice. With
+  ``keep_assisted_mode`` it keeps using a kept mode while the autonomy assists its goal, also once
+  the mode's own dimensions are done (pushing toward the goal in it), until the whole goal's
+  remaining error stops falling (rule 5) or the assistance stops.
 """
 
 from __future__ import annotations
@@ -188,6 +191,11 @@ class UserConfig:
             short of the goal (the aim reached, the mode not done), the user corrects it at once
             in the same mode (a corrective submovement, aimed anew) rather than moving on to
             another mode and coming back later (0 = it always moves on while others are left).
+        keep_assisted_mode: Keep using the mode a request chose and the user kept (``accept_prob``)
+            while the autonomy assists its goal (:func:`helped`), also when the mode's own
+            dimensions are done: it pushes toward the goal in it (the blended command moves the arm
+            toward the goal) until the whole goal's remaining error stops falling (rule 5) or the
+            assistance stops. False: a kept mode whose dimensions are done is left at once.
     """
 
     position_tolerance: float = 0.01
@@ -231,6 +239,7 @@ class UserConfig:
     accept_prob: float = 1.0
     aim_error: float = 0.0
     correction_prob: float = 0.0
+    keep_assisted_mode: bool = False
 
     def __post_init__(self) -> None:
         check_real_fields(
@@ -277,6 +286,10 @@ class UserConfig:
             raise ValueError(f"UserConfig.rho1: expected None or a number in [0, 1], got {self.rho1!r}")
         if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
             raise ValueError(f"UserConfig.seed: expected an integer >= 0, got {self.seed!r}")
+        if not isinstance(self.keep_assisted_mode, bool):
+            raise ValueError(
+                f"UserConfig.keep_assisted_mode: expected true or false, got {self.keep_assisted_mode!r}"
+            )
         check_real_fields(self, ("pause_duration",))
         check_real_fields(
             self,
@@ -591,16 +604,6 @@ def _seen_error(state: UserState, err: NDArray[np.float64], dims: tuple[int, ...
     return seen
 
 
-def pulled_away(belief: ArrayLike, goal_index: int, rho1: float) -> bool:
-    """True when the autonomy assists another goal than ``goal_index``: the belief's argmax is
-    another goal and above ``rho1`` (the arm is visibly pulled elsewhere)."""
-    p = np.asarray(belief, dtype=float)
-    if not all_finite(p):
-        return False
-    g = int(np.argmax(p))
-    return g != goal_index and p[g] > rho1
-
-
 def _pushed(err: NDArray[np.float64], dims: tuple[int, ...], tol: NDArray[np.float64]) -> int:
     """In a kept mode (``UserState.kept_mode``) whose dimensions are all within tolerance, the one
     the user pushes along (the largest error in tolerance units; toward the goal): its index in
@@ -680,10 +683,10 @@ def user_step(
     if time < state.hold_until - 1e-9:
         return state  # letting go late: the drive is held
     lag_done = state.hold_until > 0.0
-    away = False
-    if belief is not None:
-        away = pulled_away(belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1)
-    new = _decide(state, time, mode, err, interface, config, belief, away)
+    assisted = belief is not None and helped(
+        belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
+    )
+    new = _decide(state, time, mode, err, interface, config, belief, assisted)
     if config.release_lag > 0 and not lag_done and _drive(state.raw) and not _drive(new.raw):
         # The lag has a stream of its own keyed by this decision's counter, and the counter is not
         # advanced: the decision made when the lag ends replays this one's draws, so the user
@@ -706,10 +709,10 @@ def _decide(
     interface: InterfaceConfig,
     config: UserConfig,
     belief: ArrayLike | None,
-    away: bool,
+    assisted: bool,
 ) -> UserState:
-    """Rules 3 to 6 at a free decision (not reacting, not letting go late); ``away``: the autonomy
-    assists another goal (:func:`pulled_away`)."""
+    """Rules 3 to 6 at a free decision (not reacting, not letting go late); ``assisted``: the
+    autonomy assists the user's goal (:func:`helped`)."""
     modes = interface.modes
     n_modes = len(modes)
     direct = interface.mode_selection == "direct"
@@ -818,7 +821,7 @@ def _decide(
 
     # The mode a request chose: keep it, or cycle away to one of its own choice.
     if state.judge:
-        state = _evolve(state, judge=False, kept_mode=mode)
+        state = _evolve(state, judge=False, kept_mode=mode if config.keep_assisted_mode else -1)
         if config.accept_prob < 1.0 and rng().random() >= config.accept_prob:
             g = rng() if config.mode_temperature > 0 else None
             target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct)
@@ -828,7 +831,7 @@ def _decide(
     # The kept mode: while the assistance helps, the arm approaches the goal in it whatever is left
     # along the mode's own dimensions, so the user keeps using it until the whole goal's remaining
     # error stops falling (rule 5 watches it) or the assistance stops helping.
-    keep = state.kept_mode == mode < n_modes - 1 and belief is not None and not away
+    keep = state.kept_mode == mode < n_modes - 1 and assisted
     if state.kept_mode >= 0 and not keep:
         state = _evolve(state, kept_mode=-1)
     if keep:

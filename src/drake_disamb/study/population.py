@@ -121,6 +121,7 @@ def _default_fixed() -> dict[str, Any]:
         "settle_log_sd": 0.93,  # within: pooled log-sd of the settles
         "request_wait": 3.0,  # the system's 2-2.5 s latency; request -> switch 2.5-3.2 s in the logs
         "request_at_start": True,
+        "keep_assisted_mode": True,  # a kept request mode is used while the assistance helps
     }
 
 
