@@ -4,7 +4,8 @@ per interface, task and paradigm (a check of the calibration, not a fit).
 Runs ``--trials`` trials per condition (interface x task x paradigm) with subjects drawn by
 :func:`drake_disamb.study.population.draw_subjects`, each with a random intended goal and initial
 mode, through :func:`drake_disamb.trial.run_trial` (the embedded reaching and pouring scenarios,
-``duration`` raised to ``--duration``), and prints their means beside the means of the authors'
+``duration`` raised to ``--duration``, the joystick's mode selection the study protocol's
+``interface_mode_selection``), and prints their means beside the means of the authors'
 logs (:func:`drake_disamb.study.metrics.summarize` of :func:`drake_disamb.study.authors.read_trials`,
 the authors' metric definitions) and the ratio simulated / human; the last column adds the people's
 median tail (last command to the end of the trial, which the experimenter stopped) to the simulated
@@ -31,6 +32,7 @@ from drake_disamb.study.authors import read_trials
 from drake_disamb.study.calibration import estimate_behaviour
 from drake_disamb.study.metrics import summarize
 from drake_disamb.study.population import draw_subjects
+from drake_disamb.study.protocol import default_protocol
 from drake_disamb.trial import run_trial
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
@@ -47,6 +49,7 @@ def run_one(itf: str, task: str, par: str, subject, seed: int) -> dict:
     base = load_scenario(task)
     goals = [int(rng.integers(len(base.stage_goals(k)))) for k in range(base.n_stages)]
     s = with_overrides(base, interface=itf, paradigm=par, seed=seed, goal=goals)
+    s = dataclasses.replace(s, interface_mode_selection=default_protocol().interface_mode_selection)
     n_modes = 5 if itf == "joystick" else 7
     user = dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
     s = validate_scenario(

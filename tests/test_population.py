@@ -62,6 +62,7 @@ def test_new_fields_default_to_the_deterministic_user() -> None:
     assert cfg.decision_period is None and cfg.direction_kappa is None and cfg.request_decay_time is None
     assert cfg.mode_temperature == 0 and cfg.pause_rate == 0 and cfg.wrong_press_prob == 0
     assert cfg.request_prob == 1 and cfg.accept_prob == 1 and cfg.request_instead_prob == 0
+    assert cfg.aim_error == 0 and cfg.correction_prob == 0 and not cfg.keep_assisted_mode
     # No draw is made by the default user (the draw counter keys every random number).
     states = run_fixed_mode(QUIET, 1, until=1.0)
     assert all(s.draws == 0 for s in states)
@@ -78,6 +79,8 @@ def test_new_fields_default_to_the_deterministic_user() -> None:
         ("wrong_press_prob", 1.5),
         ("accept_prob", -0.1),
         ("pause_duration", 0.0),
+        ("correction_prob", 1.01),
+        ("correction_prob", float("nan")),
     ],
 )
 def test_new_fields_are_validated(field: str, value: float) -> None:
@@ -224,6 +227,22 @@ def test_pauses_release_everything_for_a_drawn_duration() -> None:
     assert not any(not np.any(s.raw) for s in run_fixed_mode(QUIET, 1, until=1.0))
 
 
+def test_a_late_release_carries_out_the_pause_it_was_decided_for() -> None:
+    # With a release lag the user stops driving late, but it does stop: the pause decided at the
+    # start of the lag is the one made at its end (not drawn anew, which all but suppressed pauses).
+    cfg = dataclasses.replace(
+        QUIET, pause_rate=0.5, pause_duration=1.0, pause_log_sd=0.3, decision_period=0.1, seed=4
+    )
+
+    def pauses(config: UserConfig) -> int:
+        states = run_fixed_mode(config, 1, until=60.0)
+        return sum(not np.any(b.raw) and np.any(a.raw) for a, b in zip(states, states[1:], strict=False))
+
+    without_lag = pauses(cfg)
+    with_lag = pauses(dataclasses.replace(cfg, release_lag=0.06))
+    assert without_lag >= 10 and with_lag >= 0.6 * without_lag
+
+
 def test_a_pause_is_not_a_stall() -> None:
     # A stalled arm (the pose never changes) with long pauses: every pause restarts the stall watch,
     # which counts commanding time only.
@@ -267,6 +286,11 @@ def test_request_wait_then_accept_or_cycle_away() -> None:
     s = step(UserState(), 0.0, 3, keep, belief=flat)
     s = step(s, 1.5, 1, keep, belief=flat)
     assert s.raw[0] != 0 and s.raw[2] == 0  # kept: drives in the chosen mode
+    assert s.kept_mode == -1  # not kept beyond its own dimensions (keep_assisted_mode: test_user.py)
+    keep = dataclasses.replace(keep, keep_assisted_mode=True)
+    helping = np.array([0.9, 0.1])
+    s = step(step(UserState(), 0.0, 3, keep, belief=helping), 1.5, 1, keep, belief=helping)
+    assert s.kept_mode == 1 and s.raw[0] != 0
 
 
 def test_human_user_is_seeded() -> None:

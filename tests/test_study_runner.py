@@ -93,6 +93,25 @@ def test_default_protocol_is_the_papers() -> None:
     }
     assert [len(t["start_poses"]) for t in data["tasks"]] == [3, 3]
     assert data["request_latency"] == [2.0, 2.5] and data["disambiguation_method"] == "algorithm1"
+    assert protocol.interface_mode_selection == "direct"  # the study's joystick: one press per change
+
+
+def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> None:
+    from drake_disamb.config import resolve_scenario
+    from drake_disamb.study.runner import StudyContext, build_scenario
+
+    protocol = P.quick_protocol()
+    context = StudyContext(protocol=P.protocol_to_dict(protocol))
+    seen = {}
+    for spec in P.expand_trials(protocol, 0):
+        interface = resolve_scenario(build_scenario(spec, context)).interface
+        seen[spec.interface] = interface.mode_selection
+    assert seen == {"joystick": "direct", "head_array": "cycle"}
+    data = P.protocol_to_dict(protocol)
+    data["interface_mode_selection"] = "cycle"
+    context = StudyContext(protocol=data)
+    spec = next(s for s in P.expand_trials(protocol, 0) if s.interface == "joystick")
+    assert resolve_scenario(build_scenario(spec, context)).interface.mode_selection == "cycle"
 
 
 @pytest.mark.parametrize(
@@ -115,6 +134,7 @@ def test_default_protocol_is_the_papers() -> None:
         ({"subjects": 0}, r"protocol\.subjects: .*0"),
         ({"colour": "red"}, r"protocol\.colour: unknown key"),
         ({"request_latency": [2.5, 2.0]}, r"protocol\.request_latency"),
+        ({"interface_mode_selection": "sector"}, r"protocol\.interface_mode_selection: .*'sector'"),
     ],
 )
 def test_bad_protocol_names_the_field(change: dict, message: str) -> None:

@@ -61,6 +61,14 @@ def test_config_validation() -> None:
         UserConfig(stall_time=0.0)
     with pytest.raises(ValueError, match="stall_progress"):
         UserConfig(stall_progress=float("nan"))
+    with pytest.raises(
+        ValueError, match=r"UserConfig\.correction_prob: expected a probability in \[0, 1\], got 1\.5"
+    ):
+        UserConfig(correction_prob=1.5)
+    with pytest.raises(
+        ValueError, match=r"UserConfig\.keep_assisted_mode: expected true or false, got 'yes'"
+    ):
+        UserConfig(keep_assisted_mode="yes")
 
 
 def test_state_vector_round_trip() -> None:
@@ -510,6 +518,54 @@ def test_a_user_that_thinks_the_mode_is_done_moves_on_and_corrects_later() -> No
     ee[2] = GOALS[0, 2]
     s = step(judged, 1.0, 0, interface=HEAD, config=AIMING, ee=ee)
     assert s.raw[0] == 1.0 and s.aim_mode == 0 and s.aim_0 != 0.04
+
+
+def test_a_user_that_sees_the_shortfall_corrects_it_in_the_same_mode() -> None:
+    # As above (x looks done 4 cm short, vz has 5 cm left), but the user corrects at once with
+    # correction_prob: always at 1 (aiming anew, still short), never at 0, and with 0.5 some of
+    # the seeded users do and some move on.
+    ee = EE.copy()
+    ee[0] = GOALS[0, 0] - 0.04
+    judged = UserState(aim_mode=0, aim_0=0.04)
+    s = step(judged, 1.0, 0, interface=HEAD, config=dataclasses.replace(AIMING, correction_prob=1.0), ee=ee)
+    assert s.raw[0] == 1.0 and s.target_mode == -1 and s.aim_mode == 0 and 0.0 <= s.aim_0 < 0.04
+    s = step(judged, 1.0, 0, interface=HEAD, config=dataclasses.replace(AIMING, correction_prob=0.0), ee=ee)
+    assert s.raw[2] == 1.0 and s.target_mode == 2
+    corrected = [
+        step(
+            judged,
+            1.0,
+            0,
+            interface=HEAD,
+            config=dataclasses.replace(AIMING, correction_prob=0.5, seed=k),
+            ee=ee,
+        ).raw[0]
+        == 1.0
+        for k in range(40)
+    ]
+    assert 5 < sum(corrected) < 35
+
+
+@pytest.mark.parametrize("interface", [HEAD, JOY])
+def test_a_kept_request_mode_is_used_while_the_assistance_helps(interface: InterfaceConfig) -> None:
+    # The request chose mode 0 (x first) and the user kept it, but x is done (z is left): while the
+    # autonomy assists its goal it keeps pushing toward the goal in the mode (the arm approaches
+    # the goal through the assistance); once the autonomy pulls toward the other goal or gives no
+    # assistance, or the mode is not the kept one, x is done as before and it goes for z.
+    ee = EE.copy()
+    ee[0] = GOALS[0, 0] - 0.005
+    kept = UserState(kept_mode=0, requested_at_start=True)
+    cfg = dataclasses.replace(NO_REQUESTS, keep_assisted_mode=True)
+    s = step(kept, 1.0, 0, interface=interface, config=cfg, ee=ee, belief=np.array([0.9, 0.1]))
+    assert s.raw[0] > 0.0 and s.raw[2] == 0.0 and s.kept_mode == 0  # toward +x, no press
+    assert UserState.from_vector(s.to_vector()) == s
+    for belief in ([0.1, 0.9], [0.5, 0.5]):  # pulled toward the other goal; no assistance
+        away = step(kept, 1.0, 0, interface=interface, config=cfg, ee=ee, belief=np.array(belief))
+        assert away.raw[2] == 1.0 and away.kept_mode == -1
+    plain = step(  # not the kept mode
+        UserState(requested_at_start=True), 1.0, 0, interface=interface, ee=ee, belief=np.array([0.9, 0.1])
+    )
+    assert plain.raw[2] == 1.0
 
 
 def test_a_stalled_user_with_nothing_else_to_do_asks_for_help_when_it_can() -> None:

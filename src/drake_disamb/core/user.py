@@ -83,8 +83,9 @@ values and where they come from):
   and leaves it for a clearly better one, as people interleave modes.
 - *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
   its dimensions and stops short by a half-normal share (scale ``aim_error``) of the distance it
-  sees; the mode then looks done and it moves on, and comes back later to correct (when nothing
-  else is left it looks again at once).
+  sees; the mode then looks done. With probability ``correction_prob`` (or when nothing else is
+  left) it sees the shortfall and corrects it at once in the same mode, aiming anew (a corrective
+  submovement, Meyer et al. 1988); else it moves on and comes back later.
 - *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``
   (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
@@ -92,7 +93,10 @@ values and where they come from):
   of cycling with probability ``request_instead_prob``; both scaled by ``exp(-t /
   request_decay_time)`` (requests concentrate early). After a request it waits up to
   ``request_wait`` seconds for the mode to change, then keeps the mode the system chose with
-  probability ``accept_prob`` or cycles away from it to a mode of its own choice.
+  probability ``accept_prob`` or cycles away from it to a mode of its own choice. With
+  ``keep_assisted_mode`` it keeps using a kept mode while the autonomy assists its goal, also once
+  the mode's own dimensions are done (pushing toward the goal in it), until the whole goal's
+  remaining error stops falling (rule 5) or the assistance stops.
 """
 
 from __future__ import annotations
@@ -183,6 +187,15 @@ class UserConfig:
             a mode it aims each of the mode's dimensions at ``goal - eps * error`` with ``eps``
             half-normal of scale this (truncated at 2), i.e. the primary movement stops short by a
             share of the distance it sees, and the user corrects later.
+        correction_prob: With ``aim_error``: probability that, when a movement in a mode ends
+            short of the goal (the aim reached, the mode not done), the user corrects it at once
+            in the same mode (a corrective submovement, aimed anew) rather than moving on to
+            another mode and coming back later (0 = it always moves on while others are left).
+        keep_assisted_mode: Keep using the mode a request chose and the user kept (``accept_prob``)
+            while the autonomy assists its goal (:func:`helped`), also when the mode's own
+            dimensions are done: it pushes toward the goal in it (the blended command moves the arm
+            toward the goal) until the whole goal's remaining error stops falling (rule 5) or the
+            assistance stops. False: a kept mode whose dimensions are done is left at once.
     """
 
     position_tolerance: float = 0.01
@@ -225,6 +238,8 @@ class UserConfig:
     request_wait: float = 0.0
     accept_prob: float = 1.0
     aim_error: float = 0.0
+    correction_prob: float = 0.0
+    keep_assisted_mode: bool = False
 
     def __post_init__(self) -> None:
         check_real_fields(
@@ -271,6 +286,10 @@ class UserConfig:
             raise ValueError(f"UserConfig.rho1: expected None or a number in [0, 1], got {self.rho1!r}")
         if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
             raise ValueError(f"UserConfig.seed: expected an integer >= 0, got {self.seed!r}")
+        if not isinstance(self.keep_assisted_mode, bool):
+            raise ValueError(
+                f"UserConfig.keep_assisted_mode: expected true or false, got {self.keep_assisted_mode!r}"
+            )
         check_real_fields(self, ("pause_duration",))
         check_real_fields(
             self,
@@ -303,6 +322,7 @@ class UserConfig:
             "request_prob",
             "request_instead_prob",
             "accept_prob",
+            "correction_prob",
         ):
             value = getattr(self, name)
             if not (is_real(value) and 0 <= value <= 1):
@@ -352,6 +372,8 @@ class UserState:
         aim_mode: The mode whose stopping points it has judged (``aim_error``), or -1.
         aim_0, aim_1: Its misjudgement of the goal along the mode's first and second dimension
             (m or rad): it drives until the error along the dimension is this.
+        kept_mode: The mode a request chose and the user kept, while it keeps using it (the
+            assistance helps), or -1.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -374,9 +396,10 @@ class UserState:
     aim_mode: int = -1
     aim_0: float = 0.0
     aim_1: float = 0.0
+    kept_mode: int = -1
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
-    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode")
+    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode", "kept_mode")
     _BOOL = ("requested_at_start", "started", "judge", "overshot")
     _FIELDS = (
         "busy_until",
@@ -398,13 +421,14 @@ class UserState:
         "aim_mode",
         "aim_0",
         "aim_1",
+        "kept_mode",
     )
-    VECTOR_SIZE = 19 + RAW_SIZE
+    VECTOR_SIZE = 20 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
-        request_since, judge, overshot, aim_mode, aim_0, aim_1, raw (4)]``."""
+        request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, raw (4)]``."""
         head = [float(getattr(self, name)) for name in self._FIELDS]
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 
@@ -580,6 +604,16 @@ def _seen_error(state: UserState, err: NDArray[np.float64], dims: tuple[int, ...
     return seen
 
 
+def _pushed(err: NDArray[np.float64], dims: tuple[int, ...], tol: NDArray[np.float64]) -> int:
+    """In a kept mode (``UserState.kept_mode``) whose dimensions are all within tolerance, the one
+    the user pushes along (the largest error in tolerance units; toward the goal): its index in
+    ``dims``, or -1 when a dimension is not within tolerance (it drives that one as usual)."""
+    arm = [k for k, d in enumerate(dims) if d != GRIPPER_DIM]
+    if not arm or any(abs(err[dims[k]]) > tol[dims[k]] for k in arm):
+        return -1
+    return max(arm, key=lambda k: abs(err[dims[k]]) / tol[dims[k]])
+
+
 def _drive(raw: NDArray[np.float64]) -> bool:
     """Whether a raw signal drives the arm (joystick axes or head-array left/right; a stick deflected
     with the mode button pressed selects a mode, it does not drive)."""
@@ -649,11 +683,19 @@ def user_step(
     if time < state.hold_until - 1e-9:
         return state  # letting go late: the drive is held
     lag_done = state.hold_until > 0.0
-    new = _decide(state, time, mode, err, interface, config, belief)
+    assisted = belief is not None and helped(
+        belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
+    )
+    new = _decide(state, time, mode, err, interface, config, belief, assisted)
     if config.release_lag > 0 and not lag_done and _drive(state.raw) and not _drive(new.raw):
-        rng = _draw(config, state.draws)
+        # The lag has a stream of its own keyed by this decision's counter, and the counter is not
+        # advanced: the decision made when the lag ends replays this one's draws, so the user
+        # carries out late what it decided (a pause, a review's or a correction's outcome) instead
+        # of drawing it anew (which made every random reason to stop driving twice as likely, or,
+        # for a rate per decision, almost never carried out).
+        rng = np.random.default_rng([int(config.seed), int(state.draws), 1])
         lag = float(rng.exponential(config.release_lag))
-        return _evolve(state, hold_until=time + lag, draws=state.draws + 1)
+        return _evolve(state, hold_until=time + lag)
     if new.hold_until != 0.0:
         new = _evolve(new, hold_until=0.0)
     return new
@@ -667,8 +709,10 @@ def _decide(
     interface: InterfaceConfig,
     config: UserConfig,
     belief: ArrayLike | None,
+    assisted: bool,
 ) -> UserState:
-    """Rules 3 to 6 at a free decision (not reacting, not letting go late)."""
+    """Rules 3 to 6 at a free decision (not reacting, not letting go late); ``assisted``: the
+    autonomy assists the user's goal (:func:`helped`)."""
     modes = interface.modes
     n_modes = len(modes)
     direct = interface.mode_selection == "direct"
@@ -758,8 +802,14 @@ def _decide(
         seen = _seen_error(state, err, modes[mode])
         seen_remaining = float(mode_remaining(seen, (modes[mode],), config)[0])
         if seen_remaining <= 1.0 < remaining[mode]:
+            # The primary movement ended short: correct it now, in this mode (a corrective
+            # submovement, with probability correction_prob, or when nothing else is left).
             others = np.delete(remaining[: n_modes - 1], mode)
-            if others.size == 0 or float(np.max(others)) <= 1.0:
+            if (
+                others.size == 0
+                or float(np.max(others)) <= 1.0
+                or (config.correction_prob > 0 and rng().random() < config.correction_prob)
+            ):
                 state = _aim(state, mode, err, modes, config, rng())
                 seen = _seen_error(state, err, modes[mode])
                 seen_remaining = float(mode_remaining(seen, (modes[mode],), config)[0])
@@ -771,13 +821,23 @@ def _decide(
 
     # The mode a request chose: keep it, or cycle away to one of its own choice.
     if state.judge:
-        state = _evolve(state, judge=False)
+        state = _evolve(state, judge=False, kept_mode=mode if config.keep_assisted_mode else -1)
         if config.accept_prob < 1.0 and rng().random() >= config.accept_prob:
             g = rng() if config.mode_temperature > 0 else None
             target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct)
             if target != mode and arm_remaining[target] > 1.0:
-                return press(MODE_BUTTON, target, target_mode=target, overshot=False)
+                return press(MODE_BUTTON, target, target_mode=target, overshot=False, kept_mode=-1)
             target = -1
+    # The kept mode: while the assistance helps, the arm approaches the goal in it whatever is left
+    # along the mode's own dimensions, so the user keeps using it until the whole goal's remaining
+    # error stops falling (rule 5 watches it) or the assistance stops helping.
+    keep = state.kept_mode == mode < n_modes - 1 and assisted
+    if state.kept_mode >= 0 and not keep:
+        state = _evolve(state, kept_mode=-1)
+    if keep:
+        remaining = remaining.copy()
+        remaining[mode] = max(float(remaining[mode]), float(np.max(arm_remaining)))
+        arm_remaining = remaining[: n_modes - 1]
 
     if target >= 0 and target == mode:
         if config.overshoot_prob > 0 and not state.overshot and rng().random() < config.overshoot_prob:
@@ -854,7 +914,7 @@ def _decide(
         axes = [0.0, 0.0]
         active = []
         for k, d in enumerate(dims):
-            if d == GRIPPER_DIM or abs(err[d]) <= tol[d]:
+            if d == GRIPPER_DIM or (abs(err[d]) <= tol[d] and not (keep and k == _pushed(err, dims, tol))):
                 continue
             axis = float(np.clip(err[d] / config.approach_time / speeds[d], -1.0, 1.0))
             if abs(axis) < config.min_axis:
@@ -877,9 +937,9 @@ def _decide(
     else:
         d = dims[0]
         if d != GRIPPER_DIM:
-            if err[d] > tol[d]:
+            if err[d] > tol[d] or (keep and 0.0 <= err[d]):
                 raw[0] = 1.0
-            elif err[d] < -tol[d]:
+            elif err[d] < -tol[d] or keep:
                 raw[1] = 1.0
     if (
         config.wrong_press_prob > 0

@@ -25,6 +25,12 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
 - **Presses per mode change** (bursts of switches as above), and the share of head-array bursts
   of 7 or more presses (a full round: at least one overshoot), and the seconds of commanding per
   mode change (the user's and the requests') per interface: how long people drive in a mode.
+- **Corrections per dwell**: a dwell is the time between two mode changes (switches or requests)
+  in which the user commands; its corrections are its gaps of zero command shorter than
+  :data:`MIN_PAUSE` between commands (a stop and a new, corrective submovement in the same mode;
+  longer gaps are pauses). Per interface and per subject (pooled over paradigms), and as the
+  probability ``c / (1 + c)`` of correcting at once after a movement that ended short (``c``
+  corrections per dwell, a geometric count).
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
   the chosen mode) or a mode switch (cycled away).
 
@@ -124,6 +130,8 @@ class BehaviourEstimates:
     presses_per_change: dict[str, float]
     commanding_per_change: dict[str, float]
     full_round_share: float
+    corrections_per_dwell: dict[str, float]
+    corrections_per_dwell_by_subject: dict[str, float]
     request_share: dict[str, float]
     request_share_by_subject: dict[str, float]
     early_request_share: float
@@ -165,6 +173,8 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     req_count: dict[str, list[float]] = {"joystick": [], "head_array": []}
     early, req_norm = [], []
     accepted = rejected = 0
+    corrections: dict[str, list[int]] = {"joystick": [], "head_array": []}
+    corrections_subject: dict[str, list[int]] = {}
     commanding_total = time_total = 0.0
     commanding_by_interface = {"joystick": 0.0, "head_array": 0.0}
     for trial in valid:
@@ -200,6 +210,16 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
                 burst = 1
         if sw.size:
             bursts[r.interface].append(burst)
+        # Corrections: short stops between commands within a dwell (between mode changes).
+        edges = [0.0, *events[events > 0].tolist(), r.duration]
+        for a, b in zip(edges, edges[1:], strict=False):
+            seg = cmd[int(a / dt) : int(b / dt)]
+            if seg.any():
+                inside = np.flatnonzero(seg)
+                gaps = _runs(~seg[inside[0] : inside[-1] + 1])
+                n = sum((g1 - g0) * dt < MIN_PAUSE for g0, g1 in gaps)
+                corrections[r.interface].append(n)
+                corrections_subject.setdefault(s, []).append(n)
         # Settle: last switch of a change -> next command, nothing else first.
         for x in sw:
             later_cmd = times_cmd[times_cmd > x]
@@ -277,6 +297,10 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
             k: commanding_by_interface[k] / len(v) if v else math.nan for k, v in bursts.items()
         },
         full_round_share=float(np.mean(np.asarray(ha) >= 7)) if ha else math.nan,
+        corrections_per_dwell={k: float(np.mean(v)) if v else math.nan for k, v in corrections.items()},
+        corrections_per_dwell_by_subject={
+            s: float(np.mean(v)) for s, v in sorted(corrections_subject.items())
+        },
         request_share={k: float(np.mean(v)) if v else math.nan for k, v in req_share.items()},
         request_share_by_subject={s: float(np.mean(v)) for s, v in sorted(req_share_subject.items())},
         early_request_share=float(np.mean(early)) if early else math.nan,
@@ -303,6 +327,8 @@ def format_estimates(est: BehaviourEstimates) -> str:
     rates = ", ".join(f"{s} {v:.3g}" for s, v in est.pause_rate.items())
     kappas = ", ".join(f"{s} {v:.3g}" for s, v in sorted(est.direction_kappa_by_subject.items()))
     shares = ", ".join(f"{s} {v:.2f}" for s, v in est.request_share_by_subject.items())
+    corr = ", ".join(f"{s} {v:.2f}" for s, v in est.corrections_per_dwell_by_subject.items())
+    probs = ", ".join(f"{s} {v / (1 + v):.2f}" for s, v in est.corrections_per_dwell_by_subject.items())
     lines = [
         f"valid trials: {est.n_trials}",
         _fmt_fit("start delay", est.start_delay),
@@ -320,6 +346,9 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"{est.full_round_share:.2f}",
         f"{'commanding s per change':<28} joystick {est.commanding_per_change['joystick']:.2f}, head array "
         f"{est.commanding_per_change['head_array']:.2f}",
+        f"{'corrections per dwell':<28} joystick {est.corrections_per_dwell['joystick']:.2f}, head array "
+        f"{est.corrections_per_dwell['head_array']:.2f}; per subject: {corr} (as a probability "
+        f"c / (1 + c): {probs})",
         f"{'requests per trial':<28} joystick {est.requests_per_trial['joystick']:.2f}, head array "
         f"{est.requests_per_trial['head_array']:.2f} (Disambiguation trials, merged)",
         f"{'request share of changes':<28} joystick {est.request_share['joystick']:.2f}, head array "

@@ -109,6 +109,9 @@ def _default_distributions() -> dict[str, Distribution]:
         "accept_prob": Uniform(0.66, 0.86),
         # Literature (no pose in the logs): judging by eye where to stop, relative error 10-30 %.
         "aim_error": LogNormal(0.2, 0.3, high=0.4),
+        # A movement that ended short is corrected at once in the same mode: short stops between
+        # commands per dwell c -> c / (1 + c) per subject 0.12..0.39 (pooled over paradigms).
+        "correction_prob": Uniform(0.1, 0.4),
     }
 
 
@@ -118,6 +121,7 @@ def _default_fixed() -> dict[str, Any]:
         "settle_log_sd": 0.93,  # within: pooled log-sd of the settles
         "request_wait": 3.0,  # the system's 2-2.5 s latency; request -> switch 2.5-3.2 s in the logs
         "request_at_start": True,
+        "keep_assisted_mode": True,  # a kept request mode is used while the assistance helps
     }
 
 

@@ -5,7 +5,8 @@ per condition, the mode-selection method, the request latency, each task's start
 the order of conditions is counterbalanced. The embedded default (``study/protocol.yaml``,
 :func:`default_protocol`) is the paper's (FACTS section 9): 8 subjects, joystick and head array,
 reaching and pouring, Manual 3 + Disambiguation 5 + Automatic 5 trials per condition (416 trials),
-Algorithm 1, a request latency uniform in [2.0, 2.5] s, 3 start poses per task.
+Algorithm 1, a request latency uniform in [2.0, 2.5] s, 3 start poses per task, and a joystick that
+selects each mode with one press (``interface_mode_selection: direct``, as the study's did).
 
 Protocol files are read like scenarios: the text hardening of :mod:`drake_disamb.yaml_safety`,
 the strict type check :func:`~drake_disamb.config.checks.check_data` (errors name the field path
@@ -44,6 +45,7 @@ from pydrake.common.yaml import yaml_load_typed
 
 from drake_disamb.config.checks import check_data, cut, fmt
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
+from drake_disamb.core.interfaces import MODE_SELECTIONS
 from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
 
 __all__ = [
@@ -126,6 +128,10 @@ class Protocol:
             ``None`` = the same tick (no latency).
         counterbalance: ``rotation`` or ``none`` (module docstring).
         duration: Simulated-time limit (s) of every trial; ``None`` = the task's.
+        interface_mode_selection: How the joystick's mode button selects a mode in every trial
+            (``Scenario.interface_mode_selection``): ``cycle`` or ``direct`` (the stick's sector
+            picks the mode: one press per change, as the study's joystick did). The head array
+            always cycles.
     """
 
     subjects: int = 8
@@ -136,6 +142,7 @@ class Protocol:
     request_latency: list[float] | None = field(default=None, metadata=_meta(size=(2,)))
     counterbalance: str = field(default="rotation", metadata=_meta(choices=COUNTERBALANCE))
     duration: float | None = None
+    interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
 
     @property
     def n_trials(self) -> int:
@@ -183,6 +190,11 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
         raise ValueError(
             f"{name}.disambiguation_method: expected one of {', '.join(METHODS)}, "
             f"got {fmt(protocol.disambiguation_method)}"
+        )
+    if protocol.interface_mode_selection not in MODE_SELECTIONS:
+        raise ValueError(
+            f"{name}.interface_mode_selection: expected one of {', '.join(MODE_SELECTIONS)}, "
+            f"got {fmt(protocol.interface_mode_selection)}"
         )
     lat = protocol.request_latency
     if lat is not None:

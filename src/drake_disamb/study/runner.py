@@ -21,7 +21,8 @@ kill can leave, is cut and its trial run again) are skipped.
 
 A trial's scenario (:func:`build_scenario`): the embedded task, then the trial's interface,
 paradigm, intended goals, initial mode, start posture (the task's start posture plus the start
-pose's joint offsets), seed, the protocol's duration, mode-selection method and the drawn request
+pose's joint offsets), seed, the protocol's duration, the joystick's mode selection
+(``Scenario.interface_mode_selection``), the mode-selection method and the drawn request
 latency (``Scenario.disambiguation.method`` and ``.request_latency``), the subject's overrides
 of ``Scenario.user.config`` and last the study's overrides (dotted field paths, ``study
 ablate``). Built through
@@ -182,6 +183,7 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
     plain["paradigm"] = spec.paradigm
     plain["seed"] = spec.scenario_seed
     plain["initial_mode"] = spec.initial_mode
+    plain["interface_mode_selection"] = protocol.get("interface_mode_selection", "cycle")
     plain["user"]["goals"] = list(spec.goals)
     task = _task_protocol(context, spec.task)
     offsets = task["start_poses"][spec.start_pose].get("joint_offsets")
