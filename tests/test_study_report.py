@@ -192,13 +192,15 @@ def test_stars_and_rank_biserial() -> None:
     assert rank_biserial([1, 2], [1, 2]) == 0.0
 
 
-def test_summary_excludes_invalid_trials_from_means_and_counts_failures() -> None:
+def test_summary_excludes_invalid_and_failed_trials_from_means_and_counts_failures() -> None:
     records = synthetic_records()
     rows = {(r["interface"], r["task"], r["paradigm"]): r for r in summarize(records)}
     row = rows[("head_array", "pouring", "manual")]
     group = [r for r in records if (r.interface, r.task, r.paradigm) == ("head_array", "pouring", "manual")]
-    valid = [r for r in group if r.valid]
-    assert row["n_trials"] == len(group) == 8 and row["n_valid"] == len(valid) == 7
+    # The means leave out the invalid trials and the failed ones, as the authors left out theirs.
+    valid = [r for r in group if r.valid and r.success is not False]
+    assert row["n_trials"] == len(group) == 8 and row["n_valid"] == sum(r.valid for r in group) == 7
+    assert row["n_analysed"] == len(valid) < 7
     assert row["mean_mode_switches_raw"] == pytest.approx(np.mean([r.mode_switches for r in valid]))
     assert row["mean_completion_time"] == pytest.approx(
         np.mean([r.completion_time for r in valid if r.completion_time is not None])
@@ -276,7 +278,12 @@ def test_a_p_value_of_stats_json_is_recomputed_from_trials_jsonl(study: Path) ->
     lines = [json.loads(line) for line in (study / "trials.jsonl").read_text().splitlines()]
 
     def values(paradigm: str, interface: str, field: str) -> list[float]:
-        rows = [r for r in lines if r["valid"] and r["paradigm"] == paradigm and r["interface"] == interface]
+        rows = [  # the analysed trials: valid, and not failed (as the authors left theirs out)
+            r
+            for r in lines
+            if r["valid"] and r["success"] is not False
+            if r["paradigm"] == paradigm and r["interface"] == interface
+        ]
         return [_clean_independently(r) if field == "clean" else r[field] for r in rows]
 
     for metric, field in (("button_presses", "clean"), ("button_presses_raw", "button_presses")):

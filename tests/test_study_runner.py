@@ -312,7 +312,7 @@ def test_quick_study_end_to_end(tmp_path: Path) -> None:
         if (r["test"], r["metric"], r["interface"], r["task"], r["a"], r["b"])
         == ("ranksum", "button_presses_raw", "head_array", "reaching", "manual", "disambiguation")
     )
-    head = [r for r in records if r.interface == "head_array"]
+    head = [r for r in records if r.interface == "head_array" and r.success]  # failed trials are left out
     by = {p: [r.button_presses for r in head if r.paradigm == p] for p in ("manual", "disambiguation")}
     expected = mannwhitneyu(by["manual"], by["disambiguation"], alternative="two-sided")
     assert (row["n_a"], row["n_b"]) == (len(by["manual"]), len(by["disambiguation"]))

@@ -62,8 +62,8 @@ def _slot(group: int, k: int, paradigms: Sequence[str], width: float) -> float:
 def _by_condition(
     trials: Sequence[TrialMetrics], paradigms: Sequence[str], width: float
 ) -> Iterator[tuple[float, str, list[TrialMetrics]]]:
-    """(x, paradigm, its valid trials) for every condition of :data:`CONDITIONS` (groups at x = 0,
-    1, ...) and every paradigm with trials in it."""
+    """(x, paradigm, its analysed trials: valid, not failed) for every condition of
+    :data:`CONDITIONS` (groups at x = 0, 1, ...) and every paradigm with trials in it."""
     for gi, (interface, task) in enumerate(CONDITIONS):
         sel = select_trials(trials, interface, task)
         for pi, paradigm in enumerate(paradigms):

@@ -55,11 +55,11 @@ WITHIN = 0.5
 def select_trials(
     trials: Sequence[TrialMetrics], interface: str = "all", task: str = "all"
 ) -> list[TrialMetrics]:
-    """The valid trials of ``interface`` and ``task`` (``"all"``: any)."""
+    """The analysed trials of ``interface`` and ``task`` (``"all"``: any)."""
     return [
         m
         for m in trials
-        if m.record.valid
+        if m.analysed
         and (interface == "all" or m.record.interface == interface)
         and (task == "all" or m.record.task == task)
     ]

@@ -25,8 +25,11 @@ of their repository. Per trial (:func:`trial_metrics`):
   exactly the ones they excluded, so for ``source == "authors"`` success is ``valid``;
 - **mean alpha** and **assistance onset** as in the record.
 
-Invalid trials (``valid`` False) are left out of every mean and test; they count in the success
-rate (as failures where the record says so).
+Failed trials are left out of every mean and test, as the authors left theirs out: a trial is
+*analysed* (:attr:`TrialMetrics.analysed`) when it is valid and did not fail (``success`` False: a
+simulated or live trial that ran out of time or ended at the wrong goal; the authors' failed trials
+are their invalid ones). Failed and invalid trials count in the success rate (as failures where
+the record says so).
 """
 
 from __future__ import annotations
@@ -158,6 +161,11 @@ class TrialMetrics:
     mean_alpha: float | None
     assistance_onset: float | None
 
+    @property
+    def analysed(self) -> bool:
+        """Whether the trial enters the means and tests: valid and not failed (module docstring)."""
+        return self.record.valid and self.success is not False
+
     def value(self, metric: str) -> float | None:
         """The number of ``metric`` (one of :data:`METRICS`), None where undefined."""
         if metric not in METRICS:
@@ -193,10 +201,10 @@ def trial_metrics(record: TrialRecord) -> TrialMetrics:
 
 def request_time_skewness(trials: Iterable[TrialMetrics]) -> float | None:
     """Skewness (biased, MATLAB's ``skewness``) of the cleaned request times normalised by
-    duration, pooled over the valid trials; None where there are no requests (or all equal)."""
+    duration, pooled over the analysed trials; None where there are no requests (or all equal)."""
     from scipy.stats import skew
 
-    pooled = [x for m in trials if m.record.valid for x in m.normalized_request_times]
+    pooled = [x for m in trials if m.analysed for x in m.normalized_request_times]
     if not pooled:
         return None
     value = float(skew(np.asarray(pooled)))
@@ -219,15 +227,16 @@ def _sd(values: Iterable[float | None]) -> float | None:
 
 
 def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
-    """One row per source, interface, task and paradigm (sorted): counts and means (valid
-    trials only) after the authors' cleaning, the raw means (``*_raw``), the success rate (all
-    trials whose success is known) and the request-time skewness."""
+    """One row per source, interface, task and paradigm (sorted): counts (``n_valid`` valid trials,
+    ``n_analysed`` of them not failed) and means (analysed trials only) after the authors'
+    cleaning, the raw means (``*_raw``), the success rate (all trials whose success is known) and
+    the request-time skewness."""
     groups: dict[tuple[str, str, str, str], list[TrialMetrics]] = {}
     for r in records:
         groups.setdefault(group_key(r), []).append(trial_metrics(r))
     rows = []
     for (source, interface, task, paradigm), ms in sorted(groups.items()):
-        valid = [m for m in ms if m.record.valid]
+        valid = [m for m in ms if m.analysed]  # the means' trials
         known = [m.success for m in ms if m.success is not None]
         row: dict[str, Any] = {
             "source": source,
@@ -235,7 +244,8 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
             "task": task,
             "paradigm": paradigm,
             "n_trials": len(ms),
-            "n_valid": len(valid),
+            "n_valid": sum(m.record.valid for m in ms),
+            "n_analysed": len(valid),
             "n_subjects": len({m.record.subject for m in ms}),
         }
         for name in COUNT_METRICS:

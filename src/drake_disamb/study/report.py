@@ -155,6 +155,7 @@ SUMMARY_COLUMNS = (
     "paradigm",
     "n_trials",
     "n_valid",
+    "n_analysed",
     "n_subjects",
     "mean_mode_switches",
     "mean_requests",
@@ -229,7 +230,9 @@ def write_report(
         f"<code>{html.escape(str(folder / 'trials.jsonl'))}</code>; "
         f"sources: {', '.join(sources)}"
         + (" (a mix: every table and figure is per source)" if len(sources) > 1 else "")
-        + ". Means over valid trials, after the authors' cleaning (requests less than 3 s apart merged, "
+        + ". Means over the analysed trials (valid and not failed: failed trials are left out, as the "
+        "authors did; they count in the success rate), after the authors' cleaning (requests less "
+        "than 3 s apart merged, "
         "repeated joystick presses into the same mode within 2 s dropped); raw means in the *_raw columns. "
         "Tests: two-sided Wilcoxon rank-sum over trials (scipy mannwhitneyu); "
         "*** p &lt; 0.001, ** p &lt; 0.01, "
@@ -383,7 +386,7 @@ def _write_ablation_report(folder: Path) -> ReportFiles:
     sections = [
         f'<p class="note">{len(settings)} settings from '
         f"<code>{html.escape(str(folder / 'ablation.json'))}</code>. "
-        "Per setting, the paradigm effect (b minus a, means over valid trials after the authors' "
+        "Per setting, the paradigm effect (b minus a, means over the analysed trials after the authors' "
         "cleaning) on "
         "button presses and completion time, with the two-sided rank-sum test.</p>",
         _img(figures[0], "paradigm effect per setting"),

@@ -3,7 +3,8 @@
 For every source, metric (:data:`drake_disamb.study.metrics.METRICS`), interface (``joystick``,
 ``head_array`` or ``all``) and task (``reaching``, ``pouring`` or ``all``), and every pair of
 paradigms present (:data:`PAIRS`: manual vs disambiguation, manual vs automatic,
-disambiguation vs automatic), over the valid trials with a value:
+disambiguation vs automatic), over the analysed trials with a value (valid and not failed,
+:attr:`~drake_disamb.study.metrics.TrialMetrics.analysed`):
 
 - ``test = "ranksum"``: the paper's Wilcoxon rank-sum test, ``scipy.stats.mannwhitneyu(a, b,
   alternative="two-sided")`` (its default method: exact for small samples without ties, else the
@@ -93,11 +94,11 @@ def _bootstrap_ci(a: np.ndarray, b: np.ndarray, seed: int) -> tuple[float, float
 def values_of(
     trials: Sequence[TrialMetrics], metric: str, interface: str, task: str, paradigm: str
 ) -> list[tuple[str, float]]:
-    """``(subject, value)`` of ``metric`` over the valid trials of a group (``all`` matches any)."""
+    """``(subject, value)`` of ``metric`` over the analysed trials of a group (``all`` matches any)."""
     out = []
     for m in trials:
         r = m.record
-        if not r.valid or r.paradigm != paradigm:
+        if not m.analysed or r.paradigm != paradigm:
             continue
         if interface != "all" and r.interface != interface:
             continue
