@@ -614,13 +614,18 @@ def test_user_reaches_a_target_mode_in_one_direct_press() -> None:
     assert [(e.kind, e.from_mode, e.to_mode) for e in events] == [("mode_switch", 0, 3)]
 
 
-def test_direct_overshoot_is_one_centred_press_then_one_selection() -> None:
+def test_overshoot_is_a_cycling_error_not_a_direct_selection_one() -> None:
+    # Only wy is left to do: the target is mode 3 ({wy}). A user who always presses once too many
+    # on reaching its target does so while cycling (one step past wy, then round again); with
+    # direct selection a change is one deliberate press and there is nothing to overshoot.
     ee = np.array([0.2, -0.4, 0.25, *quat_from_rotvec(np.array([0.0, 0.3, 0.0]))])
     config = dataclasses.replace(NO_REQUESTS, overshoot_prob=1.0)
+    presses, mode, events = _presses_to_target(JOY, config, 0, ee)
+    assert [(e.from_mode, e.to_mode) for e in events][:4] == [(0, 1), (1, 2), (2, 3), (3, 4)]
+    assert mode == 3 and presses > 3
     presses, mode, events = _presses_to_target(JOY_DIRECT, config, 0, ee)
-    # Select wy, one too many with the stick centred (wy -> gripper), select wy again.
-    assert [(e.from_mode, e.to_mode) for e in events] == [(0, 3), (3, 4), (4, 3)]
-    assert (presses, mode) == (3, 3)
+    assert [(e.from_mode, e.to_mode) for e in events] == [(0, 3)]
+    assert (presses, mode) == (1, 3)
 
 
 def test_press_cost_counts_one_press_per_direct_selection() -> None:

@@ -76,8 +76,10 @@ values and where they come from):
   press it takes to get there) with temperature ``mode_temperature`` (0 = the best mode, rule 4);
   the presses are made one by one, and on reaching its target the user presses once more with
   probability ``overshoot_prob`` (and must go round again). With direct selection every other mode
-  is one press away (``press_cost`` once), and an overshoot is a press with the stick centred (one
-  step past the target) followed by one press selecting the target again; a wrong press, made with
+  is one press away (``press_cost`` once) and there is nothing to overshoot: a change is one
+  deliberate press with the stick in the target's sector (the joystick logs' consecutive button
+  events less than 1 s apart are 3-4 % of them; an overshoot, a centred press and a second
+  selection, made 11-17 % with ``overshoot_prob`` from the head array); a wrong press, made with
   the stick centred, cycles on either interface. With ``mode_review_rate`` it also
   reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
   and leaves it for a clearly better one, as people interleave modes.
@@ -170,7 +172,8 @@ class UserConfig:
         wrong_press_prob: Probability that starting to drive presses the mode button instead.
         mode_temperature: Softmax temperature of the mode choice, in usefulness units (0 = the best).
         press_cost: Usefulness a mode loses per press needed to reach it.
-        overshoot_prob: Probability of one press too many on reaching the target mode.
+        overshoot_prob: Probability of one press too many on reaching the target mode by cycling
+            (not with direct selection: one deliberate press per change).
         mode_review_rate: Reviews per second of commanding time of whether another mode would be
             better (a Boltzmann choice with the current mode in it, at no press cost); 0 = only
             when the mode is done or stalled.
@@ -840,9 +843,10 @@ def _decide(
         arm_remaining = remaining[: n_modes - 1]
 
     if target >= 0 and target == mode:
-        if config.overshoot_prob > 0 and not state.overshot and rng().random() < config.overshoot_prob:
-            # One too many (stick centred: one step on); cycling goes round again to the target,
-            # direct selection gets back to it with its next press.
+        overshoot = config.overshoot_prob > 0 and not direct and not state.overshot
+        if overshoot and rng().random() < config.overshoot_prob:
+            # One too many (one step on): cycling goes round again to the target. Direct selection
+            # is one deliberate press per change: nothing to overshoot.
             return press(MODE_BUTTON, overshot=True)
         state = _evolve(state, target_mode=-1, overshot=False)
         out = settle()
