@@ -169,3 +169,24 @@ def test_public_results_are_c_contiguous_and_kernels_broadcast_row_by_row() -> N
         for j in range(6):
             np.testing.assert_array_equal(prod[i, j], quat_multiply(a[i, 0], q2[j]))
             np.testing.assert_array_equal(err[i, j], orientation_error(a[i, 0], q2[j]))
+
+
+def test_compiled_checks_agree_with_numpy() -> None:
+    """all_finite and normalized_quaternions_unchecked run compiled loops on float64 arrays; they
+    must give numpy's answers, and anything else goes through numpy."""
+    from drake_disamb.core._validation import all_finite
+    from drake_disamb.core.geometry import normalized_quaternions_unchecked
+
+    rng = np.random.default_rng(3)
+    for special in (np.nan, np.inf, -np.inf, 1e308, -1e308, 0.0):
+        for shape in ((6,), (3, 6), (2, 3, 4)):
+            a = rng.normal(size=shape)
+            a.flat[rng.integers(a.size)] = special
+            assert all_finite(a, np.zeros(2)) == bool(np.isfinite(a).all())
+            assert all_finite(a[..., ::2]) == bool(np.isfinite(a[..., ::2]).all())  # a strided view
+    assert all_finite([1.0, 2.0], 3.0, np.arange(4)) and not all_finite([1.0, np.nan])
+    q = rng.normal(size=(5, 4))
+    expected = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    np.testing.assert_allclose(normalized_quaternions_unchecked(q), expected)
+    assert normalized_quaternions_unchecked(q[0]).shape == (4,)
+    assert normalized_quaternions_unchecked(q.reshape(5, 1, 4)).shape == (5, 1, 4)

@@ -52,13 +52,14 @@ def check_real_fields(config: object, names: tuple[str, ...], allow_zero: bool =
 def all_finite(*arrays: NDArray[np.float64]) -> bool:
     """True if every entry of every array is finite.
 
-    Float64 arrays go through a compiled loop (a control tick checks a few small arrays several
-    times, where numpy's ``isfinite(a).all()`` costs a microsecond or two per array); other dtypes
-    through ``np.isfinite(a).all()``. Unlike a sum, neither overflows, so huge finite values (a
-    command of 1e308) raise no numpy ``RuntimeWarning`` at every tick.
+    Float64 numpy arrays go through a compiled loop (a control tick checks a few small arrays
+    several times, where numpy's ``isfinite(a).all()`` costs a microsecond or two per array);
+    anything else (other dtypes, lists, scalars) through ``np.isfinite(a).all()``. Unlike a sum,
+    neither overflows, so huge finite values (a command of 1e308) raise no numpy
+    ``RuntimeWarning`` at every tick.
     """
     for a in arrays:
-        if a.dtype == _FLOAT:
+        if type(a) is np.ndarray and a.dtype == _FLOAT:
             if not _all_finite_flat(a.ravel()):
                 return False
         elif not _isfinite(a).all():
