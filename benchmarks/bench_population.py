@@ -1,5 +1,6 @@
 """The simulated population beside the people: mean user mode switches, requests and completion time
-per interface, task and paradigm (a check of the calibration, not a fit).
+per interface, task and paradigm (a check of the calibration, not a fit). Means over the trials
+that succeeded (the authors left their failed trials out of every mean); success over all.
 
 Runs ``--trials`` trials per condition (interface x task x paradigm) with subjects drawn by
 :func:`drake_disamb.study.population.draw_subjects`, each with a random intended goal and initial
@@ -115,15 +116,16 @@ def main() -> int:
         if not rs:
             continue
         h = human.get((itf, task, par), {})
+        ok = [r for r in rs if r["success"]]  # the means leave failed trials out, as the authors did
         cells = []
         for key in ("mode_switches", "requests", "completion_time"):
-            sim = float(np.mean([r[key] for r in rs]))
+            sim = float(np.mean([r[key] for r in ok])) if ok else float("nan")
             hum = h.get(f"mean_{key}", float("nan"))
             ratio = sim / hum if hum else float("nan")
             cells.append(f"{sim:6.1f}/{hum:5.1f} ({ratio:4.2f})")
         succ = np.mean([r["success"] for r in rs])
         hum_time = h.get("mean_completion_time", float("nan"))
-        with_tail = (np.mean([r["completion_time"] for r in rs]) + tail) / hum_time
+        with_tail = (np.mean([r["completion_time"] for r in ok]) + tail) / hum_time if ok else float("nan")
         print(
             f"{itf:<11} {task:<9} {par:<15} {len(rs):>3} {succ:>5.2f} | "
             + " ".join(cells)
