@@ -79,8 +79,8 @@ values and where they come from):
   is one press away (``press_cost`` once) and there is nothing to overshoot: a change is one
   deliberate press with the stick in the target's sector (the joystick logs' consecutive button
   events less than 1 s apart are 3-4 % of them; an overshoot, a centred press and a second
-  selection, made 11-17 % with ``overshoot_prob`` from the head array); a wrong press, made with
-  the stick centred, cycles on either interface. With ``mode_review_rate`` it also
+  selection, made 11-17 % with ``overshoot_prob`` from the head array, 4-5 % without); a wrong
+  press, made with the stick centred, cycles on either interface. With ``mode_review_rate`` it also
   reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
   and leaves it for a clearly better one, as people interleave modes.
 - *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
