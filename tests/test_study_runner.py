@@ -471,3 +471,29 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
             f"{task} start pose {pose}: reached {result.reached_goal_names} at {result.time} s"
         )
     assert len({tuple(p) if p else None for p in postures}) == 3
+
+
+def test_trials_are_submitted_longest_first(tmp_path: Path) -> None:
+    """Multi-step tasks and the head array first, so that no worker starts a long trial last. A
+    fake executor records the order and fails every trial (nothing is simulated or written)."""
+    import concurrent.futures as cf
+
+    class Recording(cf.Executor):
+        def __init__(self) -> None:
+            self.order: list = []
+
+        def submit(self, fn, spec, *args, **kwargs):  # type: ignore[no-untyped-def, override]
+            self.order.append(spec)
+            future: cf.Future = cf.Future()
+            future.set_exception(RuntimeError("not run"))
+            return future
+
+    data = compatible_protocol_data()
+    data.update(subjects=1)
+    plan = plan_study(tmp_path / "s", P.protocol_from_dict(data), 0)
+    executor = Recording()
+    result = run_study(plan, executor)
+    assert len(result.errors) == len(plan.pending) == len(executor.order) and not result.ran
+    keys = [(len(s.goals), s.interface != "joystick") for s in executor.order]
+    assert keys == sorted(keys, reverse=True) and keys[0] != keys[-1]
+    assert sorted(s.trial_id for s in executor.order) == sorted(s.trial_id for s in plan.pending)

@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from drake_disamb.core.interfaces import arm_modes
 from drake_disamb.study.population import draw_subjects
 from drake_disamb.study.protocol import (
     Protocol,
@@ -414,6 +415,12 @@ class StudyResult:
     wall_time: float
 
 
+def _expected_length(spec: TrialSpec) -> tuple[int, int]:
+    """What makes a trial long, for the submission order: its task's stages, its interface's arm
+    modes (a head array's cycling takes more presses per change than a joystick's selection)."""
+    return len(spec.goals), len(arm_modes(spec.interface))
+
+
 def run_study(
     plan: StudyPlan,
     executor: cf.Executor,
@@ -427,7 +434,11 @@ def run_study(
         on_result: Called after each trial with its record (or ``None`` and the error message).
     """
     start = time.perf_counter()
-    futures = {executor.submit(run_trial_job, spec, plan.context): spec for spec in plan.pending}
+    # Longest first (a trial's length is unknown, its task's stage count and its interface's arm
+    # mode count are what make it long): a worker that draws a long trial last leaves the others
+    # idle at the end. Only the submission order changes: every trial has its own seed.
+    order = sorted(plan.pending, key=_expected_length, reverse=True)
+    futures = {executor.submit(run_trial_job, spec, plan.context): spec for spec in order}
     ran: list[TrialRecord] = []
     errors: list[tuple[str, str]] = []
     try:
