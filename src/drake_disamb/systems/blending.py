@@ -64,9 +64,9 @@ class SharedControlBlender(LeafSystem):
     The three outputs share one blending step, a cache entry that depends on the three inputs only
     (computed once per change of the inputs, not per output or per integrator stage). The step is
     a pure function of the inputs' values, and a one-entry memo on the system keeps the last one:
-    when Drake invalidates inputs whose values did not change (the diagram's unrestricted update
-    rewrites the belief and ``u_h`` unchanged at every tick), the entry is refilled without a new
-    blending step.
+    when Drake invalidates inputs whose values did not change (at a tick where one subsystem's
+    unrestricted update writes, the interface's when the user's raw signal changes, Drake rewrites
+    the belief and ``u_h`` unchanged too), the entry is refilled without a new blending step.
 
     **No user input.** The paper blends "always", so with ``assist_without_input=True`` a user who
     lets go is still driven toward ``g*`` at up to ``rho3 |u_a|`` (0.14 m/s with the default
@@ -159,7 +159,7 @@ class SharedControlBlender(LeafSystem):
         u_h, p, u_a = self._inputs(context)
         # The step is a pure function of the three inputs: a one-entry memo of the last one keeps
         # it from being recomputed when Drake invalidates inputs whose values did not change (the
-        # belief and u_h are rewritten, unchanged, at every tick's unrestricted update).
+        # belief and u_h are rewritten, unchanged, at ticks where any unrestricted update writes).
         key = u_h.tobytes() + p.tobytes() + u_a.tobytes()
         memo = self._memo
         if memo is None or memo[0] != key:

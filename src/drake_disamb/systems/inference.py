@@ -167,8 +167,9 @@ class _IntentInferenceBase(LeafSystem):
     def _belief(self, context: Context) -> NDArray[np.float64]:
         # A copy projected onto the simplex: the stored state may carry integrator error. The
         # projection is a pure function of the stored belief: a one-entry memo of the last one
-        # keeps it from being recomputed when the state is rewritten unchanged (every tick's
-        # unrestricted update rewrites it). Read-only: the outputs copy it.
+        # keeps it from being recomputed when the state is rewritten unchanged (at ticks where any
+        # subsystem's unrestricted update writes, Drake rewrites it too). Read-only: the outputs
+        # copy it.
         raw = self._raw_belief(context)
         key = raw.tobytes()
         memo = self._belief_memo
