@@ -365,7 +365,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
 
 def format_condition_means(rows: Sequence[dict[str, Any]]) -> str:
     """The authors' metrics per condition as a table: the rows of
-    :func:`drake_disamb.study.metrics.summarize` (means of the valid trials)."""
+    :func:`drake_disamb.study.metrics.summarize` (means of the analysed trials)."""
     lines = [
         f"{'interface':<11} {'task':<9} {'paradigm':<15} {'n':>3} {'switches':>9} {'requests':>9} {'time':>7}"
     ]

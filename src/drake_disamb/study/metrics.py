@@ -16,7 +16,7 @@ of their repository. Per trial (:func:`trial_metrics`):
     actually dropped). Head-array switches are not cleaned (the authors removed the head array's
     duplicated ``current_mode`` messages, which do not enter ``mode_switches``);
   * button presses = cleaned switches + cleaned requests;
-- **request times normalised** by the trial's duration (cleaned requests), pooled over the valid
+- **request times normalised** by the trial's duration (cleaned requests), pooled over the analysed
   trials of a group for the skewness (:func:`request_time_skewness`, ``scipy.stats.skew`` with its
   default biased estimator = MATLAB's ``skewness``);
 - **completion time** (``completion_time``; None when the task was not done);
@@ -236,7 +236,7 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
         groups.setdefault(group_key(r), []).append(trial_metrics(r))
     rows = []
     for (source, interface, task, paradigm), ms in sorted(groups.items()):
-        valid = [m for m in ms if m.analysed]  # the means' trials
+        analysed = [m for m in ms if m.analysed]  # the means' trials
         known = [m.success for m in ms if m.success is not None]
         row: dict[str, Any] = {
             "source": source,
@@ -245,21 +245,21 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
             "paradigm": paradigm,
             "n_trials": len(ms),
             "n_valid": sum(m.record.valid for m in ms),
-            "n_analysed": len(valid),
+            "n_analysed": len(analysed),
             "n_subjects": len({m.record.subject for m in ms}),
         }
         for name in COUNT_METRICS:
-            row[f"mean_{name}"] = _mean(getattr(m, name) for m in valid)
-        row["mean_completion_time"] = _mean(m.completion_time for m in valid)
-        row["sd_completion_time"] = _sd(m.completion_time for m in valid)
+            row[f"mean_{name}"] = _mean(getattr(m, name) for m in analysed)
+        row["mean_completion_time"] = _mean(m.completion_time for m in analysed)
+        row["sd_completion_time"] = _sd(m.completion_time for m in analysed)
         row["success_rate"] = float(np.mean(known)) if known else None
         row["n_success_known"] = len(known)
-        row["request_time_skewness"] = request_time_skewness(valid)
-        row["mean_alpha"] = _mean(m.mean_alpha for m in valid)
-        row["sd_alpha"] = _sd(m.mean_alpha for m in valid)
-        row["mean_assistance_onset"] = _mean(m.assistance_onset for m in valid)
-        row["mean_automatic_switches"] = _mean(float(m.record.automatic_switches) for m in valid)
+        row["request_time_skewness"] = request_time_skewness(analysed)
+        row["mean_alpha"] = _mean(m.mean_alpha for m in analysed)
+        row["sd_alpha"] = _sd(m.mean_alpha for m in analysed)
+        row["mean_assistance_onset"] = _mean(m.assistance_onset for m in analysed)
+        row["mean_automatic_switches"] = _mean(float(m.record.automatic_switches) for m in analysed)
         for name in COUNT_METRICS:
-            row[f"mean_{name}_raw"] = _mean(getattr(m, f"{name}_raw") for m in valid)
+            row[f"mean_{name}_raw"] = _mean(getattr(m, f"{name}_raw") for m in analysed)
         rows.append(row)
     return rows

@@ -272,8 +272,8 @@ def write_report(
                     )
         sections.append(f"<h2>Skewness of request times ({html.escape(source)})</h2>")
         sections.append(
-            '<p class="note">Cleaned request times divided by the trial\'s duration, pooled over the valid '
-            "trials of a condition; biased sample skewness (MATLAB skewness, scipy.stats.skew).</p>"
+            '<p class="note">Cleaned request times divided by the trial\'s duration, pooled over the '
+            "analysed trials of a condition; biased sample skewness (MATLAB skewness, scipy.stats.skew).</p>"
         )
         sections.append(_table(skew_rows, ("interface", "task", "paradigm", "requests", "skewness", "paper")))
         for path, caption in source_figures(mine, tests, source, out, suffix):

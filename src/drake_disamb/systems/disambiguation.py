@@ -317,8 +317,9 @@ class DisambiguationSystem(LeafSystem):
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         seen_count, seen_mode = context.get_discrete_state(self._tick_index).get_value()
         count, mode = self._seen(context, float(seen_count))
-        if count == seen_count and (mode == seen_mode or (mode != mode and seen_mode != seen_mode)):
-            return EventStatus.DidNothing()  # no request served, the same mode (NaN too): no write
+        same_mode = mode == seen_mode or (math.isnan(mode) and math.isnan(seen_mode))
+        if count == seen_count and same_mode:
+            return EventStatus.DidNothing()  # no request served, the same mode: nothing to write
         if count > seen_count:  # served in this tick, with the mode the interface had before it
             request = self._pack(context)
             request[-1] = seen_mode
