@@ -475,6 +475,80 @@ def test_calibrate_command_prints_the_estimates(capsys: pytest.CaptureFixture[st
     assert "head_array  pouring   manual" in out
 
 
+@needs_data
+def test_people_change_modes_less_while_the_belief_is_confident(human_trials) -> None:
+    from drake_disamb.study.calibration import estimate_behaviour
+
+    est = estimate_behaviour(human_trials)
+    for interface in ("joystick", "head_array"):
+        confident, unsure = est.changes_per_minute[interface]
+        assert 0.0 < confident < 0.7 * unsure, interface
+        assert 0.3 < est.confident_share[interface] < 0.6
+
+
+def _logged_trial(folder: Path, trial_id: str, *, t, mode, belief, switches, requests, duration):
+    """A record and its trace written into the study folder ``folder`` (a hand-made trial)."""
+    from drake_disamb.study.outcome import save_trace
+    from drake_disamb.study.records import TrialRecord, append_record
+
+    record = TrialRecord(
+        trial_id=trial_id, subject="S01", interface="head_array", task="reaching", paradigm="disambiguation",
+        disambiguation_method="algorithm1", repetition=0, seed=0, start_pose=0, initial_mode="vx",
+        intended_goals=[0], reached_goals=[0], success=True, done=True, duration=duration,
+        completion_time=duration, mode_switches=len(switches), requests=len(requests), automatic_switches=0,
+        button_presses=len(switches) + len(requests), request_times=requests, mode_switch_times=switches,
+        mode_switch_modes=["vy"] * len(switches), automatic_switch_times=[], mean_alpha=0.1,
+        assistance_onset=None, wall_time=0.0,
+    )  # fmt: skip
+    (folder / "traces").mkdir(parents=True, exist_ok=True)
+    append_record(folder / "trials.jsonl", record)
+    n = len(t)
+    save_trace(
+        folder / "traces" / f"{trial_id}.npz",
+        {"t": np.asarray(t), "mode": np.asarray(mode, dtype=float), "belief": np.asarray(belief),
+         "u_h": np.zeros((n, 6)), "alpha": np.zeros(n)},
+    )  # fmt: skip
+    return record
+
+
+def test_study_trials_give_the_request_switches_and_the_confident_change_rates(tmp_path: Path) -> None:
+    from drake_disamb.study.authors import read_study_trials
+    from drake_disamb.study.calibration import estimate_behaviour
+
+    t = np.round(np.arange(0, 40.0, 0.01), 2)
+    mode = np.zeros(t.size)
+    mode[t >= 5.0] = 1  # the user's switch at 5 s
+    mode[t >= 12.5] = 3  # the request at 10 s, its switch 2.5 s later
+    mode[t >= 30.0] = 4  # the user's at 30 s
+    belief = np.tile([0.5, 0.5], (t.size, 1))  # 2 goals: rho1 = 0.6
+    belief[t >= 20.0] = [0.9, 0.1]  # confident for the last 20 s
+    record = _logged_trial(
+        tmp_path, "T1", t=t, mode=mode, belief=belief, switches=[5.0, 30.0], requests=[10.0], duration=40.0
+    )
+    (trial,) = read_study_trials(tmp_path)
+    assert trial.record == record
+    assert trial.request_switch_times == pytest.approx([12.5])
+    est = estimate_behaviour([trial])
+    # not confident 20 s: the switch at 5 s and the request (2 changes); confident 20 s: 1
+    assert est.changes_per_minute["head_array"] == pytest.approx((3.0, 6.0), rel=0.01)
+    assert est.confident_share["head_array"] == pytest.approx(0.5, abs=0.01)
+
+
+def test_study_trials_refuse_a_folder_without_records_or_a_missing_trace(tmp_path: Path) -> None:
+    from drake_disamb.study.authors import read_study_trials
+
+    with pytest.raises(ValueError, match="trials.jsonl"):
+        read_study_trials(tmp_path)
+    t = np.arange(0, 1.0, 0.01)
+    _logged_trial(
+        tmp_path, "T1", t=t, mode=np.zeros(t.size), belief=np.full((t.size, 2), 0.5),
+        switches=[], requests=[], duration=1.0,
+    )  # fmt: skip
+    (tmp_path / "traces" / "T1.npz").unlink()
+    with pytest.raises(ValueError, match="T1.npz"):
+        read_study_trials(tmp_path)
+
+
 def test_calibrate_command_refuses_a_folder_without_logs(tmp_path: Path, capsys) -> None:
     from drake_disamb.cli import main
 

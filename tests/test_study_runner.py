@@ -317,6 +317,17 @@ def test_quick_study_end_to_end(tmp_path: Path) -> None:
     expected = mannwhitneyu(by["manual"], by["disambiguation"], alternative="two-sided")
     assert (row["n_a"], row["n_b"]) == (len(by["manual"]), len(by["disambiguation"]))
     assert row["p_value"] == pytest.approx(expected.pvalue, rel=1e-12)
+    # the behaviour estimates measure the simulated trials as they measure people's logs
+    from drake_disamb.study.authors import read_study_trials
+    from drake_disamb.study.calibration import estimate_behaviour
+
+    trials = read_study_trials(tmp_path / "q")
+    assert [t.record for t in trials] == records
+    for t in trials:
+        assert len(t.request_switch_times) <= len(t.record.request_times)
+    est = estimate_behaviour(trials)
+    assert est.n_trials == sum(r.success is not False and r.paradigm != "automatic" for r in records)
+    assert 0.0 < est.confident_share["joystick"] < 1.0
     # rerunning a finished study runs nothing; another seed in the same folder is refused
     res = cli(
         "study", "run", "--quick", "--out", str(tmp_path / "q"), "--protocol", str(protocol), "--workers", "1"

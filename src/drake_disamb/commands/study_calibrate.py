@@ -17,7 +17,11 @@ kept. user_vel has no timestamps: its samples are spread evenly over total_time.
 metrics per interface, task and paradigm (for comparison with the simulated population; never used
 to set it). docs/population.md maps each estimate to the population's distributions.
 
-Exit status: 0 on success, 2 when DATA_DIR holds no usable logs.
+With --simulated STUDY_DIR (a folder of `study run`), the same estimates are measured on the
+simulated trials there (Manual and Disambiguation, those that did not fail) and printed after the
+people's: the check that the population behaves as it was drawn to.
+
+Exit status: 0 on success, 2 when DATA_DIR holds no usable logs or STUDY_DIR no usable records.
 """
 
 
@@ -25,16 +29,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = DESCRIPTION
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
     parser.add_argument("data_dir", metavar="DATA_DIR", help="folder of the authors' logs")
+    parser.add_argument(
+        "--simulated",
+        metavar="STUDY_DIR",
+        help="also measure the simulated trials of this study folder (trials.jsonl and traces/)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.authors import read_trials
+    from drake_disamb.study.authors import read_study_trials, read_trials
     from drake_disamb.study.calibration import estimate_behaviour, format_condition_means, format_estimates
     from drake_disamb.study.metrics import summarize
 
     try:
         trials = read_trials(args.data_dir)
         estimates = estimate_behaviour(trials)
+        simulated = None
+        if args.simulated is not None:
+            simulated = read_study_trials(args.simulated)
+            simulated_estimates = estimate_behaviour(simulated)
     except (ValueError, OSError) as exc:
         print(f"drake-disamb study calibrate: {exc}", file=sys.stderr)
         return 2
@@ -43,4 +56,8 @@ def run(args: argparse.Namespace) -> int:
     print()
     print("The authors' metrics per condition (valid trials; a check, not an input):")
     print(format_condition_means(summarize([t.record for t in trials])))
+    if simulated is not None:
+        print()
+        print(f"The same estimates from the {len(simulated)} simulated trials in {args.simulated}")
+        print(format_estimates(simulated_estimates))
     return 0

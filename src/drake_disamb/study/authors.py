@@ -80,6 +80,7 @@ __all__ = [
     "load_trial_order",
     "mode_name",
     "parse_trial_name",
+    "read_study_trials",
     "read_trial",
     "read_trials",
 ]
@@ -191,7 +192,8 @@ def load_trial_order(path: str | Path) -> dict[tuple[str, int, int], dict[str, A
 
 @dataclass
 class AuthorsTrial:
-    """One imported trial: its record and its trace arrays (see the module docstring).
+    """One logged trial: its record and its trace arrays (see the module docstring), read from the
+    authors' files (:func:`read_trial`) or from a study folder (:func:`read_study_trials`).
 
     ``request_switch_times`` are the mode switches the requests made (the system's, one per
     request, s from ``start_time``), which the record leaves out of ``mode_switch_times``.
@@ -451,3 +453,41 @@ def import_authors(
         if progress is not None:
             progress(rid)
     return ImportSummary(imported=imported, skipped=len(trials) - imported, records=records_path)
+
+
+def read_study_trials(folder: str | Path) -> list[AuthorsTrial]:
+    """Every record of a study folder (``trials.jsonl`` and ``traces/``: a simulated study, an
+    import of the authors' logs, recorded human trials) with its trace, in record order.
+
+    So :mod:`drake_disamb.study.calibration` measures simulated users the way it measures people.
+    ``request_switch_times``, which a record does not keep, are the mode changes of the trace's
+    ``mode`` that are neither a user switch nor an automatic switch (within two samples of one).
+
+    Raises:
+        ValueError: ``folder`` has no ``trials.jsonl``, or a record's trace is missing or lacks
+            ``t`` or ``mode`` (the message names the file).
+    """
+    folder = Path(folder)
+    path = folder / "trials.jsonl"
+    if not path.is_file():
+        raise ValueError(f"{path}: no records (is {folder} a study folder?)")
+    trials = []
+    for record in read_records(path):
+        trace_path = folder / "traces" / f"{record.trial_id}.npz"
+        if not trace_path.is_file():
+            raise ValueError(f"{trace_path}: the trace of record {record.trial_id!r} is missing")
+        with np.load(trace_path) as z:
+            trace = {k: np.asarray(z[k]) for k in z.files}
+        for name in ("t", "mode"):
+            if name not in trace:
+                raise ValueError(f"{trace_path}: no {name!r} array")
+        t = np.asarray(trace["t"], dtype=float)
+        mode = np.asarray(trace["mode"], dtype=float)
+        changes = t[1:][np.diff(mode) != 0]
+        known = np.asarray(record.mode_switch_times + record.automatic_switch_times, dtype=float)
+        tol = 2.0 * float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+        if known.size:
+            near = np.min(np.abs(changes[:, None] - known[None, :]), axis=1) <= tol + 1e-9
+            changes = changes[~near]
+        trials.append(AuthorsTrial(record, trace, request_switch_times=changes))
+    return trials

@@ -21,7 +21,8 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   direction, summarised as the von Mises concentration whose mean cosine it is.
 - **Requests** (Disambiguation trials): per trial, the share of trials whose first request comes
   in the first 3 s, the request times normalised by the trial duration, and the share of mode
-  changes made by a request (requests / (requests + user mode changes)).
+  changes made by a request (requests / (requests + user mode changes), a user mode change being a
+  burst of switches as below: the choice is made once per change, however many presses it takes).
 - **Presses per mode change** (bursts of switches as above), and the share of head-array bursts
   of 7 or more presses (a full round: at least one overshoot), and the seconds of commanding per
   mode change (the user's and the requests') per interface: how long people drive in a mode.
@@ -33,6 +34,16 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   corrections per dwell, a geometric count).
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
   the chosen mode) or a mode switch (cycled away).
+- **Changes while the belief is confident**: mode changes (a request, or the first switch of a
+  burst of user switches) per minute while the belief's largest entry is above the system's
+  ``rho1`` (``1.2 / n``, the blending's threshold: the autonomy assists) and while it is not, and
+  the share of the trial time it is, per interface over both paradigms. People let a confident
+  autonomy carry them rather than change modes: how they use the assistance.
+
+The trials measured are the valid ones of the paradigms people did (Manual and Disambiguation)
+whose success is not False. The same function measures a simulated study
+(:func:`drake_disamb.study.authors.read_study_trials`, ``study calibrate --simulated DIR``): the
+check that the population behaves as the estimates say, not only that it was drawn from them.
 
 The logs are read by :func:`drake_disamb.study.authors.read_trials` (the reader of ``study
 import-authors``: the mode switch a request made is the one logged with the request's scores) and
@@ -50,13 +61,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.study.authors import AuthorsTrial
-from drake_disamb.study.metrics import clean_requests, trial_metrics
+from drake_disamb.study.metrics import clean_requests
 
 EARLY_REQUEST = 3.0
 """A first request before this time (s from the start) counts as early."""
 BURST_GAP = 3.0
 """Switches less than this apart with no command between them are one mode change (s)."""
+PEOPLE_PARADIGMS = ("manual", "disambiguation")
+"""The paradigms of the paper's study (Automatic is ours): the trials the estimates measure."""
 MIN_SETTLE = 0.1
 """A command sooner than this after a switch was held through it, not a settle (s)."""
 MIN_PAUSE = 0.5
@@ -142,6 +156,8 @@ class BehaviourEstimates:
     tail: LogNormalFit
     commanding_share: float
     n_trials: int
+    changes_per_minute: dict[str, tuple[float, float]]
+    confident_share: dict[str, float]
 
 
 def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
@@ -154,9 +170,13 @@ def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
 def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     """The behaviour estimates of the valid trials (module docstring), from
     :func:`drake_disamb.study.authors.read_trials`."""
-    valid = [t for t in trials if t.record.valid]
+    valid = [
+        t
+        for t in trials
+        if t.record.valid and t.record.success is not False and t.record.paradigm in PEOPLE_PARADIGMS
+    ]
     if not valid:
-        raise ValueError("trials: expected at least one valid trial, got none")
+        raise ValueError("trials: expected at least one valid Manual or Disambiguation trial, got none")
     start: dict[str, list[float]] = {}
     press: dict[str, list[float]] = {}
     settle: dict[str, list[float]] = {}
@@ -177,6 +197,8 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     corrections_subject: dict[str, list[int]] = {}
     commanding_total = time_total = 0.0
     commanding_by_interface = {"joystick": 0.0, "head_array": 0.0}
+    # interface -> [confident s, not confident s, changes while confident, changes while not]
+    confident = {"joystick": np.zeros(4), "head_array": np.zeros(4)}
     for trial in valid:
         r = trial.record
         s = r.subject
@@ -256,11 +278,11 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
                 norm = np.linalg.norm(mean)
                 if norm > 0:
                     cos_by_subject.setdefault(s, []).extend((mean / norm @ unit).tolist())
+        _count_confident_changes(trial, cmd, dt, confident[r.interface])
         if r.paradigm == "disambiguation":
             merged = clean_requests(r.request_times)
             req_count[r.interface].append(len(merged))
-            n_user = trial_metrics(r).mode_switches
-            changes = len(merged) + n_user
+            changes = len(merged) + len(_user_changes(r.mode_switch_times, cmd, dt))
             if changes:
                 req_share[r.interface].append(len(merged) / changes)
                 req_share_subject.setdefault(s, []).append(len(merged) / changes)
@@ -311,7 +333,49 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         tail=fit_lognormal(tail),
         commanding_share=commanding_total / time_total if time_total else math.nan,
         n_trials=len(valid),
+        changes_per_minute={
+            k: (
+                60.0 * v[2] / v[0] if v[0] > 0 else math.nan,
+                60.0 * v[3] / v[1] if v[1] > 0 else math.nan,
+            )
+            for k, v in confident.items()
+        },
+        confident_share={
+            k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
+        },
     )
+
+
+def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: float) -> list[float]:
+    """The times of the user's mode changes: the first switch of each burst of user switches (less
+    than :data:`BURST_GAP` apart with no command between; ``cmd`` as in :func:`estimate_behaviour`)."""
+    starts: list[float] = []
+    last = -math.inf
+    for x in sorted(x for x in switch_times if x > 0):
+        if last == -math.inf or x - last >= BURST_GAP or np.any(cmd[int(last / dt) + 1 : int(x / dt) + 1]):
+            starts.append(x)
+        last = x
+    return starts
+
+
+def _count_confident_changes(
+    trial: AuthorsTrial, cmd: NDArray[np.bool_], dt: float, acc: NDArray[np.float64]
+) -> None:
+    """Add the trial's confident / not-confident seconds and mode changes to ``acc`` (module
+    docstring; ``cmd``: the user command's non-zero samples, ``dt`` apart)."""
+    r = trial.record
+    t = np.asarray(trial.trace["t"], dtype=float)
+    belief = np.asarray(trial.trace["belief"], dtype=float)
+    if t.size < 2 or belief.ndim != 2 or belief.shape[0] != t.size:
+        return
+    sure = np.max(belief, axis=1) > RHO1_TIMES_N / belief.shape[1]
+    span = np.clip(np.append(t[1:], t[-1]), 0.0, r.duration) - np.clip(t, 0.0, r.duration)
+    acc[0] += float(span[sure].sum())
+    acc[1] += float(span[~sure].sum())
+    changes = list(clean_requests(r.request_times)) + _user_changes(r.mode_switch_times, cmd, dt)
+    for x in changes:
+        i = int(np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 1))
+        acc[2 if sure[i] else 3] += 1
 
 
 def _fmt_fit(name: str, fit: LogNormalFit, unit: str = "s") -> str:
@@ -359,6 +423,12 @@ def format_estimates(est: BehaviourEstimates) -> str:
         "not a switch)",
         _fmt_fit("tail (last command -> end)", est.tail),
         f"{'commanding share':<28} {est.commanding_share:.2f} of trial time",
+        "mode changes per minute      "
+        + "; ".join(
+            f"{k.replace('_', ' ')} {v[0]:.1f} while the belief is confident, {v[1]:.1f} while not "
+            f"(confident {est.confident_share[k]:.2f} of the time)"
+            for k, v in est.changes_per_minute.items()
+        ),
     ]
     return "\n".join(lines)
 
