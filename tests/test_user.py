@@ -568,6 +568,37 @@ def test_a_kept_request_mode_is_used_while_the_assistance_helps(interface: Inter
     assert plain.raw[2] == 1.0
 
 
+@pytest.mark.parametrize("interface", [HEAD, JOY])
+def test_with_stay_while_assisted_any_mode_is_used_while_the_assistance_helps(
+    interface: InterfaceConfig,
+) -> None:
+    # As above, but mode 0 was the user's own choice (no request): with stay_while_assisted it is
+    # kept while the autonomy assists the goal (win-stay), and not reviewed; otherwise left.
+    ee = EE.copy()
+    ee[0] = GOALS[0, 0] - 0.005
+    own = UserState(requested_at_start=True)
+    helping = np.array([0.9, 0.1])
+    stay = dataclasses.replace(NO_REQUESTS, stay_while_assisted=True, mode_review_rate=1000.0)
+    s = step(own, 1.0, 0, interface=interface, config=stay, ee=ee, belief=helping)
+    assert s.raw[0] > 0.0 and s.raw[2] == 0.0  # toward +x, no press, no review
+    away = step(own, 1.0, 0, interface=interface, config=stay, ee=ee, belief=np.array([0.5, 0.5]))
+    assert away.raw[2] == 1.0  # no assistance: x is done, it goes for z
+    plain = dataclasses.replace(stay, stay_while_assisted=False)
+    assert step(own, 1.0, 0, interface=interface, config=plain, ee=ee, belief=helping).raw[2] == 1.0
+
+
+def test_a_review_that_wants_another_mode_may_ask_for_it_instead() -> None:
+    # In vz with vx far from done, a review leaves vz: by cycling, or (request_instead_prob 1, a
+    # belief) by a request.
+    review = dataclasses.replace(NO_REQUESTS, mode_review_rate=1000.0)
+    flat = np.array([0.5, 0.5])
+    s = step(UserState(requested_at_start=True), 0.0, 2, config=review, interface=HEAD, belief=flat)
+    assert s.raw[2] == 1.0 and s.target_mode == 0
+    ask = dataclasses.replace(review, request_instead_prob=1.0)
+    s = step(UserState(requested_at_start=True), 0.0, 2, config=ask, interface=HEAD, belief=flat)
+    assert s.raw[3] == 1.0 and s.request_mode == 2
+
+
 def test_a_stalled_user_with_nothing_else_to_do_asks_for_help_when_it_can() -> None:
     # Only the x error is left and the arm does not follow (the autonomy holding it at another
     # goal): with requests available the user asks for disambiguation after stall_time.

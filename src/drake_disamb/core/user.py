@@ -199,6 +199,8 @@ class UserConfig:
             dimensions are done: it pushes toward the goal in it (the blended command moves the arm
             toward the goal) until the whole goal's remaining error stops falling (rule 5) or the
             assistance stops. False: a kept mode whose dimensions are done is left at once.
+        stay_while_assisted: Keep using *any* arm mode the user is in, not only a kept request
+            mode, while the autonomy assists its goal, the same way (win-stay while assisted).
     """
 
     position_tolerance: float = 0.01
@@ -243,6 +245,7 @@ class UserConfig:
     aim_error: float = 0.0
     correction_prob: float = 0.0
     keep_assisted_mode: bool = False
+    stay_while_assisted: bool = False
 
     def __post_init__(self) -> None:
         check_real_fields(
@@ -289,10 +292,9 @@ class UserConfig:
             raise ValueError(f"UserConfig.rho1: expected None or a number in [0, 1], got {self.rho1!r}")
         if not (isinstance(self.seed, numbers.Integral) and self.seed >= 0):
             raise ValueError(f"UserConfig.seed: expected an integer >= 0, got {self.seed!r}")
-        if not isinstance(self.keep_assisted_mode, bool):
-            raise ValueError(
-                f"UserConfig.keep_assisted_mode: expected true or false, got {self.keep_assisted_mode!r}"
-            )
+        for name in ("keep_assisted_mode", "stay_while_assisted"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"UserConfig.{name}: expected true or false, got {getattr(self, name)!r}")
         check_real_fields(self, ("pause_duration",))
         check_real_fields(
             self,
@@ -834,7 +836,7 @@ def _decide(
     # The kept mode: while the assistance helps, the arm approaches the goal in it whatever is left
     # along the mode's own dimensions, so the user keeps using it until the whole goal's remaining
     # error stops falling (rule 5 watches it) or the assistance stops helping.
-    keep = state.kept_mode == mode < n_modes - 1 and assisted
+    keep = (state.kept_mode == mode or config.stay_while_assisted) and mode < n_modes - 1 and assisted
     if state.kept_mode >= 0 and not keep:
         state = _evolve(state, kept_mode=-1)
     if keep:
@@ -896,10 +898,17 @@ def _decide(
             state = _evolve(state, progress_since=time, progress_best=now_remaining)
 
     # Reviews: while the mode still helps, is another one better now? (People interleave modes.)
-    if config.mode_review_rate > 0 and rng().random() < -math.expm1(-config.mode_review_rate * period):
+    # Not while a kept mode carries the user with the assistance (win-stay).
+    if (
+        config.mode_review_rate > 0
+        and not keep
+        and rng().random() < -math.expm1(-config.mode_review_rate * period)
+    ):
         g = rng() if config.mode_temperature > 0 else None
         choice = choose_mode(arm_remaining, mode, n_modes, config, g, direct=direct)
         if choice != mode and arm_remaining[choice] > 1.0:
+            if use_requests and request_chance(config.request_instead_prob):
+                return request()  # a change is wanted: ask for it instead, as in rules 4 and 5
             return press(MODE_BUTTON, choice, target_mode=choice, overshot=False)
 
     # Pauses (fatigue, thinking).
