@@ -234,7 +234,10 @@ def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.f
     n = g.shape[0]
     if x.shape != (7,):
         raise ValueError(f"ee_pose: expected 7 numbers, got shape {x.shape}")
-    if not all_finite(x) or x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6] < 1e-18:
+    if not all_finite(x):
+        return np.full(n, np.inf), np.full(n, np.inf)
+    qw, qx, qy, qz = x[3:].tolist()  # floats: scalar arithmetic costs less than on numpy scalars
+    if qw * qw + qx * qx + qy * qy + qz * qz < 1e-18:
         return np.full(n, np.inf), np.full(n, np.inf)
     dist, angle = np.empty(n), np.empty(n)
     _pose_error_rows(x, g, dist, angle)
