@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._kernels import _field_rows, _normalize_quaternion_rows
+from drake_disamb.core._kernels import _field_one_pose, _field_rows
 from drake_disamb.core._validation import all_finite, check_real_fields
 from drake_disamb.core.geometry import (
     check_vectors,
@@ -121,25 +121,13 @@ def _commands_from_one_pose(
     ee_pose: NDArray[np.float64], goal_poses: NDArray[np.float64], config: PotentialFieldConfig
 ) -> NDArray[np.float64]:
     """:func:`_field` for one pose ``(7,)`` and ``(n, 7)`` goal poses (finite, quaternions of norm at
-    least 1e-12), laid out as one row directly: the same kernels, in the same order, on the same
-    numbers as the broadcasting path (normalised quaternions, then the field), without its layout
-    work (a control loop computes one row per tick)."""
-    n = goal_poses.shape[0]
-    q = np.empty((1, 4))
-    _normalize_quaternion_rows(np.ascontiguousarray(ee_pose[3:]).reshape(1, 4), q)
-    gq = np.empty((n, 4))
-    _normalize_quaternion_rows(np.ascontiguousarray(goal_poses[:, 3:]), gq)
-    out = np.empty((1, n, 6))
-    _field_rows(
-        np.ascontiguousarray(ee_pose[:3]).reshape(1, 3),
-        q,
-        np.ascontiguousarray(goal_poses[:, :3]).reshape(1, n, 3),
-        gq.reshape(1, n, 4),
-        *_gains(config),
-        True,
-        out,
-    )
-    return out.reshape(n, 6)
+    least 1e-12) in one compiled call (:func:`~drake_disamb.core._kernels._field_one_pose`): the
+    same kernels, in the same order, on the same numbers as normalising the quaternions
+    (:func:`~drake_disamb.core.geometry.normalized_quaternions_unchecked`) and laying out the rows
+    first, without that work in numpy (a control loop computes one row per tick)."""
+    out = np.empty((1, goal_poses.shape[0], 6))
+    _field_one_pose(np.ascontiguousarray(ee_pose), np.ascontiguousarray(goal_poses), *_gains(config), out)
+    return out[0]
 
 
 def potential_field_rotation(

@@ -216,7 +216,8 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     one control period never takes it below zero), integrated by the simulator's integrator (the
     drive, the part of the right-hand side that does not depend on ``p``, is a cache
     entry on the inputs: computed once per control tick, not at every integrator stage; it also
-    holds whether ``u_h`` was finite, the verdict the periodic update counts);
+    holds whether ``u_h`` was finite, the verdict the periodic update counts, and the goal poses
+    it was computed with, which the periodic update compares);
     discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
     it (an entry below ``-SIMPLEX_TOLERANCE``, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard
@@ -266,9 +267,10 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # change instead of at every integrator stage.
         inputs = [self._u_h, self._ee_pose, self._goal_poses] + ([self._u_a] if params.agreement else [])
         self._drive = self.DeclareCacheEntry(
-            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite",
+            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite, goal_poses",
             ValueProducer(
-                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True)), calc=self._calc_drive
+                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True, np.zeros(7 * self._n))),
+                calc=self._calc_drive,
             ),
             prerequisites_of_calc={port.ticket() for port in inputs},
         )
@@ -288,19 +290,16 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     def _calc_drive(self, context: Context, value: AbstractValue) -> None:
         # The drive and whether u_h was finite (the verdict the periodic update counts, so that
         # the command is read and checked once per tick).
-        # Vector ports give float64 arrays of their declared sizes: only u_h's values are checked.
-        x_g = self._goal_poses.Eval(context).reshape(self._n, 7)[:, :3]
+        # Vector ports give float64 arrays (copies) of their declared sizes: only u_h's values are
+        # checked. The goal poses are kept with the drive: the periodic update compares them.
+        goal_poses = self._goal_poses.Eval(context)
+        x_g = goal_poses.reshape(self._n, 7)[:, :3]
         u_a = self._u_a.Eval(context) if self._params.agreement else None
         u = self._u_h.Eval(context)
         finite = all_finite(u)
         command = u if finite else sanitize_command(u)
-        value.set_value((dft_drive(command, self._ee_pose.Eval(context)[:3], x_g, self._dft, u_a), finite))
-
-    def _sanitized_input(self, context: Context) -> str | None:
-        # The drive's verdict on u_h (already computed for this tick's inputs by the integrator).
-        if not self._u_h.HasValue(context) or self._drive.Eval(context)[1]:
-            return None
-        return super()._sanitized_input(context)
+        drive = dft_drive(command, self._ee_pose.Eval(context)[:3], x_g, self._dft, u_a)
+        value.set_value((drive, finite, goal_poses))
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
         p = context.get_continuous_state_vector().CopyToVector()
@@ -312,10 +311,16 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         state.get_mutable_discrete_state(self._goals_index).SetFromVector(self._goal_poses_now(context))
 
     def _periodic_update(self, context: Context, state: State) -> EventStatus:
-        message = self._sanitized_input(context)
-        if message is not None:
-            self._sanitized.record(context, state.get_mutable_discrete_state(), message)
-        goals = self._goal_poses.Eval(context)
+        message = None
+        if self._u_h.HasValue(context):
+            # The drive of this tick's inputs (already computed by the integrator) holds the
+            # verdict on u_h and the goal poses: the inputs are read and checked once per tick.
+            _, finite, goals = self._drive.Eval(context)
+            if not finite:
+                message = self._sanitized_input(context)
+                self._sanitized.record(context, state.get_mutable_discrete_state(), message)
+        else:  # e.g. a system driven without a command
+            goals = self._goal_poses.Eval(context)
         old = context.get_discrete_state(self._goals_index).get_value()
         if _goals_changed(goals, old, self._tol):
             self._reset_update(context, state)
