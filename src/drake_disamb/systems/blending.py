@@ -18,6 +18,7 @@ from pydrake.systems.framework import (
 
 from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.blending import BlendingConfig, shared_control
+from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
@@ -144,10 +145,10 @@ class SharedControlBlender(LeafSystem):
         step = self._step
         if not (step.is_out_of_date(context) or step.is_cache_entry_disabled(context)):
             if step.Eval(context)[3]:
-                return EventStatus.DidNothing()
+                return DID_NOTHING
         u_h, p, u_a = self._inputs(context)
         if all_finite(u_h, p, u_a):
-            return EventStatus.DidNothing()
+            return DID_NOTHING
         message = (
             f"non-finite input (u_h={u_h.tolist()}, belief={p.tolist()}, u_a has NaN/inf: "
             f"{not np.isfinite(u_a).all()}); non-finite entries read as 0"

@@ -62,6 +62,7 @@ from drake_disamb.core.inference import (
     rest_state,
     sanitize_command,
 )
+from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
@@ -334,7 +335,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
             all(x >= -SIMPLEX_TOLERANCE for x in entries)
             and abs(math.fsum(entries) - 1.0) <= SIMPLEX_TOLERANCE
         ):
-            return EventStatus.DidNothing() if message is None else EventStatus.Succeeded()
+            return DID_NOTHING if message is None else EventStatus.Succeeded()
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(normalize_belief(p))
         return EventStatus.Succeeded()
 

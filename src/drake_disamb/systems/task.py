@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.core.geometry import pose_errors
+from drake_disamb.systems._status import DID_NOTHING
 
 POSE_SIZE = 7
 
@@ -165,7 +166,7 @@ class TaskManager(LeafSystem):
         x = context.get_discrete_state(self._state).get_value()
         stage = int(x[_STAGE])
         if stage >= self._n_stages:
-            return EventStatus.DidNothing()
+            return DID_NOTHING
         dist, angle = pose_errors(self._ee_pose.Eval(context), self._goal_sets[stage])
         # Lists of floats: a few comparisons cost less than numpy's per-call overhead (a NaN error
         # is inside no tolerance either way).
@@ -176,7 +177,7 @@ class TaskManager(LeafSystem):
         ]
         if not inside:
             if x[_CANDIDATE] == -1.0:  # far from every goal, as before: nothing to write
-                return EventStatus.DidNothing()
+                return DID_NOTHING
             x = x.copy()
             x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
             discrete_state.get_mutable_vector(self._state).SetFromVector(x)
