@@ -178,3 +178,28 @@ def test_from_poses_matches_potential_field_commands(seed: int) -> None:
         potential_field_commands_from_poses(np.r_[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], goals, config)
     with pytest.raises(ValueError, match="finite"):
         potential_field_commands_from_poses(np.r_[np.nan, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0], goals, config)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_from_poses_unchecked_is_the_composition_it_replaces(seed: int) -> None:
+    """The control loop's path (checked=False: one compiled call, _field_one_pose) gives exactly the
+    numbers of normalising with normalized_quaternions_unchecked and running the broadcasting
+    kernel path, repellers acting or not, unnormalised quaternions included."""
+    from drake_disamb.core.autonomy import _potential_field_commands, potential_field_commands_from_poses
+    from drake_disamb.core.geometry import normalized_quaternions_unchecked
+
+    rng = np.random.default_rng(seed)
+    config = PotentialFieldConfig(repeller_radius=0.2)
+    for n in (1, 2, 5):
+        for near in (False, True):
+            ee = np.r_[rng.normal(scale=0.3, size=3), rng.normal(size=4) * rng.choice([1e-3, 1.0, 50.0])]
+            goals = np.c_[rng.normal(scale=0.3, size=(n, 3)), rng.normal(size=(n, 4))]
+            if near:
+                goals[:, :3] = ee[:3] + rng.normal(scale=0.05, size=(n, 3))
+            q = normalized_quaternions_unchecked(ee[3:])
+            gq = normalized_quaternions_unchecked(goals[:, 3:])
+            expected = _potential_field_commands(ee[:3], q, goals[:, :3], gq, config)
+            got = potential_field_commands_from_poses(ee, goals, config, False)
+            assert got.shape == (n, 6)
+            np.testing.assert_array_equal(got, expected)
+            assert not np.any(np.signbit(got) != np.signbit(expected))

@@ -249,3 +249,20 @@ def test_resolve_rhos_checks_survive_its_cache() -> None:
         resolve_rhos(True, 0.1, 0.2)  # equal to 1 as a key, but a bool
     with pytest.raises(ValueError, match="rho1"):
         resolve_rhos(5, [0.1], None)  # unhashable: checked without the cache
+
+
+def test_one_step_is_a_row_of_the_batch() -> None:
+    """A single step (the control loop's) gives exactly the numbers of the same row in a batch."""
+    rng = np.random.default_rng(5)
+    n = 4
+    u_h = rng.normal(scale=0.2, size=(6, 6))
+    u_h[0] = 0.0  # no input
+    belief = rng.dirichlet(np.ones(n) * 0.3, size=6)
+    u_a = rng.normal(scale=0.3, size=(6, n, 6))
+    for config in (BlendingConfig(), BlendingConfig(assist_without_input=True, max_linear_speed=0.1)):
+        u, alpha, g_star = shared_control(u_h, belief, u_a, config)
+        for b in range(6):
+            one = shared_control(u_h[b], belief[b], u_a[b], config)
+            np.testing.assert_array_equal(one[0], u[b])
+            assert (one[1], one[2]) == (alpha[b], g_star[b])
+            assert isinstance(one[1], float) and isinstance(one[2], int)

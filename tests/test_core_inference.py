@@ -369,3 +369,49 @@ def test_guard_time_zero_is_the_plain_flow_and_bad_values_are_named() -> None:
     for bad in (-0.01, np.nan, np.inf, "0.01"):
         with pytest.raises(ValueError, match="guard_time: expected a finite number >= 0"):
             dft_mass_conserving_rhs_from_drive(p, drive, params, bad)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    "params",
+    [
+        DFTParams(),
+        DFTParams(tau1=4.0, tau2=4.0, lam=3.0, agreement=True, agreement_measure="cosine", proximity=True),
+        DFTParams(agreement=True, zero_command_excitation=False, euler_equivalent_step=0.01, R=0.3),
+        DFTParams(
+            lam=np.array([[2.0, 0.5, 0.0], [0.0, 3.0, 1.0], [0.2, 0.0, 1.0]]),
+            transition=np.array([[0.8, 0.1, 0.1], [0.0, 1.0, 0.0], [0.3, 0.3, 0.4]]),
+            rest=np.array([0.5, 0.3, 0.2]),
+            proximity=True,
+        ),
+    ],
+)
+def test_dft_row_is_the_array_functions(params: DFTParams) -> None:
+    """DFTRow (the control loop's prepared DFT) gives exactly the numbers of dft_drive and
+    dft_mass_conserving_rhs_from_drive for one belief, command and pose; dft_drive hands it its rows."""
+    from drake_disamb.core.inference import DFTRow
+
+    rng = np.random.default_rng(11)
+    n = 3
+    for guard_time in (0.0, 0.01):
+        row = DFTRow(params, n, guard_time)
+        for _ in range(20):
+            u = rng.normal(scale=0.2, size=6) * rng.integers(0, 2, size=6)
+            x_r, x_g = rng.normal(scale=0.3, size=3), rng.normal(scale=0.3, size=(7, n))[:3].T
+            u_a = rng.normal(scale=0.2, size=(n, 6))
+            p = rng.dirichlet(np.ones(n))
+            expected = dft_drive(u, x_r, x_g, params, u_a)
+            got = row.drive(u, x_r, x_g, u_a.ravel())
+            np.testing.assert_array_equal(got, expected)
+            np.testing.assert_array_equal(dft_drive(u, x_r, x_g, row, u_a), expected)
+            np.testing.assert_array_equal(
+                row.mass_conserving_rhs(p, got),
+                dft_mass_conserving_rhs_from_drive(p, expected, params, guard_time),
+            )
+    with pytest.raises(ValueError, match="guard_time"):
+        DFTRow(params, n, -1.0)
+    with pytest.raises(ValueError, match="n_goals"):
+        DFTRow(params, 0)
+    with pytest.raises(ValueError, match="transition"):
+        DFTRow(DFTParams(transition=np.eye(2)), 3)
+    with pytest.raises(ValueError, match="u_a"):
+        DFTRow(DFTParams(agreement=True), 3).drive(np.ones(6), np.zeros(3), np.ones((3, 3)))

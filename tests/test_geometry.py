@@ -190,3 +190,30 @@ def test_compiled_checks_agree_with_numpy() -> None:
     np.testing.assert_allclose(normalized_quaternions_unchecked(q), expected)
     assert normalized_quaternions_unchecked(q[0]).shape == (4,)
     assert normalized_quaternions_unchecked(q.reshape(5, 1, 4)).shape == (5, 1, 4)
+
+
+def test_orientation_error_of_one_pair_is_the_checked_path() -> None:
+    """One pair of float quaternions goes straight to the kernel: the same numbers as the checked,
+    broadcasting path (normalized_quaternions, orientation_error_unchecked), at any usable scale;
+    what the checks refuse is still refused."""
+    from drake_disamb.core.geometry import normalized_quaternions, orientation_error_unchecked
+
+    rng = np.random.default_rng(3)
+    for scale in (1e-9, 1e-3, 1.0, 7.0, 1e100):
+        for _ in range(50):
+            a, b = rng.normal(size=4) * scale, rng.normal(size=4)
+            expected = orientation_error_unchecked(
+                normalized_quaternions(a, "a"), normalized_quaternions(b, "b")
+            )
+            got = orientation_error(a, b)
+            assert got.shape == (3,)
+            np.testing.assert_array_equal(got, expected)
+            np.testing.assert_array_equal(orientation_error(list(a), b), expected)  # a list: checked path
+    for bad in (
+        [0.0, 0.0, 0.0, 0.0],
+        [np.nan, 0.0, 0.0, 1.0],
+        [np.inf, 0.0, 0.0, 1.0],
+        [1e200, 0.0, 0.0, 0.0],
+    ):
+        with pytest.raises(ValueError, match="q_from"):
+            orientation_error(np.array(bad), np.array([1.0, 0.0, 0.0, 0.0]))

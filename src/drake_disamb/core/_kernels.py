@@ -485,6 +485,33 @@ def _field_rows(
             out[r, i, 0], out[r, i, 1], out[r, i, 2] = _saturated(v0, v1, v2, v_max)
 
 
+@njit(cache=True)
+def _field_one_pose(pose, goals, k_t, k_r, gain, radius, cap, v_max, w_max, out):  # pragma: no cover
+    """:func:`_field_rows` (with translation) for one pose ``[x, y, z, qw, qx, qy, qz]`` (7) and
+    goal poses ``(n, 7)``, their quaternions normalised first by :func:`_normalize_quaternion_rows`:
+    the potential field of a control tick in one call (the same kernels on the same numbers as
+    normalising and laying out the rows in numpy first). ``out`` is ``(1, n, 6)``."""
+    n = goals.shape[0]
+    x = np.empty((1, 3))
+    raw = np.empty((1, 4))
+    q = np.empty((1, 4))
+    gx = np.empty((1, n, 3))
+    graw = np.empty((n, 4))
+    gq = np.empty((n, 4))
+    for k in range(3):
+        x[0, k] = pose[k]
+    for k in range(4):
+        raw[0, k] = pose[3 + k]
+    for i in range(n):
+        for k in range(3):
+            gx[0, i, k] = goals[i, k]
+        for k in range(4):
+            graw[i, k] = goals[i, 3 + k]
+    _normalize_quaternion_rows(raw, q)
+    _normalize_quaternion_rows(graw, gq)
+    _field_rows(x, q, gx, gq.reshape((1, n, 4)), k_t, k_r, gain, radius, cap, v_max, w_max, True, out)
+
+
 # ----------------------------------------------------------------------------------------------
 # The blending law
 # ----------------------------------------------------------------------------------------------

@@ -26,12 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._kernels import _field_rows
+from drake_disamb.core._kernels import _field_one_pose, _field_rows
 from drake_disamb.core._validation import all_finite, check_real_fields
 from drake_disamb.core.geometry import (
     check_vectors,
     normalized_quaternions,
-    normalized_quaternions_unchecked,
 )
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
 
@@ -98,6 +97,16 @@ def _field(
         as_rows(quat, batch, (4,)),
         shared_rows(goal_positions, batch, (n, 3)) if translation else np.empty((0, n, 3)),
         shared_rows(goal_quats, batch, (n, 4)),
+        *_gains(config),
+        translation,
+        out,
+    )
+    return out.reshape(*batch, n, out.shape[-1])
+
+
+def _gains(config: PotentialFieldConfig) -> tuple[float, ...]:
+    """The gains and limits :func:`_field_rows` takes, in its order."""
+    return (
         float(config.attractor_gain_translation),
         float(config.attractor_gain_rotation),
         float(config.repeller_gain),
@@ -105,10 +114,20 @@ def _field(
         REPELLER_SPEED_CAP_FACTOR * config.max_linear_speed,
         float(config.max_linear_speed),
         float(config.max_angular_speed),
-        translation,
-        out,
     )
-    return out.reshape(*batch, n, out.shape[-1])
+
+
+def _commands_from_one_pose(
+    ee_pose: NDArray[np.float64], goal_poses: NDArray[np.float64], config: PotentialFieldConfig
+) -> NDArray[np.float64]:
+    """:func:`_field` for one pose ``(7,)`` and ``(n, 7)`` goal poses (finite, quaternions of norm at
+    least 1e-12) in one compiled call (:func:`~drake_disamb.core._kernels._field_one_pose`): the
+    same kernels, in the same order, on the same numbers as normalising the quaternions
+    (:func:`~drake_disamb.core.geometry.normalized_quaternions_unchecked`) and laying out the rows
+    first, without that work in numpy (a control loop computes one row per tick)."""
+    out = np.empty((1, goal_poses.shape[0], 6))
+    _field_one_pose(np.ascontiguousarray(ee_pose), np.ascontiguousarray(goal_poses), *_gains(config), out)
+    return out[0]
 
 
 def potential_field_rotation(
@@ -190,9 +209,7 @@ def potential_field_commands_from_poses(
     are not checked twice per control tick.
     """
     if not checked:
-        q = normalized_quaternions_unchecked(ee_pose[3:])
-        gq = normalized_quaternions_unchecked(goal_poses[:, 3:])
-        return _potential_field_commands(ee_pose[:3], q, goal_poses[:, :3], gq, config)
+        return _commands_from_one_pose(ee_pose, goal_poses, config)
     if not all_finite(ee_pose, goal_poses):
         name = "quat" if not all_finite(ee_pose) else "goal_quats"
         bad = ee_pose if name == "quat" else goal_poses

@@ -209,13 +209,20 @@ def shared_control(
         )
     n = p.shape[-1]
     r1, r2, r3 = config.rhos(n)
-    batch = batch_shape(uh.shape[:-1], p.shape[:-1], ua.shape[:-2])
+    if uh.ndim == 1 and p.ndim == 1 and ua.ndim == 2:  # one step (a control tick): one row each
+        batch: tuple[int, ...] = ()
+        rows = (
+            np.ascontiguousarray(uh).reshape(1, 6),
+            np.ascontiguousarray(p).reshape(1, n),
+            np.ascontiguousarray(ua).reshape(1, n, 6),
+        )
+    else:
+        batch = batch_shape(uh.shape[:-1], p.shape[:-1], ua.shape[:-2])
+        rows = (as_rows(uh, batch, (6,)), as_rows(p, batch, (n,)), as_rows(ua, batch, (n, 6)))
     size = math.prod(batch)
     u, alpha, g_star = np.empty((size, 6)), np.empty(size), np.empty(size, dtype=np.int64)
     _shared_control_rows(
-        as_rows(uh, batch, (6,)),
-        as_rows(p, batch, (n,)),
-        as_rows(ua, batch, (n, 6)),
+        *rows,
         r1,
         r2,
         r3,

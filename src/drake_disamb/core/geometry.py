@@ -212,9 +212,31 @@ def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]
     The shortest rotation: ``|r| <= pi``, and ``q_to`` and ``-q_to`` give the same ``r``. Driving
     an orientation with angular velocity ``k * r`` (world frame) moves it towards ``q_to``.
     """
+    if _clearly_usable(q_from) and _clearly_usable(q_to):  # one pair (a simulated user's step)
+        # What the checks below would let through, normalised as normalized_quaternions does
+        # (numpy), without the checks, and one row for the kernel (no broadcasting layout).
+        out = np.empty((1, 3))
+        _orientation_error_rows(
+            (q_from / _quaternion_norms(q_from)).reshape(1, 4),
+            (q_to / _quaternion_norms(q_to)).reshape(1, 4),
+            out,
+        )
+        return out[0]
     return orientation_error_unchecked(
         normalized_quaternions(q_from, "q_from"), normalized_quaternions(q_to, "q_to")
     )
+
+
+def _clearly_usable(q: object) -> bool:
+    """True for a float64 array ``(4,)`` that :func:`normalized_quaternions` accepts with a margin:
+    finite, its squared norm in ``[1e-20, 1e300]`` (no overflow, norm far above 1e-12)."""
+    if type(q) is not np.ndarray or q.shape != (4,) or q.dtype != _FLOAT64:
+        return False
+    w, x, y, z = q.tolist()
+    return 1e-20 <= w * w + x * x + y * y + z * z <= 1e300  # False for a NaN or infinite entry
+
+
+_FLOAT64 = np.dtype(np.float64)
 
 
 def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -234,7 +256,10 @@ def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.f
     n = g.shape[0]
     if x.shape != (7,):
         raise ValueError(f"ee_pose: expected 7 numbers, got shape {x.shape}")
-    if not all_finite(x) or x[3] * x[3] + x[4] * x[4] + x[5] * x[5] + x[6] * x[6] < 1e-18:
+    if not all_finite(x):
+        return np.full(n, np.inf), np.full(n, np.inf)
+    qw, qx, qy, qz = x[3:].tolist()  # floats: scalar arithmetic costs less than on numpy scalars
+    if qw * qw + qx * qx + qy * qy + qz * qz < 1e-18:
         return np.full(n, np.inf), np.full(n, np.inf)
     dist, angle = np.empty(n), np.empty(n)
     _pose_error_rows(x, g, dist, angle)

@@ -392,15 +392,24 @@ def dft_drive(
     u_h: ArrayLike,
     x_r: ArrayLike,
     x_g: ArrayLike,
-    params: DFTParams,
+    params: DFTParams | DFTRow,
     u_a: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """The part of the DFT right-hand side that does not depend on ``p`` (1/s), shape ``(..., n)``.
 
-    ``drive = rest / tau2 + lambda @ sigma(xi)``.
+    ``drive = rest / tau2 + lambda @ sigma(xi)``. ``params`` may also be a :class:`DFTRow`
+    prepared from the parameters: then the arguments are one row, unchecked (:meth:`DFTRow.drive`).
     """
-    s = biased_sigmoid(dft_xi(u_h, x_r, x_g, params, u_a))
-    n = s.shape[-1]
+    if type(params) is DFTRow:
+        return params.drive(u_h, x_r, x_g, u_a)
+    xi = dft_xi(u_h, x_r, x_g, params, u_a)
+    rest_term, lam = _drive_terms(params, xi.shape[-1])
+    return _drive_from_xi(xi, rest_term, lam)
+
+
+def _drive_terms(params: DFTParams, n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The drive's constant parts for ``n`` goals: ``(rest / tau2, lambda)`` (``lambda`` a 0-d
+    array or an ``(n, n)`` matrix)."""
     # DFTParams validated ``rest`` as a probability vector when it was built: only its length is
     # checked here (this runs on every evaluation of the ODE's right-hand side).
     if params.rest is None:
@@ -412,8 +421,16 @@ def dft_drive(
     lam = np.asarray(params.lam, dtype=float)
     if lam.ndim == 2 and lam.shape != (n, n):
         raise ValueError(f"DFTParams.lam: expected a scalar or a ({n}, {n}) matrix, got shape {lam.shape}")
+    return rest / params.tau2, lam
+
+
+def _drive_from_xi(
+    xi: NDArray[np.float64], rest_term: NDArray[np.float64], lam: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``drive = rest / tau2 + lambda @ sigma(xi)`` from ``xi`` and :func:`_drive_terms`."""
+    s = biased_sigmoid(xi)
     excitation = lam * s if lam.ndim == 0 else s @ lam.T
-    return rest / params.tau2 + excitation
+    return rest_term + excitation
 
 
 def dft_rhs_from_drive(p: ArrayLike, drive: ArrayLike, params: DFTParams) -> NDArray[np.float64]:
@@ -475,6 +492,94 @@ def dft_mass_conserving_rhs_from_drive(
     rate = 1.0 / guard_time if guard_time > 0 else 0.0
     _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), rate, out)
     return out.reshape(*rows.batch, rows.n)
+
+
+class DFTRow:
+    """:func:`dft_drive` and :func:`dft_mass_conserving_rhs_from_drive` for one belief, with what
+    they derive from ``params`` prepared once: a control loop's hot path (one command per tick, where
+    the array functions' broadcasting, layout and checks cost several times the compiled kernels).
+
+    The same kernels and the same arithmetic as those functions, so the same numbers. ``params``
+    and ``guard_time`` are checked here, once; the arrays passed to :meth:`drive` and
+    :meth:`mass_conserving_rhs` are not (the caller's business, e.g. a Drake port fixes shapes):
+    float64 arrays of the documented shapes, the command finite (:func:`sanitize_command`).
+
+    Args:
+        params: DFT parameters; ``rest`` (if given), ``lam`` (if a matrix) and ``transition``
+            (if given) must have ``n_goals`` entries per axis.
+        n_goals: Number of goals n.
+        guard_time: As for :func:`dft_mass_conserving_rhs` (s).
+    """
+
+    __slots__ = ("_P", "_h", "_lam", "_no_u_a", "_rate", "_rest_term", "n", "params")
+
+    def __init__(self, params: DFTParams, n_goals: int, guard_time: float = 0.0) -> None:
+        if not isinstance(params, DFTParams):
+            raise ValueError(f"params: expected DFTParams, got {params!r}")
+        if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
+            raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
+        if not (is_real(guard_time) and guard_time >= 0):
+            raise ValueError(f"guard_time: expected a finite number >= 0 (s), got {guard_time!r}")
+        n = int(n_goals)
+        self.params, self.n = params, n
+        self._rest_term, self._lam = _drive_terms(params, n)
+        P = params.transition
+        if P is None:
+            self._P = np.empty((0, n, n))
+        else:
+            P = np.asarray(P, dtype=float)
+            if P.shape != (n, n):
+                raise ValueError(f"DFTParams.transition: expected a ({n}, {n}) matrix, got shape {P.shape}")
+            self._P = np.ascontiguousarray(P[None])
+        h = params.euler_equivalent_step
+        self._h = 0.0 if h is None else float(h)
+        self._rate = 1.0 / guard_time if guard_time > 0 else 0.0
+        self._no_u_a = np.empty((0, n, 6))
+
+    def drive(
+        self,
+        u_h: NDArray[np.float64],
+        x_r: NDArray[np.float64],
+        x_g: NDArray[np.float64],
+        u_a: NDArray[np.float64] | None = None,
+    ) -> NDArray[np.float64]:
+        """:func:`dft_drive` of a finite command ``u_h`` (d >= 3), the position ``x_r`` (3), the
+        goal positions ``x_g`` (n, 3) and, with ``params.agreement``, ``u_a`` (n, 6); ``(n,)``."""
+        params, n = self.params, self.n
+        agree = params.agreement
+        if agree and u_a is None:
+            raise ValueError("DFTParams.agreement is on but no per-goal autonomy commands u_a given")
+        xi = np.empty((1, n))
+        _xi_rows(
+            np.ascontiguousarray(u_h).reshape(1, -1),
+            np.ascontiguousarray(x_r).reshape(1, 3),
+            np.ascontiguousarray(x_g).reshape(1, n, 3),
+            np.ascontiguousarray(u_a).reshape(1, n, 6) if agree else self._no_u_a,
+            params.directedness,
+            agree,
+            params.agreement_measure == "cosine",
+            params.proximity,
+            params.zero_command_excitation,
+            float(params.R),
+            xi,
+        )
+        return _drive_from_xi(xi.reshape(n), self._rest_term, self._lam)
+
+    def mass_conserving_rhs(self, p: NDArray[np.float64], drive: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:func:`dft_mass_conserving_rhs_from_drive` of the belief ``p`` (n) and ``drive`` (n)."""
+        n = self.n
+        out = np.empty((1, n))
+        _dft_flow_rows(
+            np.ascontiguousarray(p).reshape(1, n),
+            np.ascontiguousarray(drive).reshape(1, n),
+            self._P,
+            self.params.tau1,
+            True,
+            self._h,
+            self._rate,
+            out,
+        )
+        return out.reshape(n)
 
 
 def dft_euler_update(p: ArrayLike, drive: ArrayLike, params: DFTParams, dt: ArrayLike) -> NDArray[np.float64]:

@@ -14,6 +14,7 @@ from pydrake.systems.framework import (
 
 from drake_disamb.core._validation import is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
+from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["PotentialFieldAutonomy"]
@@ -95,7 +96,7 @@ class PotentialFieldAutonomy(LeafSystem):
         # the count does not need the core, and the output is not computed just for the check.
         ee, goals = self._inputs(context)
         if usable_poses(ee, goals):
-            return EventStatus.DidNothing()
+            return DID_NOTHING
         message = f"unusable pose (ee_pose={ee.tolist()}, goal_poses={goals.tolist()}); u_a set to zero"
         self._sanitized.record(context, discrete_state, message)
         return EventStatus.Succeeded()

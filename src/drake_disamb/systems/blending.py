@@ -18,11 +18,12 @@ from pydrake.systems.framework import (
 
 from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.blending import BlendingConfig, shared_control
+from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 
-_NO_STEP = (np.zeros(6), np.zeros(1), np.zeros(1))
+_NO_STEP = (np.zeros(6), np.zeros(1), np.zeros(1), True)
 """Placeholder value of the blending-step cache entry before its first computation."""
 
 
@@ -62,7 +63,9 @@ class SharedControlBlender(LeafSystem):
             below); from state.
 
     The three outputs share one blending step, a cache entry that depends on the three inputs only
-    (computed once per change of the inputs, not per output or per integrator stage). The step is
+    (computed once per change of the inputs, not per output or per integrator stage); it also holds
+    whether the inputs were finite, the verdict the periodic check reuses when the step is already
+    up to date (in a loop it is: the station's update reads ``u`` in the same context). The step is
     a pure function of the inputs' values, and a one-entry memo on the system keeps the last one:
     when Drake invalidates inputs whose values did not change (at a tick where one subsystem's
     unrestricted update writes, the interface's when the user's raw signal changes, Drake rewrites
@@ -113,7 +116,7 @@ class SharedControlBlender(LeafSystem):
         # One blending step per change of the inputs, shared by the three outputs (a cache entry
         # that depends on the inputs alone, not on time or on any state).
         inputs = {port.ticket() for port in (self._u_h_port, self._belief_port, self._u_a_port)}
-        self._memo: tuple[bytes, tuple[NDArray[np.float64], ...]] | None = None
+        self._memo: tuple[bytes, tuple] | None = None
         self._step = self.DeclareCacheEntry(
             "shared_control step (u, alpha, g_star)",
             ValueProducer(allocate=lambda: AbstractValue.Make(_NO_STEP), calc=self._calc_step),
@@ -129,15 +132,23 @@ class SharedControlBlender(LeafSystem):
     def _inputs(
         self, context: Context
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        u_h = np.asarray(self._u_h_port.Eval(context), dtype=float)
-        p = np.asarray(self._belief_port.Eval(context), dtype=float)
-        u_a = np.asarray(self._u_a_port.Eval(context), dtype=float).reshape(self.n_goals, 6)
+        # Vector ports give float64 arrays (copies) of their declared sizes.
+        u_h = self._u_h_port.Eval(context)
+        p = self._belief_port.Eval(context)
+        u_a = self._u_a_port.Eval(context).reshape(self.n_goals, 6)
         return u_h, p, u_a
 
     def _check_inputs(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        # The step's verdict when the step is already computed for these inputs (in a loop it is:
+        # the station's update reads u in this context); otherwise the inputs are checked here, so
+        # that the count never needs the core.
+        step = self._step
+        if not (step.is_out_of_date(context) or step.is_cache_entry_disabled(context)):
+            if step.Eval(context)[3]:
+                return DID_NOTHING
         u_h, p, u_a = self._inputs(context)
         if all_finite(u_h, p, u_a):
-            return EventStatus.DidNothing()
+            return DID_NOTHING
         message = (
             f"non-finite input (u_h={u_h.tolist()}, belief={p.tolist()}, u_a has NaN/inf: "
             f"{not np.isfinite(u_a).all()}); non-finite entries read as 0"
@@ -147,13 +158,15 @@ class SharedControlBlender(LeafSystem):
 
     def _compute(
         self, u_h: NDArray[np.float64], p: NDArray[np.float64], u_a: NDArray[np.float64]
-    ) -> tuple[np.ndarray, float, int]:
-        if not all_finite(u_h, p, u_a):  # counted and warned by _check_inputs
+    ) -> tuple[np.ndarray, float, int, bool]:
+        """``(u, alpha, g_star, whether every input was finite)``."""
+        finite = all_finite(u_h, p, u_a)
+        if not finite:  # counted and warned by _check_inputs
             u_h = np.where(np.isfinite(u_h), u_h, 0.0)
             u_a = np.where(np.isfinite(u_a), u_a, 0.0)
             p = np.where(np.isfinite(p), p, 0.0)
         u, alpha, g_star = shared_control(u_h, p, u_a, self.config)
-        return u, float(alpha), int(g_star)
+        return u, float(alpha), int(g_star), finite
 
     def _calc_step(self, context: Context, value: AbstractValue) -> None:
         u_h, p, u_a = self._inputs(context)
@@ -163,8 +176,8 @@ class SharedControlBlender(LeafSystem):
         key = u_h.tobytes() + p.tobytes() + u_a.tobytes()
         memo = self._memo
         if memo is None or memo[0] != key:
-            u, alpha, g_star = self._compute(u_h, p, u_a)
-            memo = self._memo = (key, (u, np.array([alpha]), np.array([float(g_star)])))
+            u, alpha, g_star, finite = self._compute(u_h, p, u_a)
+            memo = self._memo = (key, (u, np.array([alpha]), np.array([float(g_star)]), finite))
         value.set_value(memo[1])
 
     def _calc_u(self, context: Context, output: BasicVector) -> None:

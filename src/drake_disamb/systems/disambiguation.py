@@ -27,6 +27,7 @@ from drake_disamb.core.disambiguation import (
     select_disambiguating_mode,
     validate_modes,
 )
+from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
@@ -319,7 +320,7 @@ class DisambiguationSystem(LeafSystem):
         count, mode = self._seen(context, float(seen_count))
         same_mode = mode == seen_mode or (math.isnan(mode) and math.isnan(seen_mode))
         if count == seen_count and same_mode:
-            return EventStatus.DidNothing()  # no request served, the same mode: nothing to write
+            return DID_NOTHING  # no request served, the same mode: nothing to write
         if count > seen_count:  # served in this tick, with the mode the interface had before it
             request = self._pack(context)
             request[-1] = seen_mode

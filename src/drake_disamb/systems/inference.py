@@ -53,15 +53,16 @@ from drake_disamb.core._validation import all_finite
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
     DFTParams,
+    DFTRow,
     bayes_step,
     check_transition,
     dft_drive,
-    dft_mass_conserving_rhs_from_drive,
     memory_step,
     normalize_belief,
     rest_state,
     sanitize_command,
 )
+from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
@@ -174,7 +175,7 @@ class _IntentInferenceBase(LeafSystem):
         key = raw.tobytes()
         memo = self._belief_memo
         if memo is None or memo[0] != key:
-            memo = self._belief_memo = (key, normalize_belief(np.array(raw, dtype=float)))
+            memo = self._belief_memo = (key, normalize_belief(raw))  # raw: a copy, normalize_belief copies
         return memo[1]
 
     def _calc_belief(self, context: Context, output: BasicVector) -> None:
@@ -216,7 +217,8 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     one control period never takes it below zero), integrated by the simulator's integrator (the
     drive, the part of the right-hand side that does not depend on ``p``, is a cache
     entry on the inputs: computed once per control tick, not at every integrator stage; it also
-    holds whether ``u_h`` was finite, the verdict the periodic update counts);
+    holds whether ``u_h`` was finite, the verdict the periodic update counts, and the goal poses
+    it was computed with, which the periodic update compares);
     discrete ``goal_poses`` (7 n), the goal set the belief refers to. Every
     ``control_period`` an unrestricted update re-projects ``p`` onto the simplex when it has left
     it (an entry below ``-SIMPLEX_TOLERANCE``, or ``|sum(p) - 1| > SIMPLEX_TOLERANCE``: a guard
@@ -257,15 +259,19 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
                 f"params.lam: expected a scalar or a ({self._n}, {self._n}) matrix, got {lam.shape}"
             )
         self._params = replace(params, rest=self._rest)
+        # The core's drive and flow for one belief, prepared once (the same kernels and numbers as
+        # dft_drive / dft_mass_conserving_rhs_from_drive, without their per-call checks and layout).
+        self._dft = DFTRow(self._params, self._n, self._period)
         self.DeclareContinuousState(self._n)
         # The drive (the part of the right-hand side that does not depend on p) changes only with
         # the inputs, which are held between control ticks: a cache entry computes it once per
         # change instead of at every integrator stage.
         inputs = [self._u_h, self._ee_pose, self._goal_poses] + ([self._u_a] if params.agreement else [])
         self._drive = self.DeclareCacheEntry(
-            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite",
+            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite, goal_poses",
             ValueProducer(
-                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True)), calc=self._calc_drive
+                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True, np.zeros(7 * self._n))),
+                calc=self._calc_drive,
             ),
             prerequisites_of_calc={port.ticket() for port in inputs},
         )
@@ -285,24 +291,20 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     def _calc_drive(self, context: Context, value: AbstractValue) -> None:
         # The drive and whether u_h was finite (the verdict the periodic update counts, so that
         # the command is read and checked once per tick).
-        x_g = self._goal_positions(np.asarray(self._goal_poses.Eval(context), dtype=float))
-        u_a = None
-        if self._params.agreement:
-            u_a = np.asarray(self._u_a.Eval(context), dtype=float).reshape(self._n, 6)
-        u = np.asarray(self._u_h.Eval(context), dtype=float)
+        # Vector ports give float64 arrays (copies) of their declared sizes: only u_h's values are
+        # checked. The goal poses are kept with the drive: the periodic update compares them.
+        goal_poses = self._goal_poses.Eval(context)
+        x_g = goal_poses.reshape(self._n, 7)[:, :3]
+        u_a = self._u_a.Eval(context) if self._params.agreement else None
+        u = self._u_h.Eval(context)
         finite = all_finite(u)
         command = u if finite else sanitize_command(u)
-        value.set_value((dft_drive(command, self._position(context), x_g, self._params, u_a), finite))
-
-    def _sanitized_input(self, context: Context) -> str | None:
-        # The drive's verdict on u_h (already computed for this tick's inputs by the integrator).
-        if not self._u_h.HasValue(context) or self._drive.Eval(context)[1]:
-            return None
-        return super()._sanitized_input(context)
+        drive = dft_drive(command, self._ee_pose.Eval(context)[:3], x_g, self._dft, u_a)
+        value.set_value((drive, finite, goal_poses))
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
         p = context.get_continuous_state_vector().CopyToVector()
-        dp = dft_mass_conserving_rhs_from_drive(p, self._drive.Eval(context)[0], self._params, self._period)
+        dp = self._dft.mass_conserving_rhs(p, self._drive.Eval(context)[0])
         derivatives.get_mutable_vector().SetFromVector(dp)
 
     def _reset_update(self, context: Context, state: State) -> None:
@@ -310,8 +312,16 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         state.get_mutable_discrete_state(self._goals_index).SetFromVector(self._goal_poses_now(context))
 
     def _periodic_update(self, context: Context, state: State) -> EventStatus:
-        counted = self._count_sanitized(context, state.get_mutable_discrete_state())
-        goals = self._goal_poses.Eval(context)
+        message = None
+        if self._u_h.HasValue(context):
+            # The drive of this tick's inputs (already computed by the integrator) holds the
+            # verdict on u_h and the goal poses: the inputs are read and checked once per tick.
+            _, finite, goals = self._drive.Eval(context)
+            if not finite:
+                message = self._sanitized_input(context)
+                self._sanitized.record(context, state.get_mutable_discrete_state(), message)
+        else:  # e.g. a system driven without a command
+            goals = self._goal_poses.Eval(context)
         old = context.get_discrete_state(self._goals_index).get_value()
         if _goals_changed(goals, old, self._tol):
             self._reset_update(context, state)
@@ -319,8 +329,13 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         p = context.get_continuous_state_vector().CopyToVector()
         # The usual case: the flow conserves sum(p) up to rounding and keeps p >= 0. Nothing
         # is written then, so the belief and what depends on it are not recomputed after the tick.
-        if np.minimum.reduce(p) >= -SIMPLEX_TOLERANCE and abs(math.fsum(p) - 1.0) <= SIMPLEX_TOLERANCE:
-            return EventStatus.Succeeded() if counted else EventStatus.DidNothing()
+        # (On a list of floats: a NaN entry fails the first test, as it fails np.min(p) >= ...)
+        entries = p.tolist()
+        if (
+            all(x >= -SIMPLEX_TOLERANCE for x in entries)
+            and abs(math.fsum(entries) - 1.0) <= SIMPLEX_TOLERANCE
+        ):
+            return DID_NOTHING if message is None else EventStatus.Succeeded()
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(normalize_belief(p))
         return EventStatus.Succeeded()
 

@@ -25,6 +25,7 @@ from drake_disamb.core.interfaces import (
     initial_state,
     interface_update,
 )
+from drake_disamb.systems._status import DID_NOTHING
 
 __all__ = [
     "EventLog",
@@ -186,7 +187,7 @@ class InterfaceSystem(LeafSystem):
         if vector[InterfaceState.PENDING_DUE_INDEX] < 0.0:
             key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes() + repr(automatic).encode()
             if key == self._fixed_point:
-                return EventStatus.DidNothing()
+                return DID_NOTHING
         before = InterfaceState.from_vector(vector)
 
         def read_disambiguation_mode() -> float | None:
@@ -214,7 +215,7 @@ class InterfaceSystem(LeafSystem):
         if key is not None:
             self._fixed_point = key
         # Nothing written: the simulator then leaves the context (and every cached value) alone.
-        return EventStatus.DidNothing()
+        return DID_NOTHING
 
     def _output_values(self, state: InterfaceState) -> dict[str, list[float]]:
         """The value of every vector output port for ``state`` (port name -> vector)."""

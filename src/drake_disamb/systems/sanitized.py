@@ -51,7 +51,10 @@ def usable_poses(*poses: NDArray[np.float64]) -> bool:
     is in range: no NaN, no entry beyond :data:`MAX_POSE_ENTRY` in magnitude (infinities
     included), and each quaternion's norm at least :data:`MIN_QUATERNION_NORM`
     (:func:`~drake_disamb.core.geometry.poses_usable` on each)."""
-    return all(poses_usable(pose, MAX_POSE_ENTRY, MIN_QUATERNION_NORM) for pose in poses)
+    for pose in poses:  # (a loop, not all() over a generator: checked twice per control tick)
+        if not poses_usable(pose, MAX_POSE_ENTRY, MIN_QUATERNION_NORM):
+            return False
+    return True
 
 
 class SanitizedInputCounter:

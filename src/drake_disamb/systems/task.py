@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.core.geometry import pose_errors
+from drake_disamb.systems._status import DID_NOTHING
 
 POSE_SIZE = 7
 
@@ -165,19 +166,24 @@ class TaskManager(LeafSystem):
         x = context.get_discrete_state(self._state).get_value()
         stage = int(x[_STAGE])
         if stage >= self._n_stages:
-            return EventStatus.DidNothing()
-        t = context.get_time()
+            return DID_NOTHING
         dist, angle = pose_errors(self._ee_pose.Eval(context), self._goal_sets[stage])
-        inside = np.flatnonzero((dist <= self._pos_tol) & (angle <= self._ori_tol))
-        if inside.size == 0:
+        # Lists of floats: a few comparisons cost less than numpy's per-call overhead (a NaN error
+        # is inside no tolerance either way).
+        dist, angle = dist.tolist(), angle.tolist()
+        pos_tol, ori_tol = self._pos_tol, self._ori_tol
+        inside = [
+            i for i, (d, a) in enumerate(zip(dist, angle, strict=True)) if d <= pos_tol and a <= ori_tol
+        ]
+        if not inside:
             if x[_CANDIDATE] == -1.0:  # far from every goal, as before: nothing to write
-                return EventStatus.DidNothing()
+                return DID_NOTHING
             x = x.copy()
             x[_CANDIDATE], x[_HOLD_START] = -1.0, np.nan
             discrete_state.get_mutable_vector(self._state).SetFromVector(x)
             return EventStatus.Succeeded()
-        x = x.copy()
-        goal = int(inside[np.argmin(dist[inside])])
+        x, t = x.copy(), context.get_time()
+        goal = min(inside, key=dist.__getitem__)  # the nearest; ties to the lowest index (np.argmin's)
         if int(x[_CANDIDATE]) != goal or not np.isfinite(x[_HOLD_START]):
             x[_CANDIDATE], x[_HOLD_START] = float(goal), t
         # A tiny slack absorbs the rounding of accumulated periodic event times.
