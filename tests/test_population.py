@@ -321,8 +321,11 @@ def test_same_seed_same_subjects_and_subjects_differ() -> None:
     assert [s.name for s in a] == [f"S{i:02d}" for i in range(1, 9)]
     assert draw_subjects(3, 3) == a[:3]  # a subject does not depend on n
     assert a != draw_subjects(8, 4)
-    for key in PopulationConfig().distributions:
-        assert len({s.user[key] for s in a}) == 8, key
+    for key, dist in PopulationConfig().distributions.items():
+        if isinstance(dist, LogNormal) and dist.log_sd == 0.0:
+            assert len({s.user[key] for s in a}) == 1, key  # one value for all (request_decay_time)
+        else:
+            assert len({s.user[key] for s in a}) == 8, key
     import json
 
     json.dumps([s.user for s in a])  # plain JSON values
@@ -460,8 +463,27 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
     rates = list(est.pause_rate.values())
     assert min(rates) <= d["pause_rate"].median <= max(rates)
     assert d["accept_prob"].low < est.accept_share < d["accept_prob"].high
-    shares = list(est.request_share_by_subject.values())
-    assert d["request_instead_prob"].low == pytest.approx(min(shares), abs=0.01)
+    # requests instead of own changes: the fitted share at the start per subject, and its decay
+    p0 = list(est.request_decay.p0.values())
+    assert d["request_instead_prob"].low == pytest.approx(min(p0), abs=0.01)
+    assert d["request_instead_prob"].high == pytest.approx(max(p0), abs=0.01)
+    assert d["request_decay_time"].median == pytest.approx(est.request_decay.tau, rel=0.05)
+
+
+def test_the_request_decay_fit_recovers_known_parameters() -> None:
+    from drake_disamb.study.calibration import fit_request_decay
+
+    rng = np.random.default_rng(3)
+    events = []
+    for subject, p0 in (("A", 0.7), ("B", 0.4)):
+        for t in rng.uniform(0.0, 120.0, 3000):
+            events.append((subject, float(t), bool(rng.random() < p0 * np.exp(-t / 60.0))))
+    fit = fit_request_decay(events)
+    assert fit.n == 6000
+    assert fit.p0["A"] == pytest.approx(0.7, abs=0.05) and fit.p0["B"] == pytest.approx(0.4, abs=0.05)
+    assert fit.tau == pytest.approx(60.0, rel=0.15)
+    flat = fit_request_decay([("A", float(t), bool(k % 2)) for k, t in enumerate(np.linspace(0, 100, 400))])
+    assert flat.p0["A"] == pytest.approx(0.5, abs=0.02) and flat.tau > 1000.0
 
 
 @needs_data

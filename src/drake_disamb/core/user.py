@@ -82,7 +82,8 @@ values and where they come from):
   selection, made 11-17 % with ``overshoot_prob`` from the head array, 4-5 % without); a wrong
   press, made with the stick centred, cycles on either interface. With ``mode_review_rate`` it also
   reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
-  and leaves it for a clearly better one, as people interleave modes.
+  and leaves it for a clearly better one, as people interleave modes (not while a kept mode, below,
+  carries it).
 - *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
   its dimensions and stops short by a half-normal share (scale ``aim_error``) of the distance it
   sees; the mode then looks done. With probability ``correction_prob`` (or when nothing else is
@@ -91,14 +92,16 @@ values and where they come from):
 - *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``
   (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
-  probability ``request_prob``; when a new mode is needed the user asks for disambiguation instead
-  of cycling with probability ``request_instead_prob``; both scaled by ``exp(-t /
-  request_decay_time)`` (requests concentrate early). After a request it waits up to
+  probability ``request_prob``; when a new mode is needed (its mode done, a stall, or a review that
+  wants another) the user asks for disambiguation instead of cycling with probability
+  ``request_instead_prob``; both scaled by ``exp(-t / request_decay_time)`` (requests concentrate
+  early). After a request it waits up to
   ``request_wait`` seconds for the mode to change, then keeps the mode the system chose with
   probability ``accept_prob`` or cycles away from it to a mode of its own choice. With
   ``keep_assisted_mode`` it keeps using a kept mode while the autonomy assists its goal, also once
   the mode's own dimensions are done (pushing toward the goal in it), until the whole goal's
-  remaining error stops falling (rule 5) or the assistance stops.
+  remaining error stops falling (rule 5) or the assistance stops. With ``stay_while_assisted`` a
+  joystick user uses any arm mode so (win-stay while assisted).
 """
 
 from __future__ import annotations
@@ -200,8 +203,12 @@ class UserConfig:
             dimensions are done: it pushes toward the goal in it (the blended command moves the arm
             toward the goal) until the whole goal's remaining error stops falling (rule 5) or the
             assistance stops. False: a kept mode whose dimensions are done is left at once.
-        stay_while_assisted: Keep using *any* arm mode the user is in, not only a kept request
-            mode, while the autonomy assists its goal, the same way (win-stay while assisted).
+        stay_while_assisted: With a proportional interface (the joystick), keep using *any* arm
+            mode the user is in, not only a kept request mode, while the autonomy assists its goal,
+            the same way (win-stay): a small push in the mode (``min_axis``) is blended with the
+            autonomy's command, which carries the arm home. Not with the head array, whose
+            full-speed switches along a done dimension drive the arm away from the goal (there
+            only a kept request mode is used so, with ``keep_assisted_mode``).
     """
 
     position_tolerance: float = 0.01
@@ -838,7 +845,8 @@ def _decide(
     # The kept mode: while the assistance helps, the arm approaches the goal in it whatever is left
     # along the mode's own dimensions, so the user keeps using it until the whole goal's remaining
     # error stops falling (rule 5 watches it) or the assistance stops helping.
-    keep = (state.kept_mode == mode or config.stay_while_assisted) and mode < n_modes - 1 and assisted
+    stay = config.stay_while_assisted and interface.kind == "joystick"
+    keep = (state.kept_mode == mode or stay) and mode < n_modes - 1 and assisted
     if state.kept_mode >= 0 and not keep:
         state = _evolve(state, kept_mode=-1)
     if keep:

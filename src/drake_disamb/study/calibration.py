@@ -22,7 +22,9 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
 - **Requests** (Disambiguation trials): per trial, the share of trials whose first request comes
   in the first 3 s, the request times normalised by the trial duration, and the share of mode
   changes made by a request (requests / (requests + user mode changes), a user mode change being a
-  burst of switches as below: the choice is made once per change, however many presses it takes).
+  burst of switches as below: the choice is made once per change, however many presses it takes),
+  and how that share falls during a trial: ``P(request | a change at t) = p0 * exp(-t / tau)``, per
+  subject ``p0`` and one ``tau``, by maximum likelihood (:func:`fit_request_decay`).
 - **Presses per mode change** (bursts of switches as above), and the share of head-array bursts
   of 7 or more presses (a full round: at least one overshoot), and the seconds of commanding per
   mode change (the user's and the requests') per interface: how long people drive in a mode.
@@ -126,6 +128,44 @@ def _runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist(), strict=True))
 
 
+@dataclass(frozen=True)
+class RequestDecayFit:
+    """``P(a mode change is made by a request | it is made at t s) = p0[subject] * exp(-t / tau)``,
+    the maximum-likelihood fit over the Disambiguation trials' mode changes (``n``; a request or
+    the first switch of a burst of the user's own), ``tau`` shared by the subjects. ``tau`` is
+    ``inf`` when no decay fits better."""
+
+    p0: dict[str, float]
+    tau: float
+    n: int
+
+
+def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecayFit:
+    """:class:`RequestDecayFit` of ``(subject, time s, made by a request)`` events."""
+    from scipy.optimize import minimize
+
+    if not events:
+        return RequestDecayFit({}, math.nan, 0)
+    subjects = sorted({e[0] for e in events})
+    index = np.array([subjects.index(e[0]) for e in events])
+    t = np.array([e[1] for e in events], dtype=float)
+    y = np.array([e[2] for e in events], dtype=float)
+
+    def nll(theta: NDArray[np.float64]) -> float:
+        p0 = 1.0 / (1.0 + np.exp(-theta[:-1]))  # in (0, 1)
+        q = np.clip(p0[index] * np.exp(-t * math.exp(-theta[-1])), 1e-12, 1.0 - 1e-12)
+        return float(-np.sum(y * np.log(q) + (1.0 - y) * np.log1p(-q)))
+
+    start = np.append(np.zeros(len(subjects)), math.log(60.0))  # theta[-1] = log(tau)
+    res = minimize(nll, start, method="Nelder-Mead", options={"maxiter": 20000, "xatol": 1e-6, "fatol": 1e-9})
+    tau = math.exp(float(res.x[-1]))
+    return RequestDecayFit(
+        p0={s: float(1.0 / (1.0 + math.exp(-v))) for s, v in zip(subjects, res.x[:-1], strict=True)},
+        tau=tau if tau < 1e5 else math.inf,
+        n=len(events),
+    )
+
+
 @dataclass
 class BehaviourEstimates:
     """What :func:`estimate_behaviour` measured (times in s). Per-subject lists feed the fits."""
@@ -151,6 +191,7 @@ class BehaviourEstimates:
     early_request_share: float
     requests_per_trial: dict[str, float]
     request_time_mean: float
+    request_decay: RequestDecayFit
     accept_share: float
     accept_n: int
     tail: LogNormalFit
@@ -192,6 +233,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     req_share_subject: dict[str, list[float]] = {}
     req_count: dict[str, list[float]] = {"joystick": [], "head_array": []}
     early, req_norm = [], []
+    change_events: list[tuple[str, float, bool]] = []  # Disambiguation: (subject, time, a request?)
     accepted = rejected = 0
     corrections: dict[str, list[int]] = {"joystick": [], "head_array": []}
     corrections_subject: dict[str, list[int]] = {}
@@ -282,7 +324,10 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         if r.paradigm == "disambiguation":
             merged = clean_requests(r.request_times)
             req_count[r.interface].append(len(merged))
-            changes = len(merged) + len(_user_changes(r.mode_switch_times, cmd, dt))
+            own_changes = _user_changes(r.mode_switch_times, cmd, dt)
+            change_events.extend((s, x, True) for x in merged)
+            change_events.extend((s, x, False) for x in own_changes)
+            changes = len(merged) + len(own_changes)
             if changes:
                 req_share[r.interface].append(len(merged) / changes)
                 req_share_subject.setdefault(s, []).append(len(merged) / changes)
@@ -328,6 +373,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         early_request_share=float(np.mean(early)) if early else math.nan,
         requests_per_trial={k: float(np.mean(v)) if v else math.nan for k, v in req_count.items()},
         request_time_mean=float(np.mean(req_norm)) if req_norm else math.nan,
+        request_decay=fit_request_decay(change_events),
         accept_share=accepted / (accepted + rejected) if accepted + rejected else math.nan,
         accept_n=int(accepted + rejected),
         tail=fit_lognormal(tail),
@@ -417,6 +463,10 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"{est.requests_per_trial['head_array']:.2f} (Disambiguation trials, merged)",
         f"{'request share of changes':<28} joystick {est.request_share['joystick']:.2f}, head array "
         f"{est.request_share['head_array']:.2f}; per subject: {shares}",
+        f"{'request share over time':<28} p0 * exp(-t / tau): tau {est.request_decay.tau:.0f} s, "
+        "p0 per subject "
+        + ", ".join(f"{k} {v:.2f}" for k, v in est.request_decay.p0.items())
+        + f" (maximum likelihood, n={est.request_decay.n} changes)",
         f"{'first request in 3 s':<28} {est.early_request_share:.2f} of Disambiguation trials; mean "
         f"normalised request time {est.request_time_mean:.2f}",
         f"{'request mode kept':<28} {est.accept_share:.2f} (n={est.accept_n}: next action a command, "
