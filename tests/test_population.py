@@ -484,6 +484,10 @@ def test_the_request_decay_fit_recovers_known_parameters() -> None:
     assert fit.tau == pytest.approx(60.0, rel=0.15)
     flat = fit_request_decay([("A", float(t), bool(k % 2)) for k, t in enumerate(np.linspace(0, 100, 400))])
     assert flat.p0["A"] == pytest.approx(0.5, abs=0.02) and flat.tau > 1000.0
+    # a handful of changes, all requests late: the fit stays finite where it can and says inf
+    few = fit_request_decay([("A", 50.0, True), ("A", 60.0, True), ("B", 1.0, False)])
+    assert 0.0 <= few.p0["A"] <= 1.0 and 0.0 <= few.p0["B"] <= 1.0 and few.n == 3
+    assert fit_request_decay([]).n == 0
 
 
 @needs_data

@@ -140,6 +140,10 @@ class RequestDecayFit:
     n: int
 
 
+LOG_TAU_MAX = 12.0
+"""The fit's largest ``log(tau)`` (about 1.6e5 s: no decay within any trial; reported as ``inf``)."""
+
+
 def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecayFit:
     """:class:`RequestDecayFit` of ``(subject, time s, made by a request)`` events."""
     from scipy.optimize import minimize
@@ -151,16 +155,22 @@ def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecay
     t = np.array([e[1] for e in events], dtype=float)
     y = np.array([e[2] for e in events], dtype=float)
 
+    def log_tau(theta: NDArray[np.float64]) -> float:
+        return min(max(float(theta[-1]), 0.0), LOG_TAU_MAX)  # tau in [1 s, e^12 s]
+
     def nll(theta: NDArray[np.float64]) -> float:
-        p0 = 1.0 / (1.0 + np.exp(-theta[:-1]))  # in (0, 1)
-        q = np.clip(p0[index] * np.exp(-t * math.exp(-theta[-1])), 1e-12, 1.0 - 1e-12)
+        p0 = 1.0 / (1.0 + np.exp(-np.clip(theta[:-1], -50.0, 50.0)))  # in (0, 1)
+        q = np.clip(p0[index] * np.exp(-t * math.exp(-log_tau(theta))), 1e-12, 1.0 - 1e-12)
         return float(-np.sum(y * np.log(q) + (1.0 - y) * np.log1p(-q)))
 
     start = np.append(np.zeros(len(subjects)), math.log(60.0))  # theta[-1] = log(tau)
     res = minimize(nll, start, method="Nelder-Mead", options={"maxiter": 20000, "xatol": 1e-6, "fatol": 1e-9})
-    tau = math.exp(float(res.x[-1]))
+    tau = math.exp(log_tau(res.x))
     return RequestDecayFit(
-        p0={s: float(1.0 / (1.0 + math.exp(-v))) for s, v in zip(subjects, res.x[:-1], strict=True)},
+        p0={
+            s: float(1.0 / (1.0 + math.exp(-min(max(v, -50.0), 50.0))))
+            for s, v in zip(subjects, res.x[:-1], strict=True)
+        },
         tau=tau if tau < 1e5 else math.inf,
         n=len(events),
     )
