@@ -1,7 +1,7 @@
 """Real-time rate of the full shared-control reaching loop (simulated head-array user, no Meshcat).
 
 Usage: ``python benchmarks/bench_loop.py [--seconds 8] [--time-step 0.01 0.001] [--interface
-head_array] [--repeats 5] [--profile]``. For each MultibodyPlant time step it builds the reaching
+head_array] [--repeats 9] [--profile]``. For each MultibodyPlant time step it builds the reaching
 diagram (the default scenario: disambiguation paradigm, goal 0), simulates ``--seconds`` of
 simulated time without stopping at success (after a 0.2 s warm-up trial that is not timed), and
 prints simulated seconds per wall second and per CPU second (the machine may be shared).
@@ -111,7 +111,7 @@ def main() -> None:
     )
     parser.add_argument("--interface", default="head_array", help="head_array or joystick")
     parser.add_argument("--profile", action="store_true", help="print a cProfile table per run")
-    parser.add_argument("--repeats", type=int, default=5, help="loop and station runs per time step")
+    parser.add_argument("--repeats", type=int, default=9, help="loop and station runs per time step")
     args = parser.parse_args()
     if args.repeats < 1:
         parser.error(f"--repeats: expected an integer >= 1, got {args.repeats}")
