@@ -365,20 +365,39 @@ def dft_xi(
         shapes.append(u_a.shape[:-2])
     batch = batch_shape(*shapes)
     xi = np.empty((math.prod(batch), n))
-    _xi_rows(
+    _xi_of_rows(
+        params,
         as_rows(u, batch, u.shape[-1:]),
         as_rows(x_r, batch, (3,)),
         shared_rows(x_g, batch, (n, 3)),
         as_rows(u_a, batch, (n, 6)) if agree else np.empty((0, n, 6)),
+        xi,
+    )
+    return xi.reshape(*batch, n)
+
+
+def _xi_of_rows(
+    params: DFTParams,
+    u: NDArray[np.float64],
+    x_r: NDArray[np.float64],
+    x_g: NDArray[np.float64],
+    u_a: NDArray[np.float64],
+    out: NDArray[np.float64],
+) -> None:
+    """The compiled excitation of row-layout arrays into ``out`` (rows, n), with ``params``'s terms."""
+    _xi_rows(
+        u,
+        x_r,
+        x_g,
+        u_a,
         params.directedness,
-        agree,
+        params.agreement,
         params.agreement_measure == "cosine",
         params.proximity,
         params.zero_command_excitation,
         float(params.R),
-        xi,
+        out,
     )
-    return xi.reshape(*batch, n)
 
 
 def biased_sigmoid(xi: ArrayLike) -> NDArray[np.float64]:
@@ -550,17 +569,12 @@ class DFTRow:
         if agree and u_a is None:
             raise ValueError("DFTParams.agreement is on but no per-goal autonomy commands u_a given")
         xi = np.empty((1, n))
-        _xi_rows(
+        _xi_of_rows(
+            params,
             np.ascontiguousarray(u_h).reshape(1, -1),
             np.ascontiguousarray(x_r).reshape(1, 3),
             np.ascontiguousarray(x_g).reshape(1, n, 3),
             np.ascontiguousarray(u_a).reshape(1, n, 6) if agree else self._no_u_a,
-            params.directedness,
-            agree,
-            params.agreement_measure == "cosine",
-            params.proximity,
-            params.zero_command_excitation,
-            float(params.R),
             xi,
         )
         return _drive_from_xi(xi.reshape(n), self._rest_term, self._lam)
