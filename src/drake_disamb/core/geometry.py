@@ -227,6 +227,9 @@ def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]
     )
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
 def _clearly_usable(q: object) -> bool:
     """True for a float64 array ``(4,)`` that :func:`normalized_quaternions` accepts with a margin:
     finite, its squared norm in ``[1e-20, 1e300]`` (no overflow, norm far above 1e-12)."""
@@ -234,9 +237,6 @@ def _clearly_usable(q: object) -> bool:
         return False
     w, x, y, z = q.tolist()
     return 1e-20 <= w * w + x * x + y * y + z * z <= 1e300  # False for a NaN or infinite entry
-
-
-_FLOAT64 = np.dtype(np.float64)
 
 
 def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

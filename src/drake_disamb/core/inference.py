@@ -503,14 +503,20 @@ def dft_mass_conserving_rhs_from_drive(
     The drive does not depend on ``p``: an integrator that evaluates the right-hand side several
     times with the same inputs (e.g. the stages of a Runge-Kutta step) computes it once.
     """
-    if not (is_real(guard_time) and guard_time >= 0):
-        raise ValueError(f"guard_time: expected a finite number >= 0 (s), got {guard_time!r}")
+    h, rate = _flow_constants(params, guard_time)
     rows = _BeliefRows(p, drive, params)
     out = np.empty_like(rows.p)
-    h = params.euler_equivalent_step
-    rate = 1.0 / guard_time if guard_time > 0 else 0.0
-    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, 0.0 if h is None else float(h), rate, out)
+    _dft_flow_rows(rows.p, rows.drive, rows.P, params.tau1, True, h, rate, out)
     return out.reshape(*rows.batch, rows.n)
+
+
+def _flow_constants(params: DFTParams, guard_time: float) -> tuple[float, float]:
+    """The mass-conserving flow kernel's ``(euler_equivalent_step or 0, 1 / guard_time or 0)``,
+    ``guard_time`` checked."""
+    if not (is_real(guard_time) and guard_time >= 0):
+        raise ValueError(f"guard_time: expected a finite number >= 0 (s), got {guard_time!r}")
+    h = params.euler_equivalent_step
+    return 0.0 if h is None else float(h), 1.0 / guard_time if guard_time > 0 else 0.0
 
 
 class DFTRow:
@@ -537,8 +543,7 @@ class DFTRow:
             raise ValueError(f"params: expected DFTParams, got {params!r}")
         if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
             raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
-        if not (is_real(guard_time) and guard_time >= 0):
-            raise ValueError(f"guard_time: expected a finite number >= 0 (s), got {guard_time!r}")
+        self._h, self._rate = _flow_constants(params, guard_time)
         n = int(n_goals)
         self.params, self.n = params, n
         self._rest_term, self._lam = _drive_terms(params, n)
@@ -550,9 +555,6 @@ class DFTRow:
             if P.shape != (n, n):
                 raise ValueError(f"DFTParams.transition: expected a ({n}, {n}) matrix, got shape {P.shape}")
             self._P = np.ascontiguousarray(P[None])
-        h = params.euler_equivalent_step
-        self._h = 0.0 if h is None else float(h)
-        self._rate = 1.0 / guard_time if guard_time > 0 else 0.0
         self._no_u_a = np.empty((0, n, 6))
 
     def drive(

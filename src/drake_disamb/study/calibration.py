@@ -42,10 +42,11 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   the share of the trial time it is, per interface over both paradigms. People let a confident
   autonomy carry them rather than change modes: how they use the assistance.
 
-The trials measured are the valid ones of the paradigms people did (Manual and Disambiguation)
-whose success is not False. The same function measures a simulated study
-(:func:`drake_disamb.study.authors.read_study_trials`, ``study calibrate --simulated DIR``): the
-check that the population behaves as the estimates say, not only that it was drawn from them.
+The trials measured are the analysed ones (:func:`~drake_disamb.study.metrics.is_analysed`: valid,
+not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
+a simulated study (:func:`drake_disamb.study.authors.read_study_trials`, ``study calibrate
+--simulated DIR``): the check that the population behaves as the estimates say, not only that it
+was drawn from them.
 
 The logs are read by :func:`drake_disamb.study.authors.read_trials` (the reader of ``study
 import-authors``: the mode switch a request made is the one logged with the request's scores) and
@@ -68,7 +69,7 @@ from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.study.authors import AuthorsTrial
-from drake_disamb.study.metrics import clean_requests
+from drake_disamb.study.metrics import clean_requests, is_analysed
 
 EARLY_REQUEST = 3.0
 """A first request before this time (s from the start) counts as early."""
@@ -161,8 +162,11 @@ def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecay
     def log_tau(theta: NDArray[np.float64]) -> float:
         return min(max(float(theta[-1]), 0.0), LOG_TAU_MAX)  # tau in [1 s, e^12 s]
 
+    def logistic(v: NDArray[np.float64]) -> NDArray[np.float64]:  # p0 in (0, 1) from its logit
+        return 1.0 / (1.0 + np.exp(-np.clip(v, -50.0, 50.0)))
+
     def nll(theta: NDArray[np.float64]) -> float:
-        p0 = 1.0 / (1.0 + np.exp(-np.clip(theta[:-1], -50.0, 50.0)))  # in (0, 1)
+        p0 = logistic(theta[:-1])
         q = np.clip(p0[index] * np.exp(-t * math.exp(-log_tau(theta))), 1e-12, 1.0 - 1e-12)
         return float(-np.sum(y * np.log(q) + (1.0 - y) * np.log1p(-q)))
 
@@ -170,10 +174,7 @@ def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecay
     res = minimize(nll, start, method="Nelder-Mead", options={"maxiter": 20000, "xatol": 1e-6, "fatol": 1e-9})
     tau = math.exp(log_tau(res.x))
     return RequestDecayFit(
-        p0={
-            s: float(1.0 / (1.0 + math.exp(-min(max(v, -50.0), 50.0))))
-            for s, v in zip(subjects, res.x[:-1], strict=True)
-        },
+        p0=dict(zip(subjects, logistic(res.x[:-1]).tolist(), strict=True)),
         tau=tau if tau < 1e5 else math.inf,
         n=len(events),
     )
@@ -224,11 +225,7 @@ def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
 def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     """The behaviour estimates of the valid trials (module docstring), from
     :func:`drake_disamb.study.authors.read_trials`."""
-    valid = [
-        t
-        for t in trials
-        if t.record.valid and t.record.success is not False and t.record.paradigm in PEOPLE_PARADIGMS
-    ]
+    valid = [t for t in trials if is_analysed(t.record) and t.record.paradigm in PEOPLE_PARADIGMS]
     if not valid:
         raise ValueError("trials: expected at least one valid Manual or Disambiguation trial, got none")
     start: dict[str, list[float]] = {}
@@ -333,11 +330,11 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
                 norm = np.linalg.norm(mean)
                 if norm > 0:
                     cos_by_subject.setdefault(s, []).extend((mean / norm @ unit).tolist())
-        _count_confident_changes(trial, cmd, dt, confident[r.interface])
+        merged = clean_requests(r.request_times)
+        own_changes = _user_changes(r.mode_switch_times, cmd, dt)
+        _count_confident_changes(trial, [*merged, *own_changes], confident[r.interface])
         if r.paradigm == "disambiguation":
-            merged = clean_requests(r.request_times)
             req_count[r.interface].append(len(merged))
-            own_changes = _user_changes(r.mode_switch_times, cmd, dt)
             change_events.extend((s, x, True) for x in merged)
             change_events.extend((s, x, False) for x in own_changes)
             changes = len(merged) + len(own_changes)
@@ -417,11 +414,9 @@ def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: flo
     return starts
 
 
-def _count_confident_changes(
-    trial: AuthorsTrial, cmd: NDArray[np.bool_], dt: float, acc: NDArray[np.float64]
-) -> None:
-    """Add the trial's confident / not-confident seconds and mode changes to ``acc`` (module
-    docstring; ``cmd``: the user command's non-zero samples, ``dt`` apart)."""
+def _count_confident_changes(trial: AuthorsTrial, changes: Sequence[float], acc: NDArray[np.float64]) -> None:
+    """Add the trial's confident / not-confident seconds and its mode ``changes`` (times: merged
+    requests and the user's own changes) to ``acc`` (module docstring)."""
     r = trial.record
     t = np.asarray(trial.trace["t"], dtype=float)
     belief = np.asarray(trial.trace["belief"], dtype=float)
@@ -431,7 +426,6 @@ def _count_confident_changes(
     span = np.clip(np.append(t[1:], t[-1]), 0.0, r.duration) - np.clip(t, 0.0, r.duration)
     acc[0] += float(span[sure].sum())
     acc[1] += float(span[~sure].sum())
-    changes = list(clean_requests(r.request_times)) + _user_changes(r.mode_switch_times, cmd, dt)
     for x in changes:
         i = int(np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 1))
         acc[2 if sure[i] else 3] += 1

@@ -54,6 +54,7 @@ __all__ = [
     "clean_mode_switches",
     "clean_requests",
     "group_key",
+    "is_analysed",
     "request_time_skewness",
     "summarize",
     "trial_metrics",
@@ -118,6 +119,12 @@ def trial_success(record: TrialRecord) -> bool | None:
     return None
 
 
+def is_analysed(record: TrialRecord) -> bool:
+    """Whether a trial enters the means and tests: valid and not failed (:func:`trial_success` not
+    False; module docstring)."""
+    return record.valid and trial_success(record) is not False
+
+
 def assistance_onset(times: ArrayLike, belief: ArrayLike, alpha: ArrayLike, goal: int) -> float | None:
     """First time from which the belief's argmax is ``goal`` with alpha above 0, and stays so to
     the last sample; None if the last sample is not such.
@@ -163,8 +170,8 @@ class TrialMetrics:
 
     @property
     def analysed(self) -> bool:
-        """Whether the trial enters the means and tests: valid and not failed (module docstring)."""
-        return self.record.valid and self.success is not False
+        """Whether the trial enters the means and tests (:func:`is_analysed`)."""
+        return is_analysed(self.record)
 
     def value(self, metric: str) -> float | None:
         """The number of ``metric`` (one of :data:`METRICS`), None where undefined."""

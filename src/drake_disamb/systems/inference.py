@@ -294,7 +294,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # Vector ports give float64 arrays (copies) of their declared sizes: only u_h's values are
         # checked. The goal poses are kept with the drive: the periodic update compares them.
         goal_poses = self._goal_poses.Eval(context)
-        x_g = goal_poses.reshape(self._n, 7)[:, :3]
+        x_g = self._goal_positions(goal_poses)
         u_a = self._u_a.Eval(context) if self._params.agreement else None
         u = self._u_h.Eval(context)
         finite = all_finite(u)
@@ -312,14 +312,13 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         state.get_mutable_discrete_state(self._goals_index).SetFromVector(self._goal_poses_now(context))
 
     def _periodic_update(self, context: Context, state: State) -> EventStatus:
-        message = None
+        counted = False
         if self._u_h.HasValue(context):
             # The drive of this tick's inputs (already computed by the integrator) holds the
             # verdict on u_h and the goal poses: the inputs are read and checked once per tick.
             _, finite, goals = self._drive.Eval(context)
             if not finite:
-                message = self._sanitized_input(context)
-                self._sanitized.record(context, state.get_mutable_discrete_state(), message)
+                counted = self._count_sanitized(context, state.get_mutable_discrete_state())
         else:  # e.g. a system driven without a command
             goals = self._goal_poses.Eval(context)
         old = context.get_discrete_state(self._goals_index).get_value()
@@ -335,7 +334,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
             all(x >= -SIMPLEX_TOLERANCE for x in entries)
             and abs(math.fsum(entries) - 1.0) <= SIMPLEX_TOLERANCE
         ):
-            return DID_NOTHING if message is None else EventStatus.Succeeded()
+            return EventStatus.Succeeded() if counted else DID_NOTHING
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(normalize_belief(p))
         return EventStatus.Succeeded()
 
