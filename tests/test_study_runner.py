@@ -94,6 +94,7 @@ def test_default_protocol_is_the_papers() -> None:
     assert [len(t["start_poses"]) for t in data["tasks"]] == [3, 3]
     assert data["request_latency"] == [2.0, 2.5] and data["disambiguation_method"] == "algorithm1"
     assert protocol.interface_mode_selection == "direct"  # the study's joystick: one press per change
+    assert protocol.initial_modes == "all"  # the study drew the initial mode over every mode
 
 
 def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> None:
@@ -135,6 +136,7 @@ def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> Non
         ({"colour": "red"}, r"protocol\.colour: unknown key"),
         ({"request_latency": [2.5, 2.0]}, r"protocol\.request_latency"),
         ({"interface_mode_selection": "sector"}, r"protocol\.interface_mode_selection: .*'sector'"),
+        ({"initial_modes": "gripper"}, r"protocol\.initial_modes: expected one of all, arm, got .gripper."),
     ],
 )
 def test_bad_protocol_names_the_field(change: dict, message: str) -> None:
@@ -166,7 +168,13 @@ def test_expansion_is_deterministic_counterbalanced_and_independent_per_trial() 
     # every draw in range; the draws vary
     assert {s.start_pose for s in a} == {0, 1, 2}
     assert len({s.goals for s in a if s.task == "reaching"}) == 5
-    assert len({s.initial_mode for s in a if s.interface == "head_array"}) == 6
+    # the initial mode over all the interface's modes, the gripper mode (the last) included, as
+    # the study drew it; or over the arm modes only
+    assert {s.initial_mode for s in a if s.interface == "head_array"} == set(range(7))
+    assert {s.initial_mode for s in a if s.interface == "joystick"} == set(range(5))
+    arm = P.expand_trials(P.protocol_from_dict({**compatible_protocol_data(), "initial_modes": "arm"}), 7)
+    assert {s.initial_mode for s in arm if s.interface == "head_array"} == set(range(6))
+    assert {s.initial_mode for s in arm if s.interface == "joystick"} == set(range(4))
     # counterbalanced: the first block differs between subjects, orders are 0..n-1 per subject
     firsts = {(s.interface, s.paradigm) for s in a if s.order == 0}
     assert len(firsts) > 1

@@ -50,6 +50,7 @@ from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
 
 __all__ = [
     "COUNTERBALANCE",
+    "INITIAL_MODES",
     "METHODS",
     "ParadigmSpec",
     "Protocol",
@@ -71,6 +72,11 @@ METHODS: tuple[str, ...] = MODE_SELECTION_METHODS
 
 COUNTERBALANCE: tuple[str, ...] = ("rotation", "none")
 """Counterbalancing schemes (module docstring)."""
+
+INITIAL_MODES: tuple[str, ...] = ("all", "arm")
+"""What a trial's initial mode is drawn from: every mode of the interface, the gripper mode
+included (the study's: its trial-order file draws joystick modes 0..4 and head-array modes 0..6),
+or the arm modes only."""
 
 
 def _meta(**kwargs: Any) -> dict[str, Any]:
@@ -132,6 +138,10 @@ class Protocol:
             (``Scenario.interface_mode_selection``): ``cycle`` or ``direct`` (the stick's sector
             picks the mode: one press per change, as the study's joystick did). The head array
             always cycles.
+        initial_modes: ``all`` (default): each trial's initial mode is uniform over all the
+            interface's modes, the gripper mode included, as the study drew them (its trial-order
+            file: joystick 0..4, head array 0..6, each about equally often); ``arm``: over the arm
+            modes only.
     """
 
     subjects: int = 8
@@ -143,6 +153,7 @@ class Protocol:
     counterbalance: str = field(default="rotation", metadata=_meta(choices=COUNTERBALANCE))
     duration: float | None = None
     interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
+    initial_modes: str = field(default="all", metadata=_meta(choices=INITIAL_MODES))
 
     @property
     def n_trials(self) -> int:
@@ -195,6 +206,11 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
         raise ValueError(
             f"{name}.interface_mode_selection: expected one of {', '.join(MODE_SELECTIONS)}, "
             f"got {fmt(protocol.interface_mode_selection)}"
+        )
+    if protocol.initial_modes not in INITIAL_MODES:
+        raise ValueError(
+            f"{name}.initial_modes: expected one of {', '.join(INITIAL_MODES)}, "
+            f"got {fmt(protocol.initial_modes)}"
         )
     lat = protocol.request_latency
     if lat is not None:
@@ -302,7 +318,7 @@ class TrialSpec:
         seed: The trial's own seed (from the study's SeedSequence); every draw below comes from it.
         scenario_seed: The scenario's ``seed`` (the simulated user's randomness).
         goals: Intended goal per stage.
-        initial_mode: Index into the interface's mode list (arm modes only).
+        initial_mode: Index into the interface's mode list (the gripper mode is the last).
         start_pose: Index into the task's ``start_poses``.
         request_latency: s, or ``None`` (no latency).
         order: 0-based position of the trial in its subject's session (counterbalanced).
@@ -367,10 +383,10 @@ def _n_stages(task: str) -> list[int]:
     return [len(sc.stage_goals(k)) for k in range(sc.n_stages)]
 
 
-def _n_arm_modes(interface: str) -> int:
-    from drake_disamb.core.interfaces import arm_modes
+def _n_initial_modes(interface: str, initial_modes: str) -> int:
+    from drake_disamb.core.interfaces import MODES, arm_modes
 
-    return len(arm_modes(interface))
+    return len(MODES[interface] if initial_modes == "all" else arm_modes(interface))
 
 
 def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None = None) -> list[TrialSpec]:
@@ -379,9 +395,10 @@ def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None
     Returned in session order (subject by subject, each in its counterbalanced order). Trial ``k``
     of the canonical enumeration (subject, interface, task, paradigm, repetition in the protocol's
     order) takes child ``k`` of ``SeedSequence(seed)``; its draws, in this order: one goal per
-    stage (uniform), the initial mode (uniform over the interface's arm modes), the start pose
-    (uniform), the request latency (uniform in ``protocol.request_latency``; drawn even when
-    ``None``, so the other draws do not depend on it), the scenario seed (a 31-bit integer).
+    stage (uniform), the initial mode (uniform over the interface's modes, or its arm modes:
+    ``initial_modes``), the start pose (uniform), the request latency (uniform in
+    ``protocol.request_latency``; drawn even when ``None``, so the other draws do not depend on
+    it), the scenario seed (a 31-bit integer).
     """
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
@@ -404,7 +421,7 @@ def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None
         trial_seed = int(child.generate_state(1, np.uint32)[0])
         rng = np.random.default_rng(trial_seed)
         goals = tuple(int(rng.integers(n)) for n in stages[task])
-        mode = int(rng.integers(_n_arm_modes(itf)))
+        mode = int(rng.integers(_n_initial_modes(itf, protocol.initial_modes)))
         pose = int(rng.integers(poses[task]))
         latency = float(rng.uniform(0.0, 1.0))
         scenario_seed = int(rng.integers(2**31 - 1))
