@@ -141,6 +141,13 @@ def test_pouring_completes_both_stages() -> None:
     r = _pouring("joystick", (0, 0))
     assert np.isfinite(r.stage_times[0]), "stage one (pour) not completed"
     assert r.success and r.reached_goals == [0, 0]
+    # The cup is let go at its place: the trial ends in the gripper mode (the last), changed to
+    # after the end effector got there, and the stage completed once the gripper opened.
+    t, mode = r.logs["mode"]
+    grip = 4  # the joystick's gripper mode
+    assert mode[-1, 0] == grip
+    entered = t[np.flatnonzero(mode[:, 0] != grip)[-1] + 1]
+    assert r.stage_times[0] < entered < r.stage_times[1]
 
 
 def test_pouring_task_goal_set_keeps_one_belief_over_the_four_goals() -> None:

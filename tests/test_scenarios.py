@@ -77,6 +77,8 @@ def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
     assert set(place) == {FACTS_POURING[0], FACTS_POURING[2]}
     assert s.carried_object is not None
     assert s.hold_time(0) == pytest.approx(1.0) and s.hold_time(1) == pytest.approx(s.success.hold_time)
+    # the cup is let go at its place (the study's people ended pouring trials in the gripper mode)
+    assert s.releases() == [False, True] and s.stages[1].release_opening == pytest.approx(0.10)
     # Side grasp: the cup's axis is the end-effector x axis; upright (x_E up) at the placing poses,
     # rolled about the horizontal approach axis (z_E) by 60-75 degrees at the pour poses.
     from drake_disamb.core.geometry import quat_to_matrix
@@ -382,3 +384,14 @@ def test_too_many_stages_or_goals_fail_before_any_quadratic_work() -> None:
     data = _reaching_dict()
     data["goals"] = [dict(data["goals"][0], name=f"g{k}") for k in range(MAX_GOALS + 1)]
     _rejected_fast(data, rf"scenario\.goals: expected at most {MAX_GOALS} goals, got {MAX_GOALS + 1}")
+
+
+@pytest.mark.parametrize("opening", [0.05, 0.08, 0.2, float("nan")])
+def test_a_release_opening_must_open_the_gripper_beyond_its_start(opening: float) -> None:
+    from drake_disamb.config import validate_scenario
+
+    s = load_scenario("pouring")
+    s.stages[1].release_opening = opening
+    message = r"pouring\.stages\[1\]\.release_opening: expected .*got (0\.05|0\.08|0\.2|nan)"
+    with pytest.raises(ValueError, match=message):
+        validate_scenario(s, "pouring")

@@ -131,3 +131,46 @@ def test_in_a_diagram_with_scenario_goals() -> None:
     simulator.AdvanceTo(1.2)
     ctx = tm.GetMyContextFromRoot(simulator.get_context())
     assert tm.stage(ctx) == 1 and tm.reached_goals(ctx) == [1, -1]
+
+
+def test_a_release_stage_completes_once_the_gripper_is_open_at_the_goal() -> None:
+    tm = TaskManager([STAGE_A], hold_times=0.2, release_openings=[0.1])
+    names = [tm.get_input_port(i).get_name() for i in range(tm.num_input_ports())]
+    assert names == ["ee_pose", "gripper_opening"]
+    context = _fixed(tm, STAGE_A[0])
+    tm.GetInputPort("gripper_opening").FixValue(context, [0.08])  # holding the object
+    _advance(tm, context, 1.0)
+    assert tm.stage(context) == 0  # held at the goal, not let go
+    tm.GetInputPort("gripper_opening").FixValue(context, [np.nan])
+    _advance(tm, context, 1.5)
+    assert tm.stage(context) == 0  # a NaN opening never releases
+    tm.GetInputPort("gripper_opening").FixValue(context, [0.1])
+    _advance(tm, context, 1.6)
+    assert tm.is_done(context) and tm.reached_goals(context) == [0]
+    assert tm.stage_end_times(context)[0] == pytest.approx(1.5)  # the first tick that sees it open
+    # open, but away from every goal: not done
+    tm2 = TaskManager([STAGE_A], hold_times=0.2, release_openings=[0.1])
+    context = _fixed(tm2, [0, 0, 0.5, 1, 0, 0, 0])
+    tm2.GetInputPort("gripper_opening").FixValue(context, [0.12])
+    _advance(tm2, context, 1.0)
+    assert not tm2.is_done(context)
+
+
+def test_a_stage_without_release_never_reads_the_opening() -> None:
+    tm = TaskManager([STAGE_A, STAGE_B], hold_times=0.1, release_openings=[None, 0.1])
+    context = _fixed(tm, STAGE_A[1])  # gripper_opening unconnected
+    _advance(tm, context, 0.3)
+    assert tm.stage(context) == 1
+
+
+@pytest.mark.parametrize(
+    ("releases", "message"),
+    [
+        ([0.1], r"release_openings: expected one per stage \(2\), got \[0\.1\]"),
+        ([None, -0.1], r"release_openings\[1\]: expected None or a finite number > 0, got -0\.1"),
+        ([np.inf, None], r"release_openings\[0\]: expected None or a finite number > 0, got inf"),
+    ],
+)
+def test_release_openings_are_checked(releases: list, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        TaskManager([STAGE_A, STAGE_B], release_openings=releases)

@@ -665,3 +665,57 @@ def test_press_cost_counts_one_press_per_direct_selection() -> None:
     assert presses_to(3, 1, 5) == 3 and presses_to(3, 1, 5, direct=True) == 1
     u = mode_usefulness([1.0, 1.0, 1.0, 1.0], 0, 5, 0.1, direct=True)
     assert u.tolist() == pytest.approx([1.0, 0.9, 0.9, 0.9])
+
+
+@pytest.mark.parametrize(
+    ("interface", "presses"), [(JOY, 4), (JOY_DIRECT, 1), (HEAD, 6)], ids=["cycle", "direct", "head_array"]
+)
+def test_at_the_goal_of_a_release_stage_the_user_changes_to_the_gripper_mode_and_opens_it(
+    interface: InterfaceConfig, presses: int
+) -> None:
+    # At the goal (rule 1) with a release: from the first mode to the gripper mode (the last), by
+    # cycling (4 presses on the joystick, 6 on the head array) or one direct selection; then it
+    # opens the gripper (the gripper mode's one dimension, joystick axis_x / head-array left) and
+    # keeps it open, while the arm gets no command.
+    ee = EE.copy()
+    ee[:3] = GOALS[0, :3]
+    grip = len(interface.modes) - 1
+    s, itf = UserState(), initial_state(interface)
+    events, gripper = [], []
+    for k in range(600):
+        t = k * 0.01
+        s = user_step(s, t, itf.mode, ee, GOALS, 0, interface, NO_REQUESTS, None, release=True)
+        itf, ev = interface_update(itf, s.raw, t, interface)
+        events += ev
+        u_h, g = command_from_raw(itf.held_raw, itf.mode, interface)
+        assert not u_h.any()  # the arm is not driven
+        gripper.append(g)
+    assert itf.mode == grip and s.presses == presses
+    assert [e.to_mode for e in events][-1] == grip and all(e.kind == "mode_switch" for e in events)
+    assert gripper[-1] == pytest.approx(interface.gripper_speed) and min(gripper) == 0.0  # opens
+    # without a release the user lets go at the goal (rule 1)
+    s = user_step(UserState(), 0.0, 0, ee, GOALS, 0, interface, NO_REQUESTS, None)
+    np.testing.assert_array_equal(s.raw, np.zeros(4))
+
+
+def test_a_release_stage_does_not_stop_the_user_short_of_the_goal() -> None:
+    # Away from the goal a release changes nothing: the user drives toward it as before.
+    a = step(UserState(), 0.0, 0)
+    b = user_step(UserState(), 0.0, 0, EE, GOALS, 0, JOY, NO_REQUESTS, None, release=True)
+    assert a == b
+
+
+def test_system_releases_per_stage() -> None:
+    from drake_disamb.systems.user import SimulatedUser
+
+    user = SimulatedUser("head_array", [0, 1], 2, NO_REQUESTS, releases=[False, True])
+    assert user.releases == (False, True)
+    ee = EE.copy()
+    ee[:3] = GOALS[1, :3]  # at goal 1: stage 1's goal, which ends with a release
+    sim, ctx = _user_context(user, mode=6, ee=ee)  # already in the gripper mode
+    out = user.get_output_port(0)
+    user.GetInputPort("stage").FixValue(ctx, [1.0])
+    sim.AdvanceTo(0.005)
+    np.testing.assert_array_equal(out.Eval(ctx), [1, 0, 0, 0])  # left: opens the gripper
+    with pytest.raises(ValueError, match=r"releases: expected one bool per stage \(2\), got \[True\]"):
+        SimulatedUser("head_array", [0, 1], 2, releases=[True])

@@ -13,6 +13,7 @@
     blender.u -----------------------------> station.ee_velocity_command
     interface.gripper_command -------------> station.gripper_command
     station.ee_pose -----------------------> everyone
+    station.gripper_opening ---------------> task.gripper_opening      (stages that end with a release)
     task.goal_poses -----------------------> everyone (the goal set switches between stages)
       (inference.goal_set "task": a constant source of every goal instead; the task manager still
       completes a stage only at one of its own goals)
@@ -155,6 +156,7 @@ def build_shared_control_diagram(
             orientation_tolerance=scenario.success.orientation_tolerance,
             hold_times=[scenario.hold_time(k) for k in range(scenario.n_stages)],
             period=scenario.control_period,
+            release_openings=[stage.release_opening for stage in scenario.stages],
         )
     )
     task.set_name("task")
@@ -166,7 +168,11 @@ def build_shared_control_diagram(
     blender.set_name("blender")
 
     if input_source is None:
-        user = builder.AddSystem(SimulatedUser(config.interface, list(config.user_goals), n, config.user))
+        user = builder.AddSystem(
+            SimulatedUser(
+                config.interface, list(config.user_goals), n, config.user, releases=scenario.releases()
+            )
+        )
         user.set_name("user")
         builder.Connect(interface.GetOutputPort("mode"), user.GetInputPort("mode"))
     else:
@@ -189,6 +195,7 @@ def build_shared_control_diagram(
         goal_source.set_name("task_goal_poses")
         goal_poses = goal_source.get_output_port()
     builder.Connect(ee_pose, task.GetInputPort("ee_pose"))
+    builder.Connect(station.diagram.GetOutputPort("gripper_opening"), task.GetInputPort("gripper_opening"))
     if input_source is None:
         builder.Connect(ee_pose, user.GetInputPort("ee_pose"))
         builder.Connect(goal_poses, user.GetInputPort("goal_poses"))

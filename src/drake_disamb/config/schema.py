@@ -205,10 +205,18 @@ class StageSpec:
         name: Stage name (e.g. ``"pour"``, ``"place"``).
         hold_time: How long (s) the end effector must stay at a goal to complete the stage;
             ``None`` uses :attr:`SuccessSpec.hold_time`.
+        release_opening: The stage ends by letting go of the held object: it completes only once
+            the end effector has been at a goal for ``hold_time`` *and* the gripper is open at
+            least this wide (m, the distance between the fingertip pads; more than the opening at
+            the start, at most the gripper's 0.12 m). The simulated user, at the goal, changes to
+            the gripper mode and opens it. ``None``: no release (the pose alone completes it).
+            The object stays with the gripper in the simulation: what is checked is the opening
+            at the goal, not where the object falls.
     """
 
     name: str = "reach"
     hold_time: float | None = None
+    release_opening: float | None = None
 
 
 @dataclass
@@ -446,6 +454,10 @@ class Scenario:
             for g in goals
         ]
         return np.array(rows, dtype=float).reshape(-1, 7)
+
+    def releases(self) -> list[bool]:
+        """Per stage, whether it ends by letting go of the held object (``release_opening``)."""
+        return [stage.release_opening is not None for stage in self.stages]
 
     def hold_time(self, stage: int) -> float:
         """Hold time (s) of ``stage``."""

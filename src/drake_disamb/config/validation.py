@@ -208,6 +208,8 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     for i, stage in enumerate(s.stages):
         if stage.hold_time is not None:
             _check_positive(stage.hold_time, f"{name}.stages[{i}].hold_time", allow_zero=True)
+        if stage.release_opening is not None:
+            _check_release(stage.release_opening, f"{name}.stages[{i}].release_opening")
     held: list[Any] = []  # the carried object as a clearance.Solid in the end-effector frame
     if s.carried_object is not None:
         c = s.carried_object
@@ -218,6 +220,17 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     _check_user(s, name)
     if s.start_joint_positions is not None:
         _check_start_posture(s.start_joint_positions, held, f"{name}.start_joint_positions")
+
+
+def _check_release(opening: float, path: str) -> None:
+    """A release opening is wider than the gripper at the start and within its travel (m)."""
+    from drake_disamb.station.config import FINGER_MAX_OPENING, MICO_HOME_GRIPPER_OPENING
+
+    if not (MICO_HOME_GRIPPER_OPENING < opening <= FINGER_MAX_OPENING):
+        raise ValueError(
+            f"{path}: expected an opening (m) above the gripper's at the start "
+            f"({MICO_HOME_GRIPPER_OPENING}) and at most {FINGER_MAX_OPENING}, got {fmt(opening)}"
+        )
 
 
 def _check_goals(s: Scenario, held: Sequence[Any], name: str) -> None:

@@ -10,7 +10,9 @@ end-effector pose, the goal poses and (optionally) the belief, and produces the 
 signal (:data:`drake_disamb.core.interfaces.RAW_LAYOUTS`):
 
 1. **Done**: within the success tolerance of its goal (position *and* orientation) it lets go
-   (raw all zeros).
+   (raw all zeros). At the goal of a stage that ends by letting go of the held object
+   (``release``: the pouring task's cup, set down at its place) it instead changes to the gripper
+   mode (pressing as in rule 4, then its settle) and opens the gripper until the stage ends.
 2. **Reacting**: after any button press it waits a reaction time with everything released (so
    presses are single rising edges and it sees the new mode before acting again).
 3. **Request**: it presses the disambiguation button at the start of the trial
@@ -644,6 +646,7 @@ def user_step(
     interface: InterfaceConfig,
     config: UserConfig,
     belief: ArrayLike | None = None,
+    release: bool = False,
 ) -> UserState:
     """One decision of the simulated user. Returns the new state; its ``raw`` is the output.
 
@@ -658,6 +661,10 @@ def user_step(
         config: The user's behaviour.
         belief: The current belief over goals (``n``), or ``None`` if unavailable (then no
             "unhelped" requests and no requests instead of mode switches are made).
+        release: The goal is reached only once the held object is let go (a stage with a
+            release, :attr:`drake_disamb.config.StageSpec.release_opening`): at the goal the user
+            changes to the gripper mode and opens the gripper, instead of letting go of the
+            interface (rule 1).
     """
     goals = np.asarray(goal_poses, dtype=float).reshape(-1, 7)
     n = goals.shape[0]
@@ -670,14 +677,17 @@ def user_step(
         )
     err = goal_error(ee_pose, goals[goal_index], config.use_orientation)
 
-    if goal_reached(err, config):
+    reached = goal_reached(err, config)
+    if reached and not release:
         return _evolve(
             state, raw=np.zeros(RAW_SIZE), unhelped_since=NOT_COUNTING, target_mode=-1, hold_until=0.0
         )
+    if reached:  # at the goal, letting go of the object (rule 1 with a release): no late release
+        state = _evolve(state, hold_until=0.0)
 
     # The "unhelped" timer runs whenever the belief is known, also while reacting.
     unhelped_since = NOT_COUNTING
-    if belief is not None and config.request_when_unhelped_for is not None:
+    if belief is not None and config.request_when_unhelped_for is not None and not reached:
         rho1 = RHO1_TIMES_N / n if config.rho1 is None else config.rho1
         if not helped(belief, goal_index, rho1):
             unhelped_since = time if state.unhelped_since == NOT_COUNTING else state.unhelped_since
@@ -700,8 +710,8 @@ def user_step(
     assisted = belief is not None and helped(
         belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
     )
-    new = _decide(state, time, mode, err, interface, config, belief, assisted)
-    if config.release_lag > 0 and not lag_done and _drive(state.raw) and not _drive(new.raw):
+    new = _decide(state, time, mode, err, interface, config, belief, assisted, reached)
+    if config.release_lag > 0 and not lag_done and not reached and _drive(state.raw) and not _drive(new.raw):
         # The lag has a stream of its own keyed by this decision's counter, and the counter is not
         # advanced: the decision made when the lag ends replays this one's draws, so the user
         # carries out late what it decided (a pause, a review's or a correction's outcome) instead
@@ -724,9 +734,11 @@ def _decide(
     config: UserConfig,
     belief: ArrayLike | None,
     assisted: bool,
+    releasing: bool = False,
 ) -> UserState:
     """Rules 3 to 6 at a free decision (not reacting, not letting go late); ``assisted``: the
-    autonomy assists the user's goal (:func:`helped`)."""
+    autonomy assists the user's goal (:func:`helped`); ``releasing``: at the goal of a stage that
+    ends by letting go of the held object (rule 1 with a release)."""
     modes = interface.modes
     n_modes = len(modes)
     direct = interface.mode_selection == "direct"
@@ -777,6 +789,22 @@ def _decide(
             config.settle_time, config.settle_log_sd, rng() if config.settle_log_sd > 0 else None
         )
         return _evolve(state, raw=zero, busy_until=time + max(wait, period), draws=draws, **changes)
+
+    # Rule 1 with a release: at the goal, change to the gripper mode (the presses, with the waits
+    # after them, as any mode change), settle into it, and open the gripper until the stage ends.
+    if releasing:
+        grip = n_modes - 1
+        state = _evolve(state, request_mode=-1, judge=False, kept_mode=-1)
+        if mode != grip:
+            return press(MODE_BUTTON, grip, target_mode=grip, overshot=False)
+        if state.target_mode == grip:
+            state = _evolve(state, target_mode=-1)
+            out = settle()
+            if out is not None:
+                return out
+        raw = zero.copy()
+        raw[0] = 1.0  # the gripper mode's one dimension: joystick axis_x, head-array left; opens
+        return _evolve(state, raw=raw, target_mode=-1, draws=draws)
 
     # A request was made: wait for the mode it chooses, then settle into it and judge it.
     if state.request_mode >= 0:

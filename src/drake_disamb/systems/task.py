@@ -3,9 +3,10 @@
 A multi-step task is a sequence of stages, each with its own set of ``n`` goal poses (every stage
 has the same ``n``, so the belief keeps its size). The manager publishes the current stage's goal
 poses; every control period it checks whether the end effector is within the success tolerance
-of one of them and, once it has stayed there for the stage's hold time, records which goal was
-reached and when, and switches to the next stage's goal set. After the last stage the task is
-done (``done`` = 1) and the goal set stays that of the last stage.
+of one of them and, once it has stayed there for the stage's hold time (and, in a stage that
+ends by letting go of the held object, the gripper is open at least the stage's release opening),
+records which goal was reached and when, and switches to the next stage's goal set. After the
+last stage the task is done (``done`` = 1) and the goal set stays that of the last stage.
 
 The manager does not know the user's intent: it reports which goal was reached in each stage;
 whether that was the intended one is the trial's business (:func:`drake_disamb.trial.run_trial`).
@@ -36,6 +37,7 @@ class TaskManager(LeafSystem):
         name: TaskManager
         input_ports:
         - ee_pose
+        - gripper_opening
         output_ports:
         - goal_poses
         - stage
@@ -45,6 +47,9 @@ class TaskManager(LeafSystem):
 
     Input ports:
         ee_pose (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m, unit quaternion).
+        gripper_opening (1): distance between the fingertip pads (m; the station's
+            ``gripper_opening``). Read only in a stage with a release opening; unconnected
+            otherwise is fine.
 
     Output ports:
         goal_poses (n * 7): the current stage's goal poses, each ``[x, y, z, qw, qx, qy, qz]``
@@ -55,10 +60,12 @@ class TaskManager(LeafSystem):
         stage_end_times (S): per stage, the time (s) it completed (NaN while pending).
 
     A goal counts as reached when the end effector stays within ``position_tolerance`` (m) and
-    ``orientation_tolerance`` (rad) of it for ``hold_times[stage]`` seconds, checked every
+    ``orientation_tolerance`` (rad) of it for ``hold_times[stage]`` seconds (and, if
+    ``release_openings[stage]`` is not ``None``, the gripper is then open at least that wide, m: the
+    held object let go at the goal; the hold goes on while it opens), checked every
     ``period`` seconds (a periodic discrete update; all outputs are state output ports, each a
     discrete group of its own written when the stage changes, so the manager has no direct
-    feedthrough). A NaN pose never counts as reached.
+    feedthrough). A NaN pose never counts as reached, nor does a NaN opening release.
     """
 
     def __init__(
@@ -68,6 +75,7 @@ class TaskManager(LeafSystem):
         orientation_tolerance: float = 0.15,
         hold_times: float | Sequence[float] = 0.3,
         period: float = 0.01,
+        release_openings: Sequence[float | None] | None = None,
     ) -> None:
         super().__init__()
         if len(stage_goal_poses) == 0:
@@ -109,10 +117,18 @@ class TaskManager(LeafSystem):
         self._n_stages = n_stages
         self._pos_tol = float(position_tolerance)
         self._ori_tol = float(orientation_tolerance)
+        releases = [None] * n_stages if release_openings is None else list(release_openings)
+        if len(releases) != n_stages:
+            raise ValueError(f"release_openings: expected one per stage ({n_stages}), got {releases!r}")
+        for k, r in enumerate(releases):
+            if r is not None and not (np.isfinite(r) and r > 0):
+                raise ValueError(f"release_openings[{k}]: expected None or a finite number > 0, got {r!r}")
         self._holds = holds
+        self._releases: list[float | None] = [None if r is None else float(r) for r in releases]
         self._period = float(period)
 
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", POSE_SIZE)
+        self._gripper_opening = self.DeclareVectorInputPort("gripper_opening", 1)
         initial = np.concatenate(([0.0, -1.0, np.nan], np.full(n_stages, -1.0), np.full(n_stages, np.nan)))
         self._state = self.DeclareDiscreteState(initial)
         # Every output is a copy of state, so each has a discrete group of its own holding its value
@@ -187,7 +203,10 @@ class TaskManager(LeafSystem):
         if int(x[_CANDIDATE]) != goal or not np.isfinite(x[_HOLD_START]):
             x[_CANDIDATE], x[_HOLD_START] = float(goal), t
         # A tiny slack absorbs the rounding of accumulated periodic event times.
-        if t - x[_HOLD_START] >= self._holds[stage] - 1e-9:
+        release = self._releases[stage]
+        if t - x[_HOLD_START] >= self._holds[stage] - 1e-9 and (
+            release is None or float(self._gripper_opening.Eval(context)[0]) >= release
+        ):
             x[_HEADER + stage] = float(goal)
             x[_HEADER + self._n_stages + stage] = t
             x[_STAGE] = float(stage + 1)

@@ -65,6 +65,8 @@ class SimulatedUser(LeafSystem):
     Attributes:
         interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
         goal_indices: Its goal per stage (a single-stage task has one entry).
+        releases: Per stage, whether the stage ends by letting go of the held object (at the goal
+            the user changes to the gripper mode and opens it: ``user_step``'s ``release``).
         config: Its :class:`~drake_disamb.core.user.UserConfig`.
     """
 
@@ -74,6 +76,7 @@ class SimulatedUser(LeafSystem):
         goal_index: int | Sequence[int],
         n_goals: int,
         config: UserConfig | None = None,
+        releases: Sequence[bool] | None = None,
         **overrides: object,
     ) -> None:
         super().__init__()
@@ -108,6 +111,10 @@ class SimulatedUser(LeafSystem):
                 f"got {self.config.min_reaction_time!r}"
             )
         self.goal_indices: tuple[int, ...] = tuple(int(g) for g in indices)
+        flags = [False] * len(indices) if releases is None else list(releases)
+        if len(flags) != len(indices) or not all(isinstance(f, bool | np.bool_) for f in flags):
+            raise ValueError(f"releases: expected one bool per stage ({len(indices)}), got {releases!r}")
+        self.releases: tuple[bool, ...] = tuple(bool(f) for f in flags)
         self.n_goals = int(n_goals)
         self.raw_layout = RAW_LAYOUTS[self.interface.kind]
 
@@ -168,6 +175,7 @@ class SimulatedUser(LeafSystem):
                 self.interface,
                 self.config,
                 belief,
+                self.releases[int(stage)],
             )
         else:
             message = (
