@@ -41,6 +41,16 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   ``rho1`` (``1.2 / n``, the blending's threshold: the autonomy assists) and while it is not, and
   the share of the trial time it is, per interface over both paradigms. People let a confident
   autonomy carry them rather than change modes: how they use the assistance.
+- **Ending in the gripper mode** (letting go of the object), per interface and task: the share of
+  trials whose mode at the end (the trace's ``mode`` at its last sample up to ``duration``) is the
+  gripper mode (the interface's last mode in :data:`drake_disamb.core.interfaces.MODES`: the
+  logs' joystick id 7 and head-array id 7), and among those the median seconds from the last
+  change into it (the last switch of the burst that reached it, to the trace's sample period:
+  50 ms in the logs) to the end, and the median number of changes into it (from another mode; a
+  switch the log shows re-selecting the current mode is no change) per trial (:class:`GripperEnd`).
+- **Starting in the gripper mode**: per interface, the share of trials whose ``initial_mode`` is
+  the gripper mode (the study's trial order drew it uniformly over all of an interface's modes,
+  gripper included: 1/5 joystick, 1/7 head array).
 
 The trials measured are the analysed ones (:func:`~drake_disamb.study.metrics.is_analysed`: valid,
 not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
@@ -53,8 +63,9 @@ import-authors``: the mode switch a request made is the one logged with the requ
 the authors' metrics (user mode switches, merged requests, the joystick's cleaning) are those of
 :mod:`drake_disamb.study.metrics`.
 
-The module is a little over the project's ~500 lines: the estimates share one pass over each
-trial's arrays (the command's samples, the events), which splitting them would repeat.
+The module is about 600 lines, over the project's ~500: the estimates share one pass over each
+trial's arrays (the command's samples, the events), which splitting them would repeat (the
+gripper-mode estimates read only the mode trace: they could move out if the module grows).
 """
 
 from __future__ import annotations
@@ -68,7 +79,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.study.authors import AuthorsTrial
+from drake_disamb.core.interfaces import MODES
+from drake_disamb.study.authors import AuthorsTrial, mode_name
 from drake_disamb.study.metrics import clean_requests, is_analysed
 
 EARLY_REQUEST = 3.0
@@ -180,6 +192,19 @@ def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecay
     )
 
 
+@dataclass(frozen=True)
+class GripperEnd:
+    """The trials of one interface and task that end in the gripper mode (module docstring): their
+    ``share`` of the ``n`` trials, and among them the median seconds from the last change into the
+    gripper mode to the end (``time_to_end``) and the median number of changes into it per trial
+    (``entries``); both NaN when no trial ends there."""
+
+    share: float
+    n: int
+    time_to_end: float
+    entries: float
+
+
 @dataclass
 class BehaviourEstimates:
     """What :func:`estimate_behaviour` measured (times in s). Per-subject lists feed the fits."""
@@ -213,6 +238,28 @@ class BehaviourEstimates:
     n_trials: int
     changes_per_minute: dict[str, tuple[float, float]]
     confident_share: dict[str, float]
+    gripper_end: dict[str, dict[str, GripperEnd]]
+    starts_in_gripper: dict[str, tuple[float, int]]
+    """Per interface, the share of trials starting in the gripper mode and the number of trials."""
+
+
+def _gripper_path(trial: AuthorsTrial) -> tuple[bool, float, int]:
+    """Whether the trial ends in the gripper mode, the seconds from its last change into the
+    gripper mode to the end (NaN without one) and its number of changes into it (trace ``mode``:
+    indices into the interface's modes, on ``t``)."""
+    r = trial.record
+    gripper = len(MODES[r.interface]) - 1
+    t = np.asarray(trial.trace["t"], dtype=float)
+    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
+    inside = t <= r.duration + 1e-9
+    last = mode[inside][-1] if np.any(inside) else mode[0]
+    changed = np.flatnonzero(np.diff(mode) != 0) + 1
+    entries = changed[(mode[changed] == gripper) & (t[changed] > 0.0) & inside[changed]]
+    return (
+        bool(last == gripper),
+        r.duration - float(t[entries[-1]]) if entries.size else math.nan,
+        len(entries),
+    )
 
 
 def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
@@ -251,9 +298,14 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     commanding_by_interface = {"joystick": 0.0, "head_array": 0.0}
     # interface -> [confident s, not confident s, changes while confident, changes while not]
     confident = {"joystick": np.zeros(4), "head_array": np.zeros(4)}
+    gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
+    starts_in_gripper: dict[str, list[bool]] = {}
     for trial in valid:
         r = trial.record
         s = r.subject
+        gripper_paths.setdefault((r.interface, r.task), []).append(_gripper_path(trial))
+        gripper_name = mode_name(MODES[r.interface][-1])
+        starts_in_gripper.setdefault(r.interface, []).append(r.initial_mode == gripper_name)
         user_vel, dt = _user_vel(trial)
         cmd = np.any(user_vel != 0.0, axis=0)
         on = np.flatnonzero(cmd)
@@ -399,6 +451,32 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         confident_share={
             k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
         },
+        gripper_end={
+            i: {
+                k: _gripper_end(gripper_paths[i, k])
+                for k in ("reaching", "pouring")
+                if (i, k) in gripper_paths
+            }
+            for i in ("joystick", "head_array")
+            if i in starts_in_gripper
+        },
+        starts_in_gripper={
+            i: (float(np.mean(starts_in_gripper[i])), len(starts_in_gripper[i]))
+            for i in ("joystick", "head_array")
+            if i in starts_in_gripper
+        },
+    )
+
+
+def _gripper_end(rows: Sequence[tuple[bool, float, int]]) -> GripperEnd:
+    """:class:`GripperEnd` of one interface and task's :func:`_gripper_path` results."""
+    ends = [(dt, k) for end, dt, k in rows if end]
+    times = [dt for dt, _ in ends if math.isfinite(dt)]
+    return GripperEnd(
+        share=len(ends) / len(rows),
+        n=len(rows),
+        time_to_end=float(np.median(times)) if times else math.nan,
+        entries=float(np.median([k for _, k in ends])) if ends else math.nan,
     )
 
 
@@ -436,6 +514,15 @@ def _fmt_fit(name: str, fit: LogNormalFit, unit: str = "s") -> str:
     return (
         f"{name:<28} median {fit.median:.3g} {unit}, log-sd {fit.log_sd:.2f} (n={fit.n}); "
         f"per subject: {per}; between-subject log-sd {fit.subject_log_sd:.2f}"
+    )
+
+
+def _fmt_gripper_end(task: str, g: GripperEnd) -> str:
+    if g.share == 0.0:
+        return f"{task} 0.00 of {g.n}"
+    return (
+        f"{task} {g.share:.2f} of {g.n} (median {g.time_to_end:.1f} s from the change to the end, "
+        f"{g.entries:g} change{'s' if g.entries != 1 else ''} into it)"
     )
 
 
@@ -485,6 +572,17 @@ def format_estimates(est: BehaviourEstimates) -> str:
             f"{k.replace('_', ' ')} {v[0]:.1f} while the belief is confident, {v[1]:.1f} while not "
             f"(confident {est.confident_share[k]:.2f} of the time)"
             for k, v in est.changes_per_minute.items()
+        ),
+        f"{'ends in gripper mode':<28} "
+        + "; ".join(
+            f"{k.replace('_', ' ')} " + ", ".join(_fmt_gripper_end(task, g) for task, g in tasks.items())
+            for k, tasks in est.gripper_end.items()
+        ),
+        f"{'starts in gripper mode':<28} "
+        + ", ".join(
+            f"{k.replace('_', ' ')} {share:.2f} of {n} (1/{len(MODES[k])} = {1 / len(MODES[k]):.2f} "
+            "if uniform over all modes)"
+            for k, (share, n) in est.starts_in_gripper.items()
         ),
     ]
     return "\n".join(lines)

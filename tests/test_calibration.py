@@ -1,0 +1,136 @@
+"""Behaviour estimates of :mod:`drake_disamb.study.calibration`: ending and starting in the gripper
+mode, on hand-made trials (read directly and through a study folder) and on the authors' logs
+(skipped where the logs are absent)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from drake_disamb.core.interfaces import MODES
+from drake_disamb.study.authors import AuthorsTrial, mode_name, read_study_trials
+from drake_disamb.study.calibration import estimate_behaviour, format_estimates
+from drake_disamb.study.outcome import save_trace
+from drake_disamb.study.records import TrialRecord, append_record
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
+DT = 0.05
+"""The hand-made traces' sample period (s): the logs' mode sampling."""
+
+
+def _trial(
+    trial_id: str,
+    interface: str,
+    task: str,
+    initial: int,
+    changes: list[tuple[float, int]],
+    duration: float,
+    *,
+    t0: float = 0.0,
+    t_end: float | None = None,
+    paradigm: str = "manual",
+    valid: bool = True,
+) -> AuthorsTrial:
+    """A trial of ``interface`` starting in mode index ``initial`` whose user switches are
+    ``changes`` (time s, mode index entered); its trace samples the mode every :data:`DT` from
+    ``t0`` to ``t_end`` (``duration`` by default)."""
+    modes = MODES[interface]
+    t = np.round(np.arange(t0, (duration if t_end is None else t_end) + DT / 2, DT), 6)
+    mode = np.full(t.size, float(initial))
+    for at, index in changes:
+        mode[t >= at - 1e-9] = index
+    u_h = np.zeros((t.size, 6))
+    u_h[(t > 0.5) & (t < 1.5), 0] = 0.05  # a command before the first switch
+    record = TrialRecord(
+        trial_id=trial_id, subject="S01", interface=interface, task=task, paradigm=paradigm,
+        disambiguation_method="algorithm1" if paradigm == "disambiguation" else None, repetition=0, seed=0,
+        start_pose=0, initial_mode=mode_name(modes[initial]), intended_goals=[0], reached_goals=[0],
+        success=True, done=True, duration=duration, completion_time=duration, mode_switches=len(changes),
+        requests=0, automatic_switches=0, button_presses=len(changes), request_times=[],
+        mode_switch_times=[at for at, _ in changes],
+        mode_switch_modes=[mode_name(modes[i]) for _, i in changes], automatic_switch_times=[],
+        mean_alpha=0.0, assistance_onset=None, wall_time=0.0, valid=valid,
+    )  # fmt: skip
+    trace = {"t": t, "mode": mode, "u_h": u_h, "belief": np.full((t.size, 2), 0.5), "alpha": np.zeros(t.size)}
+    return AuthorsTrial(record, trace, request_switch_times=np.zeros(0))
+
+
+def _trials() -> list[AuthorsTrial]:
+    j, h = len(MODES["joystick"]) - 1, len(MODES["head_array"]) - 1  # the gripper modes: 4 and 6
+    return [
+        # in, out of and back into the gripper mode: ends there 5 s after its second change into it;
+        # the trace starts before the start (as the logs' do), with presses there that do not count
+        _trial(
+            "J1",
+            "joystick",
+            "pouring",
+            0,
+            [(-1.0, j), (-0.5, 0), (10.0, j), (12.0, 1), (20.0, j)],
+            25.0,
+            t0=-2.0,
+        ),
+        # starts in the gripper mode, leaves it and comes back 3 s before the end; the trace goes
+        # on after the end, out of and back into the gripper mode: those changes do not count
+        _trial("J2", "joystick", "pouring", j, [(5.0, 0), (27.0, j), (31.0, 0), (32.0, j)], 30.0, t_end=33.0),
+        # passes through the gripper mode without ending there
+        _trial("J3", "joystick", "pouring", 0, [(8.0, j), (9.0, 2)], 20.0, paradigm="disambiguation"),
+        # the trace goes on after the end, into the gripper mode: the mode at the end is not it
+        _trial("J4", "joystick", "reaching", 1, [(10.5, j)], 10.0, t_end=12.0),
+        # not analysed: a failed trial and an Automatic one, both ending in the gripper mode
+        _trial("J5", "joystick", "reaching", j, [(2.0, 0), (4.0, j)], 9.0, valid=False),
+        _trial("J6", "joystick", "reaching", j, [(2.0, 0), (4.0, j)], 9.0, paradigm="automatic"),
+        _trial("H1", "head_array", "reaching", h, [(2.0, 0)], 10.0),
+    ]
+
+
+def _check(est) -> None:  # noqa: ANN001
+    joy, head = est.gripper_end["joystick"], est.gripper_end["head_array"]
+    assert list(est.gripper_end) == ["joystick", "head_array"] and list(joy) == ["reaching", "pouring"]
+    assert (joy["pouring"].share, joy["pouring"].n) == (pytest.approx(2 / 3), 3)
+    assert joy["pouring"].time_to_end == pytest.approx(4.0)  # median of 5 s and 3 s
+    assert joy["pouring"].entries == pytest.approx(1.5)  # J1 twice, J2 once (J3 does not end there)
+    assert (joy["reaching"].share, joy["reaching"].n) == (0.0, 1)
+    assert math.isnan(joy["reaching"].time_to_end) and math.isnan(joy["reaching"].entries)
+    assert (head["reaching"].share, head["reaching"].n) == (0.0, 1) and "pouring" not in head
+    assert est.starts_in_gripper == {"joystick": (0.25, 4), "head_array": (1.0, 1)}
+    lines = format_estimates(est).splitlines()
+    assert lines[-2] == (
+        "ends in gripper mode         joystick reaching 0.00 of 1, pouring 0.67 of 3 (median 4.0 s from "
+        "the change to the end, 1.5 changes into it); head array reaching 0.00 of 1"
+    )
+    assert lines[-1] == (
+        "starts in gripper mode       joystick 0.25 of 4 (1/5 = 0.20 if uniform over all modes), "
+        "head array 1.00 of 1 (1/7 = 0.14 if uniform over all modes)"
+    )
+
+
+def test_gripper_end_and_start_of_hand_made_trials() -> None:
+    _check(estimate_behaviour(_trials()))
+
+
+def test_gripper_estimates_are_the_same_from_a_study_folder(tmp_path: Path) -> None:
+    (tmp_path / "traces").mkdir()
+    for trial in _trials():
+        append_record(tmp_path / "trials.jsonl", trial.record)
+        save_trace(tmp_path / "traces" / f"{trial.record.trial_id}.npz", trial.trace)
+    trials = read_study_trials(tmp_path)
+    assert all(t.request_switch_times.size == 0 for t in trials)  # every change is a user switch
+    _check(estimate_behaviour(trials))
+
+
+def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
+    if not DATA.is_dir():
+        pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
+    from drake_disamb.study.authors import read_trials
+
+    est = estimate_behaviour(read_trials(DATA))
+    assert est.gripper_end["joystick"]["pouring"].share > 0.8
+    assert 1.0 < est.gripper_end["joystick"]["pouring"].time_to_end < 8.0
+    assert est.gripper_end["joystick"]["reaching"].share == 0.0
+    assert est.gripper_end["head_array"]["reaching"].share == 0.0
+    # the trial order drew the initial mode over all modes, the gripper mode included
+    assert 0.1 < est.starts_in_gripper["joystick"][0] < 0.35
+    assert 0.05 < est.starts_in_gripper["head_array"][0] < 0.25
