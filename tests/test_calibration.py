@@ -1,6 +1,6 @@
 """Behaviour estimates of :mod:`drake_disamb.study.calibration`: ending and starting in the gripper
-mode, on hand-made trials (read directly and through a study folder) and on the authors' logs
-(skipped where the logs are absent)."""
+mode and the commanded path, on hand-made trials (read directly and through a study folder) and on
+the authors' logs (skipped where the logs are absent)."""
 
 from __future__ import annotations
 
@@ -54,7 +54,14 @@ def _trial(
         mode_switch_modes=[mode_name(modes[i]) for _, i in changes], automatic_switch_times=[],
         mean_alpha=0.0, assistance_onset=None, wall_time=0.0, valid=valid,
     )  # fmt: skip
-    trace = {"t": t, "mode": mode, "u_h": u_h, "belief": np.full((t.size, 2), 0.5), "alpha": np.zeros(t.size)}
+    trace = {
+        "t": t,
+        "mode": mode,
+        "u_h": u_h,
+        "u": u_h.copy(),
+        "belief": np.full((t.size, 2), 0.5),
+        "alpha": np.zeros(t.size),
+    }
     return AuthorsTrial(record, trace, request_switch_times=np.zeros(0))
 
 
@@ -97,11 +104,11 @@ def _check(est) -> None:  # noqa: ANN001
     assert (head["reaching"].share, head["reaching"].n) == (0.0, 1) and "pouring" not in head
     assert est.starts_in_gripper == {"joystick": (0.25, 4), "head_array": (1.0, 1)}
     lines = format_estimates(est).splitlines()
-    assert lines[-2] == (
+    assert lines[-3] == (
         "ends in gripper mode         joystick reaching 0.00 of 1, pouring 0.67 of 3 (median 4.0 s from "
         "the change to the end, 1.5 changes into it); head array reaching 0.00 of 1"
     )
-    assert lines[-1] == (
+    assert lines[-2] == (
         "starts in gripper mode       joystick 0.25 of 4 (1/5 = 0.20 if uniform over all modes), "
         "head array 1.00 of 1 (1/7 = 0.14 if uniform over all modes)"
     )
@@ -134,3 +141,18 @@ def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
     # the trial order drew the initial mode over all modes, the gripper mode included
     assert 0.1 < est.starts_in_gripper["joystick"][0] < 0.35
     assert 0.05 < est.starts_in_gripper["head_array"][0] < 0.25
+
+
+def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
+    from drake_disamb.study.calibration import _command_path
+
+    trial = _trial("p", "joystick", "reaching", 0, [], 3.0)
+    trial.trace["u"][:, 4] = 0.1  # 0.1 rad/s about y throughout
+    path, rotation, moving = _command_path(trial)
+    # 0.05 m/s from 0.55 to 1.45 s, each sample held DT: 19 samples
+    assert path == pytest.approx(19 * DT * 0.05) and moving == pytest.approx(19 * DT)
+    assert rotation == pytest.approx(0.1 * 3.0)  # 60 samples held DT, the last one not at all
+    est = estimate_behaviour([trial, _trial("q", "joystick", "reaching", 0, [], 3.0)])
+    c = est.command_path["joystick"]["reaching"]
+    assert c.n == 2 and c.path == pytest.approx(19 * DT * 0.05) and c.speed == pytest.approx(0.05)
+    assert "commanded path per trial     joystick reaching 0.05 m" in format_estimates(est)

@@ -48,6 +48,12 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   change into it (the last switch of the burst that reached it, to the trace's sample period:
   50 ms in the logs) to the end, and the median number of changes into it (from another mode; a
   switch the log shows re-selecting the current mode is no change) per trial (:class:`GripperEnd`).
+- **Commanded path** (:class:`CommandPath`), per interface and task: the blended command ``u``
+  (``blended_vel`` in the logs; the same signal in a simulated trace) integrated over the trial
+  (from 0 to its completion time): the median translational path (m, the sum of ``|u[:3]| dt``),
+  rotational path (rad, ``|u[3:]| dt``) and seconds with the arm commanded (``|u[:3]|`` above
+  5 mm/s), and the median speed while it is. How far people actually drive the arm for a task, not
+  only how they change modes.
 - **Starting in the gripper mode**: per interface, the share of trials whose ``initial_mode`` is
   the gripper mode (the study's trial order drew it uniformly over all of an interface's modes,
   gripper included: 1/5 joystick, 1/7 head array).
@@ -205,6 +211,51 @@ class GripperEnd:
     entries: float
 
 
+@dataclass(frozen=True)
+class CommandPath:
+    """Medians over the ``n`` trials of one interface and task (module docstring): translational
+    path ``path`` (m), rotational path ``rotation`` (rad), seconds moving ``moving`` and the speed
+    while moving ``speed`` (m/s)."""
+
+    path: float
+    rotation: float
+    moving: float
+    speed: float
+    n: int
+
+
+MOVING_SPEED = 0.005
+"""The arm counts as commanded while the blended command's translation is above this (m/s)."""
+
+
+def _command_path(trial: AuthorsTrial) -> tuple[float, float, float]:
+    """Translational path (m), rotational path (rad) and seconds moving of the trace's ``u``."""
+    t = np.asarray(trial.trace["t"], dtype=float)
+    u = np.asarray(trial.trace["u"], dtype=float)
+    end = trial.record.completion_time
+    inside = (t >= 0.0) & (t <= (end if end is not None else t[-1]))
+    t, u = t[inside], u[inside]
+    if t.size < 2:
+        return 0.0, 0.0, 0.0
+    dt = np.diff(t, append=t[-1])  # each sample held until the next
+    speed = np.linalg.norm(u[:, :3], axis=1)
+    return (
+        float(speed @ dt),
+        float(np.linalg.norm(u[:, 3:6], axis=1) @ dt),
+        float(dt[speed > MOVING_SPEED].sum()),
+    )
+
+
+def _command_paths(rows: Sequence[tuple[float, float, float]]) -> CommandPath:
+    a = np.asarray(rows, dtype=float).reshape(-1, 3)
+    speeds = a[:, 0] / np.where(a[:, 2] > 0, a[:, 2], np.nan)
+    return CommandPath(
+        *(float(np.median(a[:, k])) for k in range(3)),
+        float(np.nanmedian(speeds)) if np.any(np.isfinite(speeds)) else math.nan,
+        len(a),
+    )
+
+
 @dataclass
 class BehaviourEstimates:
     """What :func:`estimate_behaviour` measured (times in s). Per-subject lists feed the fits."""
@@ -241,6 +292,8 @@ class BehaviourEstimates:
     gripper_end: dict[str, dict[str, GripperEnd]]
     starts_in_gripper: dict[str, tuple[float, int]]
     """Per interface, the share of trials starting in the gripper mode and the number of trials."""
+    command_path: dict[str, dict[str, CommandPath]]
+    """Per interface and task, the commanded path (:class:`CommandPath`)."""
 
 
 def _gripper_path(trial: AuthorsTrial) -> tuple[bool, float, int]:
@@ -300,10 +353,12 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     confident = {"joystick": np.zeros(4), "head_array": np.zeros(4)}
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     starts_in_gripper: dict[str, list[bool]] = {}
+    command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
     for trial in valid:
         r = trial.record
         s = r.subject
         gripper_paths.setdefault((r.interface, r.task), []).append(_gripper_path(trial))
+        command_paths.setdefault((r.interface, r.task), []).append(_command_path(trial))
         gripper_name = mode_name(MODES[r.interface][-1])
         starts_in_gripper.setdefault(r.interface, []).append(r.initial_mode == gripper_name)
         user_vel, dt = _user_vel(trial)
@@ -465,6 +520,15 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
             for i in ("joystick", "head_array")
             if i in starts_in_gripper
         },
+        command_path={
+            i: {
+                k: _command_paths(command_paths[i, k])
+                for k in ("reaching", "pouring")
+                if (i, k) in command_paths
+            }
+            for i in ("joystick", "head_array")
+            if any(key[0] == i for key in command_paths)
+        },
     )
 
 
@@ -584,6 +648,16 @@ def format_estimates(est: BehaviourEstimates) -> str:
             "if uniform over all modes)"
             for k, (share, n) in est.starts_in_gripper.items()
         ),
+        f"{'commanded path per trial':<28} "
+        + "; ".join(
+            f"{k.replace('_', ' ')} "
+            + ", ".join(
+                f"{task} {c.path:.2f} m, {c.rotation:.2f} rad, moving {c.moving:.1f} s at {c.speed:.3f} m/s"
+                for task, c in tasks.items()
+            )
+            for k, tasks in est.command_path.items()
+        )
+        + " (medians; the blended command integrated over the trial)",
     ]
     return "\n".join(lines)
 
