@@ -156,3 +156,6 @@ def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
     c = est.command_path["joystick"]["reaching"]
     assert c.n == 2 and c.path == pytest.approx(19 * DT * 0.05) and c.speed == pytest.approx(0.05)
     assert "commanded path per trial     joystick reaching 0.05 m" in format_estimates(est)
+    del trial.trace["u"]  # a trace without the blended command counts in no path
+    assert _command_path(trial) is None
+    assert estimate_behaviour([trial]).command_path == {}

@@ -228,8 +228,11 @@ MOVING_SPEED = 0.005
 """The arm counts as commanded while the blended command's translation is above this (m/s)."""
 
 
-def _command_path(trial: AuthorsTrial) -> tuple[float, float, float]:
-    """Translational path (m), rotational path (rad) and seconds moving of the trace's ``u``."""
+def _command_path(trial: AuthorsTrial) -> tuple[float, float, float] | None:
+    """Translational path (m), rotational path (rad) and seconds moving of the trace's ``u``
+    (``None`` for a trace without one)."""
+    if "u" not in trial.trace:
+        return None
     t = np.asarray(trial.trace["t"], dtype=float)
     u = np.asarray(trial.trace["u"], dtype=float)
     end = trial.record.completion_time
@@ -358,7 +361,9 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         r = trial.record
         s = r.subject
         gripper_paths.setdefault((r.interface, r.task), []).append(_gripper_path(trial))
-        command_paths.setdefault((r.interface, r.task), []).append(_command_path(trial))
+        path = _command_path(trial)
+        if path is not None:
+            command_paths.setdefault((r.interface, r.task), []).append(path)
         gripper_name = mode_name(MODES[r.interface][-1])
         starts_in_gripper.setdefault(r.interface, []).append(r.initial_mode == gripper_name)
         user_vel, dt = _user_vel(trial)
