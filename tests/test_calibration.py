@@ -144,11 +144,11 @@ def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
 
 
 def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
-    from drake_disamb.study.calibration import _command_path
+    from drake_disamb.study.course import command_path
 
     trial = _trial("p", "joystick", "reaching", 0, [], 3.0)
     trial.trace["u"][:, 4] = 0.1  # 0.1 rad/s about y throughout
-    path, rotation, moving = _command_path(trial)
+    path, rotation, moving = command_path(trial)
     # 0.05 m/s from 0.55 to 1.45 s, each sample held DT: 19 samples
     assert path == pytest.approx(19 * DT * 0.05) and moving == pytest.approx(19 * DT)
     assert rotation == pytest.approx(0.1 * 3.0)  # 60 samples held DT, the last one not at all
@@ -157,5 +157,5 @@ def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
     assert c.n == 2 and c.path == pytest.approx(19 * DT * 0.05) and c.speed == pytest.approx(0.05)
     assert "commanded path per trial     joystick reaching 0.05 m" in format_estimates(est)
     del trial.trace["u"]  # a trace without the blended command counts in no path
-    assert _command_path(trial) is None
+    assert command_path(trial) is None
     assert estimate_behaviour([trial]).command_path == {}

@@ -41,22 +41,8 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   ``rho1`` (``1.2 / n``, the blending's threshold: the autonomy assists) and while it is not, and
   the share of the trial time it is, per interface over both paradigms. People let a confident
   autonomy carry them rather than change modes: how they use the assistance.
-- **Ending in the gripper mode** (letting go of the object), per interface and task: the share of
-  trials whose mode at the end (the trace's ``mode`` at its last sample up to ``duration``) is the
-  gripper mode (the interface's last mode in :data:`drake_disamb.core.interfaces.MODES`: the
-  logs' joystick id 7 and head-array id 7), and among those the median seconds from the last
-  change into it (the last switch of the burst that reached it, to the trace's sample period:
-  50 ms in the logs) to the end, and the median number of changes into it (from another mode; a
-  switch the log shows re-selecting the current mode is no change) per trial (:class:`GripperEnd`).
-- **Commanded path** (:class:`CommandPath`), per interface and task: the blended command ``u``
-  (``blended_vel`` in the logs; the same signal in a simulated trace) integrated over the trial
-  (from 0 to its completion time): the median translational path (m, the sum of ``|u[:3]| dt``),
-  rotational path (rad, ``|u[3:]| dt``) and seconds with the arm commanded (``|u[:3]|`` above
-  5 mm/s), and the median speed while it is. How far people actually drive the arm for a task, not
-  only how they change modes.
-- **Starting in the gripper mode**: per interface, the share of trials whose ``initial_mode`` is
-  the gripper mode (the study's trial order drew it uniformly over all of an interface's modes,
-  gripper included: 1/5 joystick, 1/7 head array).
+- **How a trial starts and ends, and how far the arm is driven**: ending and starting in the
+  gripper mode, and the commanded path (:mod:`drake_disamb.study.course`, which defines them).
 
 The trials measured are the analysed ones (:func:`~drake_disamb.study.metrics.is_analysed`: valid,
 not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
@@ -69,9 +55,9 @@ import-authors``: the mode switch a request made is the one logged with the requ
 the authors' metrics (user mode switches, merged requests, the joystick's cleaning) are those of
 :mod:`drake_disamb.study.metrics`.
 
-The module is about 600 lines, over the project's ~500: the estimates share one pass over each
-trial's arrays (the command's samples, the events), which splitting them would repeat (the
-gripper-mode estimates read only the mode trace: they could move out if the module grows).
+The module is a little over the project's ~500 lines: the estimates share one pass over each
+trial's arrays (the command's samples, the events), which splitting them would repeat. The
+estimates that read only the mode and blended-command traces are in :mod:`drake_disamb.study.course`.
 """
 
 from __future__ import annotations
@@ -87,6 +73,16 @@ from numpy.typing import NDArray
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.interfaces import MODES
 from drake_disamb.study.authors import AuthorsTrial, mode_name
+from drake_disamb.study.course import (
+    CommandPath,
+    GripperEnd,
+    command_path,
+    format_command_path,
+    format_gripper_end,
+    gripper_course,
+    summarize_command_paths,
+    summarize_gripper_end,
+)
 from drake_disamb.study.metrics import clean_requests, is_analysed
 
 EARLY_REQUEST = 3.0
@@ -198,67 +194,6 @@ def fit_request_decay(events: Sequence[tuple[str, float, bool]]) -> RequestDecay
     )
 
 
-@dataclass(frozen=True)
-class GripperEnd:
-    """The trials of one interface and task that end in the gripper mode (module docstring): their
-    ``share`` of the ``n`` trials, and among them the median seconds from the last change into the
-    gripper mode to the end (``time_to_end``) and the median number of changes into it per trial
-    (``entries``); both NaN when no trial ends there."""
-
-    share: float
-    n: int
-    time_to_end: float
-    entries: float
-
-
-@dataclass(frozen=True)
-class CommandPath:
-    """Medians over the ``n`` trials of one interface and task (module docstring): translational
-    path ``path`` (m), rotational path ``rotation`` (rad), seconds moving ``moving`` and the speed
-    while moving ``speed`` (m/s)."""
-
-    path: float
-    rotation: float
-    moving: float
-    speed: float
-    n: int
-
-
-MOVING_SPEED = 0.005
-"""The arm counts as commanded while the blended command's translation is above this (m/s)."""
-
-
-def _command_path(trial: AuthorsTrial) -> tuple[float, float, float] | None:
-    """Translational path (m), rotational path (rad) and seconds moving of the trace's ``u``
-    (``None`` for a trace without one)."""
-    if "u" not in trial.trace:
-        return None
-    t = np.asarray(trial.trace["t"], dtype=float)
-    u = np.asarray(trial.trace["u"], dtype=float)
-    end = trial.record.completion_time
-    inside = (t >= 0.0) & (t <= (end if end is not None else t[-1]))
-    t, u = t[inside], u[inside]
-    if t.size < 2:
-        return 0.0, 0.0, 0.0
-    dt = np.diff(t, append=t[-1])  # each sample held until the next
-    speed = np.linalg.norm(u[:, :3], axis=1)
-    return (
-        float(speed @ dt),
-        float(np.linalg.norm(u[:, 3:6], axis=1) @ dt),
-        float(dt[speed > MOVING_SPEED].sum()),
-    )
-
-
-def _command_paths(rows: Sequence[tuple[float, float, float]]) -> CommandPath:
-    a = np.asarray(rows, dtype=float).reshape(-1, 3)
-    speeds = a[:, 0] / np.where(a[:, 2] > 0, a[:, 2], np.nan)
-    return CommandPath(
-        *(float(np.median(a[:, k])) for k in range(3)),
-        float(np.nanmedian(speeds)) if np.any(np.isfinite(speeds)) else math.nan,
-        len(a),
-    )
-
-
 @dataclass
 class BehaviourEstimates:
     """What :func:`estimate_behaviour` measured (times in s). Per-subject lists feed the fits."""
@@ -297,25 +232,6 @@ class BehaviourEstimates:
     """Per interface, the share of trials starting in the gripper mode and the number of trials."""
     command_path: dict[str, dict[str, CommandPath]]
     """Per interface and task, the commanded path (:class:`CommandPath`)."""
-
-
-def _gripper_path(trial: AuthorsTrial) -> tuple[bool, float, int]:
-    """Whether the trial ends in the gripper mode, the seconds from its last change into the
-    gripper mode to the end (NaN without one) and its number of changes into it (trace ``mode``:
-    indices into the interface's modes, on ``t``)."""
-    r = trial.record
-    gripper = len(MODES[r.interface]) - 1
-    t = np.asarray(trial.trace["t"], dtype=float)
-    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
-    inside = t <= r.duration + 1e-9
-    last = mode[inside][-1] if np.any(inside) else mode[0]
-    changed = np.flatnonzero(np.diff(mode) != 0) + 1
-    entries = changed[(mode[changed] == gripper) & (t[changed] > 0.0) & inside[changed]]
-    return (
-        bool(last == gripper),
-        r.duration - float(t[entries[-1]]) if entries.size else math.nan,
-        len(entries),
-    )
 
 
 def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
@@ -360,8 +276,8 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     for trial in valid:
         r = trial.record
         s = r.subject
-        gripper_paths.setdefault((r.interface, r.task), []).append(_gripper_path(trial))
-        path = _command_path(trial)
+        gripper_paths.setdefault((r.interface, r.task), []).append(gripper_course(trial))
+        path = command_path(trial)
         if path is not None:
             command_paths.setdefault((r.interface, r.task), []).append(path)
         gripper_name = mode_name(MODES[r.interface][-1])
@@ -513,7 +429,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         },
         gripper_end={
             i: {
-                k: _gripper_end(gripper_paths[i, k])
+                k: summarize_gripper_end(gripper_paths[i, k])
                 for k in ("reaching", "pouring")
                 if (i, k) in gripper_paths
             }
@@ -527,25 +443,13 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         },
         command_path={
             i: {
-                k: _command_paths(command_paths[i, k])
+                k: summarize_command_paths(command_paths[i, k])
                 for k in ("reaching", "pouring")
                 if (i, k) in command_paths
             }
             for i in ("joystick", "head_array")
             if any(key[0] == i for key in command_paths)
         },
-    )
-
-
-def _gripper_end(rows: Sequence[tuple[bool, float, int]]) -> GripperEnd:
-    """:class:`GripperEnd` of one interface and task's :func:`_gripper_path` results."""
-    ends = [(dt, k) for end, dt, k in rows if end]
-    times = [dt for dt, _ in ends if math.isfinite(dt)]
-    return GripperEnd(
-        share=len(ends) / len(rows),
-        n=len(rows),
-        time_to_end=float(np.median(times)) if times else math.nan,
-        entries=float(np.median([k for _, k in ends])) if ends else math.nan,
     )
 
 
@@ -583,15 +487,6 @@ def _fmt_fit(name: str, fit: LogNormalFit, unit: str = "s") -> str:
     return (
         f"{name:<28} median {fit.median:.3g} {unit}, log-sd {fit.log_sd:.2f} (n={fit.n}); "
         f"per subject: {per}; between-subject log-sd {fit.subject_log_sd:.2f}"
-    )
-
-
-def _fmt_gripper_end(task: str, g: GripperEnd) -> str:
-    if g.share == 0.0:
-        return f"{task} 0.00 of {g.n}"
-    return (
-        f"{task} {g.share:.2f} of {g.n} (median {g.time_to_end:.1f} s from the change to the end, "
-        f"{g.entries:g} change{'s' if g.entries != 1 else ''} into it)"
     )
 
 
@@ -644,7 +539,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
         ),
         f"{'ends in gripper mode':<28} "
         + "; ".join(
-            f"{k.replace('_', ' ')} " + ", ".join(_fmt_gripper_end(task, g) for task, g in tasks.items())
+            f"{k.replace('_', ' ')} " + ", ".join(format_gripper_end(task, g) for task, g in tasks.items())
             for k, tasks in est.gripper_end.items()
         ),
         f"{'starts in gripper mode':<28} "
@@ -653,16 +548,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
             "if uniform over all modes)"
             for k, (share, n) in est.starts_in_gripper.items()
         ),
-        f"{'commanded path per trial':<28} "
-        + "; ".join(
-            f"{k.replace('_', ' ')} "
-            + ", ".join(
-                f"{task} {c.path:.2f} m, {c.rotation:.2f} rad, moving {c.moving:.1f} s at {c.speed:.3f} m/s"
-                for task, c in tasks.items()
-            )
-            for k, tasks in est.command_path.items()
-        )
-        + " (medians; the blended command integrated over the trial)",
+        format_command_path(est.command_path),
     ]
     return "\n".join(lines)
 

@@ -1,0 +1,164 @@
+"""How a trial starts and ends and how far the arm is driven, from its mode and command traces.
+
+Behaviour estimates of :mod:`drake_disamb.study.calibration` that read only a trial's traces (the
+people's logs through :func:`drake_disamb.study.authors.read_trials`, a simulated study through
+:func:`~drake_disamb.study.authors.read_study_trials`; the trace ``mode`` is an index into the
+interface's modes on ``t``, ``u`` the blended command ``[vx, vy, vz, wx, wy, wz]``):
+
+- **Ending in the gripper mode** (letting go of the object), per interface and task: the share of
+  trials whose mode at the end (the trace's ``mode`` at its last sample up to ``duration``) is the
+  gripper mode (the interface's last mode in :data:`drake_disamb.core.interfaces.MODES`: the
+  logs' joystick id 7 and head-array id 7), and among those the median seconds from the last
+  change into it (the last switch of the burst that reached it, to the trace's sample period:
+  50 ms in the logs) to the end, and the median number of changes into it (from another mode; a
+  switch the log shows re-selecting the current mode is no change) per trial (:class:`GripperEnd`).
+- **Starting in the gripper mode**: per interface, the share of trials whose ``initial_mode`` is
+  the gripper mode (the study's trial order drew it uniformly over all of an interface's modes,
+  gripper included: 1/5 joystick, 1/7 head array).
+- **Commanded path** (:class:`CommandPath`), per interface and task: the blended command ``u``
+  (``blended_vel`` in the logs; the same signal in a simulated trace) integrated over the trial
+  (from 0 to its completion time): the median translational path (m, the sum of ``|u[:3]| dt``),
+  rotational path (rad, ``|u[3:]| dt``) and seconds with the arm commanded (``|u[:3]|`` above
+  5 mm/s), and the median speed while it is. How far people actually drive the arm for a task, not
+  only how they change modes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from drake_disamb.core.interfaces import MODES
+from drake_disamb.study.authors import AuthorsTrial
+
+__all__ = [
+    "MOVING_SPEED",
+    "CommandPath",
+    "GripperEnd",
+    "command_path",
+    "format_command_path",
+    "format_gripper_end",
+    "gripper_course",
+    "summarize_command_paths",
+    "summarize_gripper_end",
+]
+
+
+@dataclass(frozen=True)
+class GripperEnd:
+    """The trials of one interface and task that end in the gripper mode (module docstring): their
+    ``share`` of the ``n`` trials, and among them the median seconds from the last change into the
+    gripper mode to the end (``time_to_end``) and the median number of changes into it per trial
+    (``entries``); both NaN when no trial ends there."""
+
+    share: float
+    n: int
+    time_to_end: float
+    entries: float
+
+
+@dataclass(frozen=True)
+class CommandPath:
+    """Medians over the ``n`` trials of one interface and task (module docstring): translational
+    path ``path`` (m), rotational path ``rotation`` (rad), seconds moving ``moving`` and the speed
+    while moving ``speed`` (m/s)."""
+
+    path: float
+    rotation: float
+    moving: float
+    speed: float
+    n: int
+
+
+MOVING_SPEED = 0.005
+"""The arm counts as commanded while the blended command's translation is above this (m/s)."""
+
+
+def command_path(trial: AuthorsTrial) -> tuple[float, float, float] | None:
+    """Translational path (m), rotational path (rad) and seconds moving of the trace's ``u``
+    (``None`` for a trace without one)."""
+    if "u" not in trial.trace:
+        return None
+    t = np.asarray(trial.trace["t"], dtype=float)
+    u = np.asarray(trial.trace["u"], dtype=float)
+    end = trial.record.completion_time
+    inside = (t >= 0.0) & (t <= (end if end is not None else t[-1]))
+    t, u = t[inside], u[inside]
+    if t.size < 2:
+        return 0.0, 0.0, 0.0
+    dt = np.diff(t, append=t[-1])  # each sample held until the next
+    speed = np.linalg.norm(u[:, :3], axis=1)
+    return (
+        float(speed @ dt),
+        float(np.linalg.norm(u[:, 3:6], axis=1) @ dt),
+        float(dt[speed > MOVING_SPEED].sum()),
+    )
+
+
+def summarize_command_paths(rows: Sequence[tuple[float, float, float]]) -> CommandPath:
+    a = np.asarray(rows, dtype=float).reshape(-1, 3)
+    speeds = a[:, 0] / np.where(a[:, 2] > 0, a[:, 2], np.nan)
+    return CommandPath(
+        *(float(np.median(a[:, k])) for k in range(3)),
+        float(np.nanmedian(speeds)) if np.any(np.isfinite(speeds)) else math.nan,
+        len(a),
+    )
+
+
+def gripper_course(trial: AuthorsTrial) -> tuple[bool, float, int]:
+    """Whether the trial ends in the gripper mode, the seconds from its last change into the
+    gripper mode to the end (NaN without one) and its number of changes into it (trace ``mode``:
+    indices into the interface's modes, on ``t``)."""
+    r = trial.record
+    gripper = len(MODES[r.interface]) - 1
+    t = np.asarray(trial.trace["t"], dtype=float)
+    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
+    inside = t <= r.duration + 1e-9
+    last = mode[inside][-1] if np.any(inside) else mode[0]
+    changed = np.flatnonzero(np.diff(mode) != 0) + 1
+    entries = changed[(mode[changed] == gripper) & (t[changed] > 0.0) & inside[changed]]
+    return (
+        bool(last == gripper),
+        r.duration - float(t[entries[-1]]) if entries.size else math.nan,
+        len(entries),
+    )
+
+
+def summarize_gripper_end(rows: Sequence[tuple[bool, float, int]]) -> GripperEnd:
+    """:class:`GripperEnd` of one interface and task's :func:`gripper_course` results."""
+    ends = [(dt, k) for end, dt, k in rows if end]
+    times = [dt for dt, _ in ends if math.isfinite(dt)]
+    return GripperEnd(
+        share=len(ends) / len(rows),
+        n=len(rows),
+        time_to_end=float(np.median(times)) if times else math.nan,
+        entries=float(np.median([k for _, k in ends])) if ends else math.nan,
+    )
+
+
+def format_gripper_end(task: str, g: GripperEnd) -> str:
+    if g.share == 0.0:
+        return f"{task} 0.00 of {g.n}"
+    return (
+        f"{task} {g.share:.2f} of {g.n} (median {g.time_to_end:.1f} s from the change to the end, "
+        f"{g.entries:g} change{'s' if g.entries != 1 else ''} into it)"
+    )
+
+
+def format_command_path(paths: Mapping[str, Mapping[str, CommandPath]]) -> str:
+    """The commanded paths per interface and task as one line of ``study calibrate``."""
+    return (
+        f"{'commanded path per trial':<28} "
+        + "; ".join(
+            f"{k.replace('_', ' ')} "
+            + ", ".join(
+                f"{task} {c.path:.2f} m, {c.rotation:.2f} rad, moving {c.moving:.1f} s at {c.speed:.3f} m/s"
+                for task, c in tasks.items()
+            )
+            for k, tasks in paths.items()
+        )
+        + " (medians; the blended command integrated over the trial)"
+    )
