@@ -63,7 +63,7 @@ estimates that read only the mode and blended-command traces are in :mod:`drake_
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -427,30 +427,24 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         confident_share={
             k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
         },
-        gripper_end={
-            i: {
-                k: summarize_gripper_end(gripper_paths[i, k])
-                for k in ("reaching", "pouring")
-                if (i, k) in gripper_paths
-            }
-            for i in ("joystick", "head_array")
-            if i in starts_in_gripper
-        },
+        gripper_end=_per_condition(gripper_paths, summarize_gripper_end),
         starts_in_gripper={
             i: (float(np.mean(starts_in_gripper[i])), len(starts_in_gripper[i]))
             for i in ("joystick", "head_array")
             if i in starts_in_gripper
         },
-        command_path={
-            i: {
-                k: summarize_command_paths(command_paths[i, k])
-                for k in ("reaching", "pouring")
-                if (i, k) in command_paths
-            }
-            for i in ("joystick", "head_array")
-            if any(key[0] == i for key in command_paths)
-        },
+        command_path=_per_condition(command_paths, summarize_command_paths),
     )
+
+
+def _per_condition(rows: dict[tuple[str, str], list[Any]], summarize: Callable[[Any], Any]) -> dict[str, Any]:
+    """``{interface: {task: summarize(rows[interface, task])}}`` over the conditions with rows."""
+    out: dict[str, Any] = {}
+    for i in ("joystick", "head_array"):
+        tasks = {k: summarize(rows[i, k]) for k in ("reaching", "pouring") if (i, k) in rows}
+        if tasks:
+            out[i] = tasks
+    return out
 
 
 def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: float) -> list[float]:
