@@ -144,7 +144,9 @@ def test_pouring_completes_both_stages() -> None:
     # The cup is let go at its place: the trial ends in the gripper mode (the last), changed to
     # after the end effector got there, and the stage completed once the gripper opened.
     t, mode = r.logs["mode"]
-    grip = 4  # the joystick's gripper mode
+    from drake_disamb.core.interfaces import gripper_mode
+
+    grip = gripper_mode("joystick")
     assert mode[-1, 0] == grip
     entered = t[np.flatnonzero(mode[:, 0] != grip)[-1] + 1]
     assert r.stage_times[0] < entered < r.stage_times[1]

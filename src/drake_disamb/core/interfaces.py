@@ -129,6 +129,11 @@ def arm_modes(kind: str) -> tuple[tuple[int, ...], ...]:
     return interface_modes(kind)[:-1]
 
 
+def gripper_mode(kind: str) -> int:
+    """The index of an interface's gripper mode (its last mode)."""
+    return len(interface_modes(kind)) - 1
+
+
 @dataclass(frozen=True)
 class InterfaceConfig:
     """Settings of one interface.

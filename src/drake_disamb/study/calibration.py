@@ -71,15 +71,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.authors import AuthorsTrial, mode_name
+from drake_disamb.study.authors import AuthorsTrial
 from drake_disamb.study.course import (
     CommandPath,
     GripperEnd,
     command_path,
     format_command_path,
-    format_gripper_end,
+    format_gripper,
     gripper_course,
+    starts_in_gripper,
     summarize_command_paths,
     summarize_gripper_end,
 )
@@ -271,7 +271,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
     # interface -> [confident s, not confident s, changes while confident, changes while not]
     confident = {"joystick": np.zeros(4), "head_array": np.zeros(4)}
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
-    starts_in_gripper: dict[str, list[bool]] = {}
+    gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
     for trial in valid:
         r = trial.record
@@ -280,8 +280,7 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         path = command_path(trial)
         if path is not None:
             command_paths.setdefault((r.interface, r.task), []).append(path)
-        gripper_name = mode_name(MODES[r.interface][-1])
-        starts_in_gripper.setdefault(r.interface, []).append(r.initial_mode == gripper_name)
+        gripper_starts.setdefault(r.interface, []).append(starts_in_gripper(trial))
         user_vel, dt = _user_vel(trial)
         cmd = np.any(user_vel != 0.0, axis=0)
         on = np.flatnonzero(cmd)
@@ -429,9 +428,9 @@ def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
         },
         gripper_end=_per_condition(gripper_paths, summarize_gripper_end),
         starts_in_gripper={
-            i: (float(np.mean(starts_in_gripper[i])), len(starts_in_gripper[i]))
+            i: (float(np.mean(gripper_starts[i])), len(gripper_starts[i]))
             for i in ("joystick", "head_array")
-            if i in starts_in_gripper
+            if i in gripper_starts
         },
         command_path=_per_condition(command_paths, summarize_command_paths),
     )
@@ -531,17 +530,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
             f"(confident {est.confident_share[k]:.2f} of the time)"
             for k, v in est.changes_per_minute.items()
         ),
-        f"{'ends in gripper mode':<28} "
-        + "; ".join(
-            f"{k.replace('_', ' ')} " + ", ".join(format_gripper_end(task, g) for task, g in tasks.items())
-            for k, tasks in est.gripper_end.items()
-        ),
-        f"{'starts in gripper mode':<28} "
-        + ", ".join(
-            f"{k.replace('_', ' ')} {share:.2f} of {n} (1/{len(MODES[k])} = {1 / len(MODES[k]):.2f} "
-            "if uniform over all modes)"
-            for k, (share, n) in est.starts_in_gripper.items()
-        ),
+        *format_gripper(est.gripper_end, est.starts_in_gripper),
         format_command_path(est.command_path),
     ]
     return "\n".join(lines)

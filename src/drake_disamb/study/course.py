@@ -31,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.authors import AuthorsTrial
+from drake_disamb.core.interfaces import MODES, gripper_mode
+from drake_disamb.study.authors import AuthorsTrial, mode_name
 
 __all__ = [
     "MOVING_SPEED",
@@ -40,8 +40,9 @@ __all__ = [
     "GripperEnd",
     "command_path",
     "format_command_path",
-    "format_gripper_end",
+    "format_gripper",
     "gripper_course",
+    "starts_in_gripper",
     "summarize_command_paths",
     "summarize_gripper_end",
 ]
@@ -99,6 +100,7 @@ def command_path(trial: AuthorsTrial) -> tuple[float, float, float] | None:
 
 
 def summarize_command_paths(rows: Sequence[tuple[float, float, float]]) -> CommandPath:
+    """:class:`CommandPath` of one interface and task's :func:`command_path` results."""
     a = np.asarray(rows, dtype=float).reshape(-1, 3)
     speeds = a[:, 0] / np.where(a[:, 2] > 0, a[:, 2], np.nan)
     return CommandPath(
@@ -113,7 +115,7 @@ def gripper_course(trial: AuthorsTrial) -> tuple[bool, float, int]:
     gripper mode to the end (NaN without one) and its number of changes into it (trace ``mode``:
     indices into the interface's modes, on ``t``)."""
     r = trial.record
-    gripper = len(MODES[r.interface]) - 1
+    gripper = gripper_mode(r.interface)
     t = np.asarray(trial.trace["t"], dtype=float)
     mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
     inside = t <= r.duration + 1e-9
@@ -125,6 +127,12 @@ def gripper_course(trial: AuthorsTrial) -> tuple[bool, float, int]:
         r.duration - float(t[entries[-1]]) if entries.size else math.nan,
         len(entries),
     )
+
+
+def starts_in_gripper(trial: AuthorsTrial) -> bool:
+    """Whether the trial's ``initial_mode`` (a mode name) is its interface's gripper mode."""
+    r = trial.record
+    return r.initial_mode == mode_name(MODES[r.interface][gripper_mode(r.interface)])
 
 
 def summarize_gripper_end(rows: Sequence[tuple[bool, float, int]]) -> GripperEnd:
@@ -139,13 +147,33 @@ def summarize_gripper_end(rows: Sequence[tuple[bool, float, int]]) -> GripperEnd
     )
 
 
-def format_gripper_end(task: str, g: GripperEnd) -> str:
+def _format_gripper_end(task: str, g: GripperEnd) -> str:
     if g.share == 0.0:
         return f"{task} 0.00 of {g.n}"
     return (
         f"{task} {g.share:.2f} of {g.n} (median {g.time_to_end:.1f} s from the change to the end, "
         f"{g.entries:g} change{'s' if g.entries != 1 else ''} into it)"
     )
+
+
+def format_gripper(
+    ends: Mapping[str, Mapping[str, GripperEnd]], starts: Mapping[str, tuple[float, int]]
+) -> list[str]:
+    """The two gripper-mode lines of ``study calibrate``: trials ending in it per interface and task
+    (``ends``), trials starting in it per interface (``starts``: share and trial count)."""
+    return [
+        f"{'ends in gripper mode':<28} "
+        + "; ".join(
+            f"{k.replace('_', ' ')} " + ", ".join(_format_gripper_end(task, g) for task, g in tasks.items())
+            for k, tasks in ends.items()
+        ),
+        f"{'starts in gripper mode':<28} "
+        + ", ".join(
+            f"{k.replace('_', ' ')} {share:.2f} of {n} (1/{len(MODES[k])} = {1 / len(MODES[k]):.2f} "
+            "if uniform over all modes)"
+            for k, (share, n) in starts.items()
+        ),
+    ]
 
 
 def format_command_path(paths: Mapping[str, Mapping[str, CommandPath]]) -> str:
