@@ -108,14 +108,10 @@ class SharedControlDiagram:
 
 
 def _make_inference(config: TrialConfig, control_period: float) -> System:
-    from drake_disamb.systems import inference as inf
+    from drake_disamb.systems.inference import inference_system
 
-    n = config.n_goals
-    if config.inference_method == "dft":
-        return inf.FieldTheoreticIntentInference(n, config.dft, control_period)
-    if config.inference_method == "bayes":  # sigma and transition: the forward projection's too
-        return inf.RecursiveBayesIntentInference(n, control_period=control_period)
-    return inf.MemoryBasedIntentInference(n, control_period=control_period)
+    # The method and its parameters are the forward projection's too.
+    return inference_system(config.inference, config.n_goals, control_period)
 
 
 def build_shared_control_diagram(

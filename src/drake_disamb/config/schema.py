@@ -45,7 +45,7 @@ from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
-from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
+from drake_disamb.core.inference import AGREEMENT_MEASURES, INFERENCE_METHODS, DFTParams
 from drake_disamb.core.interfaces import MODE_SELECTIONS
 from drake_disamb.core.user import UserConfig
 from drake_disamb.station import default_plant_config
@@ -55,9 +55,6 @@ INTERFACES: tuple[str, ...] = ("joystick", "head_array")
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
-
-INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
-"""Intent-inference methods accepted by :attr:`InferenceSpec.method`."""
 
 GOAL_SETS: tuple[str, ...] = ("stage", "task")
 """What the belief is over (:attr:`InferenceSpec.goal_set`)."""
@@ -240,7 +237,8 @@ class InferenceSpec:
     """Intent inference.
 
     Attributes:
-        method: ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
+        method: A name registered in :data:`drake_disamb.core.inference.INFERENCE_METHODS`:
+            ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
         dft: Parameters of the field-theoretic update (default the ``mico`` preset's). The
             disambiguation's forward projection runs the same update with the same parameters.
         agreement: Form of the DFT's agreement term (when ``dft.agreement`` is on), live and in
@@ -276,10 +274,10 @@ class DisambiguationSpec:
             speeds, step and horizons, weights). The belief update it projects with is always the
             live one: the method and DFT parameters of :attr:`Scenario.inference` and the
             potential field of :attr:`Scenario.autonomy` replace the preset's own.
-        method: How the mode is chosen from the forward projection: ``"algorithm1"`` (the paper),
-            ``"entropy"`` (minimum expected entropy of the projected belief) or ``"kl"`` (maximum
-            expected KL divergence from the current belief); see
-            :func:`drake_disamb.core.disambiguation.select_disambiguating_mode`.
+        method: How the mode is chosen from the forward projection, a name registered in
+            :data:`drake_disamb.core.disambiguation.MODE_SELECTION_METHODS`: ``"algorithm1"`` (the
+            paper), ``"entropy"`` (minimum expected entropy of the projected belief) or ``"kl"``
+            (maximum expected KL divergence from the current belief).
         request_latency: Seconds (finite, >= 0) from a request press (or an automatic trigger) to
             the mode switch; the mode is the one chosen at the switch time. The paper's system took
             2 to 2.5 s; 0 (default) switches in the press's control tick.

@@ -39,6 +39,7 @@ import numpy as np
 from drake_disamb.config.checks import check_data, fmt
 from drake_disamb.config.schema import MAX_GOALS, SHAPE_SIZES, Scenario, SuccessSpec, to_plain
 from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
+from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference
 
 MICO_SHOULDER_POSITION: tuple[float, float, float] = (0.0, 0.0, 0.2755)
 """Position (m, in W) of the MICO's shoulder joint: D1 above the base (FACTS section 7)."""
@@ -131,7 +132,11 @@ def _check_belief_integrator(s: Scenario, name: str) -> None:
     Euler to a negative belief and costing it 2 points of accuracy)."""
     c = s.simulator_config
     limit = FIXED_STEP_STABILITY.get(c.integration_scheme)
-    if s.inference.method != "dft" or c.use_error_control or limit is None:
+    if (
+        not issubclass(INFERENCE_METHODS.get(s.inference.method), DFTInference)
+        or c.use_error_control
+        or limit is None
+    ):
         return
     rate = belief_rate_bound(s)
     if c.max_step_size * rate > limit:

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.inference import (
+    INFERENCE_METHODS,
     DFTParams,
     bayes_likelihood,
     check_transition,
@@ -51,14 +52,11 @@ from drake_disamb.core.inference import (
     posterior_update,
 )
 
-METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
-"""The three inference methods of the comparison, in the order the paper lists them."""
+METHODS: tuple[str, ...] = INFERENCE_METHODS.names()
+"""The three inference methods of the comparison (the registry's), in the order the paper lists them."""
 
-METHOD_LABELS: dict[str, str] = {
-    "dft": "field-theoretic",
-    "bayes": "recursive Bayes",
-    "memory": "memory-based",
-}
+METHOD_LABELS: dict[str, str] = {method.name: method.label for method in INFERENCE_METHODS.variants()}
+"""What people read for each method (the variants' labels)."""
 
 PUBLISHED_ACCURACY: dict[str, float] = {"dft": 0.8746, "bayes": 0.8743, "memory": 0.5915}
 """The paper's accuracies on its 500 simulated trials (FACTS section 3)."""

@@ -67,7 +67,7 @@ __all__ = [
     "validate_protocol",
 ]
 
-METHODS: tuple[str, ...] = MODE_SELECTION_METHODS
+METHODS = MODE_SELECTION_METHODS  # the registry itself: a method registered later is accepted
 """Mode-selection methods of the contract's ``Scenario.disambiguation.method``."""
 
 COUNTERBALANCE: tuple[str, ...] = ("rotation", "none")

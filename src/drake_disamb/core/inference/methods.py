@@ -1,0 +1,85 @@
+"""The inference registry: what an intent-inference method is, and which ones there are.
+
+A method is a frozen dataclass holding its own configuration, one module each
+(:mod:`~drake_disamb.core.inference.dft`, :mod:`~drake_disamb.core.inference.bayes`,
+:mod:`~drake_disamb.core.inference.memory`), registered in :data:`INFERENCE_METHODS` under the
+name a scenario's ``inference.method`` gives. Code that uses a method reads its properties
+(``continuous``, whether it is a :class:`ProjectedInference`) or dispatches on its type, never on
+its name; the Drake system of each is chosen by type in :mod:`drake_disamb.systems.inference`.
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core.registry import Registry
+
+if TYPE_CHECKING:
+    from typing import Self
+
+    from drake_disamb.core.inference.dft import DFTParams
+
+
+class InferenceMethod(abc.ABC):
+    """An intent-inference method and its configuration.
+
+    Class attributes:
+        name: The registry's (and the scenario's) name.
+        label: The name people read (tables, figures).
+        continuous: True when the live belief is continuous state the simulator integrates (the
+            integrator's settings then matter to it); False for an update every control period.
+    """
+
+    name: ClassVar[str]
+    label: ClassVar[str]
+    continuous: ClassVar[bool] = False
+
+    @classmethod
+    def from_settings(cls, dft: DFTParams) -> Self:
+        """The method as a scenario configures it: ``dft`` is the scenario's resolved
+        ``inference.dft`` (the field-theoretic method's parameters, shared with the autonomy's
+        agreement term); the baselines have no scenario settings of their own."""
+        return cls()
+
+
+class ProjectedInference(InferenceMethod):
+    """An inference method that can project the belief forward under assumed commands: its step
+    splits into a belief-independent *evidence* (computed for every step of a batch at once) and
+    a recursion over it. The disambiguation's forward projection runs exactly this update.
+    """
+
+    transition: NDArray[np.float64] | None
+    """The goal-transition matrix ``P`` (``None``: identity)."""
+
+    @property
+    def needs_autonomy(self) -> bool:
+        """Whether :meth:`evidence` reads the per-goal autonomy commands ``u_a``."""
+        return False
+
+    @abc.abstractmethod
+    def evidence(
+        self, u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike, u_a: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        """The belief-independent part of a step, ``(..., n)``, for commands ``u_h`` ``(..., 6)``
+        (m/s, rad/s, world frame), positions ``x_r`` ``(..., 3)`` and goals ``x_g`` ``(n, 3)`` (m)."""
+
+    @abc.abstractmethod
+    def rollout(self, p: ArrayLike, evidence: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """The beliefs after each of ``K`` successive steps of ``dt`` (s) from ``p`` ``(..., n)``,
+        step ``s`` using ``evidence[s]`` (``(K, ..., n)``); returns ``(K, ..., n)``."""
+
+    @abc.abstractmethod
+    def with_transition(self, transition: ArrayLike | None) -> Self:
+        """A copy whose goal-transition matrix is ``transition`` (``None``: identity)."""
+
+    @abc.abstractmethod
+    def check_goal_count(self, n: int) -> None:
+        """``ValueError`` naming the parameter whose size does not fit ``n`` goals."""
+
+
+INFERENCE_METHODS: Registry[type[InferenceMethod]] = Registry("inference method")
+"""The intent-inference methods by name, in the order the paper lists them."""
