@@ -42,14 +42,9 @@ from numpy.typing import NDArray
 from drake_disamb.core.inference import (
     INFERENCE_METHODS,
     DFTParams,
-    bayes_likelihood,
+    RecordedSamples,
     check_transition,
-    dft_drive,
-    dft_euler_update,
-    likelihood_from_log,
-    memory_log_likelihood,
     path_cost_increment,
-    posterior_update,
 )
 
 METHODS: tuple[str, ...] = INFERENCE_METHODS.names()
@@ -659,7 +654,8 @@ def replay_trials(
     if len(trials) == 0:
         raise ValueError("trials: nothing to replay (empty list)")
     params = authors_dft_params() if params is None else params
-    drive_params = replace(params, transition=None)
+    # Each method as the registry has it, the DFT with ``params`` (every trial's P replaces theirs).
+    variants = {m: INFERENCE_METHODS.get(m).from_settings(replace(params, transition=None)) for m in methods}
 
     lengths = np.array([tr.n_steps for tr in trials])
     n_goals = np.array([tr.n_goals for tr in trials])
@@ -683,25 +679,20 @@ def replay_trials(
     # Packed arrays are stored goal-major, (n, rows): the per-step slices are then (b, n) views
     # whose goal axis is strided, which makes numpy's reductions over it several times faster.
     packed: dict[str, NDArray[np.float64]] = {}
-    for m in methods:
-        packed[m] = np.full((nmax, offsets[-1]), -np.inf if m == "dft" else 0.0)
-    if "memory" in methods:
-        # Running path cost, summed per trial in time order (as the authors' loop does).
-        moves = path_cost_increment(x_cur, x_next)
-        cost = np.concatenate([np.cumsum(moves[s : s + L]) for s, L in zip(starts, lengths, strict=True)])
-        x0 = np.repeat(np.stack([tr.traj[0] for tr in trials]), lengths, axis=0)
+    for m, variant in variants.items():
+        packed[m] = np.full((nmax, offsets[-1]), variant.replay_padding)
+    # Running path cost, summed per trial in time order (as the authors' loop does).
+    moves = path_cost_increment(x_cur, x_next)
+    cost = np.concatenate([np.cumsum(moves[s : s + L]) for s, L in zip(starts, lengths, strict=True)])
+    x0 = np.repeat(np.stack([tr.traj[0] for tr in trials]), lengths, axis=0)
     for n in np.unique(n_goals):
         sel = np.repeat(n_goals == n, lengths)
         G = np.concatenate(
             [np.broadcast_to(tr.goals, (tr.n_steps, n, 3)) for tr in trials if tr.n_goals == n]
         )
-        if "dft" in methods:
-            packed["dft"][:n, rows[sel]] = dft_drive(u_h[sel], x_cur[sel], G, drive_params).T
-        if "bayes" in methods:
-            packed["bayes"][:n, rows[sel]] = bayes_likelihood(u_h[sel], x_cur[sel], G).T
-        if "memory" in methods:
-            log_lik = memory_log_likelihood(cost[sel], x_cur[sel], x0[sel], G)
-            packed["memory"][:n, rows[sel]] = likelihood_from_log(log_lik).T
+        samples = RecordedSamples(u_h=u_h[sel], x_cur=x_cur[sel], x_start=x0[sel], path_cost=cost[sel])
+        for m, variant in variants.items():
+            packed[m][:n, rows[sel]] = variant.recorded_evidence(samples, G).T
 
     # Padded per-slot constants: transition matrices (a dummy goal only maps to itself) and steps.
     P = np.zeros((nmax, nmax, B)).transpose(2, 0, 1)  # (B, n, n) view, batch axis fastest
@@ -718,20 +709,14 @@ def replay_trials(
     # update t of the b trials still running is the first b columns of the previous block.
     hist = {m: np.empty((nmax, offsets[-1])) for m in methods}
     start = np.ascontiguousarray(belief0.T)  # (n, B)
-    dft_params: dict[int, DFTParams] = {}
+    steps = {m: variant.replayer(P, dt) for m, variant in variants.items()}
     with tqdm(total=T, desc="replaying", unit="step", disable=not progress, mininterval=0.5) as bar:
         for t in range(T):
             b, lo, hi = int(active[t]), int(offsets[t]), int(offsets[t + 1])
             prev_lo = int(offsets[t - 1]) if t else 0
             for m in methods:
                 p = (hist[m][:, prev_lo : prev_lo + b] if t else start[:, :b]).T
-                if m == "dft":
-                    if b not in dft_params:
-                        dft_params[b] = replace(params, transition=P[:b])
-                    new = dft_euler_update(p, packed[m][:, lo:hi].T, dft_params[b], dt[:b])
-                else:
-                    new = posterior_update(p, packed[m][:, lo:hi].T, P[:b])
-                hist[m][:, lo:hi] = new.T
+                hist[m][:, lo:hi] = steps[m](p, packed[m][:, lo:hi].T).T
             if t % 256 == 255:
                 bar.update(256)
         bar.update(T % 256)

@@ -66,7 +66,12 @@ from drake_disamb.core.inference.memory import (
     memory_step,
     path_cost_increment,
 )
-from drake_disamb.core.inference.methods import INFERENCE_METHODS, InferenceMethod, ProjectedInference
+from drake_disamb.core.inference.methods import (
+    INFERENCE_METHODS,
+    InferenceMethod,
+    ProjectedInference,
+    RecordedSamples,
+)
 
 __all__ = [
     "AGREEMENT_MEASURES",
@@ -81,6 +86,7 @@ __all__ = [
     "InferenceMethod",
     "MemoryInference",
     "ProjectedInference",
+    "RecordedSamples",
     "agreement",
     "bayes_likelihood",
     "bayes_step",

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -550,6 +551,7 @@ class DFTInference(ProjectedInference):
     name: ClassVar[str] = "dft"
     label: ClassVar[str] = "field-theoretic"
     continuous: ClassVar[bool] = True
+    replay_padding: ClassVar[float] = -np.inf
     params: DFTParams = field(default_factory=DFTParams)
 
     def __post_init__(self) -> None:
@@ -575,6 +577,21 @@ class DFTInference(ProjectedInference):
 
     def rollout(self, p: ArrayLike, evidence: ArrayLike, dt: float) -> NDArray[np.float64]:
         return dft_euler_rollout(p, evidence, self.params, dt)
+
+    def replayer(
+        self, transition: NDArray[np.float64], dt: NDArray[np.float64]
+    ) -> Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]:
+        """The authors' Euler step (:func:`dft_euler_update`) of the first ``len(p)`` rows, with
+        their transition matrices and steps (the parameters built once per batch size)."""
+        params_by_rows: dict[int, DFTParams] = {}
+
+        def step(p: NDArray[np.float64], drive: NDArray[np.float64]) -> NDArray[np.float64]:
+            b = len(p)
+            if b not in params_by_rows:
+                params_by_rows[b] = dataclasses.replace(self.params, transition=transition[:b])
+            return dft_euler_update(p, drive, params_by_rows[b], dt[:b])
+
+        return step
 
     def with_transition(self, transition: ArrayLike | None) -> DFTInference:
         P = None if transition is None else np.asarray(transition, dtype=float)

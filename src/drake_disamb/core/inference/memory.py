@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.inference.belief import check_transition, posterior_update, squared_norm
-from drake_disamb.core.inference.methods import INFERENCE_METHODS, InferenceMethod
+from drake_disamb.core.inference.methods import INFERENCE_METHODS, InferenceMethod, RecordedSamples
 
 
 def memory_log_likelihood(
@@ -84,6 +84,12 @@ class MemoryInference(InferenceMethod):
     name: ClassVar[str] = "memory"
     label: ClassVar[str] = "memory-based"
     transition: NDArray[np.float64] | None = field(default=None, compare=False)
+
+    def recorded_evidence(self, samples: RecordedSamples, x_g: ArrayLike) -> NDArray[np.float64]:
+        """The likelihood of each goal given the path so far (:func:`memory_log_likelihood`, the
+        cost-to-go measured from the position the move started at, as in the authors' code)."""
+        log_lik = memory_log_likelihood(samples.path_cost, samples.x_cur, samples.x_start, x_g)
+        return likelihood_from_log(log_lik)
 
     def __post_init__(self) -> None:
         if self.transition is not None:
