@@ -211,6 +211,8 @@ def test_each_method_has_its_own_result_and_explanation() -> None:
         name: select_disambiguating_mode(name, BELIEF, np.zeros(3), GOALS, MODES, current_mode=0)
         for name in MODE_SELECTION_METHODS
     }
+    assert mode_selection_method("kl") == mode_selection_method("kl") != mode_selection_method("entropy")
+    assert repr(mode_selection_method("algorithm1")) == "Algorithm1()"
     assert type(results["algorithm1"]) is Algorithm1Result
     assert type(results["entropy"]) is EntropyResult and type(results["kl"]) is KLResult
     for name, result in results.items():

@@ -100,9 +100,7 @@ class TrialConfig:
     interface: InterfaceConfig
     station: Any
     simulator: Any
-    disambiguation_method: ModeSelectionMethod = dataclasses.field(
-        default_factory=lambda: mode_selection_method("algorithm1")
-    )
+    disambiguation_method: ModeSelectionMethod
     automatic: AutomaticConfig | None = None
 
 

@@ -37,6 +37,17 @@ class ModeSelectionMethod(abc.ABC):
     def select(self, request: DisambiguationRequest) -> DisambiguationResult:
         """Choose the mode for ``request`` (checked by :func:`make_request`)."""
 
+    # A method without parameters is its type: equal to, and hashed like, any instance of it (a
+    # method with parameters is a frozen dataclass, which replaces these).
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self)
+
+    def __hash__(self) -> int:
+        return hash(type(self))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
 
 MODE_SELECTION_METHODS: Registry[type[ModeSelectionMethod]] = Registry("mode-selection method")
 """The mode-selection methods by name (the paper's Algorithm 1 first)."""
