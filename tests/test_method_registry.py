@@ -175,9 +175,12 @@ def test_the_scenario_resolves_one_inference_method_for_the_live_system_and_the_
     class Unbuilt(MemoryInference):
         name: ClassVar[str] = "unbuilt"
 
-    Unbuilt()  # a subclass of a known variant is built as that variant's system
-    with pytest.raises(ValueError, match="no Drake system is registered"):
-        inference_system(object.__new__(_Orphan), 2, 0.01)
+    # A subclass of a variant gets that variant's system; a method nobody gave one is an error.
+    assert type(inference_system(Unbuilt(), 2, 0.01)) is MemoryBasedIntentInference
+    with pytest.raises(
+        ValueError, match=r"inference method 'orphan': no Drake system is registered for _Orphan"
+    ):
+        inference_system(_Orphan(), 2, 0.01)
 
 
 @dataclasses.dataclass(frozen=True)
