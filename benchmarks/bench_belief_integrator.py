@@ -9,7 +9,7 @@ The field-theoretic inference system
 (:class:`~drake_disamb.systems.inference.FieldTheoreticIntentInference`) holds the belief as
 continuous state that Drake's simulator integrates. This script plays each of the authors'
 published simulated trials (``../shared/data/tnsre2018_simulated_trajectories`` beside the
-repository, FACTS section 3) into that very system, as the live loop would feed it: a small source
+repository, docs/facts.md section 3) into that very system, as the live loop would feed it: a small source
 system (:class:`TrialPlayback`) holds the command ``u_h`` and the position of the trial's sample at
 each control tick, piecewise constant until the next tick (the interface's state and the loop's
 zero-order hold of the end-effector pose do the same). Tick ``k`` at ``t = k T`` takes sample

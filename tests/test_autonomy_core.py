@@ -12,7 +12,7 @@ IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 def _reference(position, quat, goal_positions, goal_quats, cfg: PotentialFieldConfig) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """Goal-by-goal loop straight from the formula in FACTS section 6."""
+    """Goal-by-goal loop straight from the paper's formula (Section "Study Methods", Shared Control)."""
     n = len(goal_positions)
     out = np.zeros((n, 6))
     for i in range(n):

@@ -28,7 +28,7 @@ IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 # ----------------------------------------------------------------------------------------------
-# Slow reference: one probe, one step, one goal pair at a time, written from the paper/FACTS.
+# Slow reference: one probe, one step, one goal pair at a time, written from the paper (Algorithm 1).
 # ----------------------------------------------------------------------------------------------
 
 

@@ -33,7 +33,7 @@ from drake_disamb.station import (
     build_station,
 )
 
-# The controller: speeds of the head array (FACTS section 5), gain 2/s; success as the task's.
+# The controller: speeds of the head array (docs/facts.md section 6), gain 2/s; success as the task's.
 LINEAR_SPEED, ANGULAR_SPEED, GAIN = 0.1, 0.2, 2.0
 MAX_TIME = 20.0  # s of simulated driving per leg
 

@@ -26,14 +26,14 @@ from drake_disamb.config import (
 )
 from drake_disamb.core.geometry import orientation_error
 
-FACTS_REACHING = [
+STUDY_REACHING = [
     (0.328, -0.516, 0.100),
     (-0.116, -0.579, 0.132),
     (0.124, -0.531, 0.442),
     (-0.346, -0.389, 0.220),
     (-0.376, -0.180, 0.102),
 ]
-FACTS_POURING = [
+STUDY_POURING = [
     (0.3314, -0.206, 0.100),
     (0.306, -0.550, 0.256),
     (-0.05, -0.627, 0.225),
@@ -54,7 +54,7 @@ def test_reaching_has_the_study_goals_and_defaults() -> None:
     assert s.success.position_tolerance == pytest.approx(0.02)
     assert s.success.orientation_tolerance == pytest.approx(0.15)
     assert s.n_stages == 1 and s.n_goals == 5
-    np.testing.assert_allclose([g.position for g in s.goals], FACTS_REACHING)
+    np.testing.assert_allclose([g.position for g in s.goals], STUDY_REACHING)
     poses = s.stage_goal_poses(0)
     np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0)
     # Documented orientation: home (pointing down) leaned toward the object's azimuth.
@@ -73,8 +73,8 @@ def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
     assert [st.name for st in s.stages] == ["pour", "place"]
     pour = [tuple(g.position) for g in s.stage_goals(0)]
     place = [tuple(g.position) for g in s.stage_goals(1)]
-    assert set(pour) == {FACTS_POURING[1], FACTS_POURING[3]}
-    assert set(place) == {FACTS_POURING[0], FACTS_POURING[2]}
+    assert set(pour) == {STUDY_POURING[1], STUDY_POURING[3]}
+    assert set(place) == {STUDY_POURING[0], STUDY_POURING[2]}
     assert s.carried_object is not None
     assert s.hold_time(0) == pytest.approx(1.0) and s.hold_time(1) == pytest.approx(s.success.hold_time)
     # the cup is let go at its place (the study's people ended pouring trials in the gripper mode)

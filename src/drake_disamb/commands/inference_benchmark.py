@@ -19,7 +19,7 @@ MAX_GENERATED = 1_000_000
 HELP = "Compare DFT, recursive Bayes and memory-based intent inference on simulated trials."
 
 DESCRIPTION = """\
-Replays simulated teleoperation trials (FACTS section 3) through the three inference methods and
+Replays simulated teleoperation trials (docs/facts.md section 3) through the three inference methods and
 prints, per method, the paper's accuracy metric (the zeroed-input stretch counts as correct) and
 the strict metric (that stretch excluded), mean and standard deviation over trials.
 

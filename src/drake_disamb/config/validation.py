@@ -41,10 +41,10 @@ from drake_disamb.config.schema import MAX_GOALS, SHAPE_SIZES, Scenario, Success
 from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
 
 MICO_SHOULDER_POSITION: tuple[float, float, float] = (0.0, 0.0, 0.2755)
-"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (FACTS section 7)."""
+"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (docs/facts.md section 8)."""
 
 MICO_REACH: float = 0.7
-"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (FACTS section 7)."""
+"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (docs/facts.md section 8)."""
 
 MIN_START_CLEARANCE: float = 0.05
 """A goal closer than this (m) to the gripper's start position is rejected: the task would be trivial."""

@@ -2,7 +2,7 @@
 
 Paper, Section "Shared Control": every goal ``g`` has a potential field that treats ``g`` as an
 attractor and every *other* goal as a repeller; the autonomy command is the sum of the attractor
-and repeller velocities, in the full 6-D Cartesian space (FACTS section 6). For goal ``i``::
+and repeller velocities, in the full 6-D Cartesian space. For goal ``i``::
 
     v_i = k_t (x_gi - x_r) + sum_{j != i, |x_r - x_gj| < rho} (x_r - x_gj) / (mu |x_r - x_gj|^2)
     w_i = k_r * orientation_error(q_r, q_gi)
@@ -51,7 +51,7 @@ class PotentialFieldConfig:
         max_linear_speed: Saturation of the translational part (m/s).
         max_angular_speed: Saturation of the rotational part (rad/s).
 
-    The defaults suit the MICO tasks (goals 0.2-0.4 m apart, FACTS section 8): 1/s attractors reach
+    The defaults suit the MICO tasks (goals 0.2-0.4 m apart, docs/facts.md section 9): 1/s attractors reach
     the 0.2 m/s cap farther than 0.2 m from the goal and slow down smoothly inside it; a repeller
     felt within 0.1 m pushes at 0.02 m/s at its edge and at the full 0.2 m/s 1 cm from a goal.
     """

@@ -1,6 +1,6 @@
 """Blending-based shared control (numpy, with a numba-compiled row kernel).
 
-Paper, equations (sc) and (alpha) (FACTS section 6)::
+Paper, Section "Study Methods" (Shared Control), equation (sc) and the alpha rule after it::
 
     u = alpha * u_{a, g*} + (1 - alpha) * u_h,        g* = argmax_i p_i
 
@@ -160,7 +160,7 @@ class BlendingConfig:
             blending.assist_without_input=true``), the paper's law fails reaching trials the
             default completes (README, "Where we differ from the paper").
         max_linear_speed: Limit (m/s) on the norm of the blended translation. The default is the
-            largest blended translation seen in the study logs (FACTS section 5).
+            largest blended translation seen in the study logs (docs/facts.md section 6).
         max_angular_speed: Limit (rad/s) on the norm of the blended rotation; default the largest
             joystick rotation in the logs.
     """

@@ -12,7 +12,7 @@ the live belief is the continuous flow the simulator integrates at the control p
 Euler at 10 ms in the embedded tasks). All ``2 n_k`` probes
 run together as one batch (leading probe axis), never one after another.
 
-From the projected beliefs (paper Section "Features of D_k", FACTS section 4):
+From the projected beliefs (paper Section "Features of D_k", equation (DK)):
 
 - at ``t_b``: ``Gamma = max p``, ``Omega = max p - second max p`` and
   ``Lambda = sum_{i<j} |p_i - p_j|``;
@@ -31,7 +31,7 @@ Ties: modes whose ``D_m`` lie within ``tie_tolerance`` (relative to the largest)
 equal. If every mode is equal the current mode is kept (``mode = None``); if the current mode is
 among several equally best modes it is kept too; otherwise the first of the best modes wins.
 
-Two alternative mode-selection methods run on the same forward projection (FACTS section 10, the
+Two alternative mode-selection methods run on the same forward projection (docs/facts.md section 5, the
 authors' own experiments): :func:`expected_entropy_mode` (the minimum expected entropy of the
 projected belief) and :func:`expected_kl_mode` (the maximum expected KL divergence of the projected
 belief from the current one), with the same function shape, result type and tie rule;
@@ -39,7 +39,7 @@ belief from the current one), with the same function shape, result type and tie 
 
 Two named presets (:func:`preset`):
 
-- ``"authors-r3"`` reproduces the authors' R^3 simulation (FACTS sections 1 and 4).
+- ``"authors-r3"`` reproduces the authors' R^3 simulation (docs/facts.md sections 1 and 4).
 - ``"mico"`` (the robot system's default, also ``DisambiguationConfig()``): see
   :func:`mico_config` for the parameters and why.
 
@@ -266,8 +266,8 @@ _DEFAULT_CONFIG = DisambiguationConfig()
 def mico_config(**overrides: Any) -> DisambiguationConfig:
     """The ``mico`` preset: the robot system's default (equal to ``DisambiguationConfig()``).
 
-    - All six dimensions; probes of 0.1 m/s and 0.2 rad/s, the head array's speeds (FACTS section
-      5), so the projection explores motions the user can actually make.
+    - All six dimensions; probes of 0.1 m/s and 0.2 rad/s, the head array's speeds (docs/facts.md
+      section 6), so the projection explores motions the user can actually make.
     - ``delta_t = 0.1 s``, ``t_b = 1 s``, ``t_c = 2 s``, ``w = 0.5`` (paper and authors' code);
       ``Upsilon`` per unit probe displacement (paper, ``upsilon_normalization="unit_probe"``).
     - DFT with directedness, agreement and proximity (paper equation dft_ii) and
@@ -282,7 +282,7 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
       motion (10 cm) moves the projected belief clearly while a single 10 ms control step moves
       the live belief by under 1 %; the authors' ``lambda = 200`` suits their 2 mm, 2 ms steps
       in simulation but would make the live belief jump to the latest command direction.
-    - ``R = 0.2 m``: about the spacing of the study's goals (FACTS section 8), so proximity only
+    - ``R = 0.2 m``: about the spacing of the study's goals (docs/facts.md section 9), so proximity only
       favours a goal once the gripper is clearly nearer to it than to its neighbours.
     - Agreement is the cosine of the rotational parts (``agreement_measure="cosine"``; the paper's
       plain dot product is ``"dot"``: measured with the simulated user it leaves the first
@@ -296,7 +296,7 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
 
 
 def authors_r3_config(**overrides: Any) -> DisambiguationConfig:
-    """The ``authors-r3`` preset: the authors' R^3 simulation (FACTS sections 1 and 4).
+    """The ``authors-r3`` preset: the authors' R^3 simulation (docs/facts.md sections 1 and 4).
 
     Dimensions x, y, z only; DFT with the directedness term only, ``tau1 = tau2 = 10 s``,
     ``lambda = 200 I``, ``P = I`` unless given; probe 0.2; ``delta_t = 0.1 s``, ``t_b = 1 s``,
@@ -945,7 +945,7 @@ def disambiguate(
 
 
 # ----------------------------------------------------------------------------------------------
-# Alternative mode selection: expected entropy and expected KL divergence (FACTS section 10)
+# Alternative mode selection: expected entropy and expected KL divergence (docs/facts.md section 5)
 # ----------------------------------------------------------------------------------------------
 
 MODE_SELECTION_METHODS: tuple[str, ...] = ("algorithm1", "entropy", "kl")
@@ -994,7 +994,7 @@ def expected_entropy_mode(
 ) -> DisambiguationResult:
     """Pick the mode whose motion is expected to leave the belief most certain (minimum entropy).
 
-    The authors' entropy method (FACTS section 10) on :func:`disambiguate`'s forward projection
+    The authors' entropy method (docs/facts.md section 5) on :func:`disambiguate`'s forward projection
     (:func:`forward_projection`, the same probes, inference update and horizons): each probe
     ``+/- s e_k``'s projected belief at ``t_b`` (1 s in both presets, the authors' horizon) has
     entropy ``H_k+/-`` (bits, :func:`entropy_bits`). A mode's expected projected entropy is the
@@ -1046,7 +1046,7 @@ def expected_kl_mode(
 ) -> DisambiguationResult:
     """Pick the mode whose motion is expected to change the belief most (maximum expected KL).
 
-    The authors' KL method (FACTS section 10) on :func:`disambiguate`'s forward projection (the
+    The authors' KL method (docs/facts.md section 5) on :func:`disambiguate`'s forward projection (the
     same probes, inference update and horizons): each probe's score is ``KL(p(t_b) || p(t_a))``
     (bits, :func:`kl_bits`) of its projected belief at ``t_b`` (1 s in both presets, the authors'
     horizon) from the current one; a mode's score is the mean over its probes (2 per probed

@@ -20,7 +20,7 @@ Shapes (``...`` is any batch shape, ``n`` the number of goals):
 - ``transition``: goal-transition matrix ``P``, ``(n, n)`` or batched ``(..., n, n)``.
 
 The DFT right-hand side is paper equation (dft_ii) with the time constant split in two, as in the
-authors' code (FACTS section 1)::
+authors' code (docs/facts.md section 1)::
 
     f(p) = -(1/tau1) P^T p + drive,   drive = rest/tau2 + lambda @ sigma(xi)
 

@@ -1,9 +1,10 @@
 """The paper's inference comparison: published trials, our seeded generator, replay and metrics.
 
-FACTS section 3. A trial is a simulated point robot in R^3 teleoperated toward one of 2-5 goals by
-a noisy simulated human; the comparison replays the recorded commands through the three
-inference methods of :mod:`drake_disamb.core.inference` and scores how often the most probable
-goal is the true one.
+Paper Section "Field-Theoretic Intent Inference For Assistive Robotics"; the protocol, the
+metric and the data format are in docs/facts.md section 3. A trial is a simulated point robot in
+R^3 teleoperated toward one of 2-5 goals by a noisy simulated human; the comparison replays the
+recorded commands through the three inference methods of :mod:`drake_disamb.core.inference` and
+scores how often the most probable goal is the true one.
 
 - :func:`load_trial_mat` / :func:`load_trials` read the authors' ``trajectory_N.mat`` files;
   :func:`save_trial_mat` writes the same format.
@@ -61,7 +62,8 @@ METHOD_LABELS: dict[str, str] = {
 }
 
 PUBLISHED_ACCURACY: dict[str, float] = {"dft": 0.8746, "bayes": 0.8743, "memory": 0.5915}
-"""The paper's accuracies on its 500 simulated trials (FACTS section 3)."""
+"""The paper's accuracies on its 500 simulated trials (paper Section "Field-Theoretic Intent Inference For
+Assistive Robotics")."""
 
 WORKSPACE = np.array([[-0.5, 0.5], [-0.5, 0.5], [-0.5, 0.5]])
 """Workspace of the simulated point robot (m), rows x, y, z."""
@@ -80,7 +82,7 @@ REQUIRED_FIELDS: tuple[str, ...] = (
 
 
 def authors_dft_params(**overrides: object) -> DFTParams:
-    """The DFT parameters of the authors' simulation comparison (FACTS section 1).
+    """The DFT parameters of the authors' simulation comparison (docs/facts.md section 1).
 
     tau1 = tau2 = 10 s, lambda = 200 I, directedness term only; the goal-transition matrix is
     taken per trial from the data (see :func:`replay_trials`).
@@ -93,7 +95,7 @@ def authors_dft_params(**overrides: object) -> DFTParams:
 
 @dataclass
 class Trial:
-    """One simulated teleoperation trial (the authors' fields, FACTS section 3).
+    """One simulated teleoperation trial (the authors' fields, docs/facts.md section 3).
 
     Attributes:
         goals: ``xg`` transposed, goal positions ``(n, 3)`` (m).
@@ -176,7 +178,7 @@ def _shaped(data: dict, path: Path, name: str, shape: tuple[int, int], why: str)
 
 
 def load_trial_mat(path: str | Path) -> Trial:
-    """Read one of the authors' ``trajectory_N.mat`` files (FACTS section 3) into a :class:`Trial`.
+    """Read one of the authors' ``trajectory_N.mat`` files (docs/facts.md section 3) into a :class:`Trial`.
 
     Raises ``ValueError`` naming the file and the field when the file is missing or unreadable, a
     field is missing or non-numeric, or the array shapes do not match each other.
@@ -338,7 +340,7 @@ def save_trial_mat(trial: Trial, path: str | Path) -> None:
 
 
 # ----------------------------------------------------------------------------------------------
-# Generator (the authors' protocol, FACTS section 3)
+# Generator (the authors' protocol, docs/facts.md section 3)
 # ----------------------------------------------------------------------------------------------
 
 
@@ -391,7 +393,7 @@ def sample_von_mises_fisher(
 
 @dataclass(frozen=True)
 class GeneratorConfig:
-    """The authors' trial protocol (FACTS section 3); every field may be changed.
+    """The authors' trial protocol (docs/facts.md section 3); every field may be changed.
 
     Attributes:
         min_goals, max_goals: The goal count is uniform in ``[min_goals, max_goals]``.
@@ -471,7 +473,7 @@ def chunk_seed(seed: int, chunk: int) -> np.random.SeedSequence:
 def generate_trials(
     n_trials: int, seed: int, config: GeneratorConfig | None = None, progress: bool = False
 ) -> list[Trial]:
-    """Draw ``n_trials`` new trials with the authors' protocol, seeded (FACTS section 3).
+    """Draw ``n_trials`` new trials with the authors' protocol, seeded (docs/facts.md section 3).
 
     The trials are the first ``n_trials`` of the seed's sequence: chunk ``k`` of
     :data:`GENERATOR_CHUNK` trials is drawn whole by :func:`generate_chunk` from
