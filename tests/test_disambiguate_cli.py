@@ -174,7 +174,7 @@ def test_registered_in_cli() -> None:
 
 
 # ----------------------------------------------------------------------------------------------
-# Batch isolation and exit codes (issue 11): every probe of the issue, each in under 2 s
+# Batch isolation and exit codes: every hostile batch, each in under 2 s
 # ----------------------------------------------------------------------------------------------
 
 

@@ -223,7 +223,7 @@ def test_default_scenario_object_is_invalid_without_goals() -> None:
 
 
 # ------------------------------------------------------------------------------------------------
-# Validation that matches the README: trials it lets through can be run (issue 11, item 4)
+# Validation that matches the README: trials it lets through can be run
 # ------------------------------------------------------------------------------------------------
 
 

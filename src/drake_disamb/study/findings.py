@@ -2,7 +2,7 @@
 
 :func:`findings` is the table "the paper's finding / ours / agree?" of ``study report`` (paper
 Section "Results" and the data README's manual means); :func:`compare_summaries` is its ``--compare``
-section (issue 13's acceptance: simulated means within 50 % of the people's).
+section (the criterion for a simulated population: its means within 50 % of the people's).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ PAPER_MANUAL_SWITCHES = {
 """Manual user-mode-switch means over the paper's 8 subjects (data README)."""
 
 WITHIN = 0.5
-"""``--compare`` flags a ratio outside ``[1 - WITHIN, 1 + WITHIN]`` (issue 13: within 50 %)."""
+"""``--compare`` flags a ratio outside ``[1 - WITHIN, 1 + WITHIN]`` (within 50 %)."""
 
 
 def select_trials(
