@@ -231,7 +231,7 @@ BAD_CASES: list[tuple[str, str, str]] = [
     ),
     (_json_text(dict(Y_SCENE, orientation=[0, 0, 0, 1e-200])), "orientation", "zero norm"),
     (
-        _json_text(dict(Y_SCENE, belief=[1 / 1001] * 1001, goals=[[0.1, 0.1, 0.1]] * 1001)),
+        _json_text(dict(Y_SCENE, belief=[1 / 101] * 101, goals=[[0.1, 0.1, 0.1]] * 101)),
         "goals",
         "MAX_GOALS",
     ),

@@ -41,12 +41,14 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from drake_disamb.config.checks import schema_fields
+from drake_disamb.core._validation import MAX_GOALS
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
 from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
 from drake_disamb.core.interfaces import MODE_SELECTIONS
+from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.user import UserConfig
 from drake_disamb.station import default_plant_config
 
@@ -62,14 +64,8 @@ INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
 GOAL_SETS: tuple[str, ...] = ("stage", "task")
 """What the belief is over (:attr:`InferenceSpec.goal_set`)."""
 
-SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
-"""Object shapes; their ``size`` has 3, 2 and 1 entries (:data:`SHAPE_SIZES`)."""
-
-SHAPE_SIZES: dict[str, int] = {"box": 3, "cylinder": 2, "sphere": 1}
-"""Entries of an object's ``size`` per shape."""
-
-MAX_GOALS: int = 100
-"""Most goals a scenario may have (all stages together); the study's tasks have 4 and 5."""
+SHAPES: tuple[str, ...] = tuple(SHAPE_SIZES)
+"""Object shapes; their ``size`` entries are :data:`drake_disamb.core.layout.SHAPE_SIZES`."""
 
 
 def _meta(**kwargs: Any) -> dict[str, Any]:

@@ -21,6 +21,11 @@ TIME_STEP_RANGE: tuple[float, float] = (1e-3, 0.1)
 trial takes hours of wall time (``control_period: 1e-6`` is sixty million ticks); above 100 ms the
 100 Hz velocity interface of the MICO is sampled too coarsely for the joint PD to track it."""
 
+MAX_GOALS: int = 100
+"""Most goals a scenario (all stages together) or a disambiguation request may have. The study's
+tasks have 4 and 5; the bound only keeps absurd input out (a request's cost grows with the goal
+count, a scenario's goals are bodies in the plant)."""
+
 
 def is_real(value: object) -> bool:
     """True for a finite real number that is not a bool (numpy scalars included).

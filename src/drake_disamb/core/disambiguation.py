@@ -62,7 +62,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import check_real_fields, is_real
+from drake_disamb.core._validation import MAX_GOALS, check_real_fields, is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_rotation
 from drake_disamb.core.geometry import (
     check_vectors,
@@ -80,9 +80,7 @@ from drake_disamb.core.inference import (
     dft_euler_rollout,
     posterior_update,
 )
-
-DIMENSION_NAMES: tuple[str, ...] = ("vx", "vy", "vz", "wx", "wy", "wz")
-"""Names of the six control dimensions, in the paper's order."""
+from drake_disamb.core.layout import DIM_NAMES
 
 INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes")
 """Inference updates the forward projection can use."""
@@ -103,10 +101,6 @@ MAX_POSITION = 1e3
 """Largest accepted absolute coordinate (m) of the end-effector and goal positions of a request:
 far beyond any arm's reach, yet small enough that no distance or potential computed from them
 overflows."""
-
-MAX_GOALS = 1000
-"""Largest accepted number of goals of a request (a request's memory and time grow linearly in it:
-about 12 MB and 20 ms at this bound with the ``mico`` preset)."""
 
 
 # ----------------------------------------------------------------------------------------------
@@ -336,7 +330,7 @@ def preset(name: str, transition: ArrayLike | None = None) -> DisambiguationConf
 
 
 def _mode_label(dims: Sequence[int]) -> str:
-    return "{" + ", ".join(DIMENSION_NAMES[k] for k in dims) + "}" if dims else "{}"
+    return "{" + ", ".join(DIM_NAMES[k] for k in dims) + "}" if dims else "{}"
 
 
 @dataclass(frozen=True)
@@ -474,9 +468,9 @@ class DisambiguationResult:
         sign = 0 if self.scores_plus[k] >= self.scores_minus[k] else 1
         f = {n: float(self.features[n][sign, k]) for n in FEATURE_NAMES}
         lines.append(
-            f"Best dimension k* = {DIMENSION_NAMES[self.dimension]} (D_k = {self.dimension_scores[k]:.4g}; "
+            f"Best dimension k* = {DIM_NAMES[self.dimension]} (D_k = {self.dimension_scores[k]:.4g}; "
             f"D+ = {self.scores_plus[k]:.4g}, D- = {self.scores_minus[k]:.4g}); moving "
-            f"{'+' if sign == 0 else '-'}{DIMENSION_NAMES[self.dimension]} gives Gamma = {f['gamma']:.3f}, "
+            f"{'+' if sign == 0 else '-'}{DIM_NAMES[self.dimension]} gives Gamma = {f['gamma']:.3f}, "
             f"Omega = {f['omega']:.3f}, Lambda = {f['lambda']:.3f}, Upsilon = {f['upsilon']:.4g}."
         )
         return "\n".join(lines)
@@ -896,7 +890,7 @@ def disambiguate(
         belief: Current belief ``p(t_a)`` over the ``n`` goals (non-negative, sums to 1).
         position: End-effector position ``(3,)`` (m, world frame), each coordinate within
             ``+/- MAX_POSITION`` (1 km).
-        goal_positions: ``(n, 3)`` goal positions (m), same bound, ``1 <= n <= MAX_GOALS`` (1000).
+        goal_positions: ``(n, 3)`` goal positions (m), same bound, ``1 <= n <= MAX_GOALS`` (100).
         modes: Control modes, each a list of dimension indices (0 = vx ... 5 = wz); the returned
             mode is an index into this list.
         config: Algorithm parameters (default: the ``mico`` preset).
@@ -1144,7 +1138,7 @@ def _information_mode(
 def _information_explanation(result: DisambiguationResult) -> str:
     """The entropy / KL methods' last line of :meth:`DisambiguationResult.explain`."""
     k = result.dimensions.index(result.dimension)
-    name = DIMENSION_NAMES[result.dimension]
+    name = DIM_NAMES[result.dimension]
     if result.method == "entropy":
         h = result.features["entropy"][:, k]
         return (

@@ -60,12 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._validation import check_real_fields, is_real
-
-GRIPPER_DIM = 6
-"""Dimension index of the gripper in a control mode (0..5 are vx, vy, vz, wx, wy, wz)."""
-
-DIM_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz", "gripper")
-"""Human-readable names of the dimension indices 0..6."""
+from drake_disamb.core.layout import GRIPPER_DIM
 
 InterfaceKind = Literal["joystick", "head_array"]
 INTERFACE_KINDS: tuple[str, ...] = ("joystick", "head_array")

@@ -66,7 +66,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import DIM_NAMES, MODES
+from drake_disamb.core.interfaces import MODES
+from drake_disamb.core.layout import DIM_NAMES
 from drake_disamb.study.metrics import assistance_onset
 from drake_disamb.study.records import TrialRecord, append_record, read_records
 
