@@ -376,7 +376,7 @@ def test_period_bounds_are_inclusive() -> None:
 
 
 def test_too_many_stages_or_goals_fail_before_any_quadratic_work() -> None:
-    from drake_disamb.core._validation import MAX_GOALS
+    from drake_disamb.core.validation import MAX_GOALS
 
     data = _reaching_dict()
     data["stages"] = [{"name": f"s{k}"} for k in range(20_000)]

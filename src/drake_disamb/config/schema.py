@@ -41,7 +41,6 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from drake_disamb.config.checks import schema_fields
-from drake_disamb.core._validation import MAX_GOALS
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
@@ -50,6 +49,7 @@ from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
 from drake_disamb.core.interfaces import MODE_SELECTIONS
 from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.user import UserConfig
+from drake_disamb.core.validation import MAX_GOALS
 from drake_disamb.station import default_plant_config
 
 INTERFACES: tuple[str, ...] = ("joystick", "head_array")

@@ -27,12 +27,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _field_one_pose, _field_rows
-from drake_disamb.core._validation import all_finite, check_real_fields
 from drake_disamb.core.geometry import (
     check_vectors,
     normalized_quaternions,
 )
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
+from drake_disamb.core.validation import all_finite, check_real_fields
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""

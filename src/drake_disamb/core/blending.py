@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _alpha_rows, _blend_rows, _has_input_rows, _shared_control_rows
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.rows import as_rows, batch_shape
+from drake_disamb.core.validation import check_real_fields, is_real
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""

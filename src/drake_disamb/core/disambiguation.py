@@ -62,7 +62,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import MAX_GOALS, check_real_fields, is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_rotation
 from drake_disamb.core.geometry import (
     check_vectors,
@@ -81,6 +80,7 @@ from drake_disamb.core.inference import (
     posterior_update,
 )
 from drake_disamb.core.layout import DIM_NAMES
+from drake_disamb.core.validation import MAX_GOALS, check_real_fields, is_real
 
 INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes")
 """Inference updates the forward projection can use."""

@@ -39,8 +39,8 @@ from drake_disamb.core._kernels import (
     _rotvec_rows,
     _usable_pose_rows,
 )
-from drake_disamb.core._validation import all_finite
 from drake_disamb.core.rows import as_rows, batch_shape
+from drake_disamb.core.validation import all_finite
 
 # ----------------------------------------------------------------------------------------------
 # Validation

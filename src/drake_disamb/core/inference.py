@@ -58,8 +58,8 @@ from drake_disamb.core._kernels import (
     _normalize_rows,
     _xi_rows,
 )
-from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
+from drake_disamb.core.validation import all_finite, is_real
 
 TINY = np.finfo(float).tiny
 """Smallest positive normal double: what the authors' code clips non-positive entries to."""

@@ -59,8 +59,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.layout import GRIPPER_DIM
+from drake_disamb.core.validation import check_real_fields, is_real
 
 InterfaceKind = Literal["joystick", "head_array"]
 INTERFACE_KINDS: tuple[str, ...] = ("joystick", "head_array")

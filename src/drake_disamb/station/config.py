@@ -25,8 +25,8 @@ from pydrake.multibody.parsing import LoadModelDirectives
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.multibody.tree import SpatialInertia
 
-from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
 from drake_disamb.core.layout import SHAPE_SIZES
+from drake_disamb.core.validation import TIME_STEP_RANGE, check_real_range
 from drake_disamb.paths import mico_directives
 
 ARM_JOINTS: tuple[str, ...] = tuple(f"mico_joint_{i}" for i in range(1, 7))

@@ -1,4 +1,6 @@
-"""Small checks shared by the core's config dataclasses (and by the scenario and station configs).
+"""Input checks and input bounds shared by every layer.
+
+Used by the core's config dataclasses, the scenario and station configs and the systems' port checks.
 
 Error messages format values with :func:`bounded_repr`, never with a bare ``repr()``: a value read
 from a file can be huge (a long string, a YAML structure expanded from aliases, an integer with
