@@ -1,5 +1,6 @@
-"""Helpers shared by the test files: the CLI in a child process, stopped by a signal, and the
-recording-screenshot script of ``diagrams/`` (its Chromium flags serve the browser tests too)."""
+"""Helpers shared by the test files: the CLI in a child process, stopped by a signal, the
+recording-screenshot script of ``diagrams/`` (its Chromium flags serve the browser tests too), and
+the compiled quaternion normalisation without checks (a reference for the core's fused kernels)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,11 @@ import sys
 import time
 from pathlib import Path
 from types import ModuleType
+
+import numpy as np
+from numpy.typing import NDArray
+
+from drake_disamb.core._kernels import _normalize_quaternion_rows
 
 REPO = Path(__file__).resolve().parents[1]
 SRC = REPO / "src"
@@ -75,3 +81,13 @@ def screenshot_script() -> ModuleType:
     module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(module)  # type: ignore[union-attr]
     return module
+
+
+def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`drake_disamb.core.geometry.normalized_quaternions` without its checks, on the kernel
+    the core's fused paths use: ``q`` is a float array ``(..., 4)`` of finite quaternions whose
+    norms are at least 1e-12 and do not overflow."""
+    rows = np.ascontiguousarray(q, dtype=float).reshape(-1, 4)
+    out = np.empty_like(rows)
+    _normalize_quaternion_rows(rows, out)
+    return out.reshape(np.shape(q))

@@ -174,7 +174,8 @@ def test_public_results_are_c_contiguous_and_kernels_broadcast_row_by_row() -> N
 def test_compiled_checks_agree_with_numpy() -> None:
     """all_finite and normalized_quaternions_unchecked run compiled loops on float64 arrays; they
     must give numpy's answers, and anything else goes through numpy."""
-    from drake_disamb.core.geometry import normalized_quaternions_unchecked
+    from support import normalized_quaternions_unchecked
+
     from drake_disamb.core.validation import all_finite
 
     rng = np.random.default_rng(3)

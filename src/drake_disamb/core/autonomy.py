@@ -123,7 +123,7 @@ def _commands_from_one_pose(
     """:func:`_field` for one pose ``(7,)`` and ``(n, 7)`` goal poses (finite, quaternions of norm at
     least 1e-12) in one compiled call (:func:`~drake_disamb.core._kernels._field_one_pose`): the
     same kernels, in the same order, on the same numbers as normalising the quaternions
-    (:func:`~drake_disamb.core.geometry.normalized_quaternions_unchecked`) and laying out the rows
+    (:func:`~drake_disamb.core._kernels._normalize_quaternion_rows`) and laying out the rows
     first, without that work in numpy (a control loop computes one row per tick)."""
     out = np.empty((1, goal_poses.shape[0], 6))
     _field_one_pose(np.ascontiguousarray(ee_pose), np.ascontiguousarray(goal_poses), *_gains(config), out)

@@ -32,7 +32,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import (
     _SMALL_ANGLE,
-    _normalize_quaternion_rows,
     _orientation_error_rows,
     _pose_error_rows,
     _quat_multiply_rows,
@@ -80,17 +79,6 @@ def normalized_quaternions(q: ArrayLike, name: str) -> NDArray[np.float64]:
 def _quaternion_norms(a: NDArray[np.float64]) -> NDArray[np.float64]:
     """Norms of quaternions ``(..., 4)``, keepdims (what ``np.linalg.norm`` computes)."""
     return np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))
-
-
-def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """:func:`normalized_quaternions` without its checks: ``q`` is a float array ``(..., 4)`` of
-    finite quaternions whose norms are at least 1e-12 and do not overflow (the caller checked).
-    A compiled loop (numpy's reduction over a last axis of 4 costs several microseconds, and a
-    control tick normalises the end effector's and the goals' orientations)."""
-    rows = np.ascontiguousarray(q, dtype=float).reshape(-1, 4)
-    out = np.empty_like(rows)
-    _normalize_quaternion_rows(rows, out)
-    return out.reshape(np.shape(q))
 
 
 def poses_usable(poses: NDArray[np.float64], max_entry: float, min_quaternion_norm: float) -> bool:

@@ -68,18 +68,6 @@ Assistive Robotics")."""
 WORKSPACE = np.array([[-0.5, 0.5], [-0.5, 0.5], [-0.5, 0.5]])
 """Workspace of the simulated point robot (m), rows x, y, z."""
 
-REQUIRED_FIELDS: tuple[str, ...] = (
-    "ng",
-    "xg",
-    "goal_transition_P",
-    "delta_t",
-    "traj_zeroed",
-    "uh_history_zeroed",
-    "true_goal_index_history",
-    "min_ind",
-    "max_ind",
-)
-
 
 def authors_dft_params(**overrides: object) -> DFTParams:
     """The DFT parameters of the authors' simulation comparison (docs/facts.md section 1).

@@ -203,16 +203,6 @@ class SharedControlVisualizer(LeafSystem):
         """``[stage][goal]`` the ``(r, g, b)`` the spheres are drawn in."""
         return [[tuple(float(c) for c in rgb) for rgb in stage] for stage in self._colors]  # type: ignore[misc]
 
-    @property
-    def legend_names(self) -> list[str]:
-        """The control-panel rows of the legend (HTML), in order."""
-        return list(self._legend)
-
-    def remove_legend(self) -> None:
-        """Delete the legend's rows from the Meshcat control panel."""
-        for name in self._legend:
-            self._meshcat.DeleteButton(name, strict=False)
-
     # -- scene creation -----------------------------------------------------------------------
 
     def _create_objects(self) -> None:
