@@ -45,7 +45,7 @@ MAX_YAML_DEPTH: int = 32
 
 MAX_YAML_NODES: int = 50_000
 """Most values (scalars, mappings and sequences) accepted; the embedded scenarios have about 300.
-Loading costs about 10 us per value, so this bounds the loader's time too."""
+Loading time grows with the number of values, so this bounds the loader's time too."""
 
 MAX_NUMBER_CHARS: int = 100
 """Longest plain number accepted (characters); Python refuses to read an integer of over 4300 digits."""

@@ -365,8 +365,8 @@ class Scenario:
         plant_config: Drake's ``MultibodyPlantConfig`` of the arm (SAP, joint PD). Its
             ``time_step`` (s, in [1 ms, 100 ms] and at most the control period) defaults to the
             control period: the arm only receives new set points every control tick, the PD is
-            integrated implicitly, and the loop runs about 8 times faster than with a 1 ms plant
-            (``benchmarks/bench_loop.py`` prints both); 0.001 resolves contact finer.
+            integrated implicitly, and the loop runs several times faster than with a 1 ms plant
+            (``benchmarks/bench_loop.py --time-step 0.001`` prints it); 0.001 resolves contact finer.
         duration: Simulated-time limit (s) of a trial.
         success: Success tolerance.
         seed: Seed of every random draw in the trial.

@@ -60,7 +60,7 @@ def all_finite(*arrays: NDArray[np.float64]) -> bool:
     """True if every entry of every array is finite.
 
     Float64 numpy arrays go through a compiled loop (a control tick checks a few small arrays
-    several times, where numpy's ``isfinite(a).all()`` costs a microsecond or two per array);
+    several times, where numpy's ``isfinite(a).all()`` costs more than the check itself);
     anything else (other dtypes, lists, scalars) through ``np.isfinite(a).all()``. Unlike a sum,
     neither overflows, so huge finite values (a command of 1e308) raise no numpy
     ``RuntimeWarning`` at every tick.
