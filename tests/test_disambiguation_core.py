@@ -8,6 +8,7 @@ import zlib
 
 import numpy as np
 import pytest
+from support import integrate_pose
 
 from drake_disamb.core.autonomy import potential_field_commands
 from drake_disamb.core.disambiguation import (
@@ -19,7 +20,7 @@ from drake_disamb.core.disambiguation import (
     preset,
     select_mode,
 )
-from drake_disamb.core.geometry import integrate_pose, orientation_error, quat_from_rotvec
+from drake_disamb.core.geometry import orientation_error, quat_from_rotvec
 from drake_disamb.core.inference import bayes_step, dft_euler_step
 
 HEAD_ARRAY_MODES = [[0], [1], [2], [3], [4], [5]]
