@@ -1,4 +1,4 @@
-"""Motion off the command: the figures behind the station's safety contract (issue 11).
+"""Motion off the command: the figures behind the station's safety contract.
 
 Usage: ``python benchmarks/bench_safety.py [--duration 10]``. From five start postures (home, next
 to the wrist singularity, the elbow on its limit, the wrist roll on its limit, a turned posture) it

@@ -7,7 +7,6 @@ import pytest
 
 from drake_disamb.core.interfaces import (
     DIRECT_SELECT_DEFLECTION,
-    GRIPPER_DIM,
     InterfaceConfig,
     InterfaceState,
     command_from_raw,
@@ -17,6 +16,7 @@ from drake_disamb.core.interfaces import (
     sector_mode,
     sector_stick,
 )
+from drake_disamb.core.layout import GRIPPER_DIM
 
 DT = 0.01
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import integrate_pose
 
 from drake_disamb.core.autonomy import potential_field_commands
 from drake_disamb.core.disambiguation import (
@@ -18,7 +19,6 @@ from drake_disamb.core.disambiguation import (
     mico_config,
     select_disambiguating_mode,
 )
-from drake_disamb.core.geometry import integrate_pose
 from drake_disamb.core.inference import dft_euler_step
 
 HEAD_ARRAY_MODES = [[0], [1], [2], [3], [4], [5]]

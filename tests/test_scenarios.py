@@ -26,14 +26,14 @@ from drake_disamb.config import (
 )
 from drake_disamb.core.geometry import orientation_error
 
-FACTS_REACHING = [
+STUDY_REACHING = [
     (0.328, -0.516, 0.100),
     (-0.116, -0.579, 0.132),
     (0.124, -0.531, 0.442),
     (-0.346, -0.389, 0.220),
     (-0.376, -0.180, 0.102),
 ]
-FACTS_POURING = [
+STUDY_POURING = [
     (0.3314, -0.206, 0.100),
     (0.306, -0.550, 0.256),
     (-0.05, -0.627, 0.225),
@@ -54,11 +54,11 @@ def test_reaching_has_the_study_goals_and_defaults() -> None:
     assert s.success.position_tolerance == pytest.approx(0.02)
     assert s.success.orientation_tolerance == pytest.approx(0.15)
     assert s.n_stages == 1 and s.n_goals == 5
-    np.testing.assert_allclose([g.position for g in s.goals], FACTS_REACHING)
+    np.testing.assert_allclose([g.position for g in s.goals], STUDY_REACHING)
     poses = s.stage_goal_poses(0)
     np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0)
     # Documented orientation: home (pointing down) leaned toward the object's azimuth.
-    from drake_disamb.core.geometry import quat_to_matrix
+    from support import quat_to_matrix
 
     for pose, lean in zip(poses, [30, 35, 60, 25, 15], strict=True):
         z_axis = quat_to_matrix(pose[3:])[:, 2]
@@ -73,15 +73,15 @@ def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
     assert [st.name for st in s.stages] == ["pour", "place"]
     pour = [tuple(g.position) for g in s.stage_goals(0)]
     place = [tuple(g.position) for g in s.stage_goals(1)]
-    assert set(pour) == {FACTS_POURING[1], FACTS_POURING[3]}
-    assert set(place) == {FACTS_POURING[0], FACTS_POURING[2]}
+    assert set(pour) == {STUDY_POURING[1], STUDY_POURING[3]}
+    assert set(place) == {STUDY_POURING[0], STUDY_POURING[2]}
     assert s.carried_object is not None
     assert s.hold_time(0) == pytest.approx(1.0) and s.hold_time(1) == pytest.approx(s.success.hold_time)
     # the cup is let go at its place (the study's people ended pouring trials in the gripper mode)
     assert s.releases() == [False, True] and s.stages[1].release_opening == pytest.approx(0.10)
     # Side grasp: the cup's axis is the end-effector x axis; upright (x_E up) at the placing poses,
     # rolled about the horizontal approach axis (z_E) by 60-75 degrees at the pour poses.
-    from drake_disamb.core.geometry import quat_to_matrix
+    from support import quat_to_matrix
 
     assert s.start_joint_positions is not None
     for pose in s.stage_goal_poses(1):
@@ -223,7 +223,7 @@ def test_default_scenario_object_is_invalid_without_goals() -> None:
 
 
 # ------------------------------------------------------------------------------------------------
-# Validation that matches the README: trials it lets through can be run (issue 11, item 4)
+# Validation that matches the README: trials it lets through can be run
 # ------------------------------------------------------------------------------------------------
 
 
@@ -376,7 +376,7 @@ def test_period_bounds_are_inclusive() -> None:
 
 
 def test_too_many_stages_or_goals_fail_before_any_quadratic_work() -> None:
-    from drake_disamb.config import MAX_GOALS
+    from drake_disamb.core.validation import MAX_GOALS
 
     data = _reaching_dict()
     data["stages"] = [{"name": f"s{k}"} for k in range(20_000)]

@@ -1,6 +1,6 @@
 """Safety of the station: the end effector moves along the commanded twist and nowhere else.
 
-Issue 11's acceptance: from the home pose and other postures (near the wrist singularity, a joint on
+The contract: from the home pose and other postures (near the wrist singularity, a joint on
 its limit, ...), each pure single-axis command held for 10 s (translations at 0.1 m/s, rotations at
 0.2 and 0.67 rad/s) moves the end effector outside the commanded direction by at most 2 cm in total
 and never faster than 1 cm/s, on the simulated arm (PD tracking, gravity, the table), while the
@@ -92,7 +92,7 @@ def test_home_commands_are_achieved() -> None:
 
 
 def test_pure_rotation_does_not_translate() -> None:
-    """The issue's probe: wx = 0.2 rad/s held 10 s from home moved the gripper 0.34 m down."""
+    """A probe that once failed: wx = 0.2 rad/s held 10 s from home moved the gripper 0.34 m down."""
     rig = Hold(POSTURES["home"])
     for V in ([0, 0, 0, 0.2, 0, 0], [0, 0, 0, 0, 0, 0.67]):
         result = rig.run(np.array(V, dtype=float), 20.0 if V[5] else 10.0)
@@ -154,7 +154,7 @@ def test_random_postures_and_twists_move_only_along_the_command(seed: int) -> No
 
 
 def test_huge_finite_command_is_slowed_along_it_without_warnings() -> None:
-    """The issue's probe: commands near 1e308 gave about 200 numpy overflow warnings per second."""
+    """A probe that once failed: commands near 1e308 gave about 200 numpy overflow warnings per second."""
     import warnings  # noqa: PLC0415
 
     rig = Hold(POSTURES["home"])

@@ -44,7 +44,6 @@ import numpy as np
 from drake_disamb.config.checks import cut, fmt
 from drake_disamb.config.schema import Scenario
 from drake_disamb.config.validation import check_scenario
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig, resolve_rhos
@@ -57,6 +56,7 @@ from drake_disamb.core.disambiguation import (
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
 from drake_disamb.core.interfaces import MODE_SELECTIONS, InterfaceConfig
 from drake_disamb.core.user import UserConfig
+from drake_disamb.core.validation import is_real
 
 T = TypeVar("T")
 

@@ -47,7 +47,9 @@ from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
 from drake_disamb.core.inference import AGREEMENT_MEASURES, INFERENCE_METHODS, DFTParams
 from drake_disamb.core.interfaces import MODE_SELECTIONS
+from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.user import UserConfig
+from drake_disamb.core.validation import MAX_GOALS
 from drake_disamb.station import default_plant_config
 
 INTERFACES: tuple[str, ...] = ("joystick", "head_array")
@@ -59,14 +61,8 @@ PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 GOAL_SETS: tuple[str, ...] = ("stage", "task")
 """What the belief is over (:attr:`InferenceSpec.goal_set`)."""
 
-SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
-"""Object shapes; their ``size`` has 3, 2 and 1 entries (:data:`SHAPE_SIZES`)."""
-
-SHAPE_SIZES: dict[str, int] = {"box": 3, "cylinder": 2, "sphere": 1}
-"""Entries of an object's ``size`` per shape."""
-
-MAX_GOALS: int = 100
-"""Most goals a scenario may have (all stages together); the study's tasks have 4 and 5."""
+SHAPES: tuple[str, ...] = tuple(SHAPE_SIZES)
+"""Object shapes; their ``size`` entries are :data:`drake_disamb.core.layout.SHAPE_SIZES`."""
 
 
 def _meta(**kwargs: Any) -> dict[str, Any]:
@@ -367,8 +363,8 @@ class Scenario:
         plant_config: Drake's ``MultibodyPlantConfig`` of the arm (SAP, joint PD). Its
             ``time_step`` (s, in [1 ms, 100 ms] and at most the control period) defaults to the
             control period: the arm only receives new set points every control tick, the PD is
-            integrated implicitly, and the loop runs about 8 times faster than with a 1 ms plant
-            (``benchmarks/bench_loop.py`` prints both); 0.001 resolves contact finer.
+            integrated implicitly, and the loop runs several times faster than with a 1 ms plant
+            (``benchmarks/bench_loop.py --time-step 0.001`` prints it); 0.001 resolves contact finer.
         duration: Simulated-time limit (s) of a trial.
         success: Success tolerance.
         seed: Seed of every random draw in the trial.

@@ -6,10 +6,10 @@ an unknown key, a wrong type, a NaN or infinite number, a vector of the wrong le
 that is not one of its field's choices). Then:
 
 - a ``control_period`` or ``plant_config.time_step`` outside [1 ms, 100 ms]
-  (:data:`~drake_disamb.core._validation.TIME_STEP_RANGE`), a plant step above the period, or a
+  (:data:`~drake_disamb.core.validation.TIME_STEP_RANGE`), a plant step above the period, or a
   ``plant_config`` the station cannot use (:func:`drake_disamb.station.check_plant_config`);
 - a ``simulator_config`` Drake would refuse, or that does not start at t = 0;
-- no goal, more than :data:`~drake_disamb.config.schema.MAX_GOALS` goals, more stages than goals,
+- no goal, more than :data:`~drake_disamb.core.validation.MAX_GOALS` goals, more stages than goals,
   stages with different numbers of goals;
 - a goal out of the arm's reach (:data:`MICO_REACH` from the shoulder);
 - a goal below the table: with the end effector at the goal pose, the gripper (closed or open) and
@@ -37,15 +37,16 @@ from typing import Any
 import numpy as np
 
 from drake_disamb.config.checks import check_data, fmt
-from drake_disamb.config.schema import MAX_GOALS, SHAPE_SIZES, Scenario, SuccessSpec, to_plain
-from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
+from drake_disamb.config.schema import Scenario, SuccessSpec, to_plain
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference
+from drake_disamb.core.layout import SHAPE_SIZES
+from drake_disamb.core.validation import MAX_GOALS, TIME_STEP_RANGE, check_real_range
 
 MICO_SHOULDER_POSITION: tuple[float, float, float] = (0.0, 0.0, 0.2755)
-"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (FACTS section 7)."""
+"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (docs/facts.md section 8)."""
 
 MICO_REACH: float = 0.7
-"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (FACTS section 7)."""
+"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (docs/facts.md section 8)."""
 
 MIN_START_CLEARANCE: float = 0.05
 """A goal closer than this (m) to the gripper's start position is rejected: the task would be trivial."""

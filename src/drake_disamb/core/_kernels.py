@@ -26,7 +26,7 @@ _SMALL_ANGLE = 1e-8
 
 
 # ----------------------------------------------------------------------------------------------
-# Checks of a control tick's inputs (used by _validation and geometry)
+# Checks of a control tick's inputs (used by validation and geometry)
 # ----------------------------------------------------------------------------------------------
 
 

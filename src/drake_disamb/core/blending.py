@@ -1,6 +1,6 @@
 """Blending-based shared control (numpy, with a numba-compiled row kernel).
 
-Paper, equations (sc) and (alpha) (FACTS section 6)::
+Paper, Section "Study Methods" (Shared Control), equation (sc) and the alpha rule after it::
 
     u = alpha * u_{a, g*} + (1 - alpha) * u_h,        g* = argmax_i p_i
 
@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _alpha_rows, _blend_rows, _has_input_rows, _shared_control_rows
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.rows import as_rows, batch_shape
+from drake_disamb.core.validation import check_real_fields, is_real
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -160,7 +160,7 @@ class BlendingConfig:
             blending.assist_without_input=true``), the paper's law fails reaching trials the
             default completes (README, "Where we differ from the paper").
         max_linear_speed: Limit (m/s) on the norm of the blended translation. The default is the
-            largest blended translation seen in the study logs (FACTS section 5).
+            largest blended translation seen in the study logs (docs/facts.md section 6).
         max_angular_speed: Limit (rad/s) on the norm of the blended rotation; default the largest
             joystick rotation in the logs.
     """

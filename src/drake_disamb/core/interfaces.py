@@ -1,6 +1,6 @@
 """Control interfaces: control modes, raw-signal layouts and the interface update (pure numpy).
 
-Two interfaces of the study (paper Section "Study Methods", FACTS section 5):
+Two interfaces of the study (paper Section "Study Methods"; docs/facts.md section 6):
 
 - **2-axis joystick** (``"joystick"``): continuous axes in ``[-1, 1]``, a mode button that cycles
   through 5 control modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper`` (or, with
@@ -26,7 +26,7 @@ can drive it), see :data:`RAW_LAYOUTS`:
 **Mode selection** (:data:`MODE_SELECTIONS`, ``InterfaceConfig.mode_selection``). ``"cycle"`` (the
 default, and the head array's only one): a mode-button press selects the next mode. ``"direct"``
 (joystick only): the study's joystick selected a mode with one action (consecutive logged modes
-step forward, back, two or three places about equally, and some repeat the mode: FACTS section 5),
+step forward, back, two or three places about equally, and some repeat the mode: docs/facts.md section 6),
 so here a press *with the stick deflected* (``|(axis_x, axis_y)| >=``
 :data:`DIRECT_SELECT_DEFLECTION`) selects the mode of the stick direction's sector, and a press with
 the stick centred cycles as before. The ``n`` modes have equal sectors of ``360 / n`` degrees,
@@ -59,13 +59,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import check_real_fields, is_real
-
-GRIPPER_DIM = 6
-"""Dimension index of the gripper in a control mode (0..5 are vx, vy, vz, wx, wy, wz)."""
-
-DIM_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz", "gripper")
-"""Human-readable names of the dimension indices 0..6."""
+from drake_disamb.core.layout import GRIPPER_DIM
+from drake_disamb.core.validation import check_real_fields, is_real
 
 InterfaceKind = Literal["joystick", "head_array"]
 INTERFACE_KINDS: tuple[str, ...] = ("joystick", "head_array")
@@ -95,7 +90,8 @@ DEFAULT_SPEEDS: dict[str, tuple[float, float]] = {
     "joystick": (0.13, 0.4),
     "head_array": (0.1, 0.2),
 }
-"""Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs (FACTS 5)."""
+"""Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs
+(docs/facts.md section 6)."""
 
 MODE_SELECTIONS: tuple[str, ...] = ("cycle", "direct")
 """How a mode-button press chooses the mode: the next one (``"cycle"``) or, on the joystick, the

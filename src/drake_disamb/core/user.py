@@ -117,18 +117,18 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import all_finite, check_real_fields, is_real
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.geometry import orientation_error
 from drake_disamb.core.interfaces import (
-    GRIPPER_DIM,
     MODE_BUTTON,
     RAW_SIZE,
     REQUEST_BUTTON,
     InterfaceConfig,
     sector_stick,
 )
+from drake_disamb.core.layout import GRIPPER_DIM
 from drake_disamb.core.trials import sample_von_mises_fisher
+from drake_disamb.core.validation import all_finite, check_real_fields, is_real
 
 NOT_COUNTING = -1.0
 """``unhelped_since`` value meaning "the autonomy is currently helping" (times are >= 0)."""

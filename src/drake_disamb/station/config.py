@@ -25,7 +25,8 @@ from pydrake.multibody.parsing import LoadModelDirectives
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.multibody.tree import SpatialInertia
 
-from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
+from drake_disamb.core.layout import SHAPE_SIZES
+from drake_disamb.core.validation import TIME_STEP_RANGE, check_real_range
 from drake_disamb.paths import mico_directives
 
 ARM_JOINTS: tuple[str, ...] = tuple(f"mico_joint_{i}" for i in range(1, 7))
@@ -67,7 +68,6 @@ where its singularities are."""
 MICO_HOME_Q.setflags(write=False)
 
 
-_SHAPE_SIZES = {"box": 3, "cylinder": 2, "sphere": 1}
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
@@ -114,9 +114,9 @@ class SceneObject:
         owner = f"SceneObject({self.name!r})"
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
             raise ValueError(f"SceneObject.name: expected an identifier-like string, got {self.name!r}")
-        if self.shape not in _SHAPE_SIZES:
-            raise ValueError(f"{owner}.shape: expected one of {sorted(_SHAPE_SIZES)}, got {self.shape!r}")
-        size = _finite_vector(owner, "size", self.size, _SHAPE_SIZES[self.shape])
+        if self.shape not in SHAPE_SIZES:
+            raise ValueError(f"{owner}.shape: expected one of {sorted(SHAPE_SIZES)}, got {self.shape!r}")
+        size = _finite_vector(owner, "size", self.size, SHAPE_SIZES[self.shape])
         if np.any(size <= 0):
             raise ValueError(f"{owner}.size: expected positive numbers, got {size.tolist()}")
         pose = _finite_vector(owner, "pose", self.pose, 7)

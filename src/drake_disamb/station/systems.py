@@ -33,8 +33,9 @@ from pydrake.systems.framework import (
 )
 
 from drake_disamb.clearance import Solid, gripper_points_in_ee, table_top_z
-from drake_disamb.core._validation import all_finite
-from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
+from drake_disamb.core.validation import all_finite
+from drake_disamb.ik import IkParams, IkStatus, VelocityIkSolver
+from drake_disamb.joint_limits import JointLimits
 from drake_disamb.station.config import ARM_JOINTS, ARM_MODEL_NAME, EE_FRAME, SceneObject, StationConfig
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 

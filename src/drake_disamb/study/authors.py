@@ -19,8 +19,8 @@ How each field is made (times are seconds from the trial's ``start_time``):
 - ``initial_mode``: the mode logged in ``current_mode``'s second row (the order file's 0-based
   initial mode agrees with it after the corrections), named as in
   :data:`drake_disamb.core.interfaces.MODES` by its position in the interface's cycle
-  (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``, FACTS
-  section 5; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
+  (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``,
+  docs/facts.md section 6; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
   ``extra["initial_mode_id"]``.
 - ``request_times``: the rows of ``assistance_requested`` after the placeholder. Every request
   made one mode switch of its own (the disambiguation system's), logged in ``mode_switches`` at
@@ -66,7 +66,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import DIM_NAMES, MODES
+from drake_disamb.core.interfaces import MODES
+from drake_disamb.core.layout import DIM_NAMES
 from drake_disamb.study.metrics import assistance_onset
 from drake_disamb.study.records import TrialRecord, append_record, read_records
 

@@ -31,7 +31,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import DIM_NAMES, interface_modes
+from drake_disamb.core.interfaces import interface_modes
+from drake_disamb.core.layout import DIM_NAMES
 from drake_disamb.study.records import TrialRecord
 
 __all__ = [

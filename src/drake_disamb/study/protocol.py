@@ -3,7 +3,7 @@
 A :class:`Protocol` says who is tested on what: subjects x interfaces x tasks x paradigms x trials
 per condition, the mode-selection method, the request latency, each task's start poses and how
 the order of conditions is counterbalanced. The embedded default (``study/protocol.yaml``,
-:func:`default_protocol`) is the paper's (FACTS section 9): 8 subjects, joystick and head array,
+:func:`default_protocol`) is the paper's (Section "Study Methods"): 8 subjects, joystick and head array,
 reaching and pouring, Manual 3 + Disambiguation 5 + Automatic 5 trials per condition (416 trials),
 Algorithm 1, a request latency uniform in [2.0, 2.5] s, 3 start poses per task, and a joystick that
 selects each mode with one press (``interface_mode_selection: direct``, as the study's did).

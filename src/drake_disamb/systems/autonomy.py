@@ -12,8 +12,8 @@ from pydrake.systems.framework import (
     LeafSystem,
 )
 
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
+from drake_disamb.core.validation import is_real
 from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 

@@ -16,8 +16,8 @@ from pydrake.systems.framework import (
     ValueProducer,
 )
 
-from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.blending import BlendingConfig, shared_control
+from drake_disamb.core.validation import all_finite, is_real
 from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 

@@ -29,13 +29,11 @@ from drake_disamb.core.disambiguation import (
     mode_selection_method,
     validate_modes,
 )
+from drake_disamb.core.layout import POSE_SIZE
 from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
-
-POSE_SIZE = 7
-"""A pose on a vector port: ``[x, y, z, qw, qx, qy, qz]``."""
 
 
 @dataclass(frozen=True)

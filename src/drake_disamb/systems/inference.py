@@ -53,7 +53,6 @@ from pydrake.systems.framework import (
     ValueProducer,
 )
 
-from drake_disamb.core._validation import all_finite
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
     BayesInference,
@@ -70,6 +69,7 @@ from drake_disamb.core.inference import (
     rest_state,
     sanitize_command,
 )
+from drake_disamb.core.validation import all_finite
 from drake_disamb.systems._status import DID_NOTHING
 from drake_disamb.systems.sanitized import SanitizedInputCounter
 

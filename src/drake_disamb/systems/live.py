@@ -17,8 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.interfaces import MODE_BUTTON, RAW_SIZE, REQUEST_BUTTON, InterfaceConfig
+from drake_disamb.core.validation import check_real_fields, is_real
 
 __all__ = ["LIVE_CONTROLS", "LiveInputConfig", "LiveState", "MeshcatLiveInput", "live_raw_step"]
 

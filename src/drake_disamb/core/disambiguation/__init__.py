@@ -25,7 +25,6 @@ from drake_disamb.core.disambiguation.algorithm1 import (
 )
 from drake_disamb.core.disambiguation.config import (
     DEFAULT_CONFIG,
-    DIMENSION_NAMES,
     MICO_DFT,
     PRESETS,
     UPSILON_NORMALIZATIONS,
@@ -49,7 +48,6 @@ from drake_disamb.core.disambiguation.registry import (
     select_disambiguating_mode,
 )
 from drake_disamb.core.disambiguation.request import (
-    MAX_GOALS,
     MAX_POSITION,
     DisambiguationRequest,
     make_request,
@@ -59,9 +57,7 @@ from drake_disamb.core.disambiguation.selection import DisambiguationResult, Pro
 
 __all__ = [
     "DEFAULT_CONFIG",
-    "DIMENSION_NAMES",
     "FEATURE_NAMES",
-    "MAX_GOALS",
     "MAX_POSITION",
     "MICO_DFT",
     "MODE_SELECTION_METHODS",

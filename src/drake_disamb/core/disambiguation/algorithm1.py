@@ -1,7 +1,7 @@
 """Paper Algorithm 1: the mode whose motion best disambiguates the goals, from the features
 of the forward projection.
 
-From the projected beliefs (paper Section "Features of D_k"):
+From the projected beliefs (paper Section "Features of D_k", equation (DK)):
 
 - at ``t_b``: ``Gamma = max p``, ``Omega = max p - second max p`` and
   ``Lambda = sum_{i<j} |p_i - p_j|``;
@@ -30,11 +30,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.disambiguation.config import DIMENSION_NAMES, DisambiguationConfig
+from drake_disamb.core.disambiguation.config import DisambiguationConfig
 from drake_disamb.core.disambiguation.projection import forward_projection
 from drake_disamb.core.disambiguation.registry import MODE_SELECTION_METHODS, ModeSelectionMethod
 from drake_disamb.core.disambiguation.request import DisambiguationRequest, make_request
 from drake_disamb.core.disambiguation.selection import ProbeResult, select_mode
+from drake_disamb.core.layout import DIM_NAMES
 
 FEATURE_NAMES: tuple[str, ...] = ("gamma", "omega", "lambda", "upsilon")
 
@@ -134,9 +135,9 @@ class Algorithm1Result(ProbeResult):
         sign = 0 if self.scores_plus[k] >= self.scores_minus[k] else 1
         f = {n: float(self.features[n][sign, k]) for n in FEATURE_NAMES}
         lines.append(
-            f"Best dimension k* = {DIMENSION_NAMES[self.dimension]} (D_k = {self.dimension_scores[k]:.4g}; "
+            f"Best dimension k* = {DIM_NAMES[self.dimension]} (D_k = {self.dimension_scores[k]:.4g}; "
             f"D+ = {self.scores_plus[k]:.4g}, D- = {self.scores_minus[k]:.4g}); moving "
-            f"{'+' if sign == 0 else '-'}{DIMENSION_NAMES[self.dimension]} gives Gamma = {f['gamma']:.3f}, "
+            f"{'+' if sign == 0 else '-'}{DIM_NAMES[self.dimension]} gives Gamma = {f['gamma']:.3f}, "
             f"Omega = {f['omega']:.3f}, Lambda = {f['lambda']:.3f}, Upsilon = {f['upsilon']:.4g}."
         )
         return lines

@@ -2,7 +2,7 @@
 
 Two named presets (:func:`preset`):
 
-- ``"authors-r3"`` reproduces the authors' R^3 simulation.
+- ``"authors-r3"`` reproduces the authors' R^3 simulation (docs/facts.md sections 1 and 4).
 - ``"mico"`` (the robot system's default, also ``DisambiguationConfig()``): see
   :func:`mico_config` for the parameters and why.
 
@@ -18,12 +18,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference, DFTParams, ProjectedInference
-
-DIMENSION_NAMES: tuple[str, ...] = ("vx", "vy", "vz", "wx", "wy", "wz")
-"""Names of the six control dimensions, in the paper's order."""
+from drake_disamb.core.validation import check_real_fields, is_real
 
 PRESETS: tuple[str, ...] = ("mico", "authors-r3")
 """Names accepted by :func:`preset`."""
@@ -174,8 +171,8 @@ DEFAULT_CONFIG = DisambiguationConfig()
 def mico_config(**overrides: Any) -> DisambiguationConfig:
     """The ``mico`` preset: the robot system's default (equal to ``DisambiguationConfig()``).
 
-    - All six dimensions; probes of 0.1 m/s and 0.2 rad/s, the head array's speeds, so the
-      projection explores motions the user can actually make.
+    - All six dimensions; probes of 0.1 m/s and 0.2 rad/s, the head array's speeds (docs/facts.md
+      section 6), so the projection explores motions the user can actually make.
     - ``delta_t = 0.1 s``, ``t_b = 1 s``, ``t_c = 2 s``, ``w = 0.5`` (paper and authors' code);
       ``Upsilon`` per unit probe displacement (paper, ``upsilon_normalization="unit_probe"``).
     - DFT with directedness, agreement and proximity (paper equation dft_ii) and
@@ -190,7 +187,7 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
       motion (10 cm) moves the projected belief clearly while a single 10 ms control step moves
       the live belief by under 1 %; the authors' ``lambda = 200`` suits their 2 mm, 2 ms steps
       in simulation but would make the live belief jump to the latest command direction.
-    - ``R = 0.2 m``: about the spacing of the study's goals, so proximity only
+    - ``R = 0.2 m``: about the spacing of the study's goals (docs/facts.md section 9), so proximity only
       favours a goal once the gripper is clearly nearer to it than to its neighbours.
     - Agreement is the cosine of the rotational parts (``agreement_measure="cosine"``; the paper's
       plain dot product is ``"dot"``: measured with the simulated user it leaves the first
@@ -204,7 +201,7 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
 
 
 def authors_r3_config(**overrides: Any) -> DisambiguationConfig:
-    """The ``authors-r3`` preset: the authors' R^3 simulation.
+    """The ``authors-r3`` preset: the authors' R^3 simulation (docs/facts.md sections 1 and 4).
 
     Dimensions x, y, z only; DFT with the directedness term only, ``tau1 = tau2 = 10 s``,
     ``lambda = 200 I``, ``P = I`` unless given; probe 0.2; ``delta_t = 0.1 s``, ``t_b = 1 s``,

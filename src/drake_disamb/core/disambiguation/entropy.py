@@ -1,6 +1,6 @@
 """Minimum expected entropy: the mode whose motion is expected to leave the belief most certain.
 
-The authors' entropy method on Algorithm 1's forward projection
+The authors' entropy method (docs/facts.md section 5) on Algorithm 1's forward projection
 (:func:`~drake_disamb.core.disambiguation.projection.forward_projection`: the same probes,
 inference update and horizons): each probe ``+/- s e_k``'s projected belief at ``t_b`` (1 s in
 both presets, the authors' horizon) has entropy ``H_k+/-`` (bits, :func:`entropy_bits`). A mode's
@@ -31,11 +31,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.disambiguation.config import DIMENSION_NAMES, DisambiguationConfig
+from drake_disamb.core.disambiguation.config import DisambiguationConfig
 from drake_disamb.core.disambiguation.projection import forward_projection
 from drake_disamb.core.disambiguation.registry import MODE_SELECTION_METHODS, ModeSelectionMethod
 from drake_disamb.core.disambiguation.request import DisambiguationRequest, make_request
 from drake_disamb.core.disambiguation.selection import ProbeResult, mean_over_probes, select_mode
+from drake_disamb.core.layout import DIM_NAMES
 
 _REALMIN = float(np.finfo(float).tiny)
 """MATLAB's ``realmin``: the authors' guard inside their logarithms."""
@@ -63,7 +64,7 @@ class EntropyResult(ProbeResult):
     def explain_details(self) -> list[str]:
         """The best dimension's projected entropies."""
         k = self.dimensions.index(self.dimension)
-        name = DIMENSION_NAMES[self.dimension]
+        name = DIM_NAMES[self.dimension]
         h = self.features["entropy"][:, k]
         return [
             f"Best dimension k* = {name}: moving +{name} / -{name} leaves a projected entropy of "

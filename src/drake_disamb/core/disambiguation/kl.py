@@ -1,13 +1,13 @@
 """Maximum expected KL divergence: the mode whose motion is expected to change the belief most.
 
-The authors' KL method on Algorithm 1's forward projection (the same probes, inference update and
-horizons): each probe's score is ``KL(p(t_b) || p(t_a))`` (bits, :func:`kl_bits`) of its projected
-belief at ``t_b`` (1 s in both presets, the authors' horizon) from the current one; a mode's score
-is the mean over its probes (2 per probed dimension), and the mode with the **maximum** expected
-divergence is chosen, as in the authors' code. A mode that cannot change the belief scores 0, the
-least possible; a mode none of whose dimensions is probed also scores 0. Probes and ties as in
-:mod:`~drake_disamb.core.disambiguation.entropy` (the axis probes of Algorithm 1;
-:func:`~drake_disamb.core.disambiguation.selection.select_mode`).
+The authors' KL method (docs/facts.md section 5) on Algorithm 1's forward projection (the same
+probes, inference update and horizons): each probe's score is ``KL(p(t_b) || p(t_a))`` (bits,
+:func:`kl_bits`) of its projected belief at ``t_b`` (1 s in both presets, the authors' horizon)
+from the current one; a mode's score is the mean over its probes (2 per probed dimension), and the
+mode with the **maximum** expected divergence is chosen, as in the authors' code. A mode that
+cannot change the belief scores 0, the least possible; a mode none of whose dimensions is probed
+also scores 0. Probes and ties as in :mod:`~drake_disamb.core.disambiguation.entropy` (the axis
+probes of Algorithm 1; :func:`~drake_disamb.core.disambiguation.selection.select_mode`).
 """
 
 from __future__ import annotations
@@ -19,11 +19,12 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.disambiguation.config import DIMENSION_NAMES, DisambiguationConfig
+from drake_disamb.core.disambiguation.config import DisambiguationConfig
 from drake_disamb.core.disambiguation.projection import forward_projection
 from drake_disamb.core.disambiguation.registry import MODE_SELECTION_METHODS, ModeSelectionMethod
 from drake_disamb.core.disambiguation.request import DisambiguationRequest, make_request
 from drake_disamb.core.disambiguation.selection import ProbeResult, mean_over_probes, select_mode
+from drake_disamb.core.layout import DIM_NAMES
 
 _REALMIN = float(np.finfo(float).tiny)
 """MATLAB's ``realmin``: the authors' guard inside their logarithms."""
@@ -55,7 +56,7 @@ class KLResult(ProbeResult):
     def explain_details(self) -> list[str]:
         """The best dimension's divergences."""
         k = self.dimensions.index(self.dimension)
-        name = DIMENSION_NAMES[self.dimension]
+        name = DIM_NAMES[self.dimension]
         d = self.features["kl"][:, k]
         return [
             f"Best dimension k* = {name}: moving +{name} / -{name} changes the belief by KL = {d[0]:.4g} / "

@@ -16,15 +16,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.disambiguation.config import DEFAULT_CONFIG, DisambiguationConfig
 from drake_disamb.core.geometry import check_vectors, normalized_quaternions
+from drake_disamb.core.validation import MAX_GOALS
 
 MAX_POSITION = 1e3
 """Largest accepted absolute coordinate (m) of the end-effector and goal positions of a request:
 far beyond any arm's reach, yet small enough that no distance or potential computed from them
 overflows."""
-
-MAX_GOALS = 1000
-"""Largest accepted number of goals of a request (a request's memory and time grow linearly in it:
-about 12 MB and 20 ms at this bound with the ``mico`` preset)."""
 
 
 def validate_modes(modes: Sequence[Sequence[int]]) -> tuple[tuple[int, ...], ...]:
@@ -146,7 +143,7 @@ def make_request(
         belief: Current belief ``p(t_a)`` over the ``n`` goals (non-negative, sums to 1).
         position: End-effector position ``(3,)`` (m, world frame), each coordinate within
             ``+/- MAX_POSITION`` (1 km).
-        goal_positions: ``(n, 3)`` goal positions (m), same bound, ``1 <= n <= MAX_GOALS`` (1000).
+        goal_positions: ``(n, 3)`` goal positions (m), same bound, ``1 <= n <= MAX_GOALS`` (100).
         modes: Control modes, each a list of dimension indices (0 = vx ... 5 = wz); a result's
             mode is an index into this list.
         config: The forward projection's configuration (default: the ``mico`` preset).

@@ -15,13 +15,13 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.disambiguation.config import DIMENSION_NAMES
 from drake_disamb.core.disambiguation.request import DisambiguationRequest
+from drake_disamb.core.layout import DIM_NAMES
 
 
 def mode_label(dims: Sequence[int]) -> str:
     """A mode as people read it, e.g. ``{vx, vy}``."""
-    return "{" + ", ".join(DIMENSION_NAMES[k] for k in dims) + "}" if dims else "{}"
+    return "{" + ", ".join(DIM_NAMES[k] for k in dims) + "}" if dims else "{}"
 
 
 def select_mode(

@@ -13,7 +13,7 @@ Shapes (``...`` is any batch shape, ``n`` the number of goals):
 - ``transition``: goal-transition matrix ``P``, ``(n, n)`` or batched ``(..., n, n)``.
 
 The right-hand side is paper equation (dft_ii) with the time constant split in two, as in the
-authors' code::
+authors' code (docs/facts.md section 1)::
 
     f(p) = -(1/tau1) P^T p + drive,   drive = rest/tau2 + lambda @ sigma(xi)
 
@@ -44,7 +44,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _dft_flow_rows, _euler_rollout_rows, _euler_rows, _xi_rows
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.inference.belief import (
     check_probability_vector,
     check_transition,
@@ -53,6 +52,7 @@ from drake_disamb.core.inference.belief import (
 )
 from drake_disamb.core.inference.methods import INFERENCE_METHODS, ProjectedInference
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
+from drake_disamb.core.validation import is_real
 
 AGREEMENT_MEASURES: tuple[str, ...] = ("dot", "cosine")
 """Forms of the DFT's agreement term (:attr:`DFTParams.agreement_measure`): the paper's plain dot

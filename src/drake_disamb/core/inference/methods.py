@@ -24,8 +24,6 @@ from drake_disamb.core.registry import Registry
 if TYPE_CHECKING:
     from typing import Self
 
-    from drake_disamb.core.inference.dft import DFTParams
-
 
 @dataclass(frozen=True)
 class RecordedSamples:
@@ -81,10 +79,10 @@ class InferenceMethod(abc.ABC):
         return step
 
     @classmethod
-    def from_settings(cls, dft: DFTParams) -> Self:
+    def from_settings(cls, dft: object) -> Self:
         """The method as a scenario configures it: ``dft`` is the scenario's resolved
-        ``inference.dft`` (the field-theoretic method's parameters, shared with the autonomy's
-        agreement term); the baselines have no scenario settings of their own."""
+        ``inference.dft`` (a :class:`~drake_disamb.core.inference.DFTParams`: the field-theoretic
+        method's parameters); the baselines have no scenario settings of their own."""
         return cls()
 
 
