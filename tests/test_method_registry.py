@@ -295,3 +295,45 @@ def test_a_registered_method_is_selectable_from_yaml_and_runs_in_the_diagram(las
     system.GetInputPort("current_mode").FixValue(context, [0.0])
     system.GetInputPort("request_count").FixValue(context, [0.0])
     assert system.GetOutputPort("disambiguation_mode").Eval(context)[0] == len(system.modes) - 1
+
+
+def test_a_registered_method_is_selectable_from_the_protocol_and_the_command_line(
+    last_mode: type, tmp_path, capsys: pytest.CaptureFixture[str]
+) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from drake_disamb import cli
+    from drake_disamb.study.protocol import default_protocol, protocol_from_dict, protocol_to_dict
+
+    data = protocol_to_dict(default_protocol())
+    data["disambiguation_method"] = "last_mode"
+    assert protocol_from_dict(data).disambiguation_method == "last_mode"
+    data["disambiguation_method"] = "fisher"
+    with pytest.raises(
+        ValueError, match=r"disambiguation_method: expected one of algorithm1, entropy, kl, last_mode"
+    ):
+        protocol_from_dict(data)
+
+    cases = tmp_path / "cases.json"
+    cases.write_text(
+        json.dumps(
+            [
+                {
+                    "belief": [0.5, 0.5],
+                    "position": [0, 0, 0],
+                    "goals": [[0.3, 0.1, 0], [0.3, -0.1, 0]],
+                    "modes": [[0], [1]],
+                }
+            ]
+        )
+    )
+    assert cli.main(["disambiguate", "--cases", str(cases), "--method", "last_mode"]) == 0
+    assert json.loads(capsys.readouterr().out)[0]["method"] == "last_mode"
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["disambiguate", "--cases", str(cases), "--method", "fisher"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'fisher'" in err  # argparse lists the choices: the registered names
+    assert all(
+        name in err.split("choose from", 1)[1] for name in ("algorithm1", "entropy", "kl", "last_mode")
+    )
