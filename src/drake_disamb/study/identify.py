@@ -25,8 +25,8 @@ dft_euler_step`, :func:`~drake_disamb.core.inference.dft_euler_rollout`,
   identified values from each logged belief before an idle update.
 - **Alpha** (:func:`fit_alpha_law`): ``alpha_max`` is the largest logged alpha; on the rows with
   ``0 < alpha < alpha_max`` alpha is a straight line in the belief's maximum (rounded to the
-  decimals, :data:`ALPHA_DECIMALS` tried, that fit best), whose zero and top are the thresholds
-  ``rho1``, ``rho2`` per goal count (rounded to the same decimals). Alpha is taken as 0 from a
+  decimals, of :data:`ALPHA_DECIMALS`, whose law matches the most rows), whose zero and top are
+  the thresholds ``rho1``, ``rho2`` per goal count (rounded to the same decimals). Alpha is taken as 0 from a
   request's press to its mode switch. :func:`alpha_matches` says which rows the law reproduces
   (within :data:`ALPHA_TOLERANCE`) with :func:`~drake_disamb.core.blending.blending_alpha`.
 - **Request time** (:func:`request_timing`): from each press (``assistance_requested``) to the
@@ -331,15 +331,31 @@ def alpha_matches(trial: AuthorsTrial, law: AlphaLaw) -> NDArray[np.bool_]:
     return np.abs(predicted - np.asarray(trial.trace["alpha"], dtype=float)) <= ALPHA_TOLERANCE
 
 
-def _line_fit(top: NDArray[np.float64], alpha: NDArray[np.float64]) -> tuple[float, float, float]:
-    """``(slope, intercept, largest residual)`` of the least-squares line."""
+def _line_fit(top: NDArray[np.float64], alpha: NDArray[np.float64]) -> tuple[float, float]:
+    """``(slope, intercept)`` of the least-squares line, refitted once on the rows within
+    :data:`ALPHA_TOLERANCE` of the first fit (a few rows off the law do not tilt it)."""
     A = np.column_stack((top, np.ones_like(top)))
-    (a, b), *_ = np.linalg.lstsq(A, alpha, rcond=None)
-    return float(a), float(b), float(np.max(np.abs(A @ (a, b) - alpha)))
+    coef, *_ = np.linalg.lstsq(A, alpha, rcond=None)
+    near = np.abs(A @ coef - alpha) <= ALPHA_TOLERANCE
+    if near.sum() >= 2:
+        coef, *_ = np.linalg.lstsq(A[near], alpha[near], rcond=None)
+    return float(coef[0]), float(coef[1])
+
+
+def _match_counts(trials: Sequence[AuthorsTrial], law: AlphaLaw) -> dict[tuple[str, str], list[int]]:
+    """``[rows matched, rows]`` per (interface, task)."""
+    matched: dict[tuple[str, str], list[int]] = {}
+    for trial in trials:
+        ok = alpha_matches(trial, law)
+        m = matched.setdefault((trial.record.interface, trial.record.task), [0, 0])
+        m[0] += int(ok.sum())
+        m[1] += len(ok)
+    return dict(sorted(matched.items()))
 
 
 def fit_alpha_law(trials: Sequence[AuthorsTrial]) -> AlphaLaw:
-    """:class:`AlphaLaw` of ``trials`` (module docstring)."""
+    """:class:`AlphaLaw` of ``trials`` (module docstring): of the roundings tried, the one whose law
+    matches the most rows."""
     alpha_max = max(float(np.max(t.trace["alpha"])) for t in trials if len(t.trace["alpha"]))
     if not alpha_max > 0:
         raise ValueError("trials: alpha is 0 on every logged row")
@@ -348,35 +364,31 @@ def fit_alpha_law(trials: Sequence[AuthorsTrial]) -> AlphaLaw:
         belief, alpha = trial.trace["belief"], np.asarray(trial.trace["alpha"], dtype=float)
         mid = (alpha > 1e-9) & (alpha < alpha_max - 1e-9)
         interior.setdefault(belief.shape[1], []).append((belief[mid], alpha[mid]))
-    best: tuple[float, int | None, dict[int, tuple[float, float]], dict[int, int]] | None = None
+    best: tuple[int, AlphaLaw, dict[tuple[str, str], list[int]]] | None = None
     for decimals in ALPHA_DECIMALS:
-        thresholds, counts, worst = {}, {}, 0.0
-        for n, parts in interior.items():
+        thresholds, counts = {}, {}
+        for n, parts in sorted(interior.items()):
             top = np.concatenate([_top(b, decimals) for b, _ in parts if len(b)] or [np.zeros(0)])
             alpha = np.concatenate([a for _, a in parts])
             if len(top) < 2:
                 continue
-            a, b, residual = _line_fit(top, alpha)
+            a, b = _line_fit(top, alpha)
             lo, hi = -b / a, (alpha_max - b) / a
             if decimals is not None:
                 lo, hi = round(lo, decimals), round(hi, decimals)
-            thresholds[n], counts[n] = (float(lo), float(hi)), len(top)
-            worst = max(worst, residual)
-        if best is None or worst < best[0] - 1e-12:
-            best = (worst, decimals, thresholds, counts)
+            if 0.0 <= lo < hi <= 1.0:  # else this rounding does not give a law of this form
+                thresholds[n], counts[n] = (float(lo), float(hi)), len(top)
+        law = AlphaLaw(alpha_max, decimals, thresholds, counts, {}, {})
+        matched = _match_counts(trials, law)
+        total = sum(m[0] for m in matched.values())
+        if best is None or total > best[0]:
+            best = (total, law, matched)
     assert best is not None
-    _, decimals, thresholds, counts = best
-    law = AlphaLaw(alpha_max, decimals, thresholds, counts, {}, {})
-    matched: dict[tuple[str, str], list[int]] = {}
-    for trial in trials:
-        ok = alpha_matches(trial, law)
-        m = matched.setdefault((trial.record.interface, trial.record.task), [0, 0])
-        m[0] += int(ok.sum())
-        m[1] += len(ok)
+    _, law, matched = best
     return dataclasses.replace(
         law,
-        match={k: v[0] / max(v[1], 1) for k, v in sorted(matched.items())},
-        rows={k: v[1] for k, v in sorted(matched.items())},
+        match={k: v[0] / max(v[1], 1) for k, v in matched.items()},
+        rows={k: v[1] for k, v in matched.items()},
     )
 
 
@@ -750,6 +762,10 @@ class Identification:
             "zero_command_excitation": self.decay.zero_command_excitation,
             "zero_command_excitation_rate": self.decay.excitation,
             "alpha_thresholds": {str(n): list(v) for n, v in self.alpha.thresholds.items()},
+            "alpha_thresholds_above_uniform": {
+                str(n): [round(lo - 1.0 / n, 9), round(hi - 1.0 / n, 9)]
+                for n, (lo, hi) in self.alpha.thresholds.items()
+            },
             "alpha_max": self.alpha.alpha_max,
             "alpha_belief_decimals": self.alpha.decimals,
             "alpha_match": {f"{i}/{t}": v for (i, t), v in self.alpha.match.items()},
