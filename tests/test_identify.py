@@ -251,6 +251,8 @@ def test_logs_known_path_blend_law_and_belief_replay() -> None:
     assert kp.blend_share > 0.85 and kp.blend_share_idle > 0.9
     assert min(kp.best.correlation) > 0.9
     assert kp.best.argmax_agreement > 0.75
+    # The proximity term does not replay it (the study's system has none, at any radius tried).
+    assert all(np.mean(r.correlation) < np.mean(kp.best.correlation) - 0.1 for r in kp.proximity)
 
 
 @needs_data
@@ -283,3 +285,80 @@ def test_cli_identify_bad_folder(tmp_path: Path, capsys: pytest.CaptureFixture[s
 
     assert main(["study", "identify", str(tmp_path)]) == 2
     assert "trial-order file is missing" in capsys.readouterr().err
+
+
+# -- the study's system as a preset -----------------------------------------------------------------
+
+
+def test_blending_thresholds_above_uniform() -> None:
+    from drake_disamb.core.blending import BlendingConfig
+
+    config = BlendingConfig(rho1_above_uniform=0.05, rho2_above_uniform=0.10)
+    assert config.rhos(4) == pytest.approx((0.30, 0.35, 0.7))
+    assert config.rhos(5) == pytest.approx((0.25, 0.30, 0.7))
+    assert BlendingConfig().rhos(5) == pytest.approx((0.24, 0.28, 0.7))  # the paper's
+    with pytest.raises(ValueError, match="rho1 or rho1_above_uniform, not both"):
+        BlendingConfig(rho1=0.3, rho1_above_uniform=0.05)
+    with pytest.raises(ValueError, match=r"rho2_above_uniform: expected a number in \[-1, 1\]"):
+        BlendingConfig(rho2_above_uniform=float("nan"))
+    with pytest.raises(ValueError, match="rho1: expected a number in"):
+        BlendingConfig(rho1_above_uniform=0.9).rhos(2)
+
+
+def _preset_scenario(task: str, name: str):
+    import yaml
+
+    from drake_disamb.config import embedded_scenario_text, resolve_scenario, scenario_from_dict
+    from drake_disamb.config.system_presets import apply_system_preset
+
+    plain = apply_system_preset(yaml.safe_load(embedded_scenario_text(task)), name)
+    scenario = scenario_from_dict(plain, f"{task} with {name}")
+    return scenario, resolve_scenario(scenario)
+
+
+def test_system_presets_load_and_resolve() -> None:
+    from drake_disamb.config.system_presets import SYSTEM_PRESETS, system_preset
+
+    assert system_preset("mico") == {}
+    with pytest.raises(ValueError, match="system: expected one of mico, tnsre2020_study, got 'nope'"):
+        system_preset("nope")
+    for name in SYSTEM_PRESETS:
+        for task in ("reaching", "pouring"):
+            _preset_scenario(task, name)
+    scenario, cfg = _preset_scenario("reaching", "tnsre2020_study")
+    assert cfg.rhos == pytest.approx((0.25, 0.30, 0.7))
+    assert (cfg.dft.tau1, cfg.dft.tau2, cfg.dft.euler_equivalent_step) == (5.1, 5.1, 0.1)
+    assert not (cfg.dft.agreement or cfg.dft.proximity or cfg.dft.zero_command_excitation)
+    assert cfg.blending.assist_without_input and scenario.inference.goal_set == "task"
+    _, cfg = _preset_scenario("pouring", "tnsre2020_study")
+    assert cfg.rhos == pytest.approx((0.30, 0.35, 0.7))
+    _, mico = _preset_scenario("reaching", "mico")
+    assert mico.rhos == pytest.approx((0.24, 0.28, 0.7)) and mico.dft.tau1 == 4.0
+
+
+def test_protocol_names_a_system() -> None:
+    from drake_disamb.study.protocol import default_protocol_text, protocol_from_yaml
+
+    text = default_protocol_text()
+    assert protocol_from_yaml(text + "\nsystem: mico\n").system == "mico"
+    with pytest.raises(ValueError, match="protocol.system: expected one of mico, tnsre2020_study"):
+        protocol_from_yaml(text + "\nsystem: nope\n")
+
+
+@needs_data
+def test_study_preset_holds_the_identified_values() -> None:
+    from drake_disamb.config.system_presets import system_preset
+
+    _, ident = _logs()
+    preset = system_preset("tnsre2020_study")
+    dft, blending = preset["inference"]["dft"], preset["blending"]
+    assert dft["tau1"] == dft["tau2"] == pytest.approx(ident.decay.tau, abs=1e-3)
+    assert dft["euler_equivalent_step"] == pytest.approx(ident.period.period)
+    assert dft["zero_command_excitation"] is ident.decay.zero_command_excitation
+    assert dft["lam"] == pytest.approx(ident.known_path.best.lam, rel=0.05)
+    assert blending["rho3"] == pytest.approx(ident.alpha.alpha_max)
+    for n, (lo, hi) in ident.alpha.thresholds.items():
+        assert (blending["rho1_above_uniform"], blending["rho2_above_uniform"]) == pytest.approx(
+            (lo - 1.0 / n, hi - 1.0 / n)
+        )
+    assert blending["assist_without_input"] is (ident.known_path.blend_share_idle > 0.9)

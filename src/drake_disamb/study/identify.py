@@ -43,7 +43,8 @@ dft_euler_step`, :func:`~drake_disamb.core.inference.dft_euler_rollout`,
   offset on every goal's command but the nearest goal's (:func:`solve_positions`); the blend law
   ``(1 - alpha) u_h + alpha u_a(argmax p)`` there; and the DFT gain ``lambda`` (directedness term
   only, the identified ``tau``) that replays the logged belief best, with its per-goal correlation
-  and argmax agreement, beside another setting's (the ``mico`` preset's).
+  and argmax agreement, beside the same with the proximity term and another setting's (the
+  ``mico`` preset's).
 
 What the logs cannot show: orientations were not logged, so neither the agreement term nor the
 rotational part of the autonomy can be identified, and the system's ``D_k`` cannot be recomputed.
@@ -111,6 +112,8 @@ KNOWN_PATH_TRIAL = "H3PH1REHAT10"
 KNOWN_PATH_FILE = Path("known_path") / "test_data.mat"
 LAMBDA_GRID: tuple[float, ...] = tuple(float(x) for x in np.round(np.geomspace(0.1, 30.0, 49), 4))
 """The DFT gains (1/s) tried for the belief replay of the known-path trial."""
+PROXIMITY_RADII: tuple[float, ...] = (0.1, 0.2, 0.3)
+"""Radii (m) of the proximity term tried beside the best directedness-only replay."""
 _REPELLER_FLOOR = 1e-3
 """A repeller offset (m/s) above this counts as felt (the radius's evidence)."""
 
@@ -615,7 +618,8 @@ class KnownPath:
     the share of samples solved to under 1e-4 m/s rms and the worst rms, the attractor speed
     (m/s), the largest distance to the nearest goal at which a repeller is felt (m); the blend
     law's share of rows with ``alpha > 0`` (within 1e-3) and with the user commanding; the best
-    DFT gain's replay and another setting's."""
+    DFT gain's replay, the same with the proximity term added (radii :data:`PROXIMITY_RADII`),
+    and another setting's."""
 
     trial_id: str
     samples: int
@@ -630,6 +634,7 @@ class KnownPath:
     blend_share_idle: float
     blend_rows_idle: int
     best: BeliefReplay
+    proximity: list[BeliefReplay]
     other: BeliefReplay | None
 
 
@@ -709,6 +714,18 @@ def identify_known_path(
         if best is None or np.nanmean(r.correlation) > np.nanmean(best.correlation):
             best = r
     assert best is not None
+    proximity = [
+        belief_replay(
+            trial,
+            t_path,
+            x,
+            goals,
+            decay.params(lam=best.lam, proximity=True, R=R),
+            decay.dt,
+            f"proximity R {R:g} m",
+        )
+        for R in PROXIMITY_RADII
+    ]
     other_replay = None
     if other is not None:
         other_replay = belief_replay(trial, t_path, x, goals, other[1], decay.dt, other[0])
@@ -726,6 +743,7 @@ def identify_known_path(
         blend_share_idle=float(np.mean(ok[~commanding])) if np.any(~commanding) else math.nan,
         blend_rows_idle=int(np.count_nonzero(~commanding)),
         best=best,
+        proximity=proximity,
         other=other_replay,
     )
 
@@ -805,6 +823,7 @@ class Identification:
                 "correlation": kp.best.correlation,
                 "argmax_agreement": kp.best.argmax_agreement,
             }
+            out["known_path"]["proximity"] = [dataclasses.asdict(r) for r in kp.proximity]
             if kp.other is not None:
                 out["known_path"]["other"] = dataclasses.asdict(kp.other)
         return out
@@ -952,7 +971,7 @@ def format_identification(ident: Identification) -> str:
         f"{100 * kp.blend_share:.1f} % of {kp.blend_rows} with a user command, "
         f"{100 * kp.blend_share_idle:.1f} % of {kp.blend_rows_idle} without, within 1e-3",
     ]
-    for rep in (kp.best, kp.other):
+    for rep in (kp.best, *kp.proximity, kp.other):
         if rep is None:
             continue
         lines.append(
