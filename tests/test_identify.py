@@ -328,7 +328,8 @@ def test_system_presets_load_and_resolve() -> None:
     scenario, cfg = _preset_scenario("reaching", "tnsre2020_study")
     assert cfg.rhos == pytest.approx((0.25, 0.30, 0.7))
     assert (cfg.dft.tau1, cfg.dft.tau2, cfg.dft.euler_equivalent_step) == (5.1, 5.1, 0.1)
-    assert not (cfg.dft.agreement or cfg.dft.proximity or cfg.dft.zero_command_excitation)
+    assert not (cfg.dft.proximity or cfg.dft.zero_command_excitation)
+    assert cfg.dft.agreement and cfg.dft.agreement_measure == "cosine"  # ours: the logs cannot show it
     assert cfg.blending.assist_without_input and scenario.inference.goal_set == "task"
     _, cfg = _preset_scenario("pouring", "tnsre2020_study")
     assert cfg.rhos == pytest.approx((0.30, 0.35, 0.7))
