@@ -4,8 +4,9 @@
 and returns a :class:`TrialConfig`:
 
 - the blending thresholds ``(rho1, rho2, rho3)``, resolved once for the scenario's number of goals
-  (:func:`~drake_disamb.core.blending.resolve_rhos`, the paper's ``1.2 / n`` and ``1.4 / n`` where
-  the scenario leaves them out): the blender gets them written out, the simulated user its
+  (:meth:`~drake_disamb.core.blending.BlendingConfig.rhos`, the paper's ``1.2 / n`` and ``1.4 / n``
+  where the scenario leaves them out, or ``1 / n`` plus ``rho1_above_uniform`` /
+  ``rho2_above_uniform``): the blender gets them written out, the simulated user its
   ``rho1``, the trial result reports ``rho1``;
 - the DFT parameters and the potential field, one instance each, shared by the live inference,
   the autonomy and the disambiguation's forward projection. Whatever the preset, the projection
@@ -46,7 +47,7 @@ from drake_disamb.config.schema import Scenario
 from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
-from drake_disamb.core.blending import BlendingConfig, resolve_rhos
+from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import (
     DisambiguationConfig,
     ModeSelectionMethod,
@@ -167,8 +168,10 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     check_scenario(s, name)
     n = s.n_goals
     blending = _named(f"{name}.blending", s.blending.to_config)
-    rhos = _named(f"{name}.blending", lambda: resolve_rhos(n, blending.rho1, blending.rho2, blending.rho3))
-    blending = dataclasses.replace(blending, rho1=rhos[0], rho2=rhos[1])
+    rhos = _named(f"{name}.blending", lambda: blending.rhos(n))
+    blending = dataclasses.replace(
+        blending, rho1=rhos[0], rho2=rhos[1], rho1_above_uniform=None, rho2_above_uniform=None
+    )
     autonomy = _named(f"{name}.autonomy", s.autonomy.to_config)
     dft = _named(
         f"{name}.inference.dft", lambda: s.inference.dft.to_config(agreement_measure=s.inference.agreement)

@@ -44,6 +44,7 @@ import yaml
 from pydrake.common.yaml import yaml_load_typed
 
 from drake_disamb.config.checks import check_data, cut, fmt
+from drake_disamb.config.system_presets import SYSTEM_PRESETS
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
 from drake_disamb.core.interfaces import MODE_SELECTIONS
 from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
@@ -142,6 +143,9 @@ class Protocol:
             interface's modes, the gripper mode included, as the study drew them (its trial-order
             file: joystick 0..4, head array 0..6, each about equally often); ``arm``: over the arm
             modes only.
+        system: The system every trial runs (:mod:`drake_disamb.config.system_presets`): ``mico``
+            (the scenario's defaults) or ``tnsre2020_study`` (the paper's study's system, as its
+            logs show it), applied before an ablation's overrides.
     """
 
     subjects: int = 8
@@ -154,6 +158,7 @@ class Protocol:
     duration: float | None = None
     interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
     initial_modes: str = field(default="all", metadata=_meta(choices=INITIAL_MODES))
+    system: str = field(default="mico", metadata=_meta(choices=SYSTEM_PRESETS))
 
     @property
     def n_trials(self) -> int:
