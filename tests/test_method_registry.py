@@ -337,3 +337,54 @@ def test_a_registered_method_is_selectable_from_the_protocol_and_the_command_lin
     assert all(
         name in err.split("choose from", 1)[1] for name in ("algorithm1", "entropy", "kl", "last_mode")
     )
+
+
+@dataclasses.dataclass(frozen=True)
+class _Stubborn(ProjectedInference):
+    """A test-only inference method: the belief never moves (evidence 1 for every goal)."""
+
+    name: ClassVar[str] = "stubborn"
+    label: ClassVar[str] = "stubborn"
+    transition: None = None
+
+    def evidence(self, u_h, x_r, x_g, u_a=None):  # type: ignore[no-untyped-def]
+        return np.ones(np.broadcast_shapes(np.shape(x_r)[:-1], np.shape(x_g)[:-2]) + (np.shape(x_g)[-2],))
+
+    def rollout(self, p, evidence, dt):  # type: ignore[no-untyped-def]
+        return np.broadcast_to(p, np.shape(evidence)).copy()
+
+    def with_transition(self, transition):  # type: ignore[no-untyped-def]
+        return self
+
+    def check_goal_count(self, n: int) -> None:
+        return None
+
+    def recorded_evidence(self, samples, x_g):  # type: ignore[no-untyped-def]
+        return np.ones((len(samples.u_h), np.shape(x_g)[-2]))
+
+
+def test_a_registered_inference_method_is_selectable_from_yaml() -> None:
+    """A new inference method registers itself and its Drake system; the scenario names it, and the
+    live system and the forward projection both run it (no other module edited)."""
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.systems.inference import RecursiveBayesIntentInference, inference_system
+
+    INFERENCE_METHODS.register(_Stubborn)
+    try:
+        inference_system.register(_Stubborn)(
+            lambda method, n_goals, control_period: RecursiveBayesIntentInference(
+                n_goals, control_period=control_period
+            )
+        )
+        scenario = scenario_from_yaml(_reaching("inference: {method: stubborn}"))
+        config = resolve_scenario(scenario)
+        assert type(config.inference) is _Stubborn and config.disambiguation.inference is config.inference
+        handles = build_shared_control_diagram(scenario)
+        assert type(handles.systems["inference"]) is RecursiveBayesIntentInference
+        result = select_disambiguating_mode(
+            "algorithm1", BELIEF, np.zeros(3), GOALS, MODES, config.disambiguation, current_mode=0
+        )
+        # A belief that never moves: every mode scores the same, the current mode is kept.
+        assert result.mode is None and np.ptp(result.mode_scores) == 0
+    finally:
+        INFERENCE_METHODS.unregister("stubborn")
