@@ -63,9 +63,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from drake_disamb.config import load_scenario
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
 from drake_disamb.core.blending import blend, blending_alpha
 from drake_disamb.core.inference import DFTParams, dft_drive, dft_euler_rollout, dft_euler_step
+from drake_disamb.core.layout import DIM_NAMES
 from drake_disamb.study.authors import MODE_IDS, AuthorsTrial, read_trials
 
 __all__ = [
@@ -885,8 +887,6 @@ def identify(
 
 def _reaching_goals() -> NDArray[np.float64]:
     """The embedded reaching task's goal positions (m), in the task's order."""
-    from drake_disamb.config import load_scenario
-
     return np.array([g.position for g in load_scenario("reaching").goals], dtype=float)
 
 
@@ -894,8 +894,6 @@ def _reaching_goals() -> NDArray[np.float64]:
 
 
 def _dims(d: tuple[int, ...] | None) -> str:
-    from drake_disamb.core.interfaces import DIM_NAMES
-
     return "?" if d is None else "{" + ", ".join(DIM_NAMES[k] for k in d) + "}"
 
 
