@@ -122,6 +122,7 @@ def build_shared_control_diagram(
     scenario: Scenario,
     meshcat: Meshcat | None = None,
     input_source: System | None = None,
+    backend: Any = None,
 ) -> SharedControlDiagram:
     """Assemble the full shared-control diagram of ``scenario``.
 
@@ -131,17 +132,19 @@ def build_shared_control_diagram(
             active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
         input_source: A system with one 4-vector output port ``raw`` to drive the interface
             instead of the simulated user (a recorded log, a live device, a fault injector).
+        backend: The station backend (:mod:`drake_disamb.station.backends`); ``None`` is the
+            in-process simulation.
 
     Raises:
         ValueError: an invalid scenario, or a goal on top of the gripper's start position.
     """
-    from drake_disamb.station import build_station
+    from drake_disamb.station.backends import make_station
 
     config = resolve_scenario(scenario)
     n = config.n_goals
     builder = DiagramBuilder()
 
-    station = build_station(config.station, meshcat=meshcat)
+    station = make_station(backend, config.station, meshcat=meshcat)
     builder.AddSystem(station.diagram)
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])
@@ -258,7 +261,6 @@ def build_shared_control_diagram(
         systems["automatic_trigger"] = trigger
 
     if meshcat is not None:
-        from drake_disamb.clearance import table_top_z
         from drake_disamb.systems import visualization
 
         vis = builder.AddSystem(visualization.visualizer_for_scenario(meshcat, scenario, modes))
@@ -266,7 +268,7 @@ def build_shared_control_diagram(
         if vis.HasInputPort("stage"):
             builder.Connect(task.GetOutputPort("stage"), vis.GetInputPort("stage"))
         bounds = visualization.illustration_bounds(plant, station.scene_graph)
-        visualization.frame_workspace(meshcat, *bounds, work_height=table_top_z())
+        visualization.frame_workspace(meshcat, *bounds, work_height=station.geometry.table_top)
         builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
         builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
         builder.Connect(station.diagram.GetOutputPort("ee_pose"), vis.GetInputPort("ee_pose"))
@@ -298,9 +300,7 @@ def build_shared_control_diagram(
 
 
 def start_ee_pose(station: Any) -> NDArray[np.float64]:
-    """``[x, y, z, qw, qx, qy, qz]`` of the end effector in the station's default (start) state."""
-    from drake_disamb.station import EE_FRAME
-
-    plant = station.plant
-    X = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(plant.CreateDefaultContext())
-    return np.concatenate((X.translation(), X.rotation().ToQuaternion().wxyz()))
+    """``[x, y, z, qw, qx, qy, qz]`` of the end effector at the start: the station's ``ee_pose``
+    output in its default context (the simulated arm's home, or the measured arm's pose)."""
+    diagram = station.diagram
+    return np.asarray(diagram.GetOutputPort("ee_pose").Eval(diagram.CreateDefaultContext())).copy()

@@ -211,11 +211,12 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     station = build_station(config, meshcat=meshcat)
     if meshcat is not None:
-        from drake_disamb.clearance import table_top_z
         from drake_disamb.systems.visualization import frame_workspace, illustration_bounds
 
         frame_workspace(
-            meshcat, *illustration_bounds(station.plant, station.scene_graph), work_height=table_top_z()
+            meshcat,
+            *illustration_bounds(station.plant, station.scene_graph),
+            work_height=station.geometry.table_top,
         )
     try:
         written = write_diagram_graph(station.diagram, out / "station")

@@ -61,14 +61,14 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, Meshcat, Role, SceneGraph
 from pydrake.math import RigidTransform
-from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
+from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import Frame, JointActuatorIndex, ModelInstanceIndex, PdControllerGains
 from pydrake.systems.controllers import InverseDynamics
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import Demultiplexer, MatrixGain, Multiplexer
 
-from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
+from drake_disamb.paths import mico_directives, mico_urdf
 from drake_disamb.station.config import (
     ARM_JOINTS,
     ARM_MODEL_NAME,
@@ -78,31 +78,28 @@ from drake_disamb.station.config import (
     FINGER_MAX_OPENING,
     SceneObject,
     StationConfig,
+    model_parser,
 )
+from drake_disamb.station.geometry import StationGeometry
+from drake_disamb.station.ports import SHARED_INPUTS, SHARED_OUTPUTS, SIMULATION_OUTPUTS
 from drake_disamb.station.systems import DifferentialIKIntegrator, EndEffectorState, GripperOpeningIntegrator
 
-STATION_INPUTS: tuple[str, ...] = ("ee_velocity_command", "gripper_command")
-"""Names of the station diagram's exported input ports."""
-STATION_OUTPUTS: tuple[str, ...] = (
-    "ee_pose",
-    "ee_velocity",
-    "arm_joint_state",
-    "gripper_opening",
-    "ik_status",
-    "query_object",
-)
-"""Names of the station diagram's exported output ports."""
+STATION_INPUTS: tuple[str, ...] = SHARED_INPUTS
+"""Names of the simulated station diagram's exported input ports."""
+STATION_OUTPUTS: tuple[str, ...] = SHARED_OUTPUTS + SIMULATION_OUTPUTS
+"""Names of the simulated station diagram's exported output ports."""
 
 
 @dataclass(frozen=True)
 class Station:
-    """A built station: its Diagram and typed handles on the systems inside it.
+    """A built station (any backend): its Diagram and typed handles on the systems inside it.
 
     Attributes:
         diagram: The station Diagram (named ``"station"``) with the exported ports
-            :data:`STATION_INPUTS` and :data:`STATION_OUTPUTS`; add it to a builder, or simulate it
-            on its own.
-        plant: The simulated MultibodyPlant (subsystem ``"plant"``: discrete, SAP, gravity on).
+            :data:`~drake_disamb.station.ports.SHARED_INPUTS`, and ``outputs``; add it to a builder,
+            or simulate it on its own.
+        plant: The station's MultibodyPlant (subsystem ``"plant"``): the simulated arm (discrete,
+            SAP, gravity on), or on a wire the model that the measured angles pose.
         scene_graph: Its SceneGraph (subsystem ``"scene_graph"``).
         arm: Model instance of the MICO (arm and gripper) in ``plant``.
         control_plant: Arm-only continuous plant (plus objects held in the gripper) that the
@@ -112,6 +109,8 @@ class Station:
         config: The configuration used.
         scene_objects: All scene objects added (the config's first).
         meshcat: The Meshcat instance the station draws into, if any.
+        geometry: The clearance geometry of ``plant`` (the IK's floor uses it).
+        outputs: Names of the exported output ports (:data:`STATION_OUTPUTS` for the simulation).
     """
 
     diagram: Diagram
@@ -124,16 +123,12 @@ class Station:
     config: StationConfig
     scene_objects: tuple[SceneObject, ...]
     meshcat: Meshcat | None = None
+    geometry: StationGeometry | None = None
+    outputs: tuple[str, ...] = STATION_OUTPUTS
 
     def plant_context(self, root_context: Context) -> Context:
         """The plant's context inside ``root_context`` (the station's or any enclosing diagram's)."""
         return self.plant.GetMyContextFromRoot(root_context)
-
-
-def _parser(plant: MultibodyPlant) -> Parser:
-    parser = Parser(plant)
-    parser.package_map().Add(MODELS_PACKAGE, str(models_dir()))
-    return parser
 
 
 def _add_objects(
@@ -160,7 +155,7 @@ def _add_objects(
 
 def _make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
     plant = MultibodyPlant(time_step=0.0)
-    (arm,) = _parser(plant).AddModels(str(mico_urdf()))
+    (arm,) = model_parser(plant).AddModels(str(mico_urdf()))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(BASE_FRAME, arm))
     _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
     plant.Finalize()
@@ -223,7 +218,7 @@ def build_station(
     builder = DiagramBuilder()
 
     plant, scene_graph = AddMultibodyPlant(config.plant_config, builder)
-    ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, _parser(plant))
+    ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
     ee_frame = plant.GetFrameByName(EE_FRAME, arm)
     _add_objects(plant, objects, ee_frame, only_attached=False)
@@ -270,8 +265,10 @@ def build_station(
     builder.Connect(state, finger_state.get_input_port())
     builder.Connect(finger_state.get_output_port(), gripper_opening.get_input_port())
 
+    geometry = StationGeometry.from_plant(plant, scene_graph, arm)
     diff_ik = builder.AddNamedSystem(
-        "diff_ik", DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects)
+        "diff_ik",
+        DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects, geometry=geometry),
     )
     gripper = builder.AddNamedSystem(
         "gripper_integrator",
@@ -351,4 +348,5 @@ def build_station(
         config=config,
         scene_objects=objects,
         meshcat=meshcat,
+        geometry=geometry,
     )
