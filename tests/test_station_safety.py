@@ -165,3 +165,12 @@ def test_huge_finite_command_is_slowed_along_it_without_warnings() -> None:
     assert result.off_total <= OFF_TOTAL and result.off_speed <= OFF_SPEED
     assert result.progress > 0.1  # moved, at the joints' limits, along the command
     assert IkStatus.LIMITED in result.statuses
+
+
+@pytest.mark.parametrize("V", [[0.1, 0, 0, 0, 0, 0], [0, 0, 0, 0.67, 0, 0], [0, 0, -0.1, 0, 0, 0]])
+def test_the_limits_hold_over_the_lcm_path(V: list[float]) -> None:
+    """The same contract with the station on a memq:// bus and the simulated driver behind it."""
+    rig = Hold(POSTURES["home"], on_wire=True)
+    result = rig.run(np.array(V, dtype=float), 4.0)
+    assert result.off_total <= OFF_TOTAL and result.off_speed <= OFF_SPEED, (V, result)
+    assert result.progress > 0.1

@@ -102,6 +102,22 @@ class SharedControlDiagram:
         sampler = self.systems["ee_pose_sampler"]
         sampler.GetMyMutableContextFromRoot(root_context).SetDiscreteState(np.asarray(station_pose))
 
+    def station_fault(self, root_context: Context) -> str:
+        """The reason of the station's latched fault in ``root_context``, or ``""`` (a simulated
+        station has no ``fault`` port and never faults)."""
+        if "fault" not in self.station.outputs:
+            return ""
+        from drake_disamb.station.lcm.faults import Fault
+
+        diagram = self.station.diagram
+        code = diagram.GetOutputPort("fault").Eval(diagram.GetMyContextFromRoot(root_context))[0]
+        return Fault(int(code)).reason
+
+    def stop_station(self) -> None:
+        """Command the arm to stop (the zero command, several times) if the station is on a wire."""
+        if self.station.link is not None:
+            self.station.link.stop_arm()
+
     def goal_names(self, stage: int) -> list[str]:
         """Goal names in belief-slot order for ``stage``."""
         return [g.name for g in self.scenario.stage_goals(stage)]

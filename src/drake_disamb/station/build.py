@@ -55,8 +55,9 @@ the station's state is untouched.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, Meshcat, Role, SceneGraph
@@ -65,7 +66,7 @@ from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirective
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import Frame, JointActuatorIndex, ModelInstanceIndex, PdControllerGains
 from pydrake.systems.controllers import InverseDynamics
-from pydrake.systems.framework import Context, Diagram, DiagramBuilder
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder, InputPort, OutputPort
 from pydrake.systems.primitives import Demultiplexer, MatrixGain, Multiplexer
 
 from drake_disamb.paths import mico_directives, mico_urdf
@@ -111,6 +112,8 @@ class Station:
         meshcat: The Meshcat instance the station draws into, if any.
         geometry: The clearance geometry of ``plant`` (the IK's floor uses it).
         outputs: Names of the exported output ports (:data:`STATION_OUTPUTS` for the simulation).
+        link: On a wire, the :class:`~drake_disamb.station.lcm.bus.CommandLink` (its
+            ``stop_arm()`` sends the zero command several times); ``None`` in simulation.
     """
 
     diagram: Diagram
@@ -118,13 +121,14 @@ class Station:
     scene_graph: SceneGraph
     arm: ModelInstanceIndex
     control_plant: MultibodyPlant
-    diff_ik: DifferentialIKIntegrator
-    gripper: GripperOpeningIntegrator
+    diff_ik: DifferentialIKIntegrator | None
+    gripper: GripperOpeningIntegrator | None
     config: StationConfig
     scene_objects: tuple[SceneObject, ...]
     meshcat: Meshcat | None = None
     geometry: StationGeometry | None = None
     outputs: tuple[str, ...] = STATION_OUTPUTS
+    link: Any = None
 
     def plant_context(self, root_context: Context) -> Context:
         """The plant's context inside ``root_context`` (the station's or any enclosing diagram's)."""
@@ -208,6 +212,65 @@ def build_station(
             ``config.home_q`` outside the joint limits.
     """
     config = config or StationConfig()
+    return _build_plant_station(config, scene_objects, meshcat, _ik_set_points)
+
+
+@dataclass(frozen=True)
+class _SetPoints:
+    """What a set-point source adds to the plant station: the arm's and the fingers' desired
+    states (12 and 4 ports) and the ports it exports."""
+
+    arm_desired: OutputPort
+    finger_desired: OutputPort
+    inputs: dict[str, InputPort]
+    outputs: dict[str, OutputPort]
+    diff_ik: DifferentialIKIntegrator | None = None
+    gripper: GripperOpeningIntegrator | None = None
+
+
+def _ik_set_points(
+    builder: DiagramBuilder,
+    config: StationConfig,
+    control_plant: MultibodyPlant,
+    control_arm: ModelInstanceIndex,
+    objects: Sequence[SceneObject],
+    geometry: StationGeometry,
+    arm_state: OutputPort,
+    finger_state: OutputPort,
+) -> _SetPoints:
+    """The simulated station's set points: the differential IK and the gripper integrator."""
+    diff_ik = builder.AddNamedSystem(
+        "diff_ik",
+        DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects, geometry=geometry),
+    )
+    gripper = builder.AddNamedSystem(
+        "gripper_integrator",
+        GripperOpeningIntegrator(
+            config.control_period, FINGER_MAX_OPENING, config.home_gripper_opening, config.warn_interval
+        ),
+    )
+    builder.Connect(arm_state, diff_ik.GetInputPort("arm_joint_state"))
+    builder.Connect(finger_state, gripper.GetInputPort("finger_state"))
+    return _SetPoints(
+        arm_desired=diff_ik.GetOutputPort("desired_state"),
+        finger_desired=gripper.GetOutputPort("finger_desired_state"),
+        inputs={
+            "ee_velocity_command": diff_ik.GetInputPort("ee_velocity_command"),
+            "gripper_command": gripper.GetInputPort("gripper_command"),
+        },
+        outputs={"ik_status": diff_ik.GetOutputPort("ik_status")},
+        diff_ik=diff_ik,
+        gripper=gripper,
+    )
+
+
+def _build_plant_station(
+    config: StationConfig,
+    scene_objects: Iterable[SceneObject],
+    meshcat: Meshcat | None,
+    set_points: Callable[..., _SetPoints],
+) -> Station:
+    """The plant, its PD and gravity compensation, with the set points ``set_points`` adds."""
     objects = tuple(config.scene_objects) + tuple(scene_objects)
     names = [o.name for o in objects]
     for k, obj in enumerate(objects):
@@ -266,26 +329,24 @@ def build_station(
     builder.Connect(finger_state.get_output_port(), gripper_opening.get_input_port())
 
     geometry = StationGeometry.from_plant(plant, scene_graph, arm)
-    diff_ik = builder.AddNamedSystem(
-        "diff_ik",
-        DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects, geometry=geometry),
+    points = set_points(
+        builder,
+        config,
+        control_plant,
+        control_arm,
+        objects,
+        geometry,
+        arm_state.get_output_port(),
+        finger_state.get_output_port(),
     )
-    gripper = builder.AddNamedSystem(
-        "gripper_integrator",
-        GripperOpeningIntegrator(
-            config.control_period, FINGER_MAX_OPENING, config.home_gripper_opening, config.warn_interval
-        ),
-    )
-    builder.Connect(arm_state.get_output_port(), diff_ik.GetInputPort("arm_joint_state"))
-    builder.Connect(finger_state.get_output_port(), gripper.GetInputPort("finger_state"))
 
     # Desired state: the set points regrouped as [q_d; v_d] in ARM_JOINTS + FINGER_JOINTS order,
     # then mapped to the plant's actuator order (each actuator drives one of those joints).
     arm_split = builder.AddNamedSystem("arm_set_point_demux", Demultiplexer([6, 6]))
     finger_split = builder.AddNamedSystem("finger_set_point_demux", Demultiplexer([2, 2]))
     mux = builder.AddNamedSystem("desired_state_mux", Multiplexer([6, 2, 6, 2]))
-    builder.Connect(diff_ik.GetOutputPort("desired_state"), arm_split.get_input_port())
-    builder.Connect(gripper.GetOutputPort("finger_desired_state"), finger_split.get_input_port())
+    builder.Connect(points.arm_desired, arm_split.get_input_port())
+    builder.Connect(points.finger_desired, finger_split.get_input_port())
     for k, port in enumerate(
         (arm_split.get_output_port(0), finger_split.get_output_port(0))
         + (arm_split.get_output_port(1), finger_split.get_output_port(1))
@@ -326,14 +387,18 @@ def build_station(
             builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration, prefix="station")
         )
 
-    builder.ExportInput(diff_ik.GetInputPort("ee_velocity_command"), "ee_velocity_command")
-    builder.ExportInput(gripper.GetInputPort("gripper_command"), "gripper_command")
-    builder.ExportOutput(ee_state.GetOutputPort("ee_pose"), "ee_pose")
-    builder.ExportOutput(ee_state.GetOutputPort("ee_velocity"), "ee_velocity")
-    builder.ExportOutput(arm_state.get_output_port(), "arm_joint_state")
-    builder.ExportOutput(gripper_opening.get_output_port(), "gripper_opening")
-    builder.ExportOutput(diff_ik.GetOutputPort("ik_status"), "ik_status")
-    builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
+    for name, port in points.inputs.items():
+        builder.ExportInput(port, name)
+    outputs = {
+        "ee_pose": ee_state.GetOutputPort("ee_pose"),
+        "ee_velocity": ee_state.GetOutputPort("ee_velocity"),
+        "arm_joint_state": arm_state.get_output_port(),
+        "gripper_opening": gripper_opening.get_output_port(),
+        **points.outputs,
+        "query_object": scene_graph.get_query_output_port(),
+    }
+    for name, port in outputs.items():
+        builder.ExportOutput(port, name)
     diagram = builder.Build()
     diagram.set_name("station")
 
@@ -343,10 +408,11 @@ def build_station(
         scene_graph=scene_graph,
         arm=arm,
         control_plant=control_plant,
-        diff_ik=diff_ik,
-        gripper=gripper,
+        diff_ik=points.diff_ik,
+        gripper=points.gripper,
         config=config,
         scene_objects=objects,
         meshcat=meshcat,
         geometry=geometry,
+        outputs=tuple(outputs),
     )

@@ -182,6 +182,11 @@ class DifferentialIKIntegrator(LeafSystem):
         return self._plant
 
     @property
+    def velocity_limits(self) -> NDArray[np.float64]:
+        """Joint speed limits (rad/s) the integrator respects."""
+        return self._vmax.copy()
+
+    @property
     def joint_position_limits(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Lower and upper joint limits (rad) the integrator respects."""
         return self._lower.copy(), self._upper.copy()

@@ -13,11 +13,12 @@ from dataclasses import dataclass, field
 
 from pydrake.geometry import Meshcat
 
+from drake_disamb.station.backends.lcm import InProcessLcm, Lcm
 from drake_disamb.station.backends.sim import Sim
 from drake_disamb.station.build import Station
 from drake_disamb.station.config import SceneObject, StationConfig
 
-BACKENDS: dict[str, type] = {cls.name: cls for cls in (Sim,)}
+BACKENDS: dict[str, type] = {cls.name: cls for cls in (Sim, Lcm)}
 """Every registered backend by name (``--station NAME``)."""
 
 StationBackend = typing.Union[tuple(BACKENDS.values())]  # noqa: UP007 (built from the registry)
@@ -69,6 +70,8 @@ def make_station(
 
 __all__ = [
     "BACKENDS",
+    "InProcessLcm",
+    "Lcm",
     "Sim",
     "StationBackend",
     "StationChoice",
