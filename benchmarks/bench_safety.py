@@ -2,10 +2,10 @@
 
 Usage: ``python benchmarks/bench_safety.py [--duration 10] [--station sim|lcm]``. From five start
 postures (home, next to the wrist singularity, the elbow on its limit, the wrist roll on its limit,
-a turned posture) it holds each pure single-axis command (translations at +/-0.1 m/s, rotations at +/-0.2 and +/-0.67
-rad/s) on the simulated station and prints, per posture, the worst total motion outside the
-commanded direction (cm), the worst speed of that motion (cm/s), the worst rotation outside it
-(rad), and how often each IK status appeared. The acceptance limits are 2 cm and 1 cm/s.
+a turned posture) it holds each pure single-axis command (translations at +/-0.1 m/s, rotations at
++/-0.2 and +/-0.67 rad/s) on the simulated station and prints, per posture, the worst total motion
+outside the commanded direction (cm), the worst speed of that motion (cm/s), the worst rotation
+outside it (rad), and how often each IK status appeared. The acceptance limits are 2 cm and 1 cm/s.
 ``--station lcm`` holds the commands over the LCM path: the station on a ``memq://`` bus with the
 simulated driver behind ``lcmt_jaco_status`` / ``lcmt_jaco_command`` (one period of latency).
 """

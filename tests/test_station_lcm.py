@@ -258,8 +258,8 @@ def test_a_burst_is_read_as_its_latest_status() -> None:
 
     wire = Wire(extra=extra)
     wire.simulator.AdvanceTo(0.1)
-    used, dropped, bursts = wire.counts()
-    assert bursts == 1 and dropped == 0
+    used, dropped, missed = wire.counts()
+    assert missed == 2 and dropped == 0
     assert len(wire.commands) <= used + 1
 
 
@@ -412,3 +412,57 @@ def test_killing_the_driver_mid_trial_stops_the_arm_and_the_demo(tmp_path) -> No
     zero_at = next(t for t, c in seen if t >= killed and not np.any(c))
     assert zero_at - killed <= 3 * PERIOD + 0.02
     assert all(not np.any(c) for t, c in seen if t >= zero_at)
+
+
+def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:
+    from drake_disamb.systems.deadman import PageDeadman
+
+    class Page:
+        connections = 1
+
+        def GetNumActiveConnections(self) -> int:  # noqa: N802 (Meshcat's name)
+            return self.connections
+
+    page = Page()
+    deadman = PageDeadman(page, PERIOD, timeout=0.5)
+    simulator = Simulator(deadman)
+    ctx = simulator.get_mutable_context()
+    deadman.GetInputPort("raw_in").FixValue(ctx, [0.7, 0.0, 0.0, 0.0])
+    simulator.AdvanceTo(1.0)
+    assert deadman.GetOutputPort("raw").Eval(ctx)[0] == 0.7
+    page.connections = 0
+    simulator.AdvanceTo(1.45)
+    assert deadman.GetOutputPort("raw").Eval(ctx)[0] == 0.7  # not yet
+    simulator.AdvanceTo(1.6)
+    assert (
+        not np.any(deadman.GetOutputPort("raw").Eval(ctx)) and deadman.GetOutputPort("released").Eval(ctx)[0]
+    )
+    page.connections = 1
+    simulator.AdvanceTo(1.7)
+    assert deadman.GetOutputPort("raw").Eval(ctx)[0] == 0.7
+
+
+def test_the_driver_stops_the_arm_when_commands_stop_and_ignores_bad_ones() -> None:
+    wire = Wire()
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    wire.simulator.AdvanceTo(0.5)
+    driver = wire.driver
+    moving = driver.joint_positions()
+    for _ in range(3):
+        driver.step()
+    assert np.linalg.norm(driver.joint_positions() - moving) > 1e-4  # still obeying the last command
+    for _ in range(60):  # no command for 0.6 s: the arm stops (the PD settles)
+        driver.step()
+    stopped = driver.joint_positions()
+    for _ in range(10):
+        driver.step()
+    assert np.linalg.norm(driver.joint_positions() - stopped) < 1e-5
+    bad = lcmt_jaco_command()
+    bad.num_joints, bad.joint_position, bad.joint_velocity = 6, [0.0] * 6, [float("nan"), 0.3, 0, 0, 0, 0]
+    bad.num_fingers, bad.finger_position, bad.finger_velocity = 2, [0.0] * 2, [0.0] * 2
+    dropped = driver.dropped
+    for _ in range(10):
+        wire.lcm.Publish(DEFAULT_COMMAND_CHANNEL, bad.encode())
+        driver.step()
+    assert driver.dropped == dropped + 10
+    assert np.linalg.norm(driver.joint_positions() - stopped) < 2e-5

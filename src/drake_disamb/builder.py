@@ -198,7 +198,15 @@ def build_shared_control_diagram(
         user = builder.AddSystem(input_source)
         if not user.get_name():
             user.set_name("input_source")
-    builder.Connect(user.GetOutputPort("raw"), interface.GetInputPort("raw"))
+    raw = user.GetOutputPort("raw")
+    if input_source is not None and meshcat is not None and station.link is not None:
+        # A person at the page drives a real arm: losing the page releases every signal.
+        from drake_disamb.systems.deadman import PageDeadman
+
+        deadman = builder.AddNamedSystem("deadman", PageDeadman(meshcat, scenario.control_period))
+        builder.Connect(raw, deadman.GetInputPort("raw_in"))
+        raw = deadman.GetOutputPort("raw")
+    builder.Connect(raw, interface.GetInputPort("raw"))
 
     # The control loop (every scenario.control_period, 10 ms by default) sees the end-effector pose
     # sampled at its ticks (as the MICO's Cartesian interface reports it); this also keeps plant

@@ -41,10 +41,13 @@ class StatusInbox:
         self._pending.append((bytes(data), time.monotonic()))
 
     def poll(self, timeout: float) -> None:
-        """Receive what arrives within ``timeout`` seconds (at least what is already there)."""
+        """Receive what arrives within ``timeout`` seconds, then everything already queued (LCM
+        hands over one message per call: a backlog is drained, never left to overflow)."""
         if self._pump is not None:
             self._pump()
-        self._lcm.HandleSubscriptions(max(0, int(timeout * 1000)))
+        if self._lcm.HandleSubscriptions(max(0, int(timeout * 1000))) > 0:
+            while self._lcm.HandleSubscriptions(0) > 0:
+                pass
 
     def take(self) -> list[tuple[bytes, float]]:
         """Every message received since the last take, oldest first."""
@@ -69,13 +72,17 @@ class CommandLink:
         self.latencies: list[float] = []
         self.sent = 0
         self._stopped = False
+        self._answered: float | None = None
 
     def publish(self, msg: object, answered_at: float | None = None) -> None:
-        """Publish one command; ``answered_at`` is the receipt time of the status it answers."""
+        """Publish one command; ``answered_at`` is the receipt time of the status it answers (a
+        latency is recorded for the first command after each status)."""
         self._lcm.Publish(self.channel, msg.encode())  # type: ignore[attr-defined]
         self.sent += 1
-        if answered_at is not None:
-            self.latencies.append(time.monotonic() - answered_at)
+        if answered_at is not None and answered_at != self._answered:
+            if self._answered is not None:
+                self.latencies.append(time.monotonic() - answered_at)
+            self._answered = answered_at
 
     def stop_arm(self, utime: int = 0) -> None:
         """Send the zero command ``zero_repeats`` times, one period apart (idempotent: only the

@@ -33,7 +33,9 @@ class JacoStatusReceiver(LeafSystem):
 
     Every ``period`` it polls the bus until a status arrives that decodes, has 6 joints and 2
     fingers, is finite and has a ``utime`` after the last one used (others are dropped and counted
-    on ``sanitized_input_count``); of several (a burst) the latest is used. A status that puts a
+    on ``sanitized_input_count``); of several (a burst) the latest is used, and the ones skipped
+    are counted as missed (LCM over UDP keeps only the latest message of a channel, so there they
+    show only as a gap in ``utime``). A status that puts a
     joint outside the model's limits latches :attr:`Fault.JOINT_LIMIT`; no usable status within
     ``status_timeout`` seconds (wall clock) of the last one latches :attr:`Fault.STATUS_TIMEOUT`.
     Once a fault is latched it no longer waits and its measurement holds still (velocities zero).
@@ -44,7 +46,8 @@ class JacoStatusReceiver(LeafSystem):
     - arm_joint_state (12): measured DH angles (rad) then velocities (rad/s)
     - finger_state (4): finger slides (m) then speeds (m/s)
     - fault (1): the latched Fault code (0 while none)
-    - status_count (3): statuses used, dropped, and ticks that found more than one (bursts)
+    - status_count (3): statuses used, dropped, and missed (skipped between two used ones, by
+      their utime: a burst, or a tick that came late)
     - sanitized_input_count (1): ticks at which a status was dropped
     @endsystem
 
@@ -66,6 +69,7 @@ class JacoStatusReceiver(LeafSystem):
         self._inbox = inbox
         self._lower, self._upper = np.asarray(lower, float), np.asarray(upper, float)
         self._timeout = float(status_timeout)
+        self._period_us = period * 1e6
         self._arm = self.DeclareDiscreteState(np.concatenate([first.q, first.v]))
         self._finger = self.DeclareDiscreteState(np.concatenate([first.finger_q, first.finger_v]))
         self._fault = self.DeclareDiscreteState([float(Fault.NONE)])
@@ -78,6 +82,10 @@ class JacoStatusReceiver(LeafSystem):
         self.DeclareStateOutputPort("status_count", self._counts)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
 
+    def last_utime(self, context: Context) -> int:
+        """The ``utime`` (us) of the status used last in ``context``."""
+        return int(context.get_discrete_state(self._utime).get_value()[0])
+
     def fault(self, context: Context) -> Fault:
         """The fault latched in ``context``."""
         return Fault(int(context.get_discrete_state(self._fault).get_value()[0]))
@@ -87,11 +95,11 @@ class JacoStatusReceiver(LeafSystem):
             return EventStatus.DidNothing()
         arm = context.get_discrete_state(self._arm).get_value()
         last_utime = int(context.get_discrete_state(self._utime).get_value()[0])
-        used, dropped, bursts = context.get_discrete_state(self._counts).get_value()
+        used, dropped, missed = context.get_discrete_state(self._counts).get_value()
+        previous_utime = last_utime
         good: StatusReading | None = None
         good_at = 0.0
         fault = Fault.NONE
-        found = 0
         reason = ""
         while True:
             now = time.monotonic()
@@ -109,7 +117,6 @@ class JacoStatusReceiver(LeafSystem):
                     reason = f"joint angles {np.round(reading.q, 4).tolist()} rad outside the model's limits"
                     break
                 good, good_at, last_utime = reading, received, reading.utime
-                found += 1
             if fault != Fault.NONE or good is not None:
                 break
             if time.monotonic() >= self._inbox.last_good + self._timeout:
@@ -134,8 +141,8 @@ class JacoStatusReceiver(LeafSystem):
             )
             discrete_state.get_mutable_vector(self._utime).SetAtIndex(0, float(good.utime))
             used += 1
-            bursts += found > 1
-        discrete_state.get_mutable_vector(self._counts).SetFromVector([used, dropped, bursts])
+            missed += max(0, round((good.utime - previous_utime) / self._period_us) - 1)
+        discrete_state.get_mutable_vector(self._counts).SetFromVector([used, dropped, missed])
         return EventStatus.Succeeded()
 
 
