@@ -466,3 +466,15 @@ def test_the_driver_stops_the_arm_when_commands_stop_and_ignores_bad_ones() -> N
         driver.step()
     assert driver.dropped == dropped + 10
     assert np.linalg.norm(driver.joint_positions() - stopped) < 2e-5
+
+
+def test_the_commands_name_a_bad_station_option(capsys, tmp_path) -> None:  # noqa: ANN001
+    from drake_disamb.cli import main
+
+    assert main(["mico-driver", "--lcm-url", "bogus", "--quiet"]) == 2
+    assert "--lcm-url: expected a URL such as udpm://" in capsys.readouterr().err
+    assert main(["demo", "--lcm-url", "memq://", "--no-meshcat", "--out", str(tmp_path)]) == 2
+    assert "--lcm-url: the sim station has no bus (add --station lcm)" in capsys.readouterr().err
+    args = ["station-demo", "--station", "lcm", "--lcm-url", "nourl", "--no-meshcat", "--out", str(tmp_path)]
+    assert main(args) == 2
+    assert "--lcm-url: station.lcm_url: expected a URL" in capsys.readouterr().err

@@ -32,8 +32,10 @@ same systems (``"plant"``, ``"scene_graph"``, ``"diff_ik"``, ``"gripper_integrat
 ``diff_ik.control_plant()``). A subsystem's context inside any enclosing root context is
 ``system.GetMyContextFromRoot(root_context)`` (:meth:`Station.plant_context` for the plant).
 
-Station ports (velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``, not Drake's
-``[w; v]``; W is the world frame, which coincides with ``mico_link_base``):
+Station ports, those every backend provides (:mod:`~drake_disamb.station.ports`) and the
+simulation's own ``ik_status`` and ``query_object`` (velocities are in the paper's order
+``[vx, vy, vz, wx, wy, wz]``, not Drake's ``[w; v]``; W is the world frame, which coincides with
+``mico_link_base``):
 
 - input ``ee_velocity_command`` (6): desired spatial velocity of ``mico_end_effector``, m/s and
   rad/s, expressed in W, taken at the end-effector origin.

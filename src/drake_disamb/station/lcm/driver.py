@@ -163,6 +163,7 @@ class SimulatedDriver:
         self._steps_since_command = self._timeout_steps + 1
         self._fresh = False
         self.statuses = self.commands = self.dropped = 0
+        self._steps = 0  # periods advanced: the time is steps * period (no drift from a running sum)
         self.alive = True
         self._set_velocity(np.zeros(6), np.zeros(2))
         self._simulator.Initialize()
@@ -204,7 +205,8 @@ class SimulatedDriver:
             self._set_velocity(*self._command)
         else:
             self._set_velocity(np.zeros(6), np.zeros(2))
-        self._simulator.AdvanceTo(self._context.get_time() + self.period)
+        self._steps += 1
+        self._simulator.AdvanceTo(self._steps * self.period)
         self.publish_status()
 
     def kill(self) -> None:
@@ -216,7 +218,7 @@ class SimulatedDriver:
         ``duration`` seconds of simulated time; returns the periods that started late."""
         late = 0
         next_tick = time.monotonic()
-        while not stop() and (duration is None or self._context.get_time() < duration):
+        while not stop() and (duration is None or self._steps * self.period < duration):
             self.step()
             next_tick += self.period
             wait = next_tick - time.monotonic()

@@ -94,7 +94,7 @@ def first_status(
     extra = f" (the last one was dropped: {why})" if why else ""
     raise RuntimeError(
         f"station: no usable arm status on {inbox.channel!r} at {where} within {timeout:g} s{extra}; "
-        "is the driver running (drake-disamb mico-driver --lcm-url URL)?"
+        "is a driver publishing on that bus (the arm's, or the simulated one)?"
     )
 
 
