@@ -485,3 +485,72 @@ def test_the_commands_name_a_bad_station_option(capsys, tmp_path) -> None:  # no
     args = ["station-demo", "--station", "lcm", "--lcm-url", "nourl", "--no-meshcat", "--out", str(tmp_path)]
     assert main(args) == 2
     assert "--lcm-url: station.lcm_url: expected a URL" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("stop", ["signal", "exception"])
+def test_a_trial_that_stops_sends_zero_several_times(stop: str) -> None:
+    """A stop request (Ctrl-C, SIGTERM: the commands' flag) or an exception: zero, several times."""
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    backend = InProcessLcm(lcm_url="memq://")
+    handles = build_shared_control_diagram(load_scenario("reaching"), backend=backend)
+    seen: list[np.ndarray] = []
+    backend.driver.lcm.Subscribe(
+        DEFAULT_COMMAND_CHANNEL,
+        lambda data: seen.append(np.array(lcmt_jaco_command.decode(data).joint_velocity)),
+    )
+    calls = [0]
+
+    def stop_requested() -> bool:
+        calls[0] += 1
+        if calls[0] == 150:
+            if stop == "exception":
+                raise RuntimeError("a failure in the loop")
+            return True
+        return False
+
+    if stop == "exception":
+        with pytest.raises(RuntimeError, match="a failure in the loop"):
+            run_trial(handles, progress=False, stop_requested=stop_requested)
+    else:
+        assert run_trial(handles, progress=False, stop_requested=stop_requested).interrupted
+    backend.driver.lcm.HandleSubscriptions(0)
+    repeats = Lcm().zero_command_repeats
+    assert any(np.any(c) for c in seen[:-repeats])  # it was moving
+    assert len(seen) > repeats and all(not np.any(c) for c in seen[-repeats:])
+
+
+def test_a_live_input_on_the_wire_passes_through_the_deadman() -> None:
+    from pydrake.geometry import Meshcat, MeshcatParams
+    from pydrake.systems.framework import LeafSystem
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+
+    class HeldSwitch(LeafSystem):  # a person holding the left switch, as the live page would report
+        def __init__(self) -> None:
+            super().__init__()
+            self.DeclareVectorOutputPort("raw", 4, lambda context, out: out.SetFromVector([1.0, 0, 0, 0]))
+
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    handles = build_shared_control_diagram(
+        load_scenario("reaching"),
+        meshcat=meshcat,
+        input_source=HeldSwitch(),
+        backend=InProcessLcm(lcm_url="memq://"),
+    )
+    deadman = handles.diagram.GetSubsystemByName("deadman")
+    interface = handles.systems["interface"]
+    simulator = Simulator(handles.diagram)
+    ctx = simulator.get_mutable_context()
+    handles.initialize(ctx)
+    simulator.AdvanceTo(1.0)  # no browser at the page: released after 0.5 s
+    assert deadman.GetOutputPort("released").Eval(deadman.GetMyContextFromRoot(ctx))[0] == 1.0
+    assert not np.any(interface.GetInputPort("raw").Eval(interface.GetMyContextFromRoot(ctx)))
+    handles.stop_station()
+    sim_handles = build_shared_control_diagram(
+        load_scenario("reaching"), meshcat=meshcat, input_source=HeldSwitch()
+    )
+    assert not sim_handles.diagram.HasSubsystemNamed("deadman")  # the simulated arm: unchanged
