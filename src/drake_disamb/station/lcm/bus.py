@@ -10,6 +10,7 @@ moves it into its context's discrete state at each tick.
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
@@ -55,12 +56,17 @@ class StatusInbox:
         return out
 
 
+KEPT_LATENCIES = 360_000
+"""Latencies a :class:`CommandLink` keeps (an hour at 100 Hz)."""
+
+
 class CommandLink:
     """Publishes commands on the command channel, and zero commands when the controller stops.
 
     Attributes:
         latencies: Wall-clock seconds from the receipt of the status a command answers to its
-            publication, one per command (the hardware-loop benchmark reads them).
+            publication, one per command, the last :data:`KEPT_LATENCIES` (the hardware-loop
+            benchmark reads them).
         sent: Commands published.
     """
 
@@ -69,7 +75,7 @@ class CommandLink:
         self.channel = channel
         self._period = float(period)
         self._zero_repeats = int(zero_repeats)
-        self.latencies: list[float] = []
+        self.latencies: deque[float] = deque(maxlen=KEPT_LATENCIES)
         self.sent = 0
         self._stopped = False
         self._answered: float | None = None
