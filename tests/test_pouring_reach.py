@@ -56,7 +56,7 @@ class _Driver:
         self.ctx = self.plant.CreateDefaultContext()
         self.frame = self.plant.GetFrameByName(EE_FRAME)
         self.q_idx = [self.plant.GetJointByName(n).position_start() for n in ARM_JOINTS]
-        self.ik = DifferentialIKIntegrator(self.plant, config)
+        self.ik = DifferentialIKIntegrator(self.plant, config, geometry=station.geometry)
         self.ik_ctx = self.ik.CreateDefaultContext()
         self.period = config.control_period
 

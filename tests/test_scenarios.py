@@ -247,12 +247,19 @@ def _warm() -> None:
 
 
 def test_table_top_comes_from_the_station_model() -> None:
-    from drake_disamb.clearance import arm_lowest_point, table_top_z
-    from drake_disamb.station import MICO_HOME_Q
+    from drake_disamb.station import MICO_HOME_Q, build_station
+    from drake_disamb.station.geometry import model_geometry
 
-    assert table_top_z() == pytest.approx(0.0, abs=1e-12)
-    assert arm_lowest_point(MICO_HOME_Q)[0] > 0.1
-    assert arm_lowest_point(load_scenario("pouring").start_joint_positions)[0] > 0.1
+    geometry = model_geometry()
+    assert geometry.table_top == pytest.approx(0.0, abs=1e-12)
+    assert geometry.arm_lowest_point(MICO_HOME_Q)[0] > 0.1
+    assert geometry.arm_lowest_point(load_scenario("pouring").start_joint_positions)[0] > 0.1
+    # A built station measures its own plant, with the same answers.
+    own = build_station().geometry
+    assert own.plant is not geometry.plant
+    assert own.table_top == geometry.table_top
+    assert own.arm_lowest_point(MICO_HOME_Q) == geometry.arm_lowest_point(MICO_HOME_Q)
+    assert np.array_equal(own.gripper_points_in_ee(), geometry.gripper_points_in_ee())
 
 
 def test_goal_under_the_table_is_rejected() -> None:
@@ -332,8 +339,10 @@ def test_start_posture_inside_the_table_is_rejected() -> None:
 
 
 def test_start_posture_counts_the_carried_object() -> None:
-    from drake_disamb.clearance import Solid, arm_lowest_point, pose_matrix
+    from drake_disamb.clearance import Solid, pose_matrix
+    from drake_disamb.station.geometry import model_geometry
 
+    arm_lowest_point = model_geometry().arm_lowest_point
     q = load_scenario("pouring").start_joint_positions
     cup = Solid("cup", "cylinder", (0.035, 0.6), pose_matrix([0.0, 0.0, 0.0, 0.7071, 0.0, 0.7071, 0.0]))
     low, part = arm_lowest_point(q, [cup])  # a 60 cm cup, upright in the gripper 30 cm above the table

@@ -17,7 +17,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from drake_disamb.clearance import gripper_lowest_point
 from drake_disamb.safety import CommandHold as Hold
 from drake_disamb.safety import HoldResult
 from drake_disamb.station import MICO_HOME_Q, IkStatus
@@ -102,7 +101,8 @@ def test_pure_rotation_does_not_translate() -> None:
 def test_floor_stops_a_downward_command() -> None:
     rig = Hold(POSTURES["home"])
     result = rig.run(np.array([0, 0, -0.1, 0, 0, 0.0]), 6.0)
-    lowest = gripper_lowest_point(rig.station.diagram.GetOutputPort("ee_pose").Eval(rig.ctx))[0]
+    pose = rig.station.diagram.GetOutputPort("ee_pose").Eval(rig.ctx)
+    lowest = rig.station.geometry.gripper_lowest_point(pose)[0]
     assert 0.0 < lowest <= rig.station.config.table_clearance + 0.01
     assert result.statuses[-1] == IkStatus.WORKSPACE
     assert result.off_total <= OFF_TOTAL
@@ -165,3 +165,12 @@ def test_huge_finite_command_is_slowed_along_it_without_warnings() -> None:
     assert result.off_total <= OFF_TOTAL and result.off_speed <= OFF_SPEED
     assert result.progress > 0.1  # moved, at the joints' limits, along the command
     assert IkStatus.LIMITED in result.statuses
+
+
+@pytest.mark.parametrize("V", [[0.1, 0, 0, 0, 0, 0], [0, 0, 0, 0.67, 0, 0], [0, 0, -0.1, 0, 0, 0]])
+def test_the_limits_hold_over_the_lcm_path(V: list[float]) -> None:
+    """The same contract with the station on a memq:// bus and the simulated driver behind it."""
+    rig = Hold(POSTURES["home"], on_wire=True)
+    result = rig.run(np.array(V, dtype=float), 4.0)
+    assert result.off_total <= OFF_TOTAL and result.off_speed <= OFF_SPEED, (V, result)
+    assert result.progress > 0.1

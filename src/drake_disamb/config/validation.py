@@ -20,7 +20,7 @@ that is not one of its field's choices). Then:
   one can count as reaching the other, and each goal's repeller pushes the arm off the other;
 - start joint angles outside the joint limits, or that put a link, a finger or the carried object
   less than :data:`MIN_TABLE_CLEARANCE` above the table top (forward kinematics of the station's
-  model, :mod:`drake_disamb.clearance`);
+  model, :mod:`drake_disamb.station.geometry`);
 - a simulated user whose intended goals or success tolerances do not fit the task.
 
 Every error is a ``ValueError`` naming the field path and the value, e.g.
@@ -188,8 +188,8 @@ def _solid(label: str, obj: Any, pose: Sequence[float]) -> Any:
 def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     """Check every field and cross-field constraint of ``scenario`` (see the module docstring).
 
-    The table and start-posture checks use the station's model (:mod:`drake_disamb.clearance`,
-    which imports pydrake).
+    The table and start-posture checks use the station's model
+    (:func:`drake_disamb.station.geometry.model_geometry`, which imports pydrake).
 
     Raises:
         ValueError: naming the field path (``scenario.goals[2].position`` ...) and the value.
@@ -240,9 +240,11 @@ def _check_release(opening: float, path: str) -> None:
 
 
 def _check_goals(s: Scenario, held: Sequence[Any], name: str) -> None:
-    from drake_disamb import clearance  # pydrake: imported when a scenario with goals is checked
+    from drake_disamb import clearance
+    from drake_disamb.station.geometry import model_geometry  # pydrake: imported when goals are checked
 
-    table = clearance.table_top_z()
+    geometry = model_geometry()
+    table = geometry.table_top
     names: set[str] = set()
     shoulder = np.asarray(MICO_SHOULDER_POSITION)
     for i, g in enumerate(s.goals):
@@ -257,7 +259,7 @@ def _check_goals(s: Scenario, held: Sequence[Any], name: str) -> None:
                 f"{path}.stage: expected a stage index in [0, {len(s.stages) - 1}], got {fmt(g.stage)}"
             )
         _check_object(g.object, f"{path}.object")
-        low, part = clearance.gripper_lowest_point([*pos, *g.orientation], held)
+        low, part = geometry.gripper_lowest_point([*pos, *g.orientation], held)
         if low < table + MIN_TABLE_CLEARANCE:
             raise ValueError(
                 f"{path}.position: goal {fmt(g.name)} is too low: with the end effector there, "
@@ -333,17 +335,18 @@ def _check_separation(s: Scenario, name: str) -> None:
 
 def _check_start_posture(q: Sequence[float], held: Sequence[Any], path: str) -> None:
     """Reject start joint angles outside the joint limits or that put the arm into the table."""
-    from drake_disamb import clearance
+    from drake_disamb.station.geometry import model_geometry
 
-    table = clearance.table_top_z()
-    lower, upper = clearance.arm_joint_limits()
+    geometry = model_geometry()
+    table = geometry.table_top
+    lower, upper = geometry.joint_limits()
     for k, (v, lo, hi) in enumerate(zip(q, lower, upper, strict=True)):
         if not lo <= v <= hi:
             raise ValueError(
                 f"{path}[{k}]: expected an angle within joint {k + 1}'s limits [{lo:.4f}, {hi:.4f}] rad, "
                 f"got {fmt(v)}"
             )
-    low, part = clearance.arm_lowest_point(q, held)
+    low, part = geometry.arm_lowest_point(q, held)
     if low < table + MIN_TABLE_CLEARANCE:
         raise ValueError(
             f"{path}: the start posture puts {part} at z = {low:.4f} m, less than {MIN_TABLE_CLEARANCE} m "

@@ -205,7 +205,7 @@ def potential_field_commands_from_poses(
     shapes are the caller's business (a Drake port fixes them). A non-finite entry or a (near) zero
     quaternion is a ``ValueError`` naming the argument, as there. ``checked=False`` skips those
     checks: the caller has already checked the poses (every entry finite, each quaternion's norm
-    at least 1e-12 and finite, e.g. :func:`drake_disamb.systems.sanitized.usable_poses`), and they
+    at least 1e-12 and finite, e.g. :func:`drake_disamb.system_helpers.sanitized.usable_poses`), and they
     are not checked twice per control tick.
     """
     if not checked:

@@ -30,8 +30,8 @@ from drake_disamb.core.disambiguation import (
     validate_modes,
 )
 from drake_disamb.core.layout import POSE_SIZE
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.systems._status import DID_NOTHING
-from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
 
@@ -114,7 +114,7 @@ class DisambiguationSystem(LeafSystem):
 
     **Unusable inputs.** A belief that is not a probability vector up to scale (a NaN/inf or
     negative entry, or no positive one), a non-finite ``current_mode``, or a pose that is not
-    finite or has an unusable quaternion (:func:`~drake_disamb.systems.sanitized.usable_poses`)
+    finite or has an unusable quaternion (:func:`~drake_disamb.system_helpers.sanitized.usable_poses`)
     are detected before the core is called: ``disambiguation_mode`` is then -1 (the mode is kept)
     and, when the interface served such a request, the next update adds one to
     ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other

@@ -70,8 +70,8 @@ from drake_disamb.core.inference import (
     sanitize_command,
 )
 from drake_disamb.core.validation import all_finite
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 from drake_disamb.systems._status import DID_NOTHING
-from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
 """Largest ``|sum(p) - 1|``, and largest ``-min(p)``, the DFT system's periodic projection leaves
