@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.authors import AuthorsTrial, mode_name, read_study_trials
+from drake_disamb.study.authors import mode_name
 from drake_disamb.study.calibration import estimate_behaviour, format_estimates
-from drake_disamb.study.outcome import save_trace
+from drake_disamb.study.folder import LoggedTrial, StudyFolder, save_trace
 from drake_disamb.study.records import TrialRecord, append_record
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
@@ -33,7 +33,7 @@ def _trial(
     t_end: float | None = None,
     paradigm: str = "manual",
     valid: bool = True,
-) -> AuthorsTrial:
+) -> LoggedTrial:
     """A trial of ``interface`` starting in mode index ``initial`` whose user switches are
     ``changes`` (time s, mode index entered); its trace samples the mode every :data:`DT` from
     ``t0`` to ``t_end`` (``duration`` by default)."""
@@ -62,10 +62,10 @@ def _trial(
         "belief": np.full((t.size, 2), 0.5),
         "alpha": np.zeros(t.size),
     }
-    return AuthorsTrial(record, trace, request_switch_times=np.zeros(0))
+    return LoggedTrial(record, trace, request_switch_times=np.zeros(0))
 
 
-def _trials() -> list[AuthorsTrial]:
+def _trials() -> list[LoggedTrial]:
     j, h = len(MODES["joystick"]) - 1, len(MODES["head_array"]) - 1  # the gripper modes: 4 and 6
     return [
         # in, out of and back into the gripper mode: ends there 5 s after its second change into it;
@@ -123,7 +123,7 @@ def test_gripper_estimates_are_the_same_from_a_study_folder(tmp_path: Path) -> N
     for trial in _trials():
         append_record(tmp_path / "trials.jsonl", trial.record)
         save_trace(tmp_path / "traces" / f"{trial.record.trial_id}.npz", trial.trace)
-    trials = read_study_trials(tmp_path)
+    trials = StudyFolder(tmp_path).read_trials()
     assert all(t.request_switch_times.size == 0 for t in trials)  # every change is a user switch
     _check(estimate_behaviour(trials))
 

@@ -27,7 +27,7 @@ from scipy.stats import mannwhitneyu
 from support import SRC, cli_process, interrupt
 
 from drake_disamb.study import protocol as P
-from drake_disamb.study.outcome import TRACE_ARRAYS, assistance_onset
+from drake_disamb.study.outcome import TRACE_ARRAYS, stage_onsets
 from drake_disamb.study.records import read_records
 from drake_disamb.study.runner import plan_study, records_by_id, run_study
 
@@ -200,15 +200,15 @@ def test_assistance_onset_on_a_hand_made_trace() -> None:
     u_h = np.zeros((8, 6))
     u_h[[0, 1, 2, 3, 5, 6], 0] = 0.1  # not commanding at samples 4 and 7 (alpha 0 there is no lapse)
     trace = {"t": t, "belief": belief, "alpha": alpha, "u_h": u_h, "stage": np.zeros(8)}
-    assert assistance_onset(trace, [0], [2]) == [1.5]  # sample 2 had alpha 0 while commanding
-    assert assistance_onset(trace, [1], [2]) == [None]
+    assert stage_onsets(trace, [0], [2]) == [1.5]  # sample 2 had alpha 0 while commanding
+    assert stage_onsets(trace, [1], [2]) == [None]
     # two stages, a task-wide belief of 2 + 2 goals: stage 1's intended goal 1 is belief index 3
     trace2 = {
         **trace,
         "belief": np.tile([0.1, 0.1, 0.2, 0.6], (8, 1)),
         "stage": np.r_[np.zeros(4), np.ones(4)],
     }
-    assert assistance_onset(trace2, [0, 1], [2, 2]) == [None, 2.5]
+    assert stage_onsets(trace2, [0, 1], [2, 2]) == [None, 2.5]
 
 
 # -- running ----------------------------------------------------------------------------------------
@@ -326,10 +326,10 @@ def test_quick_study_end_to_end(tmp_path: Path) -> None:
     assert (row["n_a"], row["n_b"]) == (len(by["manual"]), len(by["disambiguation"]))
     assert row["p_value"] == pytest.approx(expected.pvalue, rel=1e-12)
     # the behaviour estimates measure the simulated trials as they measure people's logs
-    from drake_disamb.study.authors import read_study_trials
     from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.folder import StudyFolder
 
-    trials = read_study_trials(tmp_path / "q")
+    trials = StudyFolder(tmp_path / "q").read_trials()
     assert [t.record for t in trials] == records
     for t in trials:
         assert len(t.request_switch_times) <= len(t.record.request_times)

@@ -257,26 +257,28 @@ def _valid_subject(name: str | None) -> bool:
 
 
 def check_record_dir(path: Path) -> Path:
-    """``--record``: a writable folder whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
-    from drake_disamb.study.records import read_records
+    """``--record``: a writable study folder no other process writes (its writer lock is taken and
+    held) whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
+    from drake_disamb.study.folder import StudyFolder
 
-    folder = check_output_dir(path, "--record")
-    records = folder / "trials.jsonl"
-    if records.exists():
-        read_records(records, repair=True)
-    return folder
+    try:
+        folder = StudyFolder(path).prepare()
+        folder.read_records(repair=True)
+    except ValueError as exc:
+        raise ValueError(f"--record: {exc}") from None
+    return folder.path
 
 
 def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN001 (TrialResult)
     """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
     ``folder/traces/``; returns its ``trial_id`` (``<subject>-<interface>-<task>-<paradigm>-h<n>``,
     ``n`` counting that person's earlier trials of the condition, also its ``repetition``)."""
-    from drake_disamb.study.outcome import record_from_result, save_trace, trace_arrays
-    from drake_disamb.study.records import append_record, read_records
+    from drake_disamb.study.folder import StudyFolder
+    from drake_disamb.study.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
-    records_path = folder / "trials.jsonl"
-    existing = read_records(records_path, repair=True) if records_path.exists() else []
+    study = StudyFolder(folder).prepare()
+    existing = study.read_records(repair=True)
     stem = f"{subject}-{sc.interface}-{sc.task}-{sc.paradigm}-h"
     ids = {r.trial_id for r in existing}
     n = 0
@@ -296,9 +298,7 @@ def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN0
         wall_time=0.0,
         extra={"live": True, "scenario_seed": sc.seed},
     )
-    (folder / "traces").mkdir(exist_ok=True)
-    save_trace(folder / "traces" / f"{trial_id}.npz", trace)
-    append_record(records_path, record)
+    study.append(record, trace)
     return trial_id
 
 

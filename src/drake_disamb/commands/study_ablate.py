@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         settings = settings_of(args.switch)
         for s in settings:
-            check_overrides(s["overrides"])
+            check_overrides(s["overrides"], "--switch")
         protocol = build_protocol(args)
         out = check_output_dir(args.out, "--out")
         manifest = {"format": ABLATION_FORMAT, "settings": settings}

@@ -178,11 +178,12 @@ def execute(plans: list[Any], args: argparse.Namespace, command: str) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """``study run``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
+    from drake_disamb.commands._outputs import check_output_dir
     from drake_disamb.study.runner import plan_study
 
     try:
         protocol = build_protocol(args)
-        plan = plan_study(args.out, protocol, args.seed)
+        plan = plan_study(check_output_dir(args.out, "--out"), protocol, args.seed)
     except ValueError as exc:
         return error("run", exc)
     print(

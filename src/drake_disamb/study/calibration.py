@@ -46,7 +46,7 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
 
 The trials measured are the analysed ones (:func:`~drake_disamb.study.metrics.is_analysed`: valid,
 not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
-a simulated study (:func:`drake_disamb.study.authors.read_study_trials`, ``study calibrate
+a simulated study (:func:`drake_disamb.study.folder.StudyFolder.read_trials`, ``study calibrate
 --simulated DIR``): the check that the population behaves as the estimates say, not only that it
 was drawn from them.
 
@@ -71,7 +71,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.study.authors import AuthorsTrial
 from drake_disamb.study.course import (
     CommandPath,
     GripperEnd,
@@ -83,6 +82,7 @@ from drake_disamb.study.course import (
     summarize_command_paths,
     summarize_gripper_end,
 )
+from drake_disamb.study.folder import LoggedTrial
 from drake_disamb.study.metrics import clean_requests, is_analysed
 
 EARLY_REQUEST = 3.0
@@ -234,14 +234,14 @@ class BehaviourEstimates:
     """Per interface and task, the commanded path (:class:`CommandPath`)."""
 
 
-def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
+def _user_vel(trial: LoggedTrial) -> tuple[NDArray[np.float64], float]:
     """The ``(6, M)`` user command ``[vx, vy, vz, wx, wy, wz]`` and the seconds per sample
     (``total_time / M``: the log has no times)."""
     u = np.asarray(trial.trace["u_h"], dtype=float).T
     return u, trial.record.duration / max(u.shape[1], 1)
 
 
-def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
+def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     """The behaviour estimates of the valid trials (module docstring), from
     :func:`drake_disamb.study.authors.read_trials`."""
     valid = [t for t in trials if is_analysed(t.record) and t.record.paradigm in PEOPLE_PARADIGMS]
@@ -458,7 +458,7 @@ def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: flo
     return starts
 
 
-def _count_confident_changes(trial: AuthorsTrial, changes: Sequence[float], acc: NDArray[np.float64]) -> None:
+def _count_confident_changes(trial: LoggedTrial, changes: Sequence[float], acc: NDArray[np.float64]) -> None:
     """Add the trial's confident / not-confident seconds and its mode ``changes`` (times: merged
     requests and the user's own changes) to ``acc`` (module docstring)."""
     r = trial.record

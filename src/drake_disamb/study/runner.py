@@ -6,11 +6,11 @@ The study folder ``DIR``:
   setting's), the subjects (names and user overrides), the package version, written when the study
   starts. Rerunning into an existing folder resumes it; a different protocol, seed, overrides or
   subjects there is an error (:class:`StudyMismatch`), the version is informative only.
-- ``trials.jsonl``: one :class:`~drake_disamb.study.records.TrialRecord` per finished trial,
-  appended (flushed, fsync-ed) by the parent process as each trial finishes, so the lines come
-  in completion order: read them as a set keyed by ``trial_id``.
-- ``traces/<trial_id>.npz``: the trial's time series (:mod:`drake_disamb.study.outcome`), written
-  (whole, by rename) before its record.
+- ``trials.jsonl`` and ``traces/``: a :class:`~drake_disamb.study.folder.StudyFolder`, appended by
+  the parent process (which holds the folder's writer lock) as each trial finishes, so the lines
+  come in completion order: read them as a set keyed by ``trial_id``. Records there without a
+  ``study.yaml``, or a record whose seed or condition is not its trial's in this study, are an
+  error (:class:`StudyMismatch`): the folder holds something else.
 
 A trial is a pure function of its :class:`~drake_disamb.study.protocol.TrialSpec` and the
 :class:`StudyContext` (:func:`run_trial_job`, run in a worker: a process of a
@@ -49,6 +49,7 @@ import numpy as np
 import yaml
 
 from drake_disamb.core.interfaces import arm_modes
+from drake_disamb.study.folder import StudyFolder
 from drake_disamb.study.population import draw_subjects
 from drake_disamb.study.protocol import (
     Protocol,
@@ -56,7 +57,7 @@ from drake_disamb.study.protocol import (
     expand_trials,
     protocol_to_dict,
 )
-from drake_disamb.study.records import TrialRecord, append_record, read_records
+from drake_disamb.study.records import TrialRecord
 
 __all__ = [
     "StudyContext",
@@ -154,7 +155,7 @@ def apply_override(plain: dict[str, Any], path: str, value: Any) -> None:
     node[parts[-1]] = copy.deepcopy(value)
 
 
-def check_overrides(overrides: dict[str, Any], option: str = "--switch") -> None:
+def check_overrides(overrides: dict[str, Any], option: str = "overrides") -> None:
     """Check that every dotted path names a scenario field and its value passes the scenario's checks
     on every embedded task (raises ``ValueError`` naming ``option``, the path and the value)."""
     from drake_disamb.config import scenario_from_dict
@@ -279,12 +280,16 @@ class StudyPlan:
     population: str
 
     @property
+    def folder(self) -> StudyFolder:
+        return StudyFolder(self.out)
+
+    @property
     def records_path(self) -> Path:
-        return self.out / "trials.jsonl"
+        return self.folder.records_path
 
     @property
     def traces_dir(self) -> Path:
-        return self.out / "traces"
+        return self.folder.traces_dir
 
 
 def _study_header(
@@ -318,7 +323,7 @@ def _check_header(path: Path, header: dict[str, Any]) -> None:
         if old.get(key) != header[key]:
             raise StudyMismatch(
                 f"{path}: this folder holds another study ({key} differs: {_short(old.get(key))} there, "
-                f"{_short(header[key])} now); choose another --out, or rerun with the same protocol and seed"
+                f"{_short(header[key])} now); choose another folder, or rerun with the same protocol and seed"
             )
 
 
@@ -337,18 +342,17 @@ def plan_study(
 ) -> StudyPlan:
     """Prepare (or resume) the study in ``out``; nothing runs yet.
 
-    Checks, before any trial: ``out`` is a writable folder, the overrides and every condition's
-    scenario are valid (one scenario per task, interface, paradigm and start pose, and one per
-    subject), and an existing ``study.yaml`` describes the same study. Then writes ``study.yaml``
-    (when new), creates ``traces/``, repairs ``trials.jsonl`` and lists the pending trials.
+    Checks, before any trial: the overrides and every condition's scenario are valid (one scenario
+    per task, interface, paradigm and start pose, and one per subject), ``out`` is a writable folder
+    no other process writes (its writer lock is taken and held), an existing ``study.yaml``
+    describes the same study, and every record there is one of this study's trials with its seed.
+    Then writes ``study.yaml`` (when new), repairs ``trials.jsonl`` and lists the pending trials.
 
     Raises:
-        ValueError: naming the option, field or path; :class:`StudyMismatch` for another study.
+        ValueError: naming the field, file or folder; :class:`StudyMismatch` for another study;
+            :class:`~drake_disamb.study.folder.FolderBusy` when another process writes ``out``.
     """
-    from drake_disamb.commands._outputs import check_output_dir
-
     overrides = dict(overrides or {})
-    out = check_output_dir(out, "--out")
     if overrides:
         check_overrides(overrides)
     subjects, population = draw_study_subjects(protocol.subjects, seed)
@@ -359,25 +363,47 @@ def plan_study(
     if check_scenarios:
         _check_conditions(specs, context)
     header = _study_header(protocol, seed, overrides, subjects, population)
+    folder = StudyFolder(out).prepare()
+    out = folder.path
     study_yaml = out / "study.yaml"
     if study_yaml.exists():
         _check_header(study_yaml, header)
-    else:
+    elif folder.has_records():
+        raise StudyMismatch(
+            f"{folder.records_path}: records without {study_yaml.name}: which study they belong to is "
+            "unknown, so they cannot be resumed; restore study.yaml or choose another folder"
+        )
+    finished = folder.read_records(repair=True)
+    _check_finished(folder.records_path, finished, specs)
+    if not study_yaml.exists():
         tmp = out / ".study.yaml.tmp"
         tmp.write_text(yaml.safe_dump(header, sort_keys=False), encoding="utf-8")
         tmp.replace(study_yaml)
-    (out / "traces").mkdir(exist_ok=True)
-    for stale in (out / "traces").glob(".*.npz.tmp"):  # a trace being written when a run was killed
-        stale.unlink(missing_ok=True)
-    records_path = out / "trials.jsonl"
-    finished = read_records(records_path, repair=True) if records_path.exists() else []
-    known = {s.trial_id for s in specs}
-    stray = [r.trial_id for r in finished if r.trial_id not in known]
-    if stray:
-        raise StudyMismatch(f"{records_path}: records of trials this study does not have: {stray[:5]}")
     done = {r.trial_id for r in finished}
     pending = [s for s in specs if s.trial_id not in done]
     return StudyPlan(out, protocol, seed, context, specs, pending, finished, population)
+
+
+_SPEC_FIELDS = ("subject", "interface", "task", "paradigm", "repetition", "seed", "start_pose")
+"""The fields a record shares with its :class:`TrialSpec`: resume refuses a record that differs."""
+
+
+def _check_finished(path: Path, finished: list[TrialRecord], specs: list[TrialSpec]) -> None:
+    """Every record of ``path`` is a trial of ``specs`` with its seed and condition."""
+    by_id = {s.trial_id: s for s in specs}
+    for line, record in enumerate(finished, start=1):
+        spec = by_id.get(record.trial_id)
+        if spec is None:
+            raise StudyMismatch(
+                f"{path}:{line}: trial_id {record.trial_id!r} is not a trial of this study (another "
+                "study's records)"
+            )
+        for name in _SPEC_FIELDS:
+            if getattr(record, name) != getattr(spec, name):
+                raise StudyMismatch(
+                    f"{path}:{line}: {name}: the record has {getattr(record, name)!r}, this study's trial "
+                    f"{record.trial_id} has {getattr(spec, name)!r} (another study's records)"
+                )
 
 
 def _task_protocol(context: StudyContext, task: str) -> dict[str, Any]:
@@ -464,11 +490,8 @@ def run_study(
 
 
 def write_output(plan: StudyPlan, output: TrialOutput) -> None:
-    """Write a trial's trace, then append its record."""
-    from drake_disamb.study.outcome import save_trace
-
-    save_trace(plan.traces_dir / f"{output.record.trial_id}.npz", output.trace)
-    append_record(plan.records_path, output.record)
+    """Write a trial's trace, then append its record (:meth:`StudyFolder.append`)."""
+    plan.folder.append(output.record, output.trace)
 
 
 def records_by_id(
