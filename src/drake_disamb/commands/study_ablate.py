@@ -86,6 +86,7 @@ def settings_of(switches: list[tuple[str, list[tuple[str, Any]]]]) -> list[dict[
 def run(args: argparse.Namespace) -> int:
     """``study ablate``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
+    from drake_disamb.study.folder import StudyFolder
     from drake_disamb.study.runner import check_overrides, plan_study
 
     try:
@@ -94,6 +95,7 @@ def run(args: argparse.Namespace) -> int:
             check_overrides(s["overrides"], "--switch")
         protocol = build_protocol(args)
         out = check_output_dir(args.out, "--out")
+        StudyFolder(out).lock()  # one writer of ablation.json and of every setting's folder
         manifest = {"format": ABLATION_FORMAT, "settings": settings}
         path = out / "ablation.json"
         if path.exists():
