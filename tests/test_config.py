@@ -345,5 +345,5 @@ def test_interface_mode_selection_reaches_the_joystick_only() -> None:
 
 def test_interface_mode_selection_is_an_ablation_switch() -> None:
     check_overrides({"interface_mode_selection": "direct"})
-    with pytest.raises(ValueError, match=r"--switch interface_mode_selection='sector'"):
+    with pytest.raises(ValueError, match=r"overrides interface_mode_selection='sector'"):
         check_overrides({"interface_mode_selection": "sector"})

@@ -116,6 +116,7 @@ def run(args: argparse.Namespace) -> int:
         return error("ablate", exc)
     print(
         f"ablation in {out}: {len(settings)} settings x {len(plans[0].specs)} trials "
+        f"(at most {len(settings) * protocol.simulated_time_bound / 3600.0:.1f} h simulated) "
         f"({', '.join(s['name'] for s in settings)})",
         flush=True,
     )

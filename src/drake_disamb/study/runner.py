@@ -60,6 +60,7 @@ from drake_disamb.study.protocol import (
 from drake_disamb.study.records import TrialRecord
 
 __all__ = [
+    "ExecutorLost",
     "StudyContext",
     "StudyMismatch",
     "StudyPlan",
@@ -216,14 +217,23 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
 
 @dataclass
 class TrialOutput:
-    """What a worker sends back: the record and the trace arrays."""
+    """What a worker sends back: the record and the trace arrays, or the error the trial raised
+    (``record`` None; so that an exception of the executor itself is never taken for a trial's)."""
 
-    record: TrialRecord
+    record: TrialRecord | None
     trace: dict[str, np.ndarray]
+    error: str | None = None
 
 
 def run_trial_job(spec: TrialSpec, context: StudyContext) -> TrialOutput:
-    """Run one trial (in a worker) and make its record and trace."""
+    """Run one trial (in a worker) and make its record and trace (or its error's message)."""
+    try:
+        return _run_trial(spec, context)
+    except Exception as exc:  # the trial's own failure: reported, no record, retried by a rerun
+        return TrialOutput(record=None, trace={}, error=f"{type(exc).__name__}: {exc}")
+
+
+def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
     from drake_disamb.study.outcome import record_from_result, trace_arrays
     from drake_disamb.trial import run_trial
 
@@ -342,9 +352,9 @@ def plan_study(
 ) -> StudyPlan:
     """Prepare (or resume) the study in ``out``; nothing runs yet.
 
-    Checks, before any trial: the overrides and every condition's scenario are valid (one scenario
-    per task, interface, paradigm and start pose, and one per subject), ``out`` is a writable folder
-    no other process writes (its writer lock is taken and held), an existing ``study.yaml``
+    Checks, before any trial: ``out`` is a writable folder no other process writes (its writer lock
+    is taken, first, and held), the overrides and every condition's scenario are valid (one scenario
+    per task, interface, paradigm and start pose, and one per subject), an existing ``study.yaml``
     describes the same study, and every record there is one of this study's trials with its seed.
     Then writes ``study.yaml`` (when new), repairs ``trials.jsonl`` and lists the pending trials.
 
@@ -353,6 +363,8 @@ def plan_study(
             :class:`~drake_disamb.study.folder.FolderBusy` when another process writes ``out``.
     """
     overrides = dict(overrides or {})
+    folder = StudyFolder(out).prepare()  # first: a second writer is refused at once
+    out = folder.path
     if overrides:
         check_overrides(overrides)
     subjects, population = draw_study_subjects(protocol.subjects, seed)
@@ -363,8 +375,6 @@ def plan_study(
     if check_scenarios:
         _check_conditions(specs, context)
     header = _study_header(protocol, seed, overrides, subjects, population)
-    folder = StudyFolder(out).prepare()
-    out = folder.path
     study_yaml = out / "study.yaml"
     if study_yaml.exists():
         _check_header(study_yaml, header)
@@ -424,6 +434,11 @@ def _check_conditions(specs: list[TrialSpec], context: StudyContext) -> None:
             build_scenario(spec, context)
 
 
+class ExecutorLost(RuntimeError):
+    """The executor failed, not a trial: a worker process died, the Dask scheduler was lost.
+    Every record written before is kept; a rerun resumes."""
+
+
 @dataclass
 class StudyResult:
     """Outcome of :func:`run_study`.
@@ -433,12 +448,14 @@ class StudyResult:
         skipped: Trials already finished before (resume).
         errors: ``(trial_id, message)`` of trials that raised (no record; a rerun retries them).
         wall_time: Seconds :func:`run_study` took.
+        stopped: ``stop()`` became true: the pending trials were cancelled (a rerun runs them).
     """
 
     ran: list[TrialRecord]
     skipped: int
     errors: list[tuple[str, str]]
     wall_time: float
+    stopped: bool = False
 
 
 def _expected_length(spec: TrialSpec) -> tuple[int, int]:
@@ -447,10 +464,25 @@ def _expected_length(spec: TrialSpec) -> tuple[int, int]:
     return len(spec.goals), len(arm_modes(spec.interface))
 
 
+POLL = 0.2
+"""Seconds between two looks at ``stop()`` while waiting for trials."""
+
+
+def _lost(exc: BaseException) -> ExecutorLost:
+    if isinstance(exc, cf.BrokenExecutor):
+        what = f"a worker process died ({exc})" if str(exc) else "a worker process died"
+    elif isinstance(exc, cf.CancelledError):
+        what = "the executor cancelled the trials (the Dask scheduler was lost?)"
+    else:
+        what = f"the executor failed ({type(exc).__name__}: {exc})"
+    return ExecutorLost(what)
+
+
 def run_study(
     plan: StudyPlan,
     executor: cf.Executor,
     on_result: Callable[[TrialRecord | None, str | None], None] | None = None,
+    stop: Callable[[], bool] = lambda: False,
 ) -> StudyResult:
     """Run the plan's pending trials on ``executor``; the parent writes each result as it completes.
 
@@ -458,6 +490,16 @@ def run_study(
         plan: From :func:`plan_study`.
         executor: Any ``concurrent.futures.Executor`` (a process pool, Dask's ``get_executor()``).
         on_result: Called after each trial with its record (or ``None`` and the error message).
+        stop: Looked at every :data:`POLL` seconds; once true, no further result is written and
+            the result says ``stopped`` (what was written is kept; never mid-write).
+
+    After a stop or an exception the pending trials are left to the executor's owner, who ends it
+    (``study run`` ends its worker processes; a pool in Python 3.11 must not have its pending
+    futures cancelled before its workers are terminated, or its manager thread fails on them).
+
+    Raises:
+        ExecutorLost: The executor failed.
+        FolderWriteError: A record or trace could not be written (a full disk...).
     """
     start = time.perf_counter()
     # Longest first (a trial's length is unknown, its task's stage count and its interface's arm
@@ -467,26 +509,37 @@ def run_study(
     futures = {executor.submit(run_trial_job, spec, plan.context): spec for spec in order}
     ran: list[TrialRecord] = []
     errors: list[tuple[str, str]] = []
-    try:
-        for future in cf.as_completed(futures):
+    waiting = set(futures)
+    stopped = False
+    while waiting:
+        if stop():
+            stopped = True
+            break
+        done, waiting = cf.wait(waiting, timeout=POLL, return_when=cf.FIRST_COMPLETED)
+        failure: BaseException | None = None  # the executor's: raised once the batch's results are written
+        for future in sorted(done, key=lambda f: futures[f].trial_id):
             spec = futures[future]
             try:
                 output: TrialOutput = future.result()
-            except Exception as exc:  # a trial that raised: reported, no record, retried by a rerun
-                message = f"{type(exc).__name__}: {exc}"
-                errors.append((spec.trial_id, message))
+            except (KeyboardInterrupt, SystemExit):
+                raise
+            except BaseException as exc:
+                failure = failure or exc
+                continue
+            if output.record is None:
+                errors.append((spec.trial_id, output.error or "no record"))
                 if on_result is not None:
-                    on_result(None, f"{spec.trial_id}: {message}")
+                    on_result(None, f"{spec.trial_id}: {output.error}")
                 continue
             write_output(plan, output)
             ran.append(output.record)
             if on_result is not None:
                 on_result(output.record, None)
-    except BaseException:
-        for f in futures:
-            f.cancel()
-        raise
-    return StudyResult(ran, len(plan.specs) - len(plan.pending), errors, time.perf_counter() - start)
+        if failure is not None:
+            raise _lost(failure) from None
+    return StudyResult(
+        ran, len(plan.specs) - len(plan.pending), errors, time.perf_counter() - start, stopped=stopped
+    )
 
 
 def write_output(plan: StudyPlan, output: TrialOutput) -> None:
