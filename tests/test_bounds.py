@@ -67,7 +67,7 @@ def _cli(*argv: str, timeout: float = 120) -> subprocess.CompletedProcess:
             ["station-demo", "--duration", "1e12", "--no-meshcat"],
             "--duration: expected a number of seconds in",
         ),
-        (["demo", "--no-meshcat", "--duration", "1e12", "--out", "{tmp}/d"], "scenario.duration: expected"),
+        (["demo", "--no-meshcat", "--duration", "1e12", "--out", "{tmp}/d"], "--duration: expected a number"),
         (
             ["study", "ablate", "--quick", "--out", "{tmp}/a", "--switch", "inference.dft.tau1=0,4"],
             "--switch inference.dft.tau1=0: .*tau1: expected a finite number > 0",

@@ -356,6 +356,7 @@ def run(args: argparse.Namespace) -> int:
 def _scenario(args: argparse.Namespace) -> Any:
     """The scenario of ``--task`` with the command-line options applied (raises ``ValueError``)."""
     from drake_disamb.config import load_scenario, with_overrides
+    from drake_disamb.config.checks import check_duration
 
     scenario = load_scenario(args.task)
     scenario = with_overrides(
@@ -363,8 +364,7 @@ def _scenario(args: argparse.Namespace) -> Any:
     )
     duration = args.duration if args.duration is not None else (600.0 if args.live else None)
     if duration is not None:
-        if not duration > 0:
-            raise ValueError(f"--duration: expected a number > 0, got {duration:g}")
+        check_duration(duration, "--duration")
         scenario = dataclasses.replace(scenario, duration=duration)
     return scenario
 
