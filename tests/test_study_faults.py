@@ -204,3 +204,10 @@ def test_a_record_of_another_study_is_refused(
     assert code == 2 and "trials.jsonl:1" in err and "another study's records" in err
     with pytest.raises(StudyMismatch):
         plan_study(tmp_path / "s", P.load_protocol(protocol), 3)
+
+
+def test_an_out_of_limit_joint_offset_is_named_by_the_protocols_field(tmp_path: Path) -> None:
+    data = tiny_protocol_data()
+    data["tasks"][0]["start_poses"][1]["joint_offsets"] = [0.0, 0.0, 0.0, 0.0, 0.0, 40.0]
+    with pytest.raises(ValueError, match=r"^protocol.tasks\[0\].start_poses\[1\].joint_offsets: "):
+        plan_study(tmp_path / "s", P.protocol_from_dict(data), 3)

@@ -209,7 +209,16 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
         config[key] = value
     for path, value in context.overrides.items():
         apply_override(plain, path, value)
-    return scenario_from_dict(plain, f"trial {spec.trial_id}")
+    try:
+        return scenario_from_dict(plain, f"trial {spec.trial_id}")
+    except ValueError as exc:
+        if offsets is None or not str(exc).startswith("scenario.start_joint_positions"):
+            raise
+        k = next(i for i, t in enumerate(protocol["tasks"]) if t["task"] == spec.task)
+        raise ValueError(
+            f"protocol.tasks[{k}].start_poses[{spec.start_pose}].joint_offsets: {offsets} makes the "
+            f"{spec.task} task's start posture invalid ({exc})"
+        ) from None
 
 
 # -- one trial -------------------------------------------------------------------------------------
