@@ -8,11 +8,13 @@ raises ``KeyboardInterrupt`` at once, for a user who does not want to wait for t
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import multiprocessing
 import signal
 import sys
 import threading
+from collections.abc import Iterator
 from types import FrameType, TracebackType
 from typing import Any
 
@@ -62,6 +64,21 @@ class StopRequest:
         for sig, handler in self._previous.items():
             signal.signal(sig, handler)
         self._previous.clear()
+
+
+@contextlib.contextmanager
+def sigterm_as_sigint() -> Iterator[None]:
+    """While inside, SIGTERM raises ``KeyboardInterrupt`` as SIGINT does (for work that cannot look
+    at a :class:`StopRequest`, such as checking a study's scenarios); outside the main thread, a
+    no-op."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def worker_init() -> None:

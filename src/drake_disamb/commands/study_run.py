@@ -171,6 +171,11 @@ def error(command: str, message: object) -> int:
     return EXIT_BAD_INPUT
 
 
+def stopped_before_the_first_trial(command: str) -> int:
+    print(f"drake-disamb study {command}: stopped before the first trial (nothing was run)", file=sys.stderr)
+    return 130
+
+
 def _written(plans: list[Any], skipped: int) -> str:
     """How many records the folders hold now (read back: only what was written is claimed)."""
     records = 0
@@ -246,13 +251,17 @@ def _close(progress: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """``study run``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
+    from drake_disamb.commands._signals import sigterm_as_sigint
     from drake_disamb.study.runner import plan_study
 
     try:
-        protocol = build_protocol(args)
-        plan = plan_study(check_output_dir(args.out, "--out"), protocol, args.seed)
+        with sigterm_as_sigint():
+            protocol = build_protocol(args)
+            plan = plan_study(check_output_dir(args.out, "--out"), protocol, args.seed)
     except ValueError as exc:
         return error("run", exc)
+    except KeyboardInterrupt:
+        return stopped_before_the_first_trial("run")
     hours = plan.protocol.simulated_time_bound / 3600.0
     print(
         f"study in {plan.out}: {len(plan.specs)} trials (at most {hours:.1f} h simulated), seed {plan.seed}, "
