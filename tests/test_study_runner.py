@@ -151,7 +151,7 @@ def test_malformed_protocol_file_names_the_file_and_line(tmp_path: Path) -> None
     path.write_text("subjects: 8\ninterfaces: [joystick\n", encoding="utf-8")
     with pytest.raises(ValueError, match=r"p\.yaml.*line"):
         P.load_protocol(path)
-    with pytest.raises(ValueError, match=r"--protocol: no such file"):
+    with pytest.raises(ValueError, match=r"protocol file .*: no such file"):
         P.load_protocol(tmp_path / "missing.yaml")
 
 

@@ -284,7 +284,7 @@ def load_protocol(path: str | Path | None = None) -> Protocol:
         return default_protocol()
     p = Path(path)
     if not p.is_file():
-        raise ValueError(f"--protocol: no such file: {fmt(str(path))}")
+        raise ValueError(f"protocol file {fmt(str(path))}: no such file")
     return protocol_from_yaml(read_yaml_file(p), str(p))
 
 
@@ -314,7 +314,7 @@ def quick_protocol(base: Protocol | None = None) -> Protocol:
     data["tasks"] = [t for t in data["tasks"] if t["task"] == "reaching"] or data["tasks"][:1]
     for p in data["paradigms"]:
         p["trials"] = 1
-    return protocol_from_dict(data, "--quick")
+    return protocol_from_dict(data, "the quick protocol")
 
 
 def protocol_to_dict(protocol: Protocol) -> dict[str, Any]:
