@@ -94,6 +94,16 @@ def test_the_commands_use_the_same_bounds(argv: list[str], message: str, tmp_pat
     assert __import__("re").search(message, res.stderr), res.stderr
 
 
+def test_demo_refuses_a_scenario_file_with_tau1_zero(tmp_path: Path) -> None:
+    data = _reaching_dict()
+    data.setdefault("inference", {})["dft"] = {"tau1": 0.0}
+    path = tmp_path / "tau1.yaml"
+    path.write_text(yaml.safe_dump(data))
+    res = _cli("demo", "--no-meshcat", "--task", str(path), "--out", str(tmp_path / "d"))
+    assert res.returncode == 2 and "Traceback" not in res.stderr, res.stderr
+    assert "scenario.inference.dft.tau1: expected a finite number > 0" in res.stderr
+
+
 def test_protocol_latency_and_duration_share_the_scenarios_bounds() -> None:
     data = yaml.safe_load(P.default_protocol_text())
     with pytest.raises(ValueError, match=r"protocol.request_latency\[1\]: expected a number of seconds in"):

@@ -154,7 +154,7 @@ def test_a_trial_that_raises_is_reported_and_retried(
     assert code == 1 and "ValueError: boom" in err and "1 trials raised" in out
 
 
-def test_a_stop_request_cancels_the_pending_trials(protocol: Path, tmp_path: Path) -> None:
+def test_a_stop_request_writes_no_further_result(protocol: Path, tmp_path: Path) -> None:
     plan = plan_study(tmp_path / "s", P.load_protocol(protocol), 3)
     answered: list[str] = []
 
