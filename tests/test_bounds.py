@@ -14,7 +14,7 @@ from test_scenarios import _reaching_dict
 from drake_disamb.cli import main
 from drake_disamb.config import scenario_from_dict
 from drake_disamb.config.checks import MAX_DURATION, MAX_REQUEST_LATENCY
-from drake_disamb.study import protocol as P
+from drake_disamb.study.design import protocol as P
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 

@@ -1,4 +1,4 @@
-"""Behaviour estimates of :mod:`drake_disamb.study.calibration`: ending and starting in the gripper
+"""Behaviour estimates of :mod:`drake_disamb.study.measures.calibration`: ending and starting in the gripper
 mode and the commanded path, on hand-made trials (read directly and through a study folder) and on
 the authors' logs (skipped where the logs are absent)."""
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.authors import mode_name
-from drake_disamb.study.calibration import estimate_behaviour, format_estimates
-from drake_disamb.study.folder import LoggedTrial, StudyFolder, save_trace
-from drake_disamb.study.records import TrialRecord, append_record
+from drake_disamb.study.data.authors import mode_name
+from drake_disamb.study.data.folder import LoggedTrial, StudyFolder, save_trace
+from drake_disamb.study.measures.calibration import estimate_behaviour, format_estimates
+from drake_disamb.study.run.records import TrialRecord, append_record
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
 DT = 0.05
@@ -131,7 +131,7 @@ def test_gripper_estimates_are_the_same_from_a_study_folder(tmp_path: Path) -> N
 def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
     if not DATA.is_dir():
         pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
-    from drake_disamb.study.authors import read_trials
+    from drake_disamb.study.data.authors import read_trials
 
     est = estimate_behaviour(read_trials(DATA))
     assert est.gripper_end["joystick"]["pouring"].share > 0.8
@@ -144,7 +144,7 @@ def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
 
 
 def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
-    from drake_disamb.study.course import command_path
+    from drake_disamb.study.measures.course import command_path
 
     trial = _trial("p", "joystick", "reaching", 0, [], 3.0)
     trial.trace["u"][:, 4] = 0.1  # 0.1 rad/s about y throughout

@@ -29,7 +29,7 @@ from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.disambiguation import preset
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
-from drake_disamb.study.runner import check_overrides
+from drake_disamb.study.run.runner import check_overrides
 from drake_disamb.trial import run_trial
 
 

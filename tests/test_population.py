@@ -18,7 +18,7 @@ from drake_disamb.core.user import (
     mode_usefulness,
     user_step,
 )
-from drake_disamb.study.population import (
+from drake_disamb.study.design.population import (
     LogNormal,
     PopulationConfig,
     Subject,
@@ -382,7 +382,7 @@ def test_a_subjects_mode_choices_are_not_always_the_best_mode() -> None:
 def human_trials():
     if not DATA.is_dir():
         pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
-    from drake_disamb.study.authors import read_trials
+    from drake_disamb.study.data.authors import read_trials
 
     return read_trials(DATA)
 
@@ -406,8 +406,8 @@ def test_reads_every_trial_with_its_paradigm(human_trials) -> None:
 
 @needs_data
 def test_behaviour_uses_the_shared_reader_and_metrics(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour, format_condition_means
-    from drake_disamb.study.metrics import summarize
+    from drake_disamb.study.measures.calibration import estimate_behaviour, format_condition_means
+    from drake_disamb.study.measures.metrics import summarize
 
     # H3PH1REHAT16: a button press 1.4 s after the request, 3.3 s before the system's switch,
     # is the user's (the reader matches the switch logged with the request's scores).
@@ -428,7 +428,7 @@ def test_behaviour_uses_the_shared_reader_and_metrics(human_trials) -> None:
 
 @needs_data
 def test_behaviour_estimates_are_human_scale(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour, format_estimates
+    from drake_disamb.study.measures.calibration import estimate_behaviour, format_estimates
 
     est = estimate_behaviour(human_trials)
     assert 2.0 < est.start_delay.median < 15.0
@@ -449,7 +449,7 @@ def test_behaviour_estimates_are_human_scale(human_trials) -> None:
 
 @needs_data
 def test_population_defaults_follow_the_estimates(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     est = estimate_behaviour(human_trials)
     d = PopulationConfig().distributions
@@ -471,7 +471,7 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
 
 
 def test_the_request_decay_fit_recovers_known_parameters() -> None:
-    from drake_disamb.study.calibration import fit_request_decay
+    from drake_disamb.study.measures.calibration import fit_request_decay
 
     rng = np.random.default_rng(3)
     events = []
@@ -503,7 +503,7 @@ def test_calibrate_command_prints_the_estimates(capsys: pytest.CaptureFixture[st
 
 @needs_data
 def test_people_change_modes_less_while_the_belief_is_confident(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     est = estimate_behaviour(human_trials)
     for interface in ("joystick", "head_array"):
@@ -514,8 +514,8 @@ def test_people_change_modes_less_while_the_belief_is_confident(human_trials) ->
 
 def _logged_trial(folder: Path, trial_id: str, *, t, mode, belief, switches, requests, duration):
     """A record and its trace written into the study folder ``folder`` (a hand-made trial)."""
-    from drake_disamb.study.folder import save_trace
-    from drake_disamb.study.records import TrialRecord, append_record
+    from drake_disamb.study.data.folder import save_trace
+    from drake_disamb.study.run.records import TrialRecord, append_record
 
     record = TrialRecord(
         trial_id=trial_id, subject="S01", interface="head_array", task="reaching", paradigm="disambiguation",
@@ -538,8 +538,8 @@ def _logged_trial(folder: Path, trial_id: str, *, t, mode, belief, switches, req
 
 
 def test_study_trials_give_the_request_switches_and_the_confident_change_rates(tmp_path: Path) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour
-    from drake_disamb.study.folder import StudyFolder
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     t = np.round(np.arange(0, 40.0, 0.01), 2)
     mode = np.zeros(t.size)
@@ -563,7 +563,7 @@ def test_study_trials_give_the_request_switches_and_the_confident_change_rates(t
 def test_study_trials_refuse_a_folder_without_records_and_skip_a_missing_trace(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from drake_disamb.study.folder import StudyFolder
+    from drake_disamb.study.data.folder import StudyFolder
 
     with pytest.raises(ValueError, match="trials.jsonl"):
         StudyFolder(tmp_path).read_trials()

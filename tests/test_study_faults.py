@@ -21,9 +21,9 @@ from test_study_runner import tiny_protocol_data, write_yaml
 
 from drake_disamb.cli import main
 from drake_disamb.commands import study_run
-from drake_disamb.study import protocol as P
-from drake_disamb.study.records import read_records
-from drake_disamb.study.runner import StudyMismatch, TrialOutput, plan_study, run_study
+from drake_disamb.study.design import protocol as P
+from drake_disamb.study.run.records import read_records
+from drake_disamb.study.run.runner import StudyMismatch, TrialOutput, plan_study, run_study
 
 
 def _output(spec) -> TrialOutput:  # noqa: ANN001 (TrialSpec)
@@ -83,7 +83,7 @@ def protocol(tmp_path: Path) -> Path:
 
 
 def _run(out: Path, protocol: Path, capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    from drake_disamb.study.folder import StudyFolder
+    from drake_disamb.study.data.folder import StudyFolder
 
     try:
         status = main(
@@ -126,7 +126,7 @@ def test_a_failing_executor_gives_one_line_and_keeps_the_records(
 def test_a_full_disk_gives_one_line_naming_the_file(
     fake_executor, protocol: Path, tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import drake_disamb.study.folder as F
+    import drake_disamb.study.data.folder as F
 
     real = F.append_record
     calls = []

@@ -17,8 +17,8 @@ from test_records import _record
 from test_study_report import digest, synthetic_records, write_study
 
 from drake_disamb.cli import main
-from drake_disamb.study.folder import FolderBusy, StudyFolder, TraceError, check_trace
-from drake_disamb.study.records import RecordError, read_records
+from drake_disamb.study.data.folder import FolderBusy, StudyFolder, TraceError, check_trace
+from drake_disamb.study.run.records import RecordError, read_records
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 
@@ -32,7 +32,7 @@ def held_folder(tmp_path: Path):
     """A study folder whose lock another process holds (it prints its PID, then sleeps)."""
     folder = tmp_path / "study"
     code = (
-        "import sys, time; from drake_disamb.study.folder import StudyFolder; "
+        "import sys, time; from drake_disamb.study.data.folder import StudyFolder; "
         f"StudyFolder({str(folder)!r}).prepare(); print('locked', flush=True); time.sleep(60)"
     )
     env = dict(os.environ, PYTHONPATH=str(SRC))
@@ -101,7 +101,7 @@ def test_append_needs_the_lock_and_reads_back(tmp_path: Path) -> None:
 def test_a_full_disk_names_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     import errno
 
-    import drake_disamb.study.folder as F
+    import drake_disamb.study.data.folder as F
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))

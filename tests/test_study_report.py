@@ -15,8 +15,9 @@ from scipy.stats import mannwhitneyu, skew
 from support import screenshot_script
 
 from drake_disamb.cli import main
-from drake_disamb.study.findings import compare_summaries
-from drake_disamb.study.metrics import (
+from drake_disamb.study.analysis.findings import compare_summaries
+from drake_disamb.study.analysis.stats import rank_biserial, run_tests, stars
+from drake_disamb.study.measures.metrics import (
     assistance_onset,
     clean_mode_switches,
     clean_requests,
@@ -24,9 +25,8 @@ from drake_disamb.study.metrics import (
     summarize,
     trial_metrics,
 )
-from drake_disamb.study.records import RecordError, TrialRecord, append_record
-from drake_disamb.study.report import write_report
-from drake_disamb.study.stats import rank_biserial, run_tests, stars
+from drake_disamb.study.report.page import write_report
+from drake_disamb.study.run.records import RecordError, TrialRecord, append_record
 
 JOYSTICK_MODES = ("vx_vy", "vx_vz", "wx_wz", "wy", "gripper")
 

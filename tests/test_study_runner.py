@@ -26,10 +26,10 @@ import yaml
 from scipy.stats import mannwhitneyu
 from support import SRC, cli_process, interrupt, wait_for_line
 
-from drake_disamb.study import protocol as P
-from drake_disamb.study.outcome import TRACE_ARRAYS, stage_onsets
-from drake_disamb.study.records import read_records
-from drake_disamb.study.runner import plan_study, records_by_id, run_study
+from drake_disamb.study.design import protocol as P
+from drake_disamb.study.run.outcome import TRACE_ARRAYS, stage_onsets
+from drake_disamb.study.run.records import read_records
+from drake_disamb.study.run.runner import plan_study, records_by_id, run_study
 
 
 def compatible_protocol_data() -> dict:
@@ -99,7 +99,7 @@ def test_default_protocol_is_the_papers() -> None:
 
 def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> None:
     from drake_disamb.config import resolve_scenario
-    from drake_disamb.study.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, build_scenario
 
     protocol = P.quick_protocol()
     context = StudyContext(protocol=P.protocol_to_dict(protocol))
@@ -326,8 +326,8 @@ def test_quick_study_end_to_end(tmp_path: Path) -> None:
     assert (row["n_a"], row["n_b"]) == (len(by["manual"]), len(by["disambiguation"]))
     assert row["p_value"] == pytest.approx(expected.pvalue, rel=1e-12)
     # the behaviour estimates measure the simulated trials as they measure people's logs
-    from drake_disamb.study.calibration import estimate_behaviour
-    from drake_disamb.study.folder import StudyFolder
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     trials = StudyFolder(tmp_path / "q").read_trials()
     assert [t.record for t in trials] == records
@@ -470,7 +470,7 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
     and a trial from each succeeds (head array, disambiguation, the first goal of every stage)."""
     import dataclasses
 
-    from drake_disamb.study.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, build_scenario
     from drake_disamb.trial import run_trial
 
     data = compatible_protocol_data()
@@ -497,7 +497,7 @@ def test_trials_are_submitted_longest_first(tmp_path: Path) -> None:
     fake executor records the order and fails every trial (nothing is simulated or written)."""
     import concurrent.futures as cf
 
-    from drake_disamb.study.runner import TrialOutput
+    from drake_disamb.study.run.runner import TrialOutput
 
     class Recording(cf.Executor):
         def __init__(self) -> None:

@@ -17,7 +17,7 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
 ``--live --record DIR --subject NAME`` also appends the person's trial to ``DIR/trials.jsonl`` as a
-study record (``source: "human"``, the same :class:`~drake_disamb.study.records.TrialRecord` the
+study record (``source: "human"``, the same :class:`~drake_disamb.study.run.records.TrialRecord` the
 simulated study writes, made by the same function) and its time series to
 ``DIR/traces/<trial_id>.npz``, so ``study report DIR`` treats people like simulated subjects. A trial
 ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``).
@@ -259,7 +259,7 @@ def _valid_subject(name: str | None) -> bool:
 def check_record_dir(path: Path) -> Path:
     """``--record``: a writable study folder no other process writes (its writer lock is taken and
     held) whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
-    from drake_disamb.study.folder import StudyFolder
+    from drake_disamb.study.data.folder import StudyFolder
 
     try:
         folder = StudyFolder(path).prepare()
@@ -273,8 +273,8 @@ def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN0
     """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
     ``folder/traces/``; returns its ``trial_id`` (``<subject>-<interface>-<task>-<paradigm>-h<n>``,
     ``n`` counting that person's earlier trials of the condition, also its ``repetition``)."""
-    from drake_disamb.study.folder import StudyFolder
-    from drake_disamb.study.outcome import record_from_result, trace_arrays
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.run.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
     study = StudyFolder(folder).prepare()

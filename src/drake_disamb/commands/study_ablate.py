@@ -93,8 +93,8 @@ def run(args: argparse.Namespace) -> int:
     """``study ablate``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
     from drake_disamb.commands._signals import sigterm_as_sigint
-    from drake_disamb.study.folder import StudyFolder
-    from drake_disamb.study.runner import check_overrides, plan_study
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.run.runner import check_overrides, plan_study
 
     try:
         with sigterm_as_sigint():

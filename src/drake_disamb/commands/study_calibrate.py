@@ -37,10 +37,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.authors import read_trials
-    from drake_disamb.study.calibration import estimate_behaviour, format_condition_means, format_estimates
-    from drake_disamb.study.folder import StudyFolder
-    from drake_disamb.study.metrics import summarize
+    from drake_disamb.study.data.authors import read_trials
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.measures.calibration import (
+        estimate_behaviour,
+        format_condition_means,
+        format_estimates,
+    )
+    from drake_disamb.study.measures.metrics import summarize
 
     try:
         trials = read_trials(args.data_dir)

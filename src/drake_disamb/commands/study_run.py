@@ -1,9 +1,9 @@
 """``drake-disamb study run``: run the study protocol with simulated subjects into a folder.
 
 ``study run --out DIR`` runs every trial of the protocol (default: the paper's, embedded in
-``drake_disamb/study/protocol.yaml``; ``--protocol FILE`` another) and writes ``DIR/study.yaml``,
+``drake_disamb/study/design/protocol.yaml``; ``--protocol FILE`` another) and writes ``DIR/study.yaml``,
 one record per finished trial to ``DIR/trials.jsonl`` and its time series to
-``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.runner`). Rerunning the same command
+``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.run.runner`). Rerunning the same command
 resumes: finished trials are skipped, a half-written last record (a killed run) is cut and its
 trial run again. ``--quick``: 2 subjects, both interfaces, reaching only, one trial per paradigm.
 
@@ -95,7 +95,7 @@ def build_protocol(args: argparse.Namespace) -> Any:
     """The protocol of ``--protocol``, ``--quick`` and ``--subjects`` (raises ``ValueError``)."""
     import dataclasses
 
-    from drake_disamb.study.protocol import load_protocol, quick_protocol, validate_protocol
+    from drake_disamb.study.design.protocol import load_protocol, quick_protocol, validate_protocol
 
     protocol = load_protocol(args.protocol)
     if args.quick:
@@ -144,7 +144,7 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
     from concurrent.futures import ProcessPoolExecutor
 
     from drake_disamb.commands._signals import end_workers, worker_init
-    from drake_disamb.study.runner import default_workers
+    from drake_disamb.study.run.runner import default_workers
 
     n = workers or default_workers()
     pool = ProcessPoolExecutor(
@@ -191,8 +191,8 @@ def execute(plans: list[Any], args: argparse.Namespace, command: str) -> int:
     SIGTERM stop it (the exit statuses are in the module docstring)."""
     from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
     from drake_disamb.progress import TrialProgress
-    from drake_disamb.study.folder import FolderWriteError
-    from drake_disamb.study.runner import ExecutorLost, run_study
+    from drake_disamb.study.data.folder import FolderWriteError
+    from drake_disamb.study.run.runner import ExecutorLost, run_study
 
     total = sum(len(p.pending) for p in plans)
     skipped = sum(len(p.finished) for p in plans)
@@ -252,7 +252,7 @@ def run(args: argparse.Namespace) -> int:
     """``study run``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
     from drake_disamb.commands._signals import sigterm_as_sigint
-    from drake_disamb.study.runner import plan_study
+    from drake_disamb.study.run.runner import plan_study
 
     try:
         with sigterm_as_sigint():

@@ -123,7 +123,7 @@ class Protocol:
     """The study protocol (see the module docstring and ``study/protocol.yaml``).
 
     Attributes:
-        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.population``).
+        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.design.population``).
         interfaces: Interfaces every subject uses.
         tasks: Tasks and their start poses.
         paradigms: Paradigms and their trials per condition.
@@ -290,7 +290,7 @@ def load_protocol(path: str | Path | None = None) -> Protocol:
 
 def default_protocol_text() -> str:
     """The YAML text of the embedded default protocol (the paper's)."""
-    return resources.files("drake_disamb.study").joinpath("protocol.yaml").read_text(encoding="utf-8")
+    return resources.files("drake_disamb.study.design").joinpath("protocol.yaml").read_text(encoding="utf-8")
 
 
 def default_protocol() -> Protocol:

@@ -3,20 +3,20 @@
 :func:`write_report` reads ``DIR/trials.jsonl`` (and ``DIR/traces/``) and writes, in
 ``DIR/report/`` only:
 
-- ``summary.json``: :func:`drake_disamb.study.metrics.summarize` (one object per source,
+- ``summary.json``: :func:`drake_disamb.study.measures.metrics.summarize` (one object per source,
   interface, task and paradigm);
-- ``stats.json``: :func:`drake_disamb.study.stats.run_tests`;
-- the figures as PNG (:mod:`drake_disamb.study.figures`): ``button_presses.png``,
+- ``stats.json``: :func:`drake_disamb.study.analysis.stats.run_tests`;
+- the figures as PNG (:mod:`drake_disamb.study.report.figures`): ``button_presses.png``,
   ``switches_requests.png``, ``completion_times.png``, ``raster.png``, ``alpha.png`` and
   ``traces_<interface>_<task>_<paradigm>.png``; with several sources in the folder each figure is
   drawn per source (``<name>_<source>.png``);
 - ``index.html``: every table (summary, skewness, tests, "the paper's finding / ours / agree?"
-  of :func:`drake_disamb.study.findings.findings`) and every figure embedded as base64 PNG; no
+  of :func:`drake_disamb.study.analysis.findings.findings`) and every figure embedded as base64 PNG; no
   network, no script.
 
 ``--compare OTHER_DIR`` adds ``compare.json``
-(:func:`drake_disamb.study.findings.compare_summaries`) and a section setting this folder's means beside
-the other's per interface, task and paradigm, with their ratio and whether it is within 50 %
+(:func:`drake_disamb.study.analysis.findings.compare_summaries`) and a section setting this folder's
+means beside the other's per interface, task and paradigm, with their ratio and whether it is within 50 %
 (issue 13's acceptance for simulated versus human users).
 
 On an ablation folder (``DIR/ablation.json``, written by ``study ablate``), :func:`write_report`
@@ -26,9 +26,9 @@ and completion time with its rank-sum test (``stats.json`` and ``summary.json`` 
 
 Nothing outside ``DIR/report/`` is written: ``report`` must be a real folder (a symlink there is
 refused), and every file is written whole into a new temporary file and renamed over its name
-(:func:`~drake_disamb.study.folder.write_atomic`), so a symlink planted in ``report/`` is replaced,
+(:func:`~drake_disamb.study.data.folder.write_atomic`), so a symlink planted in ``report/`` is replaced,
 never written through. Bad records stop the report with
-:class:`drake_disamb.study.records.RecordError` naming the file, the line and the field; a bad trace
+:class:`drake_disamb.study.run.records.RecordError` naming the file, the line and the field; a bad trace
 is left out of the example figures with a warning naming it.
 """
 
@@ -44,8 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from drake_disamb.study.figures import ablation_figure, save_figure, source_figures, trace_figures
-from drake_disamb.study.findings import (
+from drake_disamb.study.analysis.findings import (
     COMPARED,
     PAPER_SKEWNESS,
     compare_summaries,
@@ -53,10 +52,11 @@ from drake_disamb.study.findings import (
     fmt,
     select_trials,
 )
-from drake_disamb.study.folder import StudyFolder, write_atomic
-from drake_disamb.study.metrics import request_time_skewness, summarize, trial_metrics
-from drake_disamb.study.records import RecordError, TrialRecord
-from drake_disamb.study.stats import MIXED_METRICS, run_tests
+from drake_disamb.study.analysis.stats import MIXED_METRICS, run_tests
+from drake_disamb.study.data.folder import StudyFolder, write_atomic
+from drake_disamb.study.measures.metrics import request_time_skewness, summarize, trial_metrics
+from drake_disamb.study.report.figures import ablation_figure, save_figure, source_figures, trace_figures
+from drake_disamb.study.run.records import RecordError, TrialRecord
 
 __all__ = ["ReportFiles", "compare_summaries", "load_study", "write_report"]
 

@@ -1,8 +1,8 @@
 """How a trial starts and ends and how far the arm is driven, from its mode and command traces.
 
-Behaviour estimates of :mod:`drake_disamb.study.calibration` that read only a trial's traces (the
-people's logs through :func:`drake_disamb.study.authors.read_trials`, a simulated study through
-:func:`~drake_disamb.study.folder.StudyFolder.read_trials`; the trace ``mode`` is an index into the
+Behaviour estimates of :mod:`drake_disamb.study.measures.calibration` that read only a trial's traces (the
+people's logs through :func:`drake_disamb.study.data.authors.read_trials`, a simulated study through
+:func:`~drake_disamb.study.data.folder.StudyFolder.read_trials`; the trace ``mode`` is an index into the
 interface's modes on ``t``, ``u`` the blended command ``[vx, vy, vz, wx, wy, wz]``):
 
 - **Ending in the gripper mode** (letting go of the object), per interface and task: the share of
@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_disamb.core.interfaces import MODES, gripper_mode
-from drake_disamb.study.authors import mode_name
-from drake_disamb.study.folder import LoggedTrial
+from drake_disamb.study.data.authors import mode_name
+from drake_disamb.study.data.folder import LoggedTrial
 
 __all__ = [
     "MOVING_SPEED",

@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.study.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
-from drake_disamb.study.metrics import TrialMetrics
+from drake_disamb.study.analysis.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
+from drake_disamb.study.measures.metrics import TrialMetrics
 
 __all__ = ["ablation_figure", "save_figure", "source_figures", "trace_figures"]
 
@@ -38,8 +38,8 @@ def _plt() -> Any:
 
 def save_figure(fig: Any, path: Path) -> Path:
     """Save ``fig`` as PNG at 100 dpi to ``path`` (replaced whole, never written through a
-    symlink: :func:`~drake_disamb.study.folder.write_atomic`) and close it; returns ``path``."""
-    from drake_disamb.study.folder import write_atomic
+    symlink: :func:`~drake_disamb.study.data.folder.write_atomic`) and close it; returns ``path``."""
+    from drake_disamb.study.data.folder import write_atomic
 
     plt = _plt()
     try:
@@ -304,10 +304,10 @@ def trace_figures(
     warn: Callable[[str], None] | None = None,
 ) -> list[Path]:
     """One goal-probability figure per condition: its first valid trial that has a usable trace
-    (:meth:`~drake_disamb.study.folder.StudyFolder.read_trace`); a bad one is left out, with
+    (:meth:`~drake_disamb.study.data.folder.StudyFolder.read_trace`); a bad one is left out, with
     ``warn`` naming the file."""
     from drake_disamb.plotting import goal_probability_figure
-    from drake_disamb.study.folder import StudyFolder, TraceError
+    from drake_disamb.study.data.folder import StudyFolder, TraceError
 
     study = StudyFolder(folder)
 

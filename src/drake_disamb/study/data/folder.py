@@ -3,7 +3,7 @@
 A study folder ``DIR`` holds, whoever wrote it (``study run``, ``study ablate``'s settings,
 ``study import-authors``, ``demo --live --record``):
 
-- ``trials.jsonl``: one :class:`~drake_disamb.study.records.TrialRecord` per finished trial,
+- ``trials.jsonl``: one :class:`~drake_disamb.study.run.records.TrialRecord` per finished trial,
   appended (one flushed, fsync-ed line each);
 - ``traces/<trial_id>.npz``: the trial's time series (:class:`StudyFolder.append` writes it whole,
   through a temporary file and a rename, before its record);
@@ -43,7 +43,7 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.study.records import RecordError, TrialRecord, append_record, read_records
+from drake_disamb.study.run.records import RecordError, TrialRecord, append_record, read_records
 
 __all__ = [
     "FolderBusy",

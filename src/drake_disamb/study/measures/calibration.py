@@ -1,7 +1,7 @@
 """Behaviour estimates from the paper's human logs: what the simulated-user population is drawn from.
 
 The logs (``../shared/data/tnsre2020_human_study/``, 4 of the paper's 8 subjects; their README gives
-the format) are read with :func:`drake_disamb.study.authors.read_trials`. :func:`estimate_behaviour`
+the format) are read with :func:`drake_disamb.study.data.authors.read_trials`. :func:`estimate_behaviour`
 measures behaviour only, never the Manual-versus-Disambiguation outcome the study must predict:
 
 - **Times.** ``user_vel`` (the user's command, about 100 Hz) has no timestamps: sample ``k`` is
@@ -42,22 +42,22 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   the share of the trial time it is, per interface over both paradigms. People let a confident
   autonomy carry them rather than change modes: how they use the assistance.
 - **How a trial starts and ends, and how far the arm is driven**: ending and starting in the
-  gripper mode, and the commanded path (:mod:`drake_disamb.study.course`, which defines them).
+  gripper mode, and the commanded path (:mod:`drake_disamb.study.measures.course`, which defines them).
 
-The trials measured are the analysed ones (:func:`~drake_disamb.study.metrics.is_analysed`: valid,
+The trials measured are the analysed ones (:func:`~drake_disamb.study.measures.metrics.is_analysed`: valid,
 not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
-a simulated study (:func:`drake_disamb.study.folder.StudyFolder.read_trials`, ``study calibrate
+a simulated study (:func:`drake_disamb.study.data.folder.StudyFolder.read_trials`, ``study calibrate
 --simulated DIR``): the check that the population behaves as the estimates say, not only that it
 was drawn from them.
 
-The logs are read by :func:`drake_disamb.study.authors.read_trials` (the reader of ``study
+The logs are read by :func:`drake_disamb.study.data.authors.read_trials` (the reader of ``study
 import-authors``: the mode switch a request made is the one logged with the request's scores) and
 the authors' metrics (user mode switches, merged requests, the joystick's cleaning) are those of
-:mod:`drake_disamb.study.metrics`.
+:mod:`drake_disamb.study.measures.metrics`.
 
 The module is a little over the project's ~500 lines: the estimates share one pass over each
 trial's arrays (the command's samples, the events), which splitting them would repeat. The
-estimates that read only the mode and blended-command traces are in :mod:`drake_disamb.study.course`.
+estimates that read only the mode and blended-command traces are in :mod:`drake_disamb.study.measures.course`.
 """
 
 from __future__ import annotations
@@ -71,7 +71,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.study.course import (
+from drake_disamb.study.data.folder import LoggedTrial
+from drake_disamb.study.measures.course import (
     CommandPath,
     GripperEnd,
     command_path,
@@ -82,8 +83,7 @@ from drake_disamb.study.course import (
     summarize_command_paths,
     summarize_gripper_end,
 )
-from drake_disamb.study.folder import LoggedTrial
-from drake_disamb.study.metrics import clean_requests, is_analysed
+from drake_disamb.study.measures.metrics import clean_requests, is_analysed
 
 EARLY_REQUEST = 3.0
 """A first request before this time (s from the start) counts as early."""
@@ -243,7 +243,7 @@ def _user_vel(trial: LoggedTrial) -> tuple[NDArray[np.float64], float]:
 
 def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     """The behaviour estimates of the valid trials (module docstring), from
-    :func:`drake_disamb.study.authors.read_trials`."""
+    :func:`drake_disamb.study.data.authors.read_trials`."""
     valid = [t for t in trials if is_analysed(t.record) and t.record.paradigm in PEOPLE_PARADIGMS]
     if not valid:
         raise ValueError("trials: expected at least one valid Manual or Disambiguation trial, got none")
@@ -538,7 +538,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
 
 def format_condition_means(rows: Sequence[dict[str, Any]]) -> str:
     """The authors' metrics per condition as a table: the rows of
-    :func:`drake_disamb.study.metrics.summarize` (means of the analysed trials)."""
+    :func:`drake_disamb.study.measures.metrics.summarize` (means of the analysed trials)."""
     lines = [
         f"{'interface':<11} {'task':<9} {'paradigm':<15} {'n':>3} {'switches':>9} {'requests':>9} {'time':>7}"
     ]

@@ -1,9 +1,9 @@
 """From a finished trial to its record and trace: the one function every producer of records uses.
 
 :func:`record_from_result` turns a :class:`~drake_disamb.trial.TrialResult` into a
-:class:`~drake_disamb.study.records.TrialRecord` (the study runner for simulated subjects,
+:class:`~drake_disamb.study.run.records.TrialRecord` (the study runner for simulated subjects,
 ``demo --live --record`` for a person); :func:`trace_arrays` gives the trial's time series in the
-layout of ``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.folder` writes them).
+layout of ``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.data.folder` writes them).
 
 Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,) s; ``belief``
 (T, n_goals); ``u_h`` and ``u`` (T, 6): spatial velocities in the paper's order
@@ -11,7 +11,7 @@ Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,
 index; ``ee_pose`` (T, 7) ``[x, y, z, qw, qx, qy, qz]`` of the end effector in W; ``stage`` (T,)
 the task's stage index.
 
-**Assistance onset** (:func:`stage_onsets`, by :func:`drake_disamb.study.metrics.assistance_onset`):
+**Assistance onset** (:func:`stage_onsets`, by :func:`drake_disamb.study.measures.metrics.assistance_onset`):
 the blender assists only while the user commands
 (``alpha`` is 0 with no input, by design), so the onset looks at the samples where the user
 commands (``u_h != 0``): it is the time of the first such sample from which, on every commanding
@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.interfaces import DIM_NAMES, interface_modes
-from drake_disamb.study.metrics import assistance_onset
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.measures.metrics import assistance_onset
+from drake_disamb.study.run.records import TrialRecord
 
 __all__ = [
     "TRACE_ARRAYS",
@@ -81,7 +81,7 @@ def stage_onsets(
     trace: dict[str, NDArray[np.float64]], intended_goals: list[int], stage_sizes: list[int]
 ) -> list[float | None]:
     """Per stage, the assistance onset (module docstring) in s from the trial start, or None: the
-    one :func:`~drake_disamb.study.metrics.assistance_onset` on the stage's commanding samples."""
+    one :func:`~drake_disamb.study.measures.metrics.assistance_onset` on the stage's commanding samples."""
     t, belief, alpha, stage = trace["t"], trace["belief"], trace["alpha"], trace["stage"]
     commanding = np.any(np.abs(trace["u_h"]) > 1e-9, axis=1)
     onsets: list[float | None] = []

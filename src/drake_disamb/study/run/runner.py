@@ -6,13 +6,13 @@ The study folder ``DIR``:
   setting's), the subjects (names and user overrides), the package version, written when the study
   starts. Rerunning into an existing folder resumes it; a different protocol, seed, overrides or
   subjects there is an error (:class:`StudyMismatch`), the version is informative only.
-- ``trials.jsonl`` and ``traces/``: a :class:`~drake_disamb.study.folder.StudyFolder`, appended by
+- ``trials.jsonl`` and ``traces/``: a :class:`~drake_disamb.study.data.folder.StudyFolder`, appended by
   the parent process (which holds the folder's writer lock) as each trial finishes, so the lines
   come in completion order: read them as a set keyed by ``trial_id``. Records there without a
   ``study.yaml``, or a record whose seed or condition is not its trial's in this study, are an
   error (:class:`StudyMismatch`): the folder holds something else.
 
-A trial is a pure function of its :class:`~drake_disamb.study.protocol.TrialSpec` and the
+A trial is a pure function of its :class:`~drake_disamb.study.design.protocol.TrialSpec` and the
 :class:`StudyContext` (:func:`run_trial_job`, run in a worker: a process of a
 ``ProcessPoolExecutor`` or a Dask worker), so its record is the same (apart from ``wall_time``)
 whatever the executor, the worker count and the order of completion. Resume: the finished
@@ -28,7 +28,7 @@ of ``Scenario.user.config`` and last the study's overrides (dotted field paths, 
 ablate``). Built through
 :func:`~drake_disamb.config.scenario_from_dict`: every value passes the scenario's checks.
 
-Subjects come from :func:`drake_disamb.study.population.draw_subjects` (``study.yaml`` names the
+Subjects come from :func:`drake_disamb.study.design.population.draw_subjects` (``study.yaml`` names the
 population).
 """
 
@@ -49,15 +49,15 @@ import numpy as np
 import yaml
 
 from drake_disamb.core.interfaces import arm_modes
-from drake_disamb.study.folder import StudyFolder
-from drake_disamb.study.population import draw_subjects
-from drake_disamb.study.protocol import (
+from drake_disamb.study.data.folder import StudyFolder
+from drake_disamb.study.design.population import draw_subjects
+from drake_disamb.study.design.protocol import (
     Protocol,
     TrialSpec,
     expand_trials,
     protocol_to_dict,
 )
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.run.records import TrialRecord
 
 __all__ = [
     "ExecutorLost",
@@ -89,10 +89,16 @@ class StudyMismatch(ValueError):
 def draw_study_subjects(n: int, seed: int) -> tuple[list[tuple[str, dict[str, Any]]], str]:
     """``[(name, user overrides)]`` of ``n`` subjects and the population's provenance.
 
-    The subjects are drawn by :func:`drake_disamb.study.population.draw_subjects`.
+    The subjects are drawn by :func:`drake_disamb.study.design.population.draw_subjects`. The
+    provenance, part of a study's identity in ``study.yaml``, keeps the name the population had
+    before ``study/`` was split by stage, so that earlier study folders still resume.
     """
     subjects = draw_subjects(n, seed)
-    return [(s.name, dict(s.user)) for s in subjects], "drake_disamb.study.population"
+    return [(s.name, dict(s.user)) for s in subjects], POPULATION
+
+
+POPULATION = "drake_disamb.study.population"
+"""The population's provenance in ``study.yaml`` (:func:`draw_study_subjects`)."""
 
 
 # -- scenarios -------------------------------------------------------------------------------------
@@ -103,7 +109,7 @@ class StudyContext:
     """What every trial of a study shares (plain data, cheap to send to a worker).
 
     Attributes:
-        protocol: The protocol (plain data, :func:`~drake_disamb.study.protocol.protocol_to_dict`).
+        protocol: The protocol (plain data, :func:`~drake_disamb.study.design.protocol.protocol_to_dict`).
         overrides: Scenario overrides ``{dotted path: value}`` applied to every trial last.
         subject_users: Subject name -> overrides of ``Scenario.user.config`` fields.
     """
@@ -243,7 +249,7 @@ def run_trial_job(spec: TrialSpec, context: StudyContext) -> TrialOutput:
 
 
 def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
-    from drake_disamb.study.outcome import record_from_result, trace_arrays
+    from drake_disamb.study.run.outcome import record_from_result, trace_arrays
     from drake_disamb.trial import run_trial
 
     scenario = build_scenario(spec, context)
@@ -369,7 +375,7 @@ def plan_study(
 
     Raises:
         ValueError: naming the field, file or folder; :class:`StudyMismatch` for another study;
-            :class:`~drake_disamb.study.folder.FolderBusy` when another process writes ``out``.
+            :class:`~drake_disamb.study.data.folder.FolderBusy` when another process writes ``out``.
     """
     overrides = dict(overrides or {})
     folder = StudyFolder(out).prepare()  # first: a second writer is refused at once

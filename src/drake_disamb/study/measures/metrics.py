@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.run.records import TrialRecord
 
 __all__ = [
     "COUNT_METRICS",

@@ -32,7 +32,7 @@ How each field is made (times are seconds from the trial's ``start_time``):
 - ``mode_switch_times``: the remaining rows of ``mode_switches`` after the placeholder and the
   initial-mode row (the README's "rows minus 2 minus requests"), ``mode_switch_modes`` the mode
   each entered (the ``current_mode`` row logged at that time). Raw: the authors' cleaning is
-  applied by :mod:`drake_disamb.study.metrics`.
+  applied by :mod:`drake_disamb.study.measures.metrics`.
 - ``duration`` = ``completion_time`` = ``total_time``; ``reached_goals``, ``success`` and ``done``
   are null (not logged). ``valid`` is False for the 14 trials the authors excluded as failed
   (:data:`FAILED_TRIALS`, the paper's unsuccessful trials).
@@ -66,9 +66,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.interfaces import DIM_NAMES, MODES
-from drake_disamb.study.folder import LoggedTrial, StudyFolder
-from drake_disamb.study.metrics import assistance_onset
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
+from drake_disamb.study.measures.metrics import assistance_onset
+from drake_disamb.study.run.records import TrialRecord
 
 __all__ = [
     "FAILED_TRIALS",
