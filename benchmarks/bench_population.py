@@ -3,14 +3,15 @@ per interface, task and paradigm (a check of the calibration, not a fit). Means 
 that succeeded (the authors left their failed trials out of every mean); success over all.
 
 Runs ``--trials`` trials per condition (interface x task x paradigm) with subjects drawn by
-:func:`drake_disamb.study.population.draw_subjects`, each with a random intended goal and initial
+:func:`drake_disamb.study.design.population.draw_subjects`, each with a random intended goal and initial
 mode, through :func:`drake_disamb.trial.run_trial` (the embedded reaching and pouring scenarios,
 ``duration`` raised to ``--duration``, the joystick's mode selection the study protocol's
 ``interface_mode_selection``), and prints their means beside the means of the authors'
-logs (:func:`drake_disamb.study.metrics.summarize` of :func:`drake_disamb.study.authors.read_trials`,
-the authors' metric definitions) and the ratio simulated / human; the last column adds the people's
-median tail (last command to the end of the trial, which the experimenter stopped) to the simulated
-time. A simulated population is accepted when every ratio is within 0.5..1.5.
+logs (:func:`drake_disamb.study.measures.metrics.summarize` of
+:func:`drake_disamb.study.data.authors.read_trials`, the authors' metric definitions) and the ratio
+simulated / human; the last column adds the people's median tail (last command to the end of the
+trial, which the experimenter stopped) to the simulated time. A simulated population is accepted when
+every ratio is within 0.5..1.5.
 
     python benchmarks/bench_population.py [--trials 2] [--duration 180] [--seed 0] [--jsonl FILE]
 
@@ -29,11 +30,11 @@ from pathlib import Path
 import numpy as np
 
 from drake_disamb.config import load_scenario, validate_scenario, with_overrides
-from drake_disamb.study.authors import read_trials
-from drake_disamb.study.calibration import estimate_behaviour
-from drake_disamb.study.metrics import summarize
-from drake_disamb.study.population import draw_subjects
-from drake_disamb.study.protocol import default_protocol
+from drake_disamb.study.data.authors import read_trials
+from drake_disamb.study.design.population import draw_subjects
+from drake_disamb.study.design.protocol import default_protocol
+from drake_disamb.study.measures.calibration import estimate_behaviour
+from drake_disamb.study.measures.metrics import summarize
 from drake_disamb.trial import run_trial
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"

@@ -37,9 +37,9 @@ from pathlib import Path
 
 from _host import HostMeter, host_summary
 
-from drake_disamb.study import protocol as P
-from drake_disamb.study.records import read_records
-from drake_disamb.study.runner import default_workers, plan_study, records_by_id, run_study
+from drake_disamb.study.data.records import read_records
+from drake_disamb.study.design import protocol as P
+from drake_disamb.study.run.runner import default_workers, plan_study, records_by_id, run_study
 
 
 def protocol_of(args: argparse.Namespace) -> P.Protocol:

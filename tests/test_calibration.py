@@ -1,4 +1,4 @@
-"""Behaviour estimates of :mod:`drake_disamb.study.calibration`: ending and starting in the gripper
+"""Behaviour estimates of :mod:`drake_disamb.study.measures.calibration`: ending and starting in the gripper
 mode and the commanded path, on hand-made trials (read directly and through a study folder) and on
 the authors' logs (skipped where the logs are absent)."""
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.authors import AuthorsTrial, mode_name, read_study_trials
-from drake_disamb.study.calibration import estimate_behaviour, format_estimates
-from drake_disamb.study.outcome import save_trace
-from drake_disamb.study.records import TrialRecord, append_record
+from drake_disamb.study.data.authors import mode_name
+from drake_disamb.study.data.folder import LoggedTrial, StudyFolder, save_trace
+from drake_disamb.study.data.records import TrialRecord, append_record
+from drake_disamb.study.measures.calibration import estimate_behaviour, format_estimates
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
 DT = 0.05
@@ -33,7 +33,7 @@ def _trial(
     t_end: float | None = None,
     paradigm: str = "manual",
     valid: bool = True,
-) -> AuthorsTrial:
+) -> LoggedTrial:
     """A trial of ``interface`` starting in mode index ``initial`` whose user switches are
     ``changes`` (time s, mode index entered); its trace samples the mode every :data:`DT` from
     ``t0`` to ``t_end`` (``duration`` by default)."""
@@ -62,10 +62,10 @@ def _trial(
         "belief": np.full((t.size, 2), 0.5),
         "alpha": np.zeros(t.size),
     }
-    return AuthorsTrial(record, trace, request_switch_times=np.zeros(0))
+    return LoggedTrial(record, trace, request_switch_times=np.zeros(0))
 
 
-def _trials() -> list[AuthorsTrial]:
+def _trials() -> list[LoggedTrial]:
     j, h = len(MODES["joystick"]) - 1, len(MODES["head_array"]) - 1  # the gripper modes: 4 and 6
     return [
         # in, out of and back into the gripper mode: ends there 5 s after its second change into it;
@@ -123,7 +123,7 @@ def test_gripper_estimates_are_the_same_from_a_study_folder(tmp_path: Path) -> N
     for trial in _trials():
         append_record(tmp_path / "trials.jsonl", trial.record)
         save_trace(tmp_path / "traces" / f"{trial.record.trial_id}.npz", trial.trace)
-    trials = read_study_trials(tmp_path)
+    trials = StudyFolder(tmp_path).read_trials()
     assert all(t.request_switch_times.size == 0 for t in trials)  # every change is a user switch
     _check(estimate_behaviour(trials))
 
@@ -131,7 +131,7 @@ def test_gripper_estimates_are_the_same_from_a_study_folder(tmp_path: Path) -> N
 def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
     if not DATA.is_dir():
         pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
-    from drake_disamb.study.authors import read_trials
+    from drake_disamb.study.data.authors import read_trials
 
     est = estimate_behaviour(read_trials(DATA))
     assert est.gripper_end["joystick"]["pouring"].share > 0.8
@@ -144,7 +144,7 @@ def test_people_let_go_at_the_end_of_pouring_and_start_in_any_mode() -> None:
 
 
 def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
-    from drake_disamb.study.course import command_path
+    from drake_disamb.study.measures.course import command_path
 
     trial = _trial("p", "joystick", "reaching", 0, [], 3.0)
     trial.trace["u"][:, 4] = 0.1  # 0.1 rad/s about y throughout

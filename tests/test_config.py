@@ -29,7 +29,7 @@ from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.disambiguation import preset
 from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.user import UserConfig
-from drake_disamb.study.runner import check_overrides
+from drake_disamb.study.run.runner import check_overrides
 from drake_disamb.trial import run_trial
 
 
@@ -347,5 +347,5 @@ def test_interface_mode_selection_reaches_the_joystick_only() -> None:
 
 def test_interface_mode_selection_is_an_ablation_switch() -> None:
     check_overrides({"interface_mode_selection": "direct"})
-    with pytest.raises(ValueError, match=r"--switch interface_mode_selection='sector'"):
+    with pytest.raises(ValueError, match=r"overrides interface_mode_selection='sector'"):
         check_overrides({"interface_mode_selection": "sector"})

@@ -25,7 +25,7 @@ from drake_disamb.plotting import goal_probability_figure, nonzero_segments
         (["--goal", "9"], "goal: expected an index in [0, 4]"),
         (["--task", "/no/such/file.yaml"], "no such scenario file"),
         (["--live"], "--live needs Meshcat"),
-        (["--duration", "0"], "--duration: expected a number > 0"),
+        (["--duration", "0"], "--duration: expected a number of seconds in (0, 3600]"),
     ],
 )
 def test_bad_arguments_exit_2(argv: list[str], message: str, capsys, tmp_path: Path) -> None:

@@ -237,6 +237,7 @@ BAD_CASES: list[tuple[str, str, str]] = [
     ),
     (_json_text(dict(Y_SCENE, transition_matrix=[[1e308, 1e308], [0, 1]])), "transition_matrix", "sum to 1"),
     (_json_text(dict(Y_SCENE, current_mode=True)), "current_mode", "non-negative integer"),
+    (_json_text(dict(Y_SCENE, current_mode=7)), "current_mode", "expected an index in [0, 6]"),
     (_json_text(dict(Y_SCENE, modes=[[0], ["1"]])), "modes", "modes[1]"),
     (_json_text(dict(Y_SCENE, preset=["mico"])), "preset", "expected 'mico'"),
     ("[[[[1]]]]", "case", "expected a JSON object"),

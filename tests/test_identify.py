@@ -16,8 +16,9 @@ import pytest
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
 from drake_disamb.core.blending import blending_alpha
 from drake_disamb.core.inference import DFTParams, dft_euler_step
-from drake_disamb.study.authors import AuthorsTrial
-from drake_disamb.study.identify import (
+from drake_disamb.study.data.folder import LoggedTrial
+from drake_disamb.study.data.records import TrialRecord
+from drake_disamb.study.measures.identify import (
     alpha_matches,
     fit_alpha_law,
     fit_idle_decay,
@@ -28,7 +29,6 @@ from drake_disamb.study.identify import (
     update_period,
     update_rows,
 )
-from drake_disamb.study.records import TrialRecord
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2020_human_study"
 HAVE_DATA = (DATA / "trial_order_testing_8.mat").is_file()
@@ -52,7 +52,7 @@ def _record(interface: str = "head_array", task: str = "reaching", requests: lis
     )  # fmt: skip
 
 
-def _idle_trial(n: int, params: DFTParams, period: float, seed: int) -> AuthorsTrial:
+def _idle_trial(n: int, params: DFTParams, period: float, seed: int) -> LoggedTrial:
     """A trial whose belief updates every ``period`` s with the core's Euler step: commanded for the
     first 2 s (towards goal 0 of ``n``), then idle; logged every :data:`DT`."""
     rng = np.random.default_rng(seed)
@@ -78,7 +78,7 @@ def _idle_trial(n: int, params: DFTParams, period: float, seed: int) -> AuthorsT
         "t_u_h": t_u,
         "mode": np.zeros(len(t), dtype=np.int64),
     }
-    return AuthorsTrial(_record(), trace, request_switch_times=np.zeros(0))
+    return LoggedTrial(_record(), trace, request_switch_times=np.zeros(0))
 
 
 def test_update_rows_and_period() -> None:
@@ -126,7 +126,7 @@ def _alpha_trial(n: int, lo: float, hi: float, seed: int, requests: tuple[float,
         presses, switches = [requests[0]], np.array([requests[1]])
     trace = {"t": t, "belief": belief, "alpha": alpha, "u": np.zeros((len(t), 6))}
     task = "reaching" if n == 5 else "pouring"
-    return AuthorsTrial(_record(task=task, requests=presses), trace, request_switch_times=switches)
+    return LoggedTrial(_record(task=task, requests=presses), trace, request_switch_times=switches)
 
 
 def test_alpha_law_recovers_thresholds_rounding_and_requests() -> None:
@@ -138,7 +138,7 @@ def test_alpha_law_recovers_thresholds_rounding_and_requests() -> None:
     assert all(v == 1.0 for v in law.match.values())
     # Without the request's window the law would miss the rows during the request.
     trial = trials[0]
-    no_request = AuthorsTrial(_record(task="reaching"), trial.trace, request_switch_times=np.zeros(0))
+    no_request = LoggedTrial(_record(task="reaching"), trial.trace, request_switch_times=np.zeros(0))
     assert not alpha_matches(no_request, law).all()
 
 
@@ -162,7 +162,7 @@ def test_solve_positions_from_attractors_and_a_repeller() -> None:
     assert np.max(np.abs(offset - repel)) < 1e-6
 
 
-def _scores_trial(keep_winners: set[int]) -> AuthorsTrial:
+def _scores_trial(keep_winners: set[int]) -> LoggedTrial:
     """Requests of a head array whose mode ids 1..6 are the dimensions vx, vy, vz, wz, wx, wy, and
     whose score columns are in dimension order; only requests won by ``keep_winners`` columns."""
     rng = np.random.default_rng(4)
@@ -174,7 +174,7 @@ def _scores_trial(keep_winners: set[int]) -> AuthorsTrial:
     ids = np.array([1 + order.index((int(w),)) for w in np.argmax(dims, axis=1)])
     trace = {"request_mode_scores": dims.copy(), "request_dim_scores": dims, "request_mode_ids": ids}
     k = len(ids)
-    return AuthorsTrial(_record(requests=[1.0] * k), trace, request_switch_times=np.ones(k))
+    return LoggedTrial(_record(requests=[1.0] * k), trace, request_switch_times=np.ones(k))
 
 
 def test_mode_map_from_scores() -> None:
@@ -200,8 +200,8 @@ def test_mode_map_from_scores() -> None:
 
 @functools.cache
 def _logs():
-    from drake_disamb.study.authors import read_trials
-    from drake_disamb.study.identify import identify
+    from drake_disamb.study.data.authors import read_trials
+    from drake_disamb.study.measures.identify import identify
 
     trials = read_trials(DATA)
     return trials, identify(DATA, trials=trials)
@@ -339,7 +339,7 @@ def test_system_presets_load_and_resolve() -> None:
 
 
 def test_protocol_names_a_system() -> None:
-    from drake_disamb.study.protocol import default_protocol_text, protocol_from_yaml
+    from drake_disamb.study.design.protocol import default_protocol_text, protocol_from_yaml
 
     text = default_protocol_text()
     assert protocol_from_yaml(text + "\nsystem: mico\n").system == "mico"

@@ -303,7 +303,7 @@ def test_a_registered_method_is_selectable_from_the_protocol_and_the_command_lin
     import json
 
     from drake_disamb import cli
-    from drake_disamb.study.protocol import default_protocol, protocol_from_dict, protocol_to_dict
+    from drake_disamb.study.design.protocol import default_protocol, protocol_from_dict, protocol_to_dict
 
     data = protocol_to_dict(default_protocol())
     data["disambiguation_method"] = "last_mode"

@@ -18,7 +18,7 @@ from drake_disamb.core.user import (
     mode_usefulness,
     user_step,
 )
-from drake_disamb.study.population import (
+from drake_disamb.study.design.population import (
     LogNormal,
     PopulationConfig,
     Subject,
@@ -382,7 +382,7 @@ def test_a_subjects_mode_choices_are_not_always_the_best_mode() -> None:
 def human_trials():
     if not DATA.is_dir():
         pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
-    from drake_disamb.study.authors import read_trials
+    from drake_disamb.study.data.authors import read_trials
 
     return read_trials(DATA)
 
@@ -406,8 +406,8 @@ def test_reads_every_trial_with_its_paradigm(human_trials) -> None:
 
 @needs_data
 def test_behaviour_uses_the_shared_reader_and_metrics(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour, format_condition_means
-    from drake_disamb.study.metrics import summarize
+    from drake_disamb.study.measures.calibration import estimate_behaviour, format_condition_means
+    from drake_disamb.study.measures.metrics import summarize
 
     # H3PH1REHAT16: a button press 1.4 s after the request, 3.3 s before the system's switch,
     # is the user's (the reader matches the switch logged with the request's scores).
@@ -428,7 +428,7 @@ def test_behaviour_uses_the_shared_reader_and_metrics(human_trials) -> None:
 
 @needs_data
 def test_behaviour_estimates_are_human_scale(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour, format_estimates
+    from drake_disamb.study.measures.calibration import estimate_behaviour, format_estimates
 
     est = estimate_behaviour(human_trials)
     assert 2.0 < est.start_delay.median < 15.0
@@ -449,7 +449,7 @@ def test_behaviour_estimates_are_human_scale(human_trials) -> None:
 
 @needs_data
 def test_population_defaults_follow_the_estimates(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     est = estimate_behaviour(human_trials)
     d = PopulationConfig().distributions
@@ -471,7 +471,7 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
 
 
 def test_the_request_decay_fit_recovers_known_parameters() -> None:
-    from drake_disamb.study.fits import fit_request_decay
+    from drake_disamb.study.measures.fits import fit_request_decay
 
     rng = np.random.default_rng(3)
     events = []
@@ -503,7 +503,7 @@ def test_calibrate_command_prints_the_estimates(capsys: pytest.CaptureFixture[st
 
 @needs_data
 def test_people_change_modes_less_while_the_belief_is_confident(human_trials) -> None:
-    from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     est = estimate_behaviour(human_trials)
     for interface in ("joystick", "head_array"):
@@ -514,8 +514,8 @@ def test_people_change_modes_less_while_the_belief_is_confident(human_trials) ->
 
 def _logged_trial(folder: Path, trial_id: str, *, t, mode, belief, switches, requests, duration):
     """A record and its trace written into the study folder ``folder`` (a hand-made trial)."""
-    from drake_disamb.study.outcome import save_trace
-    from drake_disamb.study.records import TrialRecord, append_record
+    from drake_disamb.study.data.folder import save_trace
+    from drake_disamb.study.data.records import TrialRecord, append_record
 
     record = TrialRecord(
         trial_id=trial_id, subject="S01", interface="head_array", task="reaching", paradigm="disambiguation",
@@ -532,14 +532,14 @@ def _logged_trial(folder: Path, trial_id: str, *, t, mode, belief, switches, req
     save_trace(
         folder / "traces" / f"{trial_id}.npz",
         {"t": np.asarray(t), "mode": np.asarray(mode, dtype=float), "belief": np.asarray(belief),
-         "u_h": np.zeros((n, 6)), "alpha": np.zeros(n)},
+         "u_h": np.zeros((n, 6)), "u": np.zeros((n, 6)), "alpha": np.zeros(n)},
     )  # fmt: skip
     return record
 
 
 def test_study_trials_give_the_request_switches_and_the_confident_change_rates(tmp_path: Path) -> None:
-    from drake_disamb.study.authors import read_study_trials
-    from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
     t = np.round(np.arange(0, 40.0, 0.01), 2)
     mode = np.zeros(t.size)
@@ -551,7 +551,7 @@ def test_study_trials_give_the_request_switches_and_the_confident_change_rates(t
     record = _logged_trial(
         tmp_path, "T1", t=t, mode=mode, belief=belief, switches=[5.0, 30.0], requests=[10.0], duration=40.0
     )
-    (trial,) = read_study_trials(tmp_path)
+    (trial,) = StudyFolder(tmp_path).read_trials()
     assert trial.record == record
     assert trial.request_switch_times == pytest.approx([12.5])
     est = estimate_behaviour([trial])
@@ -560,19 +560,21 @@ def test_study_trials_give_the_request_switches_and_the_confident_change_rates(t
     assert est.confident_share["head_array"] == pytest.approx(0.5, abs=0.01)
 
 
-def test_study_trials_refuse_a_folder_without_records_or_a_missing_trace(tmp_path: Path) -> None:
-    from drake_disamb.study.authors import read_study_trials
+def test_study_trials_refuse_a_folder_without_records_and_skip_a_missing_trace(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from drake_disamb.study.data.folder import StudyFolder
 
     with pytest.raises(ValueError, match="trials.jsonl"):
-        read_study_trials(tmp_path)
+        StudyFolder(tmp_path).read_trials()
     t = np.arange(0, 1.0, 0.01)
     _logged_trial(
         tmp_path, "T1", t=t, mode=np.zeros(t.size), belief=np.full((t.size, 2), 0.5),
         switches=[], requests=[], duration=1.0,
     )  # fmt: skip
     (tmp_path / "traces" / "T1.npz").unlink()
-    with pytest.raises(ValueError, match="T1.npz"):
-        read_study_trials(tmp_path)
+    assert StudyFolder(tmp_path).read_trials() == []
+    assert "T1.npz" in capsys.readouterr().err
 
 
 def test_calibrate_command_refuses_a_folder_without_logs(tmp_path: Path, capsys) -> None:

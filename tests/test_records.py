@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from drake_disamb.study.records import FORMAT, RecordError, TrialRecord, append_record, read_records
+from drake_disamb.study.data.records import FORMAT, RecordError, TrialRecord, append_record, read_records
 
 
 def _record(trial_id: str = "t0", **changes) -> TrialRecord:

@@ -14,8 +14,8 @@ from scipy.io import loadmat
 from scipy.stats import skew
 
 from drake_disamb.cli import main
-from drake_disamb.study.authors import load_trial_order, parse_trial_name, read_trial, read_trials
-from drake_disamb.study.records import read_records
+from drake_disamb.study.data.authors import load_trial_order, parse_trial_name, read_trial, read_trials
+from drake_disamb.study.data.records import read_records
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2020_human_study"
 pytestmark = pytest.mark.skipif(

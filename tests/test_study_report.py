@@ -15,18 +15,17 @@ from scipy.stats import mannwhitneyu, skew
 from support import screenshot_script
 
 from drake_disamb.cli import main
-from drake_disamb.study.findings import compare_summaries
-from drake_disamb.study.metrics import (
-    assistance_onset,
+from drake_disamb.study.analysis.findings import compare_summaries
+from drake_disamb.study.analysis.stats import rank_biserial, run_tests, stars
+from drake_disamb.study.data.records import RecordError, TrialRecord, append_record, assistance_onset
+from drake_disamb.study.measures.metrics import (
     clean_mode_switches,
     clean_requests,
     request_time_skewness,
     summarize,
     trial_metrics,
 )
-from drake_disamb.study.records import RecordError, TrialRecord, append_record
-from drake_disamb.study.report import write_report
-from drake_disamb.study.stats import rank_biserial, run_tests, stars
+from drake_disamb.study.report.page import write_report
 
 JOYSTICK_MODES = ("vx_vy", "vx_vz", "wx_wz", "wy", "gripper")
 

@@ -24,12 +24,12 @@ import numpy as np
 import pytest
 import yaml
 from scipy.stats import mannwhitneyu
-from support import SRC, cli_process, interrupt
+from support import SRC, cli_process, interrupt, wait_for_line
 
-from drake_disamb.study import protocol as P
-from drake_disamb.study.outcome import TRACE_ARRAYS, assistance_onset
-from drake_disamb.study.records import read_records
-from drake_disamb.study.runner import plan_study, records_by_id, run_study
+from drake_disamb.study.data.records import read_records
+from drake_disamb.study.design import protocol as P
+from drake_disamb.study.run.outcome import TRACE_ARRAYS, stage_onsets
+from drake_disamb.study.run.runner import plan_study, records_by_id, run_study
 
 
 def compatible_protocol_data() -> dict:
@@ -99,7 +99,7 @@ def test_default_protocol_is_the_papers() -> None:
 
 def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> None:
     from drake_disamb.config import resolve_scenario
-    from drake_disamb.study.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, build_scenario
 
     protocol = P.quick_protocol()
     context = StudyContext(protocol=P.protocol_to_dict(protocol))
@@ -151,7 +151,7 @@ def test_malformed_protocol_file_names_the_file_and_line(tmp_path: Path) -> None
     path.write_text("subjects: 8\ninterfaces: [joystick\n", encoding="utf-8")
     with pytest.raises(ValueError, match=r"p\.yaml.*line"):
         P.load_protocol(path)
-    with pytest.raises(ValueError, match=r"--protocol: no such file"):
+    with pytest.raises(ValueError, match=r"protocol file .*: no such file"):
         P.load_protocol(tmp_path / "missing.yaml")
 
 
@@ -200,15 +200,15 @@ def test_assistance_onset_on_a_hand_made_trace() -> None:
     u_h = np.zeros((8, 6))
     u_h[[0, 1, 2, 3, 5, 6], 0] = 0.1  # not commanding at samples 4 and 7 (alpha 0 there is no lapse)
     trace = {"t": t, "belief": belief, "alpha": alpha, "u_h": u_h, "stage": np.zeros(8)}
-    assert assistance_onset(trace, [0], [2]) == [1.5]  # sample 2 had alpha 0 while commanding
-    assert assistance_onset(trace, [1], [2]) == [None]
+    assert stage_onsets(trace, [0], [2]) == [1.5]  # sample 2 had alpha 0 while commanding
+    assert stage_onsets(trace, [1], [2]) == [None]
     # two stages, a task-wide belief of 2 + 2 goals: stage 1's intended goal 1 is belief index 3
     trace2 = {
         **trace,
         "belief": np.tile([0.1, 0.1, 0.2, 0.6], (8, 1)),
         "stage": np.r_[np.zeros(4), np.ones(4)],
     }
-    assert assistance_onset(trace2, [0, 1], [2, 2]) == [None, 2.5]
+    assert stage_onsets(trace2, [0, 1], [2, 2]) == [None, 2.5]
 
 
 # -- running ----------------------------------------------------------------------------------------
@@ -326,10 +326,10 @@ def test_quick_study_end_to_end(tmp_path: Path) -> None:
     assert (row["n_a"], row["n_b"]) == (len(by["manual"]), len(by["disambiguation"]))
     assert row["p_value"] == pytest.approx(expected.pvalue, rel=1e-12)
     # the behaviour estimates measure the simulated trials as they measure people's logs
-    from drake_disamb.study.authors import read_study_trials
-    from drake_disamb.study.calibration import estimate_behaviour
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.measures.calibration import estimate_behaviour
 
-    trials = read_study_trials(tmp_path / "q")
+    trials = StudyFolder(tmp_path / "q").read_trials()
     assert [t.record for t in trials] == records
     for t in trials:
         assert len(t.request_switch_times) <= len(t.record.request_times)
@@ -470,7 +470,7 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
     and a trial from each succeeds (head array, disambiguation, the first goal of every stage)."""
     import dataclasses
 
-    from drake_disamb.study.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, build_scenario
     from drake_disamb.trial import run_trial
 
     data = compatible_protocol_data()
@@ -497,6 +497,8 @@ def test_trials_are_submitted_longest_first(tmp_path: Path) -> None:
     fake executor records the order and fails every trial (nothing is simulated or written)."""
     import concurrent.futures as cf
 
+    from drake_disamb.study.run.runner import TrialOutput
+
     class Recording(cf.Executor):
         def __init__(self) -> None:
             self.order: list = []
@@ -504,7 +506,7 @@ def test_trials_are_submitted_longest_first(tmp_path: Path) -> None:
         def submit(self, fn, spec, *args, **kwargs):  # type: ignore[no-untyped-def, override]
             self.order.append(spec)
             future: cf.Future = cf.Future()
-            future.set_exception(RuntimeError("not run"))
+            future.set_result(TrialOutput(record=None, trace={}, error="RuntimeError: not run"))
             return future
 
     data = compatible_protocol_data()
@@ -516,3 +518,104 @@ def test_trials_are_submitted_longest_first(tmp_path: Path) -> None:
     keys = [(len(s.goals), s.interface != "joystick") for s in executor.order]
     assert keys == sorted(keys, reverse=True) and keys[0] != keys[-1]
     assert sorted(s.trial_id for s in executor.order) == sorted(s.trial_id for s in plan.pending)
+
+
+# -- one writer, signals ----------------------------------------------------------------------------
+
+
+def _session_processes(sid: int) -> list[int]:
+    """PIDs of the live processes of session ``sid`` (from /proc)."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == sid and fields[0] != "Z":  # fields[3]: the session id, [0]: the state
+            pids.append(int(entry.name))
+    return pids
+
+
+def _start_run(out: Path, protocol: Path) -> subprocess.Popen:
+    argv = ["study", "run", "--out", str(out), "--protocol", str(protocol), "--seed", "3", "--workers", "2"]
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    return subprocess.Popen(
+        [sys.executable, "-m", "drake_disamb.cli", *argv, "--quiet"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,
+    )
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_run_leaves_no_process_and_a_rerun_completes(
+    reference: tuple[Path, dict], tmp_path: Path
+) -> None:
+    out = tmp_path / "term"
+    protocol = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+    proc = _start_run(out, protocol)
+    records = out / "trials.jsonl"
+    try:
+        end = time.monotonic() + 180
+        while time.monotonic() < end and not (records.exists() and records.read_bytes().count(b"\n") >= 1):
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGTERM)  # to the main process only, as a scheduler or `timeout` does
+        _, err = proc.communicate(timeout=30)
+        gone = time.monotonic() + 5.0
+        while _session_processes(proc.pid) and time.monotonic() < gone:
+            time.sleep(0.1)
+        assert _session_processes(proc.pid) == []
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert "stopped by SIGTERM" in err and "rerun the same command to resume" in err
+    assert "Traceback" not in err
+    res = cli("study", "run", "--out", str(out), "--protocol", str(protocol), "--seed", "3", "--workers", "2")
+    assert res.returncode == 0, res.stderr
+    assert records_by_id(read_records(records)) == reference[1]
+
+
+@pytest.mark.slow
+def test_ctrl_c_to_the_process_group_prints_no_worker_traceback(tmp_path: Path) -> None:
+    protocol = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+    proc = _start_run(tmp_path / "int", protocol)
+    try:
+        wait_for_line(proc, "trials to run", timeout=180)
+        time.sleep(3.0)  # the workers are running trials
+        os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130 and "Traceback" not in err, err
+    assert err.strip().count("\n") == 0 and "stopped by SIGINT" in err
+
+
+@pytest.mark.slow
+def test_two_concurrent_runs_one_is_refused_and_the_folder_reports_and_resumes(
+    reference: tuple[Path, dict], tmp_path: Path
+) -> None:
+    out = tmp_path / "both"
+    protocol = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+    first = _start_run(out, protocol)
+    try:
+        wait_for_line(first, "trials to run", timeout=180)
+        start = time.monotonic()
+        second = cli("study", "run", "--out", str(out), "--protocol", str(protocol), "--seed", "3")
+        assert second.returncode == 2 and f"PID {first.pid}" in second.stderr, second.stderr
+        # the lock is the first check: refused as soon as the command has started (its imports)
+        assert "Traceback" not in second.stderr and time.monotonic() - start < 10
+        first.communicate(timeout=300)
+    finally:
+        if first.poll() is None:
+            os.killpg(first.pid, signal.SIGKILL)
+    assert first.returncode == 0
+    assert records_by_id(read_records(out / "trials.jsonl")) == reference[1]
+    assert cli("study", "report", str(out), "--no-mixed-model").returncode == 0
+    res = cli("study", "run", "--out", str(out), "--protocol", str(protocol), "--seed", "3")
+    assert res.returncode == 0 and "0 trials to run" in res.stdout, res.stderr

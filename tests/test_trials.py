@@ -421,3 +421,11 @@ def test_cli_bad_options_fail_before_the_work(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message.format(**fill) in err
     assert blocker.read_text() == "x"
+
+
+@pytest.mark.parametrize("target", ["missing.mat", "trajectory_1.mat"], ids=["dangling", "itself"])
+def test_a_broken_mat_link_is_named_not_skipped(tmp_path: Path, target: str) -> None:
+    _write(tmp_path, "trajectory_0.mat")  # one good file beside it
+    (tmp_path / "trajectory_1.mat").symlink_to(tmp_path / target)
+    with pytest.raises(ValueError, match=r"trajectory_1.mat: a broken link"):
+        load_trials(tmp_path)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import socket
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -29,17 +30,88 @@ def add_meshcat_arguments(parser: argparse.ArgumentParser) -> None:
 def start_meshcat(args: argparse.Namespace) -> Any:
     """A Meshcat server on ``args.meshcat_host`` (localhost unless the user asked for more).
 
+    Listening beyond this machine prints a warning with the address others reach it at
+    (:func:`exposure_warning`; with ``args.live``, they can drive the arm). A ``--meshcat-port``
+    that another program holds is named, with the next free port (``ValueError``).
+
     Drake's own "Meshcat listening for connections at URL" log line is held back: the command
     prints the URL itself, once, where the user needs it."""
     from pydrake.geometry import Meshcat, MeshcatParams
 
-    params = MeshcatParams(host=args.meshcat_host)
-    if args.meshcat_port is not None:
-        if not 0 < args.meshcat_port < 65536:
-            raise ValueError(f"--meshcat-port: expected a port in 1..65535, got {args.meshcat_port}")
-        params.port = args.meshcat_port
-    with _drake_info_held_back():
-        return Meshcat(params)
+    host = args.meshcat_host
+    params = MeshcatParams(host=host)
+    port = args.meshcat_port
+    if port is not None:
+        if not 0 < port < 65536:
+            raise ValueError(f"--meshcat-port: expected a port in 1..65535, got {port}")
+        if not port_is_free(host, port):
+            raise ValueError(_taken(host, port))
+        params.port = port
+    try:
+        with _drake_info_held_back():
+            meshcat = Meshcat(params)
+    except RuntimeError as exc:
+        if port is not None:
+            raise ValueError(_taken(host, port)) from None
+        raise ValueError(f"--meshcat-host {host!r}: Meshcat cannot listen there ({exc})") from None
+    warning = exposure_warning(host, meshcat.port(), live=bool(getattr(args, "live", False)))
+    if warning is not None:
+        print(warning, file=sys.stderr, flush=True)
+    return meshcat
+
+
+LOCAL_HOSTS = ("localhost", "127.0.0.1", "::1", "ip6-localhost")
+"""Hosts that only this machine reaches."""
+
+
+def _bind_host(host: str) -> str:
+    return "" if host in ("*", "0.0.0.0", "::") else host
+
+
+def port_is_free(host: str, port: int) -> bool:
+    """Whether a server could listen on ``host``:``port`` now (a probe socket binds and closes)."""
+    try:
+        infos = socket.getaddrinfo(
+            _bind_host(host) or None, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
+        )
+    except OSError:
+        return True  # an unknown host: Meshcat reports it
+    for family, kind, proto, _, address in infos:
+        with socket.socket(family, kind, proto) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                probe.bind(address)
+            except OSError:
+                return False
+    return True
+
+
+def _taken(host: str, port: int) -> str:
+    free = next((p for p in range(port + 1, min(port + 200, 65536)) if port_is_free(host, p)), None)
+    hint = f"; the next free one is {free} (--meshcat-port {free})" if free else ""
+    return f"--meshcat-port: port {port} on {host} is taken by another program{hint}"
+
+
+def exposure_warning(host: str, port: int, live: bool) -> str | None:
+    """The warning for a Meshcat server that listens beyond this machine (None on localhost), with
+    the address(es) others can open."""
+    if host in LOCAL_HOSTS:
+        return None
+    if _bind_host(host) == "":
+        names = {socket.gethostname()}
+        with contextlib.suppress(OSError):
+            names |= {i[4][0] for i in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET)}
+        where = "every network interface"
+    else:
+        names = {host}
+        where = host
+    urls = ", ".join(f"http://{n}:{port}" for n in sorted(names))
+    what = (
+        "can watch the arm AND DRIVE IT (--live: the page's controls move the arm)"
+        if live
+        else "can watch the arm (and the page's scene)"
+    )
+    return f"warning: Meshcat listens on {where}: anyone who can reach port {port} ({urls}) {what}"
 
 
 @contextlib.contextmanager

@@ -8,8 +8,13 @@ raises ``KeyboardInterrupt`` at once, for a user who does not want to wait for t
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import multiprocessing
 import signal
+import sys
 import threading
+from collections.abc import Iterator
 from types import FrameType, TracebackType
 from typing import Any
 
@@ -59,3 +64,48 @@ class StopRequest:
         for sig, handler in self._previous.items():
             signal.signal(sig, handler)
         self._previous.clear()
+
+
+@contextlib.contextmanager
+def sigterm_as_sigint() -> Iterator[None]:
+    """While inside, SIGTERM raises ``KeyboardInterrupt`` as SIGINT does (for work that cannot look
+    at a :class:`StopRequest`, such as checking a study's scenarios); outside the main thread, a
+    no-op."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def worker_init() -> None:
+    """Initializer of the study's worker processes: ignore SIGINT (a terminal's Ctrl-C reaches the
+    whole process group; the parent stops the run and ends the workers, which then print nothing),
+    and on Linux ask the kernel to kill the worker when its parent dies (``PR_SET_PDEATHSIG``), so
+    no worker outlives the run, however the parent ends."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+
+
+_PR_SET_PDEATHSIG = 1
+"""``prctl`` option: the signal a process gets when its parent ends (``linux/prctl.h``)."""
+
+END_WAIT = 2.0
+"""Seconds :func:`end_workers` waits for the terminated workers before killing them."""
+
+
+def end_workers() -> None:
+    """End the worker processes this process started (SIGTERM, then SIGKILL after :data:`END_WAIT` s)."""
+    children = multiprocessing.active_children()
+    for child in children:
+        child.terminate()
+    for child in children:
+        child.join(END_WAIT)
+        if child.is_alive():
+            child.kill()
+            child.join(END_WAIT)

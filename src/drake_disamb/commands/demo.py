@@ -17,7 +17,7 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
 ``--live --record DIR --subject NAME`` also appends the person's trial to ``DIR/trials.jsonl`` as a
-study record (``source: "human"``, the same :class:`~drake_disamb.study.records.TrialRecord` the
+study record (``source: "human"``, the same :class:`~drake_disamb.study.data.records.TrialRecord` the
 simulated study writes, made by the same function) and its time series to
 ``DIR/traces/<trial_id>.npz``, so ``study report DIR`` treats people like simulated subjects. A trial
 ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``).
@@ -260,26 +260,28 @@ def _valid_subject(name: str | None) -> bool:
 
 
 def check_record_dir(path: Path) -> Path:
-    """``--record``: a writable folder whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
-    from drake_disamb.study.records import read_records
+    """``--record``: a writable study folder no other process writes (its writer lock is taken and
+    held) whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
+    from drake_disamb.study.data.folder import StudyFolder
 
-    folder = check_output_dir(path, "--record")
-    records = folder / "trials.jsonl"
-    if records.exists():
-        read_records(records, repair=True)
-    return folder
+    try:
+        folder = StudyFolder(path).prepare()
+        folder.read_records(repair=True)
+    except ValueError as exc:
+        raise ValueError(f"--record: {exc}") from None
+    return folder.path
 
 
 def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN001 (TrialResult)
     """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
     ``folder/traces/``; returns its ``trial_id`` (``<subject>-<interface>-<task>-<paradigm>-h<n>``,
     ``n`` counting that person's earlier trials of the condition, also its ``repetition``)."""
-    from drake_disamb.study.outcome import record_from_result, save_trace, trace_arrays
-    from drake_disamb.study.records import append_record, read_records
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.run.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
-    records_path = folder / "trials.jsonl"
-    existing = read_records(records_path, repair=True) if records_path.exists() else []
+    study = StudyFolder(folder).prepare()
+    existing = study.read_records(repair=True)
     stem = f"{subject}-{sc.interface}-{sc.task}-{sc.paradigm}-h"
     ids = {r.trial_id for r in existing}
     n = 0
@@ -299,9 +301,7 @@ def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN0
         wall_time=0.0,
         extra={"live": True, "scenario_seed": sc.seed},
     )
-    (folder / "traces").mkdir(exist_ok=True)
-    save_trace(folder / "traces" / f"{trial_id}.npz", trace)
-    append_record(records_path, record)
+    study.append(record, trace)
     return trial_id
 
 
@@ -359,6 +359,7 @@ def run(args: argparse.Namespace) -> int:
 def _scenario(args: argparse.Namespace) -> Any:
     """The scenario of ``--task`` with the command-line options applied (raises ``ValueError``)."""
     from drake_disamb.config import load_scenario, with_overrides
+    from drake_disamb.config.checks import check_duration
 
     scenario = load_scenario(args.task)
     scenario = with_overrides(
@@ -366,8 +367,7 @@ def _scenario(args: argparse.Namespace) -> Any:
     )
     duration = args.duration if args.duration is not None else (600.0 if args.live else None)
     if duration is not None:
-        if not duration > 0:
-            raise ValueError(f"--duration: expected a number > 0, got {duration:g}")
+        check_duration(duration, "--duration")
         scenario = dataclasses.replace(scenario, duration=duration)
     return scenario
 

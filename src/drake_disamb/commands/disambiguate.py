@@ -392,6 +392,13 @@ def _solve_case(case: Any, default_preset: str, method: str = "algorithm1") -> A
     current = case.get("current_mode")
     if current is not None and (isinstance(current, bool) or not isinstance(current, int) or current < 0):
         raise CaseError("current_mode", f"expected a non-negative integer, got {_short(current)}")
+    n_modes = len(case["modes"]) if isinstance(case.get("modes"), list) else None
+    if current is not None and n_modes is not None and current > n_modes:
+        raise CaseError(
+            "current_mode",
+            f"expected an index in [0, {n_modes}] ({n_modes} modes; {n_modes}: the gripper mode), "
+            f"got {current}",
+        )
     name = case.get("preset", default_preset)
     if not isinstance(name, str) or name not in PRESETS:
         raise CaseError("preset", f"expected {' or '.join(map(repr, PRESETS))}, got {_short(name)}")

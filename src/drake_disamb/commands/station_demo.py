@@ -153,9 +153,10 @@ def _error(message: object) -> int:
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
-    """Validate the options (``ValueError`` naming the option and value), without importing Drake."""
-    if not (math.isfinite(args.duration) and args.duration > 0):
-        raise ValueError(f"--duration: expected a positive number of seconds, got {args.duration!r}")
+    """Validate the options (``ValueError`` naming the option and value), before anything is built."""
+    from drake_disamb.config.checks import check_duration
+
+    check_duration(args.duration, "--duration")
     if not (math.isfinite(args.hold) and args.hold >= 0):
         raise ValueError(f"--hold: expected a number of seconds >= 0, got {args.hold!r}")
     if not (math.isfinite(args.speed) and 0 < args.speed <= 0.2):

@@ -24,7 +24,13 @@ from typing import Any
 
 import yaml
 
-from drake_disamb.commands.study_run import add_common_arguments, build_protocol, error, execute
+from drake_disamb.commands.study_run import (
+    add_common_arguments,
+    build_protocol,
+    error,
+    execute,
+    stopped_before_the_first_trial,
+)
 
 HELP = "Run the study once per setting of scenario switches (--switch PATH=V1,V2) into DIR/<setting>/."
 
@@ -86,34 +92,42 @@ def settings_of(switches: list[tuple[str, list[tuple[str, Any]]]]) -> list[dict[
 def run(args: argparse.Namespace) -> int:
     """``study ablate``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
-    from drake_disamb.study.runner import check_overrides, plan_study
+    from drake_disamb.commands._signals import sigterm_as_sigint
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.run.runner import check_overrides, plan_study
 
     try:
-        settings = settings_of(args.switch)
-        for s in settings:
-            check_overrides(s["overrides"])
-        protocol = build_protocol(args)
-        out = check_output_dir(args.out, "--out")
-        manifest = {"format": ABLATION_FORMAT, "settings": settings}
-        path = out / "ablation.json"
-        if path.exists():
-            try:
-                old = json.loads(path.read_text(encoding="utf-8"))
-            except (OSError, ValueError) as exc:
-                raise ValueError(f"{path}: cannot read the existing ablation ({exc})") from None
-            if old != manifest:
-                raise ValueError(
-                    f"{path}: this folder holds another ablation (its settings differ); choose another --out"
-                )
-        plans = [plan_study(out / s["dir"], protocol, args.seed, s["overrides"]) for s in settings]
-        if not path.exists():
-            tmp = out / ".ablation.json.tmp"
-            tmp.write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
-            tmp.replace(path)
+        with sigterm_as_sigint():
+            settings = settings_of(args.switch)
+            protocol = build_protocol(args)
+            out = check_output_dir(args.out, "--out")
+            StudyFolder(out).lock()  # first: one writer of ablation.json and of every setting's folder
+            for s in settings:
+                check_overrides(s["overrides"], "--switch")
+            manifest = {"format": ABLATION_FORMAT, "settings": settings}
+            path = out / "ablation.json"
+            if path.exists():
+                try:
+                    old = json.loads(path.read_text(encoding="utf-8"))
+                except (OSError, ValueError) as exc:
+                    raise ValueError(f"{path}: cannot read the existing ablation ({exc})") from None
+                if old != manifest:
+                    raise ValueError(
+                        f"{path}: this folder holds another ablation (its settings differ); "
+                        "choose another --out"
+                    )
+            plans = [plan_study(out / s["dir"], protocol, args.seed, s["overrides"]) for s in settings]
+            if not path.exists():
+                tmp = out / ".ablation.json.tmp"
+                tmp.write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
+                tmp.replace(path)
     except ValueError as exc:
         return error("ablate", exc)
+    except KeyboardInterrupt:
+        return stopped_before_the_first_trial("ablate")
     print(
         f"ablation in {out}: {len(settings)} settings x {len(plans[0].specs)} trials "
+        f"(at most {len(settings) * protocol.simulated_time_bound / 3600.0:.1f} h simulated) "
         f"({', '.join(s['name'] for s in settings)})",
         flush=True,
     )

@@ -37,16 +37,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.authors import read_study_trials, read_trials
-    from drake_disamb.study.calibration import estimate_behaviour, format_condition_means, format_estimates
-    from drake_disamb.study.metrics import summarize
+    from drake_disamb.study.data.authors import read_trials
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.measures.calibration import (
+        estimate_behaviour,
+        format_condition_means,
+        format_estimates,
+    )
+    from drake_disamb.study.measures.metrics import summarize
 
     try:
         trials = read_trials(args.data_dir)
         estimates = estimate_behaviour(trials)
         simulated = None
         if args.simulated is not None:
-            simulated = read_study_trials(args.simulated)
+            simulated = StudyFolder(args.simulated).read_trials()
             simulated_estimates = estimate_behaviour(simulated)
     except (ValueError, OSError) as exc:
         print(f"drake-disamb study calibrate: {exc}", file=sys.stderr)

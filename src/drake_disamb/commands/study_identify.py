@@ -19,7 +19,7 @@ dimension map of each interface and whether each request's mode is the argmax of
 scores; and, where DATA_DIR/known_path/test_data.mat and trial H3PH1REHAT10 are there, the
 end-effector path solved from the autonomy's commands, the blend law and the DFT gain that replays
 the logged belief (beside the mico preset's update without its agreement term). The study's goal
-positions are the embedded reaching task's. drake_disamb.study.identify documents each measurement.
+positions are the embedded reaching task's. drake_disamb.study.measures.identify documents each measurement.
 
 Exit status: 0 on success, 2 when DATA_DIR holds no usable logs.
 """
@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
     import dataclasses
 
     from drake_disamb.core.disambiguation import MICO_DFT
-    from drake_disamb.study.identify import format_identification, identify
+    from drake_disamb.study.measures.identify import format_identification, identify
 
     other = ("mico without agreement", dataclasses.replace(MICO_DFT, agreement=False))
     try:

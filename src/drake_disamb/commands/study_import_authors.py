@@ -11,7 +11,7 @@ HELP = "Import the authors' published human-study logs (4 of the paper's 8 subje
 EPILOG = """\
 Appends one record per trial file (source "authors") to DIR/trials.jsonl and writes its trace to
 DIR/traces/<trial_id>.npz; trials already in DIR/trials.jsonl are skipped (nothing is overwritten).
-See drake_disamb.study.authors for how every field is made.
+See drake_disamb.study.data.authors for how every field is made.
 
 example (from the repository root):
   drake-disamb study import-authors ../shared/data/tnsre2020_human_study --out out/authors
@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.authors import import_authors
+    from drake_disamb.study.data.authors import import_authors
 
     def progress(trial_id: str) -> None:
         if not args.quiet:

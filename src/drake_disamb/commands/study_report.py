@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.report import write_report
+    from drake_disamb.study.report.page import write_report
 
     try:
         files = write_report(args.dir, compare=args.compare, mixed_model=not args.no_mixed_model)

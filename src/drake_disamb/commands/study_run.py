@@ -1,9 +1,9 @@
 """``drake-disamb study run``: run the study protocol with simulated subjects into a folder.
 
 ``study run --out DIR`` runs every trial of the protocol (default: the paper's, embedded in
-``drake_disamb/study/protocol.yaml``; ``--protocol FILE`` another) and writes ``DIR/study.yaml``,
+``drake_disamb/study/design/protocol.yaml``; ``--protocol FILE`` another) and writes ``DIR/study.yaml``,
 one record per finished trial to ``DIR/trials.jsonl`` and its time series to
-``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.runner`). Rerunning the same command
+``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.run.runner`). Rerunning the same command
 resumes: finished trials are skipped, a half-written last record (a killed run) is cut and its
 trial run again. ``--quick``: 2 subjects, both interfaces, reaching only, one trial per paradigm.
 
@@ -13,8 +13,18 @@ on the machines; each worker needs drake-disamb installed; the results come back
 which writes them). Every input (protocol, options, ``--out``, the scheduler) is checked before the
 first trial runs.
 
-Exit status: 0 every trial ran (whatever its success), 1 some trial raised an error (its message is
-printed; rerun to retry it), 2 bad input, 130 interrupted.
+The folder has one writer: a second ``study run`` (or ``ablate``, ``import-authors``, ``demo
+--record``) into it is refused at once, naming the process that writes it. SIGINT (Ctrl-C, to the
+process or its whole group) and SIGTERM stop the run alike: the pending trials are cancelled, the
+worker processes ended (they ignore SIGINT and die with this process, so none is left behind and
+none prints a traceback), what was written is kept and a rerun resumes. A second signal quits at
+once.
+
+Exit status: 0 every trial ran (whatever its success); 1 some trial raised an error (its message is
+printed; rerun to retry it); 2 bad input, or the folder holds another study or is being written by
+another process; 3 the executor failed (a worker process died, the Dask scheduler was lost); 4 a
+record or trace could not be written (a full disk); 130 stopped by SIGINT or SIGTERM. 1, 3, 4 and 130
+keep every record written before and print how many; rerunning the same command resumes.
 """
 
 from __future__ import annotations
@@ -85,7 +95,7 @@ def build_protocol(args: argparse.Namespace) -> Any:
     """The protocol of ``--protocol``, ``--quick`` and ``--subjects`` (raises ``ValueError``)."""
     import dataclasses
 
-    from drake_disamb.study.protocol import load_protocol, quick_protocol, validate_protocol
+    from drake_disamb.study.design.protocol import load_protocol, quick_protocol, validate_protocol
 
     protocol = load_protocol(args.protocol)
     if args.quick:
@@ -98,7 +108,9 @@ def build_protocol(args: argparse.Namespace) -> Any:
 @contextlib.contextmanager
 def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[Any, str]]:
     """A ``concurrent.futures.Executor`` and its description: a spawn-started process pool of
-    ``workers`` processes, or the executor of a Dask client connected to ``scheduler``.
+    ``workers`` processes (:func:`~drake_disamb.commands._signals.worker_init`: they ignore SIGINT
+    and die with this process), or the executor of a Dask client connected to ``scheduler``. On an
+    exception (a stop, a fault) the pool's processes are ended at once, never left behind.
 
     Raises:
         ValueError: the scheduler cannot be reached within :data:`SCHEDULER_TIMEOUT` seconds.
@@ -125,68 +137,135 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
                 )
             yield client.get_executor(), f"Dask scheduler {scheduler} ({n} workers now)"
         finally:
-            client.close()
+            with contextlib.suppress(Exception):  # a lost scheduler: nothing left to close
+                client.close(timeout=SCHEDULER_TIMEOUT)
         return
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    from drake_disamb.study.runner import default_workers
+    from drake_disamb.commands._signals import end_workers, worker_init
+    from drake_disamb.study.run.runner import default_workers
 
     n = workers or default_workers()
-    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"))
+    pool = ProcessPoolExecutor(
+        max_workers=n, mp_context=multiprocessing.get_context("spawn"), initializer=worker_init
+    )
     try:
         yield pool, f"{n} worker process{'es' if n > 1 else ''}"
     except BaseException:
+        end_workers()
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown(wait=True)
 
 
+EXIT_TRIAL_ERROR = 1
+EXIT_BAD_INPUT = 2
+EXIT_EXECUTOR_LOST = 3
+EXIT_WRITE_FAILED = 4
+"""Exit statuses of ``study run`` and ``study ablate`` (and 0, and 130 interrupted: module docstring)."""
+
+
 def error(command: str, message: object) -> int:
     print(f"drake-disamb study {command}: error: {message}", file=sys.stderr)
-    return 2
+    return EXIT_BAD_INPUT
+
+
+def stopped_before_the_first_trial(command: str) -> int:
+    print(f"drake-disamb study {command}: stopped before the first trial (nothing was run)", file=sys.stderr)
+    return 130
+
+
+def _written(plans: list[Any], skipped: int) -> str:
+    """How many records the folders hold now (read back: only what was written is claimed)."""
+    records = 0
+    for plan in plans:
+        with contextlib.suppress(ValueError):
+            records += len(plan.folder.read_records())
+    where = plans[0].records_path if len(plans) == 1 else f"{plans[0].out.parent}/*/trials.jsonl"
+    return f"{records} records in {where} ({records - skipped} written now)"
 
 
 def execute(plans: list[Any], args: argparse.Namespace, command: str) -> int:
-    """Run the pending trials of ``plans`` on one executor, with a progress display."""
+    """Run the pending trials of ``plans`` on one executor, with a progress display; SIGINT and
+    SIGTERM stop it (the exit statuses are in the module docstring)."""
+    from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
     from drake_disamb.progress import TrialProgress
-    from drake_disamb.study.runner import run_study
+    from drake_disamb.study.data.folder import FolderWriteError
+    from drake_disamb.study.run.runner import ExecutorLost, run_study
 
     total = sum(len(p.pending) for p in plans)
     skipped = sum(len(p.finished) for p in plans)
-    try:
-        with open_executor(args.workers, args.scheduler) as (executor, where):
-            print(f"{total} trials to run ({skipped} already done) on {where}", flush=True)
-            progress = TrialProgress(total, quiet=args.quiet)
-            errors = 0
-            try:
+    errors = 0
+    resume = "rerun the same command to resume"
+    progress = None
+    with StopRequest() as stop:
+        try:
+            with open_executor(args.workers, args.scheduler) as (executor, where):
+                print(f"{total} trials to run ({skipped} already done) on {where}", flush=True)
+                progress = TrialProgress(total, quiet=args.quiet)
                 for plan in plans:
-                    result = run_study(plan, executor, on_result=progress.update)
+                    result = run_study(plan, executor, on_result=progress.update, stop=stop)
                     errors += len(result.errors)
-            finally:
-                progress.close()
-    except ValueError as exc:
-        return error(command, exc)
-    except KeyboardInterrupt:
-        print(f"drake-disamb study {command}: interrupted; rerun the same command to resume", file=sys.stderr)
-        return 130
+                    if result.stopped:
+                        raise KeyboardInterrupt
+        except ValueError as exc:
+            return error(command, exc)
+        except KeyboardInterrupt:
+            _close(progress)
+            name = stop.signal_name or "SIGINT"
+            print(
+                f"drake-disamb study {command}: stopped by {name}; {_written(plans, skipped)}; {resume}",
+                file=sys.stderr,
+            )
+            return EXIT_INTERRUPTED
+        except ExecutorLost as exc:
+            _close(progress)
+            print(
+                f"drake-disamb study {command}: error: {exc}; {_written(plans, skipped)}; {resume}",
+                file=sys.stderr,
+            )
+            return EXIT_EXECUTOR_LOST
+        except FolderWriteError as exc:
+            _close(progress)
+            print(
+                f"drake-disamb study {command}: error: {exc.strerror}; {_written(plans, skipped)}; "
+                f"free the space (or fix the folder) and {resume}",
+                file=sys.stderr,
+            )
+            return EXIT_WRITE_FAILED
+    _close(progress)
     print(progress.line(), flush=True)
-    for plan in plans:
-        print(f"wrote {plan.records_path} and {plan.traces_dir}", flush=True)
-    return 1 if errors else 0
+    traces = "each setting's traces/" if len(plans) > 1 else plans[0].traces_dir
+    print(f"{_written(plans, skipped)}, traces in {traces}", flush=True)
+    if errors:
+        print(f"{errors} trials raised (no record): {resume} retries them", flush=True)
+    return EXIT_TRIAL_ERROR if errors else 0
+
+
+def _close(progress: Any) -> None:
+    if progress is not None:
+        progress.close()
 
 
 def run(args: argparse.Namespace) -> int:
     """``study run``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
-    from drake_disamb.study.runner import plan_study
+    from drake_disamb.commands._outputs import check_output_dir
+    from drake_disamb.commands._signals import sigterm_as_sigint
+    from drake_disamb.study.run.runner import plan_study
 
     try:
-        protocol = build_protocol(args)
-        plan = plan_study(args.out, protocol, args.seed)
+        with sigterm_as_sigint():
+            protocol = build_protocol(args)
+            plan = plan_study(check_output_dir(args.out, "--out"), protocol, args.seed)
     except ValueError as exc:
         return error("run", exc)
+    except KeyboardInterrupt:
+        return stopped_before_the_first_trial("run")
+    hours = plan.protocol.simulated_time_bound / 3600.0
     print(
-        f"study in {plan.out}: {len(plan.specs)} trials, seed {plan.seed}, subjects from {plan.population}",
+        f"study in {plan.out}: {len(plan.specs)} trials (at most {hours:.1f} h simulated), seed {plan.seed}, "
+        f"subjects from {plan.population}",
         flush=True,
     )
     return execute([plan], args, "run")

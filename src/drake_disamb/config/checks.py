@@ -30,6 +30,28 @@ from typing import Any
 
 from drake_disamb.core.validation import bounded_repr, is_real
 
+MAX_DURATION: float = 3600.0
+"""Longest trial (s) a scenario, a protocol or a command-line ``--duration`` may ask for: a trial
+whose user never acts runs to its duration, so this bounds how long any trial can run."""
+
+MAX_REQUEST_LATENCY: float = 60.0
+"""Longest request latency (s) a scenario or a protocol may ask for."""
+
+
+def check_duration(value: float, path: str) -> None:
+    """A trial's duration: a finite number of seconds in (0, :data:`MAX_DURATION`] (the one bound
+    of the scenario, the protocol and the commands' ``--duration``)."""
+    if not 0.0 < value <= MAX_DURATION:
+        raise ValueError(f"{path}: expected a number of seconds in (0, {MAX_DURATION:g}], got {fmt(value)}")
+
+
+def check_request_latency(value: float, path: str) -> None:
+    """A request latency: seconds in [0, :data:`MAX_REQUEST_LATENCY`]."""
+    if not 0.0 <= value <= MAX_REQUEST_LATENCY:
+        raise ValueError(
+            f"{path}: expected a number of seconds in [0, {MAX_REQUEST_LATENCY:g}], got {fmt(value)}"
+        )
+
 
 def fmt(value: Any) -> str:
     """``repr(value)`` cut to 200 characters, never formatting more (see :func:`bounded_repr`)."""

@@ -11,7 +11,15 @@ that is not one of its field's choices). Then:
 - a ``simulator_config`` Drake would refuse, or that does not start at t = 0;
 - no goal, more than :data:`~drake_disamb.core.validation.MAX_GOALS` goals, more stages than goals,
   stages with different numbers of goals;
-- a goal out of the arm's reach (:data:`MICO_REACH` from the shoulder);
+- a goal out of the arm's reach (:data:`MICO_REACH` from the shoulder), or in or over its base
+  (closer than :data:`MIN_BASE_DISTANCE` to the base's axis);
+- a ``duration`` outside (0, :data:`~drake_disamb.config.checks.MAX_DURATION`] (so no trial runs
+  practically forever), a hold time (``success.hold_time``, ``stages[i].hold_time``) that is
+  negative, or (:func:`check_hold_times`, for a scenario as specified) not shorter than the
+  duration, a ``disambiguation.request_latency`` outside
+  [0, :data:`~drake_disamb.config.checks.MAX_REQUEST_LATENCY`] (the bounds the protocol and the
+  commands' options share);
+- a DFT time constant (``inference.dft.tau1``, ``tau2``) not above 0, a negative ``lam``;
 - a goal below the table: with the end effector at the goal pose, the gripper (closed or open) and
   the carried object must stay :data:`MIN_TABLE_CLEARANCE` above the table top, and the goal's
   object must not reach below the table top;
@@ -36,7 +44,12 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.config.checks import check_data, fmt
+from drake_disamb.config.checks import (
+    check_data,
+    check_duration,
+    check_request_latency,
+    fmt,
+)
 from drake_disamb.config.schema import Scenario, SuccessSpec, to_plain
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference
 from drake_disamb.core.layout import SHAPE_SIZES
@@ -47,6 +60,10 @@ MICO_SHOULDER_POSITION: tuple[float, float, float] = (0.0, 0.0, 0.2755)
 
 MICO_REACH: float = 0.7
 """Radius (m) about the shoulder beyond which a goal is rejected as out of reach (docs/facts.md section 8)."""
+
+MIN_BASE_DISTANCE: float = 0.15
+"""A goal closer than this (m) to the base's axis (the z axis of W) is refused: it lies in or over
+the arm's base and shoulder, where the gripper cannot be placed."""
 
 MIN_START_CLEARANCE: float = 0.05
 """A goal closer than this (m) to the gripper's start position is rejected: the task would be trivial."""
@@ -90,6 +107,17 @@ def _check_positive(value: float, path: str, allow_zero: bool = False) -> None:
         raise ValueError(
             f"{path}: expected a finite number {'>= 0' if allow_zero else '> 0'}, got {fmt(value)}"
         )
+
+
+def _check_dft(s: Scenario, name: str) -> None:
+    """The DFT's time constants are positive and its excitation ``lam`` is not negative (checked
+    here, before anything divides by them)."""
+    d, path = s.inference.dft, f"{name}.inference.dft"
+    _check_positive(d.tau1, f"{path}.tau1")
+    _check_positive(d.tau2, f"{path}.tau2")
+    lam = np.asarray(d.lam, dtype=float)
+    if np.any(lam < 0):
+        raise ValueError(f"{path}.lam: expected numbers >= 0, got {fmt(d.lam)}")
 
 
 def _check_simulator_config(s: Scenario, name: str) -> None:
@@ -160,7 +188,8 @@ def _check_timing(s: Scenario, name: str) -> None:
             f"got {s.plant_config.time_step!r}"
         )
     _check_simulator_config(s, name)
-    _check_positive(s.duration, f"{name}.duration")
+    check_duration(s.duration, f"{name}.duration")
+    check_request_latency(s.disambiguation.request_latency, f"{name}.disambiguation.request_latency")
 
 
 def _check_object(obj: Any, path: str) -> None:
@@ -210,6 +239,7 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
             f"{name}.initial_mode: expected a non-negative mode index, got {fmt(s.initial_mode)}"
         )
     check_counts(len(s.goals), len(s.stages), name)
+    _check_dft(s, name)
     _check_belief_integrator(s, name)
     for i, stage in enumerate(s.stages):
         if stage.hold_time is not None:
@@ -226,6 +256,24 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     _check_user(s, name)
     if s.start_joint_positions is not None:
         _check_start_posture(s.start_joint_positions, held, f"{name}.start_joint_positions")
+
+
+def check_hold_times(scenario: Scenario, name: str = "scenario") -> None:
+    """Every hold time (``success.hold_time``, ``stages[i].hold_time``) is shorter than the duration,
+    so that a stage can be completed. Applied where a scenario is specified (loaded from a file or
+    plain data: the protocol's trials, ``--switch``), not to a scenario cut short on purpose (a
+    warm-up run of a fraction of a second)."""
+    s = scenario
+    holds = [("success.hold_time", s.success.hold_time)]
+    holds += [
+        (f"stages[{i}].hold_time", st.hold_time) for i, st in enumerate(s.stages) if st.hold_time is not None
+    ]
+    for path, hold in holds:
+        if not hold < s.duration:
+            raise ValueError(
+                f"{name}.{path}: expected a number of seconds shorter than the duration ({s.duration:g} s), "
+                f"got {fmt(hold)}: the stage could never be completed"
+            )
 
 
 def _check_release(opening: float, path: str) -> None:
@@ -272,6 +320,12 @@ def _check_goals(s: Scenario, held: Sequence[Any], name: str) -> None:
                 f"{path}.position: goal {fmt(g.name)} is too low for its object: the {g.object.shape}'s "
                 f"bottom (goal + object.offset {fmt(g.object.offset)}) would be at z = {bottom:.3f} m, "
                 f"below the table top (z = {table:g} m), got {fmt(g.position)}"
+            )
+        axis = float(np.hypot(pos[0], pos[1]))
+        if axis < MIN_BASE_DISTANCE:
+            raise ValueError(
+                f"{path}.position: goal {fmt(g.name)} is in or over the arm's base: {axis:.3f} m from the "
+                f"base's axis (at least {MIN_BASE_DISTANCE} m), got {fmt(g.position)}"
             )
         dist = float(np.linalg.norm(pos - shoulder))
         if dist > MICO_REACH:

@@ -34,7 +34,7 @@ from pydrake.common.yaml import yaml_dump_typed, yaml_load_typed
 from drake_disamb.config.checks import check_data, cut, fmt
 from drake_disamb.config.resolve import validate_scenario
 from drake_disamb.config.schema import INTERFACES, PARADIGMS, Scenario, to_plain
-from drake_disamb.config.validation import check_counts
+from drake_disamb.config.validation import check_counts, check_hold_times
 from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
 
 EMBEDDED_TASKS: tuple[str, ...] = ("reaching", "pouring")
@@ -51,7 +51,9 @@ def _typed(data: Any, text: str | None, source: str) -> Scenario:
         scenario = yaml_load_typed(schema=Scenario, data=text, allow_yaml_with_no_schema=False)
     except (RuntimeError, ValueError, TypeError) as exc:  # not expected once check_data has passed
         raise ValueError(f"{source}: Drake's YAML loader failed: {cut(str(exc))}") from None
-    return validate_scenario(scenario)
+    scenario = validate_scenario(scenario)
+    check_hold_times(scenario)
+    return scenario
 
 
 def scenario_from_dict(data: Any, source: str = "scenario") -> Scenario:

@@ -135,12 +135,16 @@ def _natural_key(path: Path) -> tuple:
 
 
 def trial_files(directory: str | Path) -> list[Path]:
-    """The ``*.mat`` files of ``directory`` in natural order (``trajectory_2`` before ``_10``)."""
+    """The ``*.mat`` files of ``directory`` in natural order (``trajectory_2`` before ``_10``); a
+    broken link among them is an error naming it, not a file silently left out."""
     directory = Path(directory)
     if not directory.exists():
         raise ValueError(f"{directory}: no such directory")
     if not directory.is_dir():
         raise ValueError(f"{directory}: not a directory")
+    for p in directory.glob("*.mat"):
+        if p.is_symlink() and not p.exists():  # dangling, or a loop (a link to itself)
+            raise ValueError(f"{p}: a broken link (its target is missing, or it points to itself)")
     files = sorted((p for p in directory.glob("*.mat") if p.is_file()), key=_natural_key)
     if not files:
         raise ValueError(f"{directory}: no .mat trajectory files in this folder")

@@ -55,7 +55,7 @@ Randomness is optional and seeded: ``reaction_time_jitter`` (uniform, +/- s) and
 counter kept in the state, so a run is a pure function of the seed.
 
 **Human behaviour** (every field off by default, which is the deterministic user above; the
-population of :mod:`drake_disamb.study.population` turns them on, docs/population.md gives the
+population of :mod:`drake_disamb.study.design.population` turns them on, docs/population.md gives the
 values and where they come from):
 
 - *Decision rate*: ``decision_period`` (s) is how often the user decides (the

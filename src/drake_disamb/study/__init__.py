@@ -1,10 +1,16 @@
-"""The user study: protocol, simulated-user population, trial records, runner, analysis and report.
+"""The user study, one subpackage per pipeline stage.
 
-:mod:`drake_disamb.study.records` defines the record of one trial (one JSON object per line of
-``DIR/trials.jsonl``), written by the study runner, by ``study import-authors`` for the authors'
-human logs and by ``demo --live --record`` for a person, and read by ``study report``.
-:mod:`drake_disamb.study.protocol` is the protocol (a typed config; the paper's is embedded as
-``protocol.yaml``) and its expansion into trials; :mod:`drake_disamb.study.runner` runs them behind
-any ``concurrent.futures.Executor`` into a study folder; :mod:`drake_disamb.study.outcome` makes a
-finished trial's record and trace (shared by the runner and ``demo --live --record``).
+- :mod:`~drake_disamb.study.design`: the protocol (the paper's embedded as ``protocol.yaml``) and
+  its expansion into trials, the simulated subjects;
+- :mod:`~drake_disamb.study.run`: the runner (trials behind any ``concurrent.futures.Executor``)
+  and a finished trial's record and trace;
+- :mod:`~drake_disamb.study.data`: the record of one trial (``DIR/trials.jsonl``), the study folder
+  (records and traces appended and read back, one writer) and the authors' human logs as records;
+- :mod:`~drake_disamb.study.measures`: the paper's per-trial metrics, the behaviour estimates and
+  the study's system identified from its logs;
+- :mod:`~drake_disamb.study.analysis`: statistics and the paper's findings beside ours;
+- :mod:`~drake_disamb.study.report`: the HTML report, its figures and tables.
+
+Stages import one way: data <- design <- run, measures <- analysis <- report (the
+``study-stages`` contract in ``pyproject.toml``).
 """

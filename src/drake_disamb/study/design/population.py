@@ -8,7 +8,7 @@ values for all its trials; the within-trial randomness -- each reaction time, pa
 direction, mode choice -- is drawn by the user model from the trial's seed).
 
 The default distributions come from the behaviour measured in the authors' logs of 4 of the
-paper's subjects (``drake-disamb study calibrate DATA_DIR``, :mod:`drake_disamb.study.calibration`)
+paper's subjects (``drake-disamb study calibrate DATA_DIR``, :mod:`drake_disamb.study.measures.calibration`)
 where the logs show it, and from the literature where they cannot; ``docs/population.md`` gives
 the table, the estimate behind every entry and the reasoning. None is fitted to the
 Manual-versus-Disambiguation comparison.

@@ -1,7 +1,7 @@
 """The system the study's people used, identified from its logs (``drake-disamb study identify``).
 
 The paper does not publish its robot's inference and blending settings; the logs of its study
-(``../shared/data/tnsre2020_human_study/``, read by :func:`drake_disamb.study.authors.read_trials`)
+(``../shared/data/tnsre2020_human_study/``, read by :func:`drake_disamb.study.data.authors.read_trials`)
 show them. Everything here is measured from the trials given (any subset of subjects) and checked
 by replaying the logs through the core's own functions (:func:`~drake_disamb.core.inference.
 dft_euler_step`, :func:`~drake_disamb.core.inference.dft_euler_rollout`,
@@ -68,7 +68,8 @@ from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_com
 from drake_disamb.core.blending import blend, blending_alpha
 from drake_disamb.core.inference import DFTParams, dft_drive, dft_euler_rollout, dft_euler_step
 from drake_disamb.core.layout import DIM_NAMES
-from drake_disamb.study.authors import MODE_IDS, AuthorsTrial, read_trials
+from drake_disamb.study.data.authors import MODE_IDS, load_mat, read_trials
+from drake_disamb.study.data.folder import LoggedTrial
 
 __all__ = [
     "ALPHA_DECIMALS",
@@ -142,7 +143,7 @@ class UpdatePeriod:
     share: float
 
 
-def update_period(trials: Sequence[AuthorsTrial]) -> UpdatePeriod:
+def update_period(trials: Sequence[LoggedTrial]) -> UpdatePeriod:
     """The median interval between consecutive belief updates over ``trials`` (ms resolution)."""
     gaps, updates, rows = [], 0, 0
     for trial in trials:
@@ -160,7 +161,7 @@ def update_period(trials: Sequence[AuthorsTrial]) -> UpdatePeriod:
 # -- idle decay -------------------------------------------------------------------------------------
 
 
-def _command_at(trial: AuthorsTrial) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _command_at(trial: LoggedTrial) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The user command's times and samples ``(M,)``, ``(M, 6)``."""
     return np.asarray(trial.trace["t_u_h"], dtype=float), np.asarray(trial.trace["u_h"], dtype=float)
 
@@ -175,7 +176,7 @@ def _none_within(
     return (cum[hi] - cum[lo]) == 0
 
 
-def _idle_mask(trial: AuthorsTrial, times: NDArray[np.float64], period: float) -> NDArray[np.bool_]:
+def _idle_mask(trial: LoggedTrial, times: NDArray[np.float64], period: float) -> NDArray[np.bool_]:
     """True at ``times`` with no user command around them (:func:`_none_within`): none in ``u_h``
     (whose times are the reader's spread), and no blended command on the rows without assistance
     (``alpha = 0``: the blended command is the user's, with the rows' own times)."""
@@ -188,7 +189,7 @@ def _idle_mask(trial: AuthorsTrial, times: NDArray[np.float64], period: float) -
     )
 
 
-def idle_steps(trial: AuthorsTrial, period: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+def idle_steps(trial: LoggedTrial, period: float) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
     """The idle updates of a trial: beliefs before and after ``(k, n)`` and the number of idle
     stretches (runs of consecutive idle updates) they come from."""
     belief = np.asarray(trial.trace["belief"], dtype=float)
@@ -290,14 +291,14 @@ def idle_replay_error(
 # -- alpha ------------------------------------------------------------------------------------------
 
 
-def _request_windows(trial: AuthorsTrial) -> list[tuple[float, float]]:
+def _request_windows(trial: LoggedTrial) -> list[tuple[float, float]]:
     """``(press, switch)`` of each request (s), requests and their switches in time order."""
     presses = np.sort(np.asarray(trial.record.request_times, dtype=float))
     switches = np.sort(np.asarray(trial.request_switch_times, dtype=float))
     return list(zip(presses.tolist(), switches.tolist(), strict=False))
 
 
-def _in_requests(trial: AuthorsTrial, t: NDArray[np.float64]) -> NDArray[np.bool_]:
+def _in_requests(trial: LoggedTrial, t: NDArray[np.float64]) -> NDArray[np.bool_]:
     inside = np.zeros(len(t), dtype=bool)
     for press, switch in _request_windows(trial):
         inside |= (t >= press) & (t < switch)
@@ -323,7 +324,7 @@ class AlphaLaw:
     rows: dict[tuple[str, str], int]
 
 
-def alpha_matches(trial: AuthorsTrial, law: AlphaLaw) -> NDArray[np.bool_]:
+def alpha_matches(trial: LoggedTrial, law: AlphaLaw) -> NDArray[np.bool_]:
     """True at the trial's rows whose logged alpha the law reproduces (within :data:`ALPHA_TOLERANCE`)."""
     belief = np.asarray(trial.trace["belief"], dtype=float)
     n = belief.shape[1]
@@ -347,7 +348,7 @@ def _line_fit(top: NDArray[np.float64], alpha: NDArray[np.float64]) -> tuple[flo
     return float(coef[0]), float(coef[1])
 
 
-def _match_counts(trials: Sequence[AuthorsTrial], law: AlphaLaw) -> dict[tuple[str, str], list[int]]:
+def _match_counts(trials: Sequence[LoggedTrial], law: AlphaLaw) -> dict[tuple[str, str], list[int]]:
     """``[rows matched, rows]`` per (interface, task)."""
     matched: dict[tuple[str, str], list[int]] = {}
     for trial in trials:
@@ -358,7 +359,7 @@ def _match_counts(trials: Sequence[AuthorsTrial], law: AlphaLaw) -> dict[tuple[s
     return dict(sorted(matched.items()))
 
 
-def fit_alpha_law(trials: Sequence[AuthorsTrial]) -> AlphaLaw:
+def fit_alpha_law(trials: Sequence[LoggedTrial]) -> AlphaLaw:
     """:class:`AlphaLaw` of ``trials`` (module docstring): of the roundings tried, the one whose law
     matches the most rows."""
     alpha_max = max(float(np.max(t.trace["alpha"])) for t in trials if len(t.trace["alpha"]))
@@ -413,7 +414,7 @@ class RequestTiming:
     rows: int
 
 
-def request_timing(trials: Sequence[AuthorsTrial]) -> RequestTiming:
+def request_timing(trials: Sequence[LoggedTrial]) -> RequestTiming:
     """:class:`RequestTiming` of every request of ``trials``."""
     waits, zero, rows = [], 0, 0
     for trial in trials:
@@ -473,12 +474,12 @@ class ModeMap:
         return out
 
 
-def _request_modes(trial: AuthorsTrial) -> NDArray[np.int64]:
+def _request_modes(trial: LoggedTrial) -> NDArray[np.int64]:
     """The authors' mode id each request of the trial switched to (in request order)."""
     return np.asarray(trial.trace["request_mode_ids"], dtype=np.int64)
 
 
-def identify_mode_map(trials: Sequence[AuthorsTrial], interface: str) -> ModeMap:
+def identify_mode_map(trials: Sequence[LoggedTrial], interface: str) -> ModeMap:
     """:class:`ModeMap` of ``interface`` from its trials' requests."""
     modes, dims, new_ids = [], [], []
     for trial in trials:
@@ -647,7 +648,7 @@ def _nearest(times: NDArray[np.float64], at: NDArray[np.float64]) -> NDArray[np.
 
 
 def belief_replay(
-    trial: AuthorsTrial,
+    trial: LoggedTrial,
     t_path: NDArray[np.float64],
     path: NDArray[np.float64],
     goals: NDArray[np.float64],
@@ -677,16 +678,15 @@ def belief_replay(
 
 
 def identify_known_path(
-    trial: AuthorsTrial,
+    trial: LoggedTrial,
     known_path: str | Path,
     goals: NDArray[np.float64],
     decay: IdleDecay,
     other: tuple[str, DFTParams] | None = None,
 ) -> KnownPath:
     """:class:`KnownPath` of the trial whose autonomy commands are in ``known_path`` (the .mat file)."""
-    from drake_disamb.study.authors import _loadmat
 
-    data = _loadmat(Path(known_path))
+    data = load_mat(Path(known_path))
     if "gv" not in data:
         raise ValueError(f"{known_path}: no variable 'gv'")
     gv = np.asarray(data["gv"], dtype=float)
@@ -840,7 +840,7 @@ def identify(
     data_dir: str | Path,
     goals: NDArray[np.float64] | None = None,
     other: tuple[str, DFTParams] | None = None,
-    trials: Sequence[AuthorsTrial] | None = None,
+    trials: Sequence[LoggedTrial] | None = None,
 ) -> Identification:
     """Identify the study's system from the logs in ``data_dir`` (module docstring).
 

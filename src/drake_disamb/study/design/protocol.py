@@ -43,7 +43,7 @@ import numpy as np
 import yaml
 from pydrake.common.yaml import yaml_load_typed
 
-from drake_disamb.config.checks import check_data, cut, fmt
+from drake_disamb.config.checks import check_data, check_duration, check_request_latency, cut, fmt
 from drake_disamb.config.system_presets import SYSTEM_PRESETS
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
 from drake_disamb.core.interfaces import MODE_SELECTIONS
@@ -124,7 +124,7 @@ class Protocol:
     """The study protocol (see the module docstring and ``study/protocol.yaml``).
 
     Attributes:
-        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.population``).
+        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.design.population``).
         interfaces: Interfaces every subject uses.
         tasks: Tasks and their start poses.
         paradigms: Paradigms and their trials per condition.
@@ -165,6 +165,25 @@ class Protocol:
         """Trials in the whole protocol."""
         per_subject = len(self.interfaces) * len(self.tasks) * sum(p.trials for p in self.paradigms)
         return self.subjects * per_subject
+
+    @property
+    def simulated_time_bound(self) -> float:
+        """Simulated seconds if every trial ran to its duration (the protocol's, or its task's)."""
+        per_task = self.n_trials // len(self.tasks)
+        return float(sum(per_task * (self.duration or _task_duration(t.task)) for t in self.tasks))
+
+
+def _task_duration(task: str) -> float:
+    from drake_disamb.config import load_scenario
+
+    return float(load_scenario(task).duration)
+
+
+MAX_TRIALS = 100_000
+"""Most trials a protocol may have (every trial is expanded, and recorded, before the first runs)."""
+
+MAX_SIMULATED_HOURS = 10_000.0
+"""Most simulated time (h) a protocol may ask for: its trials times their duration."""
 
 
 def _check_choices(path: str, items: list[Any], choices: tuple[str, ...], what: str, attr: str = "") -> None:
@@ -219,13 +238,22 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
         )
     lat = protocol.request_latency
     if lat is not None:
-        if len(lat) != 2 or not (0.0 <= lat[0] <= lat[1] <= 60.0):
-            raise ValueError(
-                f"{name}.request_latency: expected [min, max] s with 0 <= min <= max <= 60, got {lat}"
-            )
-    if protocol.duration is not None and not 0.0 < protocol.duration <= 3600.0:
+        if len(lat) != 2 or not lat[0] <= lat[1]:
+            raise ValueError(f"{name}.request_latency: expected [min, max] s with min <= max, got {lat}")
+        for k, value in enumerate(lat):
+            check_request_latency(value, f"{name}.request_latency[{k}]")
+    if protocol.duration is not None:
+        check_duration(protocol.duration, f"{name}.duration")
+    if protocol.n_trials > MAX_TRIALS:
         raise ValueError(
-            f"{name}.duration: expected a number of seconds in (0, 3600], got {fmt(protocol.duration)}"
+            f"{name}: {protocol.n_trials} trials (subjects x interfaces x tasks x paradigms' trials), "
+            f"expected at most {MAX_TRIALS}"
+        )
+    hours = protocol.simulated_time_bound / 3600.0
+    if hours > MAX_SIMULATED_HOURS:
+        raise ValueError(
+            f"{name}: up to {hours:.0f} h of simulated time ({protocol.n_trials} trials x their duration), "
+            f"expected at most {MAX_SIMULATED_HOURS:g} h"
         )
     return protocol
 
@@ -261,13 +289,13 @@ def load_protocol(path: str | Path | None = None) -> Protocol:
         return default_protocol()
     p = Path(path)
     if not p.is_file():
-        raise ValueError(f"--protocol: no such file: {fmt(str(path))}")
+        raise ValueError(f"protocol file {fmt(str(path))}: no such file")
     return protocol_from_yaml(read_yaml_file(p), str(p))
 
 
 def default_protocol_text() -> str:
     """The YAML text of the embedded default protocol (the paper's)."""
-    return resources.files("drake_disamb.study").joinpath("protocol.yaml").read_text(encoding="utf-8")
+    return resources.files("drake_disamb.study.design").joinpath("protocol.yaml").read_text(encoding="utf-8")
 
 
 def default_protocol() -> Protocol:
@@ -291,7 +319,7 @@ def quick_protocol(base: Protocol | None = None) -> Protocol:
     data["tasks"] = [t for t in data["tasks"] if t["task"] == "reaching"] or data["tasks"][:1]
     for p in data["paradigms"]:
         p["trials"] = 1
-    return protocol_from_dict(data, "--quick")
+    return protocol_from_dict(data, "the quick protocol")
 
 
 def protocol_to_dict(protocol: Protocol) -> dict[str, Any]:

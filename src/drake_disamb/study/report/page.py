@@ -3,20 +3,20 @@
 :func:`write_report` reads ``DIR/trials.jsonl`` (and ``DIR/traces/``) and writes, in
 ``DIR/report/`` only:
 
-- ``summary.json``: :func:`drake_disamb.study.metrics.summarize` (one object per source,
+- ``summary.json``: :func:`drake_disamb.study.measures.metrics.summarize` (one object per source,
   interface, task and paradigm);
-- ``stats.json``: :func:`drake_disamb.study.stats.run_tests`;
-- the figures as PNG (:mod:`drake_disamb.study.figures`): ``button_presses.png``,
+- ``stats.json``: :func:`drake_disamb.study.analysis.stats.run_tests`;
+- the figures as PNG (:mod:`drake_disamb.study.report.figures`): ``button_presses.png``,
   ``switches_requests.png``, ``completion_times.png``, ``raster.png``, ``alpha.png`` and
   ``traces_<interface>_<task>_<paradigm>.png``; with several sources in the folder each figure is
   drawn per source (``<name>_<source>.png``);
 - ``index.html``: every table (summary, skewness, tests, "the paper's finding / ours / agree?"
-  of :func:`drake_disamb.study.findings.findings`) and every figure embedded as base64 PNG; no
+  of :func:`drake_disamb.study.analysis.findings.findings`) and every figure embedded as base64 PNG; no
   network, no script.
 
 ``--compare OTHER_DIR`` adds ``compare.json``
-(:func:`drake_disamb.study.findings.compare_summaries`) and a section setting this folder's means beside
-the other's per interface, task and paradigm, with their ratio and whether it is within 50 %
+(:func:`drake_disamb.study.analysis.findings.compare_summaries`) and a section setting this folder's
+means beside the other's per interface, task and paradigm, with their ratio and whether it is within 50 %
 (the criterion for simulated versus human users).
 
 On an ablation folder (``DIR/ablation.json``, written by ``study ablate``), :func:`write_report`
@@ -24,8 +24,12 @@ writes the combined report instead: for every setting, the paradigm effect on bu
 and completion time with its rank-sum test (``stats.json`` and ``summary.json`` rows carry a
 ``setting`` field).
 
-Nothing outside ``DIR/report/`` is written; bad records stop the report with
-:class:`drake_disamb.study.records.RecordError` naming the file and line.
+Nothing outside ``DIR/report/`` is written: ``report`` must be a real folder (a symlink there is
+refused), and every file is written whole into a new temporary file and renamed over its name
+(:func:`~drake_disamb.study.data.folder.write_atomic`), so a symlink planted in ``report/`` is replaced,
+never written through. Bad records stop the report with
+:class:`drake_disamb.study.data.records.RecordError` naming the file, the line and the field; a bad trace
+is left out of the example figures with a warning naming it.
 """
 
 from __future__ import annotations
@@ -34,13 +38,13 @@ import base64
 import html
 import json
 import math
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from drake_disamb.study.figures import ablation_figure, save_figure, source_figures, trace_figures
-from drake_disamb.study.findings import (
+from drake_disamb.study.analysis.findings import (
     COMPARED,
     PAPER_SKEWNESS,
     compare_summaries,
@@ -48,9 +52,11 @@ from drake_disamb.study.findings import (
     fmt,
     select_trials,
 )
-from drake_disamb.study.metrics import request_time_skewness, summarize, trial_metrics
-from drake_disamb.study.records import RecordError, TrialRecord, read_records
-from drake_disamb.study.stats import MIXED_METRICS, run_tests
+from drake_disamb.study.analysis.stats import MIXED_METRICS, run_tests
+from drake_disamb.study.data.folder import StudyFolder, write_atomic
+from drake_disamb.study.data.records import RecordError, TrialRecord
+from drake_disamb.study.measures.metrics import request_time_skewness, summarize, trial_metrics
+from drake_disamb.study.report.figures import ablation_figure, save_figure, source_figures, trace_figures
 
 __all__ = ["ReportFiles", "compare_summaries", "load_study", "write_report"]
 
@@ -67,7 +73,7 @@ def load_study(folder: str | Path) -> list[TrialRecord]:
         raise RecordError(f"{folder}: no such study folder")
     if not path.is_file():
         raise RecordError(f"{path}: no records (the study folder has no trials.jsonl)")
-    records = read_records(path)
+    records = StudyFolder(folder).read_records()
     if not records:
         raise RecordError(f"{path}: no records (the file is empty)")
     return records
@@ -131,21 +137,31 @@ def _page(title: str, sections: Sequence[str]) -> str:
 def _write_page(out: Path, title: str, sections: Sequence[str], figures: list[Path]) -> ReportFiles:
     """Write ``out/index.html`` (``title`` and ``sections``) beside the JSON files already there."""
     index = out / "index.html"
-    index.write_text(_page(title, sections), encoding="utf-8")
+    page = _page(title, sections).encode("utf-8")
+    write_atomic(index, lambda f: f.write(page))
     return ReportFiles(index=index, figures=figures, stats=out / "stats.json", summary=out / "summary.json")
 
 
 def _write_json(path: Path, data: Any) -> None:
-    path.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    text = (json.dumps(data, indent=1, allow_nan=False) + "\n").encode("utf-8")
+    write_atomic(path, lambda f: f.write(text))
 
 
 def _report_dir(folder: Path) -> Path:
     out = folder / "report"
+    if out.is_symlink() or (out.exists() and not out.is_dir()):
+        raise RecordError(
+            f"{out}: not a folder (a symlink or a file); the report writes only into a real folder"
+        )
     try:
         out.mkdir(exist_ok=True)
     except OSError as err:
         raise RecordError(f"{out}: cannot create the report folder: {err.strerror or err}") from None
     return out
+
+
+def _warn(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr, flush=True)
 
 
 SUMMARY_COLUMNS = (
@@ -280,7 +296,7 @@ def write_report(
             figures.append(path)
             sections.append(f"<h2>{html.escape(caption)} ({html.escape(source)})</h2>")
             sections.append(_img(path, caption))
-        traces = trace_figures(folder, mine, out, suffix)
+        traces = trace_figures(folder, mine, out, suffix, warn=_warn)
         figures += traces
         sections.append(f"<h2>Example goal-probability traces ({html.escape(source)})</h2>")
         if not traces:

@@ -1,10 +1,10 @@
 """The study's statistics: the paper's rank-sum tests over trials, effect sizes, a per-subject check.
 
-For every source, metric (:data:`drake_disamb.study.metrics.METRICS`), interface (``joystick``,
+For every source, metric (:data:`drake_disamb.study.measures.metrics.METRICS`), interface (``joystick``,
 ``head_array`` or ``all``) and task (``reaching``, ``pouring`` or ``all``), and every pair of
 paradigms present (:data:`PAIRS`: manual vs disambiguation, manual vs automatic,
 disambiguation vs automatic), over the analysed trials with a value (valid and not failed,
-:attr:`~drake_disamb.study.metrics.TrialMetrics.analysed`):
+:attr:`~drake_disamb.study.measures.metrics.TrialMetrics.analysed`):
 
 - ``test = "ranksum"``: the paper's Wilcoxon rank-sum test, ``scipy.stats.mannwhitneyu(a, b,
   alternative="two-sided")`` (its default method: exact for small samples without ties, else the
@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.study.metrics import METRICS, TrialMetrics, trial_metrics
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.data.records import TrialRecord
+from drake_disamb.study.measures.metrics import METRICS, TrialMetrics, trial_metrics
 
 __all__ = [
     "BOOTSTRAP",

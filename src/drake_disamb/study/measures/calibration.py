@@ -1,7 +1,7 @@
 """Behaviour estimates from the paper's human logs: what the simulated-user population is drawn from.
 
 The logs (``../shared/data/tnsre2020_human_study/``, 4 of the paper's 8 subjects; their README gives
-the format) are read with :func:`drake_disamb.study.authors.read_trials`. :func:`estimate_behaviour`
+the format) are read with :func:`drake_disamb.study.data.authors.read_trials`. :func:`estimate_behaviour`
 measures behaviour only, never the Manual-versus-Disambiguation outcome the study must predict:
 
 - **Times.** ``user_vel`` (the user's command, about 100 Hz) has no timestamps: sample ``k`` is
@@ -42,22 +42,22 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   the share of the trial time it is, per interface over both paradigms. People let a confident
   autonomy carry them rather than change modes: how they use the assistance.
 - **How a trial starts and ends, and how far the arm is driven**: ending and starting in the
-  gripper mode, and the commanded path (:mod:`drake_disamb.study.course`, which defines them).
+  gripper mode, and the commanded path (:mod:`drake_disamb.study.measures.course`, which defines them).
 
-The trials measured are the analysed ones (:func:`~drake_disamb.study.metrics.is_analysed`: valid,
+The trials measured are the analysed ones (:func:`~drake_disamb.study.measures.metrics.is_analysed`: valid,
 not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
-a simulated study (:func:`drake_disamb.study.authors.read_study_trials`, ``study calibrate
+a simulated study (:func:`drake_disamb.study.data.folder.StudyFolder.read_trials`, ``study calibrate
 --simulated DIR``): the check that the population behaves as the estimates say, not only that it
 was drawn from them.
 
-The logs are read by :func:`drake_disamb.study.authors.read_trials` (the reader of ``study
+The logs are read by :func:`drake_disamb.study.data.authors.read_trials` (the reader of ``study
 import-authors``: the mode switch a request made is the one logged with the request's scores) and
 the authors' metrics (user mode switches, merged requests, the joystick's cleaning) are those of
-:mod:`drake_disamb.study.metrics`.
+:mod:`drake_disamb.study.measures.metrics`.
 
 The estimates that read only the mode and blended-command traces are in
-:mod:`drake_disamb.study.course`; the distributions fitted to the samples are those of
-:mod:`drake_disamb.study.fits`.
+:mod:`drake_disamb.study.measures.course`; the distributions fitted to the samples are those of
+:mod:`drake_disamb.study.measures.fits`.
 """
 
 from __future__ import annotations
@@ -71,8 +71,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.study.authors import AuthorsTrial
-from drake_disamb.study.course import (
+from drake_disamb.study.data.folder import LoggedTrial
+from drake_disamb.study.measures.course import (
     CommandPath,
     GripperEnd,
     command_path,
@@ -83,14 +83,14 @@ from drake_disamb.study.course import (
     summarize_command_paths,
     summarize_gripper_end,
 )
-from drake_disamb.study.fits import (
+from drake_disamb.study.measures.fits import (
     LogNormalFit,
     RequestDecayFit,
     fit_lognormal,
     fit_request_decay,
     von_mises_kappa,
 )
-from drake_disamb.study.metrics import clean_requests, is_analysed
+from drake_disamb.study.measures.metrics import clean_requests, is_analysed
 
 EARLY_REQUEST = 3.0
 """A first request before this time (s from the start) counts as early."""
@@ -153,16 +153,16 @@ class BehaviourEstimates:
     """Per interface and task, the commanded path (:class:`CommandPath`)."""
 
 
-def _user_vel(trial: AuthorsTrial) -> tuple[NDArray[np.float64], float]:
+def _user_vel(trial: LoggedTrial) -> tuple[NDArray[np.float64], float]:
     """The ``(6, M)`` user command ``[vx, vy, vz, wx, wy, wz]`` and the seconds per sample
     (``total_time / M``: the log has no times)."""
     u = np.asarray(trial.trace["u_h"], dtype=float).T
     return u, trial.record.duration / max(u.shape[1], 1)
 
 
-def estimate_behaviour(trials: Iterable[AuthorsTrial]) -> BehaviourEstimates:
+def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     """The behaviour estimates of the valid trials (module docstring), from
-    :func:`drake_disamb.study.authors.read_trials`."""
+    :func:`drake_disamb.study.data.authors.read_trials`."""
     valid = [t for t in trials if is_analysed(t.record) and t.record.paradigm in PEOPLE_PARADIGMS]
     if not valid:
         raise ValueError("trials: expected at least one valid Manual or Disambiguation trial, got none")
@@ -377,7 +377,7 @@ def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: flo
     return starts
 
 
-def _count_confident_changes(trial: AuthorsTrial, changes: Sequence[float], acc: NDArray[np.float64]) -> None:
+def _count_confident_changes(trial: LoggedTrial, changes: Sequence[float], acc: NDArray[np.float64]) -> None:
     """Add the trial's confident / not-confident seconds and its mode ``changes`` (times: merged
     requests and the user's own changes) to ``acc`` (module docstring)."""
     r = trial.record
@@ -457,7 +457,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
 
 def format_condition_means(rows: Sequence[dict[str, Any]]) -> str:
     """The authors' metrics per condition as a table: the rows of
-    :func:`drake_disamb.study.metrics.summarize` (means of the analysed trials)."""
+    :func:`drake_disamb.study.measures.metrics.summarize` (means of the analysed trials)."""
     lines = [
         f"{'interface':<11} {'task':<9} {'paradigm':<15} {'n':>3} {'switches':>9} {'requests':>9} {'time':>7}"
     ]

@@ -1,8 +1,8 @@
 """How a trial starts and ends and how far the arm is driven, from its mode and command traces.
 
-Behaviour estimates of :mod:`drake_disamb.study.calibration` that read only a trial's traces (the
-people's logs through :func:`drake_disamb.study.authors.read_trials`, a simulated study through
-:func:`~drake_disamb.study.authors.read_study_trials`; the trace ``mode`` is an index into the
+Behaviour estimates of :mod:`drake_disamb.study.measures.calibration` that read only a trial's traces (the
+people's logs through :func:`drake_disamb.study.data.authors.read_trials`, a simulated study through
+:func:`~drake_disamb.study.data.folder.StudyFolder.read_trials`; the trace ``mode`` is an index into the
 interface's modes on ``t``, ``u`` the blended command ``[vx, vy, vz, wx, wy, wz]``):
 
 - **Ending in the gripper mode** (letting go of the object), per interface and task: the share of
@@ -32,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_disamb.core.interfaces import MODES, gripper_mode
-from drake_disamb.study.authors import AuthorsTrial, mode_name
+from drake_disamb.study.data.authors import mode_name
+from drake_disamb.study.data.folder import LoggedTrial
 
 __all__ = [
     "MOVING_SPEED",
@@ -78,7 +79,7 @@ MOVING_SPEED = 0.005
 """The arm counts as commanded while the blended command's translation is above this (m/s)."""
 
 
-def command_path(trial: AuthorsTrial) -> tuple[float, float, float] | None:
+def command_path(trial: LoggedTrial) -> tuple[float, float, float] | None:
     """Translational path (m), rotational path (rad) and seconds moving of the trace's ``u``
     (``None`` for a trace without one)."""
     if "u" not in trial.trace:
@@ -110,7 +111,7 @@ def summarize_command_paths(rows: Sequence[tuple[float, float, float]]) -> Comma
     )
 
 
-def gripper_course(trial: AuthorsTrial) -> tuple[bool, float, int]:
+def gripper_course(trial: LoggedTrial) -> tuple[bool, float, int]:
     """Whether the trial ends in the gripper mode, the seconds from its last change into the
     gripper mode to the end (NaN without one) and its number of changes into it (trace ``mode``:
     indices into the interface's modes, on ``t``)."""
@@ -129,7 +130,7 @@ def gripper_course(trial: AuthorsTrial) -> tuple[bool, float, int]:
     )
 
 
-def starts_in_gripper(trial: AuthorsTrial) -> bool:
+def starts_in_gripper(trial: LoggedTrial) -> bool:
     """Whether the trial's ``initial_mode`` (a mode name) is its interface's gripper mode."""
     r = trial.record
     return r.initial_mode == mode_name(MODES[r.interface][gripper_mode(r.interface)])

@@ -6,13 +6,13 @@ The study folder ``DIR``:
   setting's), the subjects (names and user overrides), the package version, written when the study
   starts. Rerunning into an existing folder resumes it; a different protocol, seed, overrides or
   subjects there is an error (:class:`StudyMismatch`), the version is informative only.
-- ``trials.jsonl``: one :class:`~drake_disamb.study.records.TrialRecord` per finished trial,
-  appended (flushed, fsync-ed) by the parent process as each trial finishes, so the lines come
-  in completion order: read them as a set keyed by ``trial_id``.
-- ``traces/<trial_id>.npz``: the trial's time series (:mod:`drake_disamb.study.outcome`), written
-  (whole, by rename) before its record.
+- ``trials.jsonl`` and ``traces/``: a :class:`~drake_disamb.study.data.folder.StudyFolder`, appended by
+  the parent process (which holds the folder's writer lock) as each trial finishes, so the lines
+  come in completion order: read them as a set keyed by ``trial_id``. Records there without a
+  ``study.yaml``, or a record whose seed or condition is not its trial's in this study, are an
+  error (:class:`StudyMismatch`): the folder holds something else.
 
-A trial is a pure function of its :class:`~drake_disamb.study.protocol.TrialSpec` and the
+A trial is a pure function of its :class:`~drake_disamb.study.design.protocol.TrialSpec` and the
 :class:`StudyContext` (:func:`run_trial_job`, run in a worker: a process of a
 ``ProcessPoolExecutor`` or a Dask worker), so its record is the same (apart from ``wall_time``)
 whatever the executor, the worker count and the order of completion. Resume: the finished
@@ -29,7 +29,7 @@ of ``Scenario.user.config`` and last the study's overrides (dotted field paths, 
 ablate``). Built through
 :func:`~drake_disamb.config.scenario_from_dict`: every value passes the scenario's checks.
 
-Subjects come from :func:`drake_disamb.study.population.draw_subjects` (``study.yaml`` names the
+Subjects come from :func:`drake_disamb.study.design.population.draw_subjects` (``study.yaml`` names the
 population).
 """
 
@@ -50,16 +50,18 @@ import numpy as np
 import yaml
 
 from drake_disamb.core.interfaces import arm_modes
-from drake_disamb.study.population import draw_subjects
-from drake_disamb.study.protocol import (
+from drake_disamb.study.data.folder import StudyFolder
+from drake_disamb.study.data.records import TrialRecord
+from drake_disamb.study.design.population import draw_subjects
+from drake_disamb.study.design.protocol import (
     Protocol,
     TrialSpec,
     expand_trials,
     protocol_to_dict,
 )
-from drake_disamb.study.records import TrialRecord, append_record, read_records
 
 __all__ = [
+    "ExecutorLost",
     "StudyContext",
     "StudyMismatch",
     "StudyPlan",
@@ -88,10 +90,16 @@ class StudyMismatch(ValueError):
 def draw_study_subjects(n: int, seed: int) -> tuple[list[tuple[str, dict[str, Any]]], str]:
     """``[(name, user overrides)]`` of ``n`` subjects and the population's provenance.
 
-    The subjects are drawn by :func:`drake_disamb.study.population.draw_subjects`.
+    The subjects are drawn by :func:`drake_disamb.study.design.population.draw_subjects`. The
+    provenance, part of a study's identity in ``study.yaml``, keeps the name the population had
+    before ``study/`` was split by stage, so that earlier study folders still resume.
     """
     subjects = draw_subjects(n, seed)
-    return [(s.name, dict(s.user)) for s in subjects], "drake_disamb.study.population"
+    return [(s.name, dict(s.user)) for s in subjects], POPULATION
+
+
+POPULATION = "drake_disamb.study.population"
+"""The population's provenance in ``study.yaml`` (:func:`draw_study_subjects`)."""
 
 
 # -- scenarios -------------------------------------------------------------------------------------
@@ -102,7 +110,7 @@ class StudyContext:
     """What every trial of a study shares (plain data, cheap to send to a worker).
 
     Attributes:
-        protocol: The protocol (plain data, :func:`~drake_disamb.study.protocol.protocol_to_dict`).
+        protocol: The protocol (plain data, :func:`~drake_disamb.study.design.protocol.protocol_to_dict`).
         overrides: Scenario overrides ``{dotted path: value}`` applied to every trial last.
         subject_users: Subject name -> overrides of ``Scenario.user.config`` fields.
     """
@@ -155,7 +163,7 @@ def apply_override(plain: dict[str, Any], path: str, value: Any) -> None:
     node[parts[-1]] = copy.deepcopy(value)
 
 
-def check_overrides(overrides: dict[str, Any], option: str = "--switch") -> None:
+def check_overrides(overrides: dict[str, Any], option: str = "overrides") -> None:
     """Check that every dotted path names a scenario field and its value passes the scenario's checks
     on every embedded task (raises ``ValueError`` naming ``option``, the path and the value)."""
     from drake_disamb.config import scenario_from_dict
@@ -209,7 +217,16 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
         config[key] = value
     for path, value in context.overrides.items():
         apply_override(plain, path, value)
-    return scenario_from_dict(plain, f"trial {spec.trial_id}")
+    try:
+        return scenario_from_dict(plain, f"trial {spec.trial_id}")
+    except ValueError as exc:
+        if offsets is None or not str(exc).startswith("scenario.start_joint_positions"):
+            raise
+        k = next(i for i, t in enumerate(protocol["tasks"]) if t["task"] == spec.task)
+        raise ValueError(
+            f"protocol.tasks[{k}].start_poses[{spec.start_pose}].joint_offsets: {offsets} makes the "
+            f"{spec.task} task's start posture invalid ({exc})"
+        ) from None
 
 
 # -- one trial -------------------------------------------------------------------------------------
@@ -217,15 +234,24 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
 
 @dataclass
 class TrialOutput:
-    """What a worker sends back: the record and the trace arrays."""
+    """What a worker sends back: the record and the trace arrays, or the error the trial raised
+    (``record`` None; so that an exception of the executor itself is never taken for a trial's)."""
 
-    record: TrialRecord
+    record: TrialRecord | None
     trace: dict[str, np.ndarray]
+    error: str | None = None
 
 
 def run_trial_job(spec: TrialSpec, context: StudyContext) -> TrialOutput:
-    """Run one trial (in a worker) and make its record and trace."""
-    from drake_disamb.study.outcome import record_from_result, trace_arrays
+    """Run one trial (in a worker) and make its record and trace (or its error's message)."""
+    try:
+        return _run_trial(spec, context)
+    except Exception as exc:  # the trial's own failure: reported, no record, retried by a rerun
+        return TrialOutput(record=None, trace={}, error=f"{type(exc).__name__}: {exc}")
+
+
+def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
+    from drake_disamb.study.run.outcome import record_from_result, trace_arrays
     from drake_disamb.trial import run_trial
 
     scenario = build_scenario(spec, context)
@@ -281,12 +307,16 @@ class StudyPlan:
     population: str
 
     @property
+    def folder(self) -> StudyFolder:
+        return StudyFolder(self.out)
+
+    @property
     def records_path(self) -> Path:
-        return self.out / "trials.jsonl"
+        return self.folder.records_path
 
     @property
     def traces_dir(self) -> Path:
-        return self.out / "traces"
+        return self.folder.traces_dir
 
 
 def _study_header(
@@ -320,7 +350,7 @@ def _check_header(path: Path, header: dict[str, Any]) -> None:
         if old.get(key) != header[key]:
             raise StudyMismatch(
                 f"{path}: this folder holds another study ({key} differs: {_short(old.get(key))} there, "
-                f"{_short(header[key])} now); choose another --out, or rerun with the same protocol and seed"
+                f"{_short(header[key])} now); choose another folder, or rerun with the same protocol and seed"
             )
 
 
@@ -339,18 +369,19 @@ def plan_study(
 ) -> StudyPlan:
     """Prepare (or resume) the study in ``out``; nothing runs yet.
 
-    Checks, before any trial: ``out`` is a writable folder, the overrides and every condition's
-    scenario are valid (one scenario per task, interface, paradigm and start pose, and one per
-    subject), and an existing ``study.yaml`` describes the same study. Then writes ``study.yaml``
-    (when new), creates ``traces/``, repairs ``trials.jsonl`` and lists the pending trials.
+    Checks, before any trial: ``out`` is a writable folder no other process writes (its writer lock
+    is taken, first, and held), the overrides and every condition's scenario are valid (one scenario
+    per task, interface, paradigm and start pose, and one per subject), an existing ``study.yaml``
+    describes the same study, and every record there is one of this study's trials with its seed.
+    Then writes ``study.yaml`` (when new), repairs ``trials.jsonl`` and lists the pending trials.
 
     Raises:
-        ValueError: naming the option, field or path; :class:`StudyMismatch` for another study.
+        ValueError: naming the field, file or folder; :class:`StudyMismatch` for another study;
+            :class:`~drake_disamb.study.data.folder.FolderBusy` when another process writes ``out``.
     """
-    from drake_disamb.commands._outputs import check_output_dir
-
     overrides = dict(overrides or {})
-    out = check_output_dir(out, "--out")
+    folder = StudyFolder(out).prepare()  # first: a second writer is refused at once
+    out = folder.path
     if overrides:
         check_overrides(overrides)
     subjects, population = draw_study_subjects(protocol.subjects, seed)
@@ -364,22 +395,42 @@ def plan_study(
     study_yaml = out / "study.yaml"
     if study_yaml.exists():
         _check_header(study_yaml, header)
-    else:
+    elif folder.has_records():
+        raise StudyMismatch(
+            f"{folder.records_path}: records without {study_yaml.name}: which study they belong to is "
+            "unknown, so they cannot be resumed; restore study.yaml or choose another folder"
+        )
+    finished = folder.read_records(repair=True)
+    _check_finished(folder.records_path, finished, specs)
+    if not study_yaml.exists():
         tmp = out / ".study.yaml.tmp"
         tmp.write_text(yaml.safe_dump(header, sort_keys=False), encoding="utf-8")
         tmp.replace(study_yaml)
-    (out / "traces").mkdir(exist_ok=True)
-    for stale in (out / "traces").glob(".*.npz.tmp"):  # a trace being written when a run was killed
-        stale.unlink(missing_ok=True)
-    records_path = out / "trials.jsonl"
-    finished = read_records(records_path, repair=True) if records_path.exists() else []
-    known = {s.trial_id for s in specs}
-    stray = [r.trial_id for r in finished if r.trial_id not in known]
-    if stray:
-        raise StudyMismatch(f"{records_path}: records of trials this study does not have: {stray[:5]}")
     done = {r.trial_id for r in finished}
     pending = [s for s in specs if s.trial_id not in done]
     return StudyPlan(out, protocol, seed, context, specs, pending, finished, population)
+
+
+_SPEC_FIELDS = ("subject", "interface", "task", "paradigm", "repetition", "seed", "start_pose")
+"""The fields a record shares with its :class:`TrialSpec`: resume refuses a record that differs."""
+
+
+def _check_finished(path: Path, finished: list[TrialRecord], specs: list[TrialSpec]) -> None:
+    """Every record of ``path`` is a trial of ``specs`` with its seed and condition."""
+    by_id = {s.trial_id: s for s in specs}
+    for line, record in enumerate(finished, start=1):
+        spec = by_id.get(record.trial_id)
+        if spec is None:
+            raise StudyMismatch(
+                f"{path}:{line}: trial_id {record.trial_id!r} is not a trial of this study (another "
+                "study's records)"
+            )
+        for name in _SPEC_FIELDS:
+            if getattr(record, name) != getattr(spec, name):
+                raise StudyMismatch(
+                    f"{path}:{line}: {name}: the record has {getattr(record, name)!r}, this study's trial "
+                    f"{record.trial_id} has {getattr(spec, name)!r} (another study's records)"
+                )
 
 
 def _task_protocol(context: StudyContext, task: str) -> dict[str, Any]:
@@ -400,6 +451,11 @@ def _check_conditions(specs: list[TrialSpec], context: StudyContext) -> None:
             build_scenario(spec, context)
 
 
+class ExecutorLost(RuntimeError):
+    """The executor failed, not a trial: a worker process died, the Dask scheduler was lost.
+    Every record written before is kept; a rerun resumes."""
+
+
 @dataclass
 class StudyResult:
     """Outcome of :func:`run_study`.
@@ -409,12 +465,14 @@ class StudyResult:
         skipped: Trials already finished before (resume).
         errors: ``(trial_id, message)`` of trials that raised (no record; a rerun retries them).
         wall_time: Seconds :func:`run_study` took.
+        stopped: ``stop()`` became true: the pending trials were cancelled (a rerun runs them).
     """
 
     ran: list[TrialRecord]
     skipped: int
     errors: list[tuple[str, str]]
     wall_time: float
+    stopped: bool = False
 
 
 def _expected_length(spec: TrialSpec) -> tuple[int, int]:
@@ -423,10 +481,25 @@ def _expected_length(spec: TrialSpec) -> tuple[int, int]:
     return len(spec.goals), len(arm_modes(spec.interface))
 
 
+POLL = 0.2
+"""Seconds between two looks at ``stop()`` while waiting for trials."""
+
+
+def _lost(exc: BaseException) -> ExecutorLost:
+    if isinstance(exc, cf.BrokenExecutor):
+        what = f"a worker process died ({exc})" if str(exc) else "a worker process died"
+    elif isinstance(exc, cf.CancelledError):
+        what = "the executor cancelled the trials (the Dask scheduler was lost?)"
+    else:
+        what = f"the executor failed ({type(exc).__name__}: {exc})"
+    return ExecutorLost(what)
+
+
 def run_study(
     plan: StudyPlan,
     executor: cf.Executor,
     on_result: Callable[[TrialRecord | None, str | None], None] | None = None,
+    stop: Callable[[], bool] = lambda: False,
 ) -> StudyResult:
     """Run the plan's pending trials on ``executor``; the parent writes each result as it completes.
 
@@ -434,6 +507,16 @@ def run_study(
         plan: From :func:`plan_study`.
         executor: Any ``concurrent.futures.Executor`` (a process pool, Dask's ``get_executor()``).
         on_result: Called after each trial with its record (or ``None`` and the error message).
+        stop: Looked at every :data:`POLL` seconds; once true, no further result is written and
+            the result says ``stopped`` (what was written is kept; never mid-write).
+
+    After a stop or an exception the pending trials are left to the executor's owner, who ends it
+    (``study run`` ends its worker processes; a pool in Python 3.11 must not have its pending
+    futures cancelled before its workers are terminated, or its manager thread fails on them).
+
+    Raises:
+        ExecutorLost: The executor failed.
+        FolderWriteError: A record or trace could not be written (a full disk...).
     """
     start = time.perf_counter()
     # Longest first (a trial's length is unknown, its task's stage count and its interface's arm
@@ -443,34 +526,42 @@ def run_study(
     futures = {executor.submit(run_trial_job, spec, plan.context): spec for spec in order}
     ran: list[TrialRecord] = []
     errors: list[tuple[str, str]] = []
-    try:
-        for future in cf.as_completed(futures):
+    waiting = set(futures)
+    stopped = False
+    while waiting:
+        if stop():
+            stopped = True
+            break
+        done, waiting = cf.wait(waiting, timeout=POLL, return_when=cf.FIRST_COMPLETED)
+        failure: BaseException | None = None  # the executor's: raised once the batch's results are written
+        for future in sorted(done, key=lambda f: futures[f].trial_id):
             spec = futures[future]
             try:
                 output: TrialOutput = future.result()
-            except Exception as exc:  # a trial that raised: reported, no record, retried by a rerun
-                message = f"{type(exc).__name__}: {exc}"
-                errors.append((spec.trial_id, message))
+            except (KeyboardInterrupt, SystemExit):
+                raise
+            except BaseException as exc:
+                failure = failure or exc
+                continue
+            if output.record is None:
+                errors.append((spec.trial_id, output.error or "no record"))
                 if on_result is not None:
-                    on_result(None, f"{spec.trial_id}: {message}")
+                    on_result(None, f"{spec.trial_id}: {output.error}")
                 continue
             write_output(plan, output)
             ran.append(output.record)
             if on_result is not None:
                 on_result(output.record, None)
-    except BaseException:
-        for f in futures:
-            f.cancel()
-        raise
-    return StudyResult(ran, len(plan.specs) - len(plan.pending), errors, time.perf_counter() - start)
+        if failure is not None:
+            raise _lost(failure) from None
+    return StudyResult(
+        ran, len(plan.specs) - len(plan.pending), errors, time.perf_counter() - start, stopped=stopped
+    )
 
 
 def write_output(plan: StudyPlan, output: TrialOutput) -> None:
-    """Write a trial's trace, then append its record."""
-    from drake_disamb.study.outcome import save_trace
-
-    save_trace(plan.traces_dir / f"{output.record.trial_id}.npz", output.trace)
-    append_record(plan.records_path, output.record)
+    """Write a trial's trace, then append its record (:meth:`StudyFolder.append`)."""
+    plan.folder.append(output.record, output.trace)
 
 
 def records_by_id(

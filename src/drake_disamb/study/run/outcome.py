@@ -1,10 +1,9 @@
 """From a finished trial to its record and trace: the one function every producer of records uses.
 
 :func:`record_from_result` turns a :class:`~drake_disamb.trial.TrialResult` into a
-:class:`~drake_disamb.study.records.TrialRecord` (the study runner for simulated subjects,
+:class:`~drake_disamb.study.data.records.TrialRecord` (the study runner for simulated subjects,
 ``demo --live --record`` for a person); :func:`trace_arrays` gives the trial's time series in the
-layout of ``DIR/traces/<trial_id>.npz`` and :func:`save_trace` writes them (to a temporary file,
-then renamed, so a trace file is whole or absent).
+layout of ``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.data.folder` writes them).
 
 Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,) s; ``belief``
 (T, n_goals); ``u_h`` and ``u`` (T, 6): spatial velocities in the paper's order
@@ -12,7 +11,8 @@ Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,
 index; ``ee_pose`` (T, 7) ``[x, y, z, qw, qx, qy, qz]`` of the end effector in W; ``stage`` (T,)
 the task's stage index.
 
-**Assistance onset** (:func:`assistance_onset`): the blender assists only while the user commands
+**Assistance onset** (:func:`stage_onsets`, by :func:`drake_disamb.study.data.records.assistance_onset`):
+the blender assists only while the user commands
 (``alpha`` is 0 with no input, by design), so the onset looks at the samples where the user
 commands (``u_h != 0``): it is the time of the first such sample from which, on every commanding
 sample to the end of its stage, the belief's argmax is the intended goal and ``alpha > 0``. Per
@@ -23,9 +23,6 @@ the first stage's.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -33,14 +30,13 @@ from numpy.typing import NDArray
 
 from drake_disamb.core.interfaces import interface_modes
 from drake_disamb.core.layout import DIM_NAMES
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
 __all__ = [
     "TRACE_ARRAYS",
-    "assistance_onset",
     "mode_name",
     "record_from_result",
-    "save_trace",
+    "stage_onsets",
     "trace_arrays",
 ]
 
@@ -74,20 +70,6 @@ def trace_arrays(result: Any) -> dict[str, NDArray[np.float64]]:
     return out
 
 
-def save_trace(path: str | Path, arrays: dict[str, NDArray[np.float64]]) -> Path:
-    """Write ``arrays`` to the ``.npz`` file ``path`` (compressed) through a temporary file."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".npz.tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez_compressed(f, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
 def _intended_index(n_belief: int, stage_sizes: list[int], stage: int, goal: int) -> int:
     """Belief index of the intended goal: within the stage, or among all goals (a task-wide belief)."""
     if n_belief == stage_sizes[stage]:
@@ -95,27 +77,18 @@ def _intended_index(n_belief: int, stage_sizes: list[int], stage: int, goal: int
     return sum(stage_sizes[:stage]) + goal
 
 
-def assistance_onset(
+def stage_onsets(
     trace: dict[str, NDArray[np.float64]], intended_goals: list[int], stage_sizes: list[int]
 ) -> list[float | None]:
-    """Per stage, the assistance onset (module docstring) in s from the trial start, or None."""
+    """Per stage, the assistance onset (module docstring) in s from the trial start, or None: the
+    one :func:`~drake_disamb.study.data.records.assistance_onset` on the stage's commanding samples."""
     t, belief, alpha, stage = trace["t"], trace["belief"], trace["alpha"], trace["stage"]
     commanding = np.any(np.abs(trace["u_h"]) > 1e-9, axis=1)
-    argmax = np.argmax(belief, axis=1) if len(t) else np.zeros(0, dtype=int)
     onsets: list[float | None] = []
     for k, goal in enumerate(intended_goals):
         idx = np.flatnonzero((stage.astype(int) == k) & commanding)
-        if len(idx) == 0:
-            onsets.append(None)
-            continue
         target = _intended_index(belief.shape[1], stage_sizes, k, goal)
-        ok = (argmax[idx] == target) & (alpha[idx] > 0)
-        if not ok[-1]:
-            onsets.append(None)
-            continue
-        bad = np.flatnonzero(~ok)
-        first = 0 if len(bad) == 0 else int(bad[-1]) + 1
-        onsets.append(float(t[idx[first]]))
+        onsets.append(assistance_onset(t[idx], belief[idx], alpha[idx], target))
     return onsets
 
 
@@ -151,7 +124,7 @@ def record_from_result(
     sc = result.scenario
     trace = trace_arrays(result) if trace is None else trace
     stage_sizes = [len(sc.stage_goals(k)) for k in range(sc.n_stages)]
-    onsets = assistance_onset(trace, list(result.intended_goals), stage_sizes)
+    onsets = stage_onsets(trace, list(result.intended_goals), stage_sizes)
     events = result.events
     switches = [e for e in events if e.kind == "mode_switch"]
     automatic = [float(e.time) for e in events if e.kind == "automatic_switch"]

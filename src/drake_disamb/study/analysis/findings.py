@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.study.metrics import TrialMetrics, request_time_skewness
+from drake_disamb.study.measures.metrics import TrialMetrics, request_time_skewness
 
 __all__ = [
     "COMPARED",

@@ -32,7 +32,7 @@ How each field is made (times are seconds from the trial's ``start_time``):
 - ``mode_switch_times``: the remaining rows of ``mode_switches`` after the placeholder and the
   initial-mode row (the README's "rows minus 2 minus requests"), ``mode_switch_modes`` the mode
   each entered (the ``current_mode`` row logged at that time). Raw: the authors' cleaning is
-  applied by :mod:`drake_disamb.study.metrics`.
+  applied by :mod:`drake_disamb.study.measures.metrics`.
 - ``duration`` = ``completion_time`` = ``total_time``; ``reached_goals``, ``success`` and ``done``
   are null (not logged). ``valid`` is False for the 14 trials the authors excluded as failed
   (:data:`FAILED_TRIALS`, the paper's unsuccessful trials).
@@ -41,7 +41,8 @@ How each field is made (times are seconds from the trial's ``start_time``):
   authors' ``loadData.m`` kept a different number, the share of those samples with alpha above
   0.6, which is in ``extra["alpha_share_above_0_6"]``.
 - ``assistance_onset``: for reaching, the first time from which the belief's argmax is the
-  target goal with alpha above 0 and stays so to the end (:func:`metrics.assistance_onset`);
+  target goal with alpha above 0 and stays so to the end
+  (:func:`~drake_disamb.study.data.records.assistance_onset`);
   null for pouring, whose single logged target does not say which goal each stage meant.
 - ``disambiguation_method``: ``algorithm1`` for disambiguation trials, null for manual ones;
   ``seed`` null, ``wall_time`` 0.
@@ -60,7 +61,6 @@ Velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``.
 
 from __future__ import annotations
 
-import os
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -72,20 +72,18 @@ from numpy.typing import NDArray
 
 from drake_disamb.core.interfaces import MODES
 from drake_disamb.core.layout import DIM_NAMES
-from drake_disamb.study.metrics import assistance_onset
-from drake_disamb.study.records import TrialRecord, append_record, read_records
+from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
+from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
 __all__ = [
     "FAILED_TRIALS",
     "MODE_IDS",
     "ORDER_FIXES",
-    "AuthorsTrial",
     "ImportSummary",
     "import_authors",
     "load_trial_order",
     "mode_name",
     "parse_trial_name",
-    "read_study_trials",
     "read_trial",
     "read_trials",
 ]
@@ -151,7 +149,8 @@ def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
     return m[1], int(m[2]), _TASKS[m[3]], _INTERFACES[m[4]], int(m[5])
 
 
-def _loadmat(path: Path) -> dict[str, Any]:
+def load_mat(path: Path) -> dict[str, Any]:
+    """The variables of a MATLAB file (scipy's loadmat); a damaged file is a ValueError naming it."""
     from scipy.io import loadmat
 
     try:
@@ -169,7 +168,7 @@ def load_trial_order(path: str | Path) -> dict[tuple[str, int, int], dict[str, A
         the file.
     """
     path = Path(path)
-    data = _loadmat(path)
+    data = load_mat(path)
     order: dict[tuple[str, int, int], dict[str, Any]] = {}
     for block in (1, 2):
         key = f"ph{block}_trial_mat"
@@ -195,26 +194,6 @@ def load_trial_order(path: str | Path) -> dict[tuple[str, int, int], dict[str, A
     return order
 
 
-@dataclass
-class AuthorsTrial:
-    """One logged trial: its record and its trace arrays (see the module docstring), read from the
-    authors' files (:func:`read_trial`) or from a study folder (:func:`read_study_trials`).
-
-    ``request_switch_times`` are the mode switches the requests made (the system's, one per
-    request, s from ``start_time``), which the record leaves out of ``mode_switch_times``.
-    """
-
-    record: TrialRecord
-    trace: dict[str, NDArray[Any]]
-    request_switch_times: NDArray[np.float64]
-
-    @property
-    def switch_times(self) -> NDArray[np.float64]:
-        """Every mode switch after the initial mode, the user's and the requests', in time order (s)."""
-        own = np.asarray(self.record.mode_switch_times, dtype=float)
-        return np.sort(np.concatenate((own, self.request_switch_times)))
-
-
 def _events(data: dict[str, Any], name: str, path: Path, width: int) -> NDArray[np.float64]:
     if name not in data:
         raise ValueError(f"{path}: no variable {name!r}")
@@ -233,7 +212,7 @@ def _scalar(data: dict[str, Any], name: str, path: Path) -> float:
     return value
 
 
-def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any]]) -> AuthorsTrial:
+def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any]]) -> LoggedTrial:
     """Read one trial file into its record and trace (see the module docstring).
 
     Args:
@@ -254,7 +233,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
             f"{path}: the trial order says {cond['task']} / {cond['interface']}, "
             f"the file name {task} / {interface}"
         )
-    data = _loadmat(path)
+    data = load_mat(path)
     start = _scalar(data, "start_time", path)
     total = _scalar(data, "total_time", path)
     switches = _events(data, "mode_switches", path, 2)
@@ -373,7 +352,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
             [current[int(np.argmin(np.abs(cm_t - switch_t[k]))), 0] for k in own], dtype=np.int64
         ),
     }
-    return AuthorsTrial(record, trace, request_switch_times=switch_t[own])
+    return LoggedTrial(record, trace, request_switch_times=switch_t[own])
 
 
 @dataclass
@@ -406,7 +385,7 @@ def _repetitions(records: list[TrialRecord]) -> None:
             r.repetition = i
 
 
-def read_trials(data_dir: str | Path) -> list[AuthorsTrial]:
+def read_trials(data_dir: str | Path) -> list[LoggedTrial]:
     """Every trial file of ``data_dir`` read with :func:`read_trial`, in trial order (subject,
     block, interface, trial), with ``repetition`` numbered within each condition.
 
@@ -429,76 +408,31 @@ def read_trials(data_dir: str | Path) -> list[AuthorsTrial]:
 def import_authors(
     data_dir: str | Path, out_dir: str | Path, progress: Callable[[str], None] | None = None
 ) -> ImportSummary:
-    """Import every trial file of ``data_dir`` into ``out_dir`` (records and traces).
+    """Import every trial file of ``data_dir`` into the study folder ``out_dir`` (records and
+    traces, :meth:`StudyFolder.append`, under the folder's writer lock).
 
     Trials already in ``out_dir/trials.jsonl`` (same ``trial_id``) are skipped; nothing existing is
     overwritten. Each record is appended only after its trace is written.
 
     Raises:
-        ValueError: ``data_dir`` has no trial files or no trial order, or a file is malformed.
+        ValueError: ``data_dir`` has no trial files or no trial order, or a file is malformed, or
+            ``out_dir`` cannot be written.
         RecordError: ``out_dir/trials.jsonl`` exists but cannot be read (names file and line).
+        FolderBusy: Another process writes ``out_dir``.
+        FolderWriteError: A write failed (names the file); a rerun imports the rest.
     """
-    out_dir = Path(out_dir)
     # Read everything first: repetitions are numbered within each condition, and a malformed file
     # stops the import before anything is written.
     trials = read_trials(data_dir)
-    records_path = out_dir / "trials.jsonl"
-    done: set[str] = set()
-    if records_path.exists():
-        done = {r.trial_id for r in read_records(records_path)}
-    traces = out_dir / "traces"
-    try:
-        traces.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ValueError(f"--out {out_dir}: cannot create {traces}: {err.strerror or err}") from None
+    folder = StudyFolder(out_dir).prepare()
+    done = {r.trial_id for r in folder.read_records(repair=True)}
     imported = 0
     for trial in trials:
         rid = trial.record.trial_id
         if rid in done:
             continue
-        tmp = traces / f".{rid}.tmp.npz"
-        np.savez_compressed(tmp, **trial.trace)
-        os.replace(tmp, traces / f"{rid}.npz")
-        append_record(records_path, trial.record)
+        folder.append(trial.record, trial.trace)
         imported += 1
         if progress is not None:
             progress(rid)
-    return ImportSummary(imported=imported, skipped=len(trials) - imported, records=records_path)
-
-
-def read_study_trials(folder: str | Path) -> list[AuthorsTrial]:
-    """Every record of a study folder (``trials.jsonl`` and ``traces/``: a simulated study, an
-    import of the authors' logs, recorded human trials) with its trace, in record order.
-
-    So :mod:`drake_disamb.study.calibration` measures simulated users the way it measures people.
-    ``request_switch_times``, which a record does not keep, are the mode changes of the trace's
-    ``mode`` that are neither a user switch nor an automatic switch (within two samples of one).
-
-    Raises:
-        ValueError: ``folder`` has no ``trials.jsonl``, or a record's trace is missing or lacks
-            ``t`` or ``mode`` (the message names the file).
-    """
-    folder = Path(folder)
-    path = folder / "trials.jsonl"
-    if not path.is_file():
-        raise ValueError(f"{path}: no records (is {folder} a study folder?)")
-    trials = []
-    for record in read_records(path):
-        trace_path = folder / "traces" / f"{record.trial_id}.npz"
-        if not trace_path.is_file():
-            raise ValueError(f"{trace_path}: the trace of record {record.trial_id!r} is missing")
-        with np.load(trace_path) as z:
-            trace = {k: np.asarray(z[k]) for k in z.files}
-        for name in ("t", "mode"):
-            if name not in trace:
-                raise ValueError(f"{trace_path}: no {name!r} array")
-        t = np.asarray(trace["t"], dtype=float)
-        mode = np.asarray(trace["mode"], dtype=float)
-        changes = t[1:][np.diff(mode) != 0]
-        known = np.asarray(record.mode_switch_times + record.automatic_switch_times, dtype=float)
-        tol = 2.0 * float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-        if known.size:
-            near = np.min(np.abs(changes[:, None] - known[None, :]), axis=1) <= tol + 1e-9
-            changes = changes[~near]
-        trials.append(AuthorsTrial(record, trace, request_switch_times=changes))
-    return trials
+    return ImportSummary(imported=imported, skipped=len(trials) - imported, records=folder.records_path)

@@ -11,15 +11,15 @@ mean alpha); :func:`trace_figures` one goal-probability trace per condition from
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from drake_disamb.config.schema import PARADIGMS
-from drake_disamb.study.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
-from drake_disamb.study.metrics import TrialMetrics
+from drake_disamb.study.analysis.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
+from drake_disamb.study.measures.metrics import TrialMetrics
 
 __all__ = ["ablation_figure", "save_figure", "source_figures", "trace_figures"]
 
@@ -37,10 +37,13 @@ def _plt() -> Any:
 
 
 def save_figure(fig: Any, path: Path) -> Path:
-    """Save ``fig`` as PNG at 100 dpi to ``path`` and close it; returns ``path``."""
+    """Save ``fig`` as PNG at 100 dpi to ``path`` (replaced whole, never written through a
+    symlink: :func:`~drake_disamb.study.data.folder.write_atomic`) and close it; returns ``path``."""
+    from drake_disamb.study.data.folder import write_atomic
+
     plt = _plt()
     try:
-        fig.savefig(path, dpi=100)
+        write_atomic(path, lambda f: fig.savefig(f, dpi=100, format="png"))
     finally:
         plt.close(fig)
     return path
@@ -293,9 +296,20 @@ def source_figures(
     return written
 
 
-def trace_figures(folder: Path, trials: Sequence[TrialMetrics], out: Path, suffix: str) -> list[Path]:
-    """One goal-probability figure per condition: its first valid trial that has a trace."""
+def trace_figures(
+    folder: Path,
+    trials: Sequence[TrialMetrics],
+    out: Path,
+    suffix: str,
+    warn: Callable[[str], None] | None = None,
+) -> list[Path]:
+    """One goal-probability figure per condition: its first valid trial that has a usable trace
+    (:meth:`~drake_disamb.study.data.folder.StudyFolder.read_trace`); a bad one is left out, with
+    ``warn`` naming the file."""
     from drake_disamb.plotting import goal_probability_figure
+    from drake_disamb.study.data.folder import StudyFolder, TraceError
+
+    study = StudyFolder(folder)
 
     written = []
     seen: set[tuple[str, str, str]] = set()
@@ -304,16 +318,17 @@ def trace_figures(folder: Path, trials: Sequence[TrialMetrics], out: Path, suffi
     ):
         r = m.record
         key = (r.interface, r.task, r.paradigm)
-        path = folder / "traces" / f"{r.trial_id}.npz"
-        if key in seen or not r.valid or not path.is_file():
+        if key in seen or not r.valid or not study.trace_path(r.trial_id).is_file():
             continue
         try:
-            with np.load(path) as z:
-                t, belief = np.asarray(z["t"], dtype=float), np.asarray(z["belief"], dtype=float)
-                u_h = np.asarray(z["u_h"], dtype=float) if "u_h" in z.files else None
-        except (OSError, ValueError, KeyError):
-            continue  # an unreadable trace is left out of the examples, not fatal
-        if belief.ndim != 2 or len(t) != len(belief) or len(t) < 2:
+            trace = study.read_trace(r.trial_id)
+        except TraceError as exc:  # left out of the examples, not fatal
+            if warn is not None:
+                warn(f"{exc}; not drawn")
+            continue
+        t, belief = np.asarray(trace["t"], dtype=float), np.asarray(trace["belief"], dtype=float)
+        u_h = np.asarray(trace["u_h"], dtype=float)
+        if len(t) < 2:
             continue
         n = belief.shape[1]
         intended = r.intended_goals[0] if len(r.intended_goals) == 1 and r.intended_goals[0] < n else None
@@ -325,8 +340,8 @@ def trace_figures(folder: Path, trials: Sequence[TrialMetrics], out: Path, suffi
             mode_switch_times=r.mode_switch_times,
             intended_goal=intended,
             # The authors' u_h has no time stamps of its own (and another length): not drawn.
-            command_times=t if u_h is not None and len(u_h) == len(t) else None,
-            commands=u_h if u_h is not None and len(u_h) == len(t) else None,
+            command_times=t if len(u_h) == len(t) else None,
+            commands=u_h if len(u_h) == len(t) else None,
             end_time=r.duration,
             title=f"{r.trial_id}: {INTERFACE_NAMES[r.interface]}, {r.task}, {r.paradigm} ({r.source})",
         )

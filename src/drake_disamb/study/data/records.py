@@ -6,26 +6,35 @@ with :func:`read_records`. A record is written whole, as one line, flushed and `
 trial finishes (:func:`append_record`), so a killed run loses at most the trial it was running: a
 half-written last line is what a kill can leave, and :func:`read_records` with ``repair=True`` cuts
 it off (the trial is then run again). Any other malformed line is an error naming the file and the
-line number.
+line number. Every record, written or read, passes the one check of its values (types, finite
+numbers, ranges, the registered interface, task, paradigm, method and source names): an error names
+the field, and a reader adds the file and line.
 
 Times are seconds from the trial's start. Counts follow the paper (Section "Study Methods", Metrics):
 ``mode_switches`` are the user's own mode-button presses (switches made by a disambiguation
 request or by the Automatic paradigm are not in it), ``requests`` the disambiguation requests,
 ``button_presses = mode_switches + requests``. Raw counts, before the authors' cleaning (requests
 within 3 s merged, repeated joystick presses into the same mode within 2 s dropped), which the
-analysis applies from ``request_times``, ``mode_switch_times`` and ``mode_switch_modes``.
+analysis applies from ``request_times``, ``mode_switch_times`` and ``mode_switch_modes``. The
+record's ``assistance_onset`` is computed by :func:`assistance_onset`, the one definition every
+producer uses.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import os
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = [
     "FORMAT",
@@ -33,6 +42,7 @@ __all__ = [
     "RecordError",
     "TrialRecord",
     "append_record",
+    "assistance_onset",
     "read_records",
     "write_records",
 ]
@@ -125,8 +135,7 @@ class TrialRecord:
     format: int = FORMAT
 
     def __post_init__(self) -> None:
-        if self.source not in SOURCES:
-            raise RecordError(f"TrialRecord.source: expected one of {SOURCES}, got {self.source!r}")
+        _check_fields(self)
         if self.button_presses != self.mode_switches + self.requests:
             raise RecordError(
                 f"TrialRecord {self.trial_id!r}: button_presses ({self.button_presses}) must be "
@@ -143,12 +152,11 @@ class TrialRecord:
                     f"TrialRecord {self.trial_id!r}: {len(getattr(self, times))} {times} for "
                     f"{count}={getattr(self, count)}"
                 )
-        for name in ("duration", "wall_time"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise RecordError(
-                    f"TrialRecord {self.trial_id!r}: {name} must be a finite number >= 0, got {value!r}"
-                )
+        if self.reached_goals is not None and len(self.reached_goals) != len(self.intended_goals):
+            raise RecordError(
+                f"field reached_goals: {len(self.reached_goals)} stages, intended_goals has "
+                f"{len(self.intended_goals)}"
+            )
 
     def to_json(self) -> str:
         """The record as one line of JSON (no newline), keys in field order."""
@@ -174,6 +182,100 @@ class TrialRecord:
             return cls(**data)
         except TypeError as err:
             raise RecordError(str(err)) from None
+
+
+@functools.lru_cache(maxsize=1)
+def _names() -> dict[str, tuple[str, ...]]:
+    """The registered names a record's fields take."""
+    from drake_disamb.config.schema import INTERFACES, PARADIGMS
+    from drake_disamb.config.yaml_io import EMBEDDED_TASKS
+    from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
+
+    return {
+        "interface": INTERFACES,
+        "task": EMBEDDED_TASKS,
+        "paradigm": PARADIGMS,
+        "disambiguation_method": MODE_SELECTION_METHODS,
+        "source": SOURCES,
+    }
+
+
+def _bad(name: str, expected: str, value: Any) -> RecordError:
+    text = repr(value)
+    return RecordError(
+        f"field {name}: expected {expected}, got {text if len(text) <= 80 else text[:77] + '...'}"
+    )
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _check_fields(r: TrialRecord) -> None:
+    """The one check of a record's values: types, finite numbers, ranges and registered names
+    (:class:`RecordError` naming the field; a reader adds the file and line)."""
+    from drake_disamb.config.schema import MAX_GOALS
+
+    if not isinstance(r.trial_id, str) or not _SAFE_ID.match(r.trial_id):
+        raise _bad("trial_id", "letters, digits, '_', '-' or '.' (not first), at most 128", r.trial_id)
+    if not isinstance(r.subject, str) or not r.subject:
+        raise _bad("subject", "a non-empty string", r.subject)
+    for name, choices in _names().items():
+        value = getattr(r, name)
+        if value is None and name == "disambiguation_method":
+            continue
+        if not isinstance(value, str) or value not in choices:
+            raise _bad(name, f"one of {', '.join(choices)}", value)
+    for name in ("repetition", "mode_switches", "requests", "automatic_switches", "button_presses", "format"):
+        value = getattr(r, name)
+        if not (_is_int(value) and value >= 0):
+            raise _bad(name, "an integer >= 0", value)
+    for name in ("seed", "start_pose"):
+        value = getattr(r, name)
+        if value is not None and not (_is_int(value) and value >= 0):
+            raise _bad(name, "an integer >= 0 or null", value)
+    if r.initial_mode is not None and not isinstance(r.initial_mode, str):
+        raise _bad("initial_mode", "a mode name or null", r.initial_mode)
+    if not (isinstance(r.intended_goals, list) and r.intended_goals):
+        raise _bad("intended_goals", "a non-empty list of goal indices", r.intended_goals)
+    for name, lowest in (("intended_goals", 0), ("reached_goals", -1)):
+        value = getattr(r, name)
+        if value is None and name == "reached_goals":
+            continue
+        if not isinstance(value, list) or not all(_is_int(g) and lowest <= g < MAX_GOALS for g in value):
+            raise _bad(name, f"a list of goal indices in [{lowest}, {MAX_GOALS})", value)
+    for name in ("success", "done"):
+        value = getattr(r, name)
+        if value is not None and not isinstance(value, bool):
+            raise _bad(name, "true, false or null", value)
+    if not isinstance(r.valid, bool):
+        raise _bad("valid", "true or false", r.valid)
+    for name in ("duration", "wall_time"):
+        value = getattr(r, name)
+        if not (_is_real(value) and value >= 0):
+            raise _bad(name, "a finite number >= 0", value)
+    for name in ("completion_time", "assistance_onset"):
+        value = getattr(r, name)
+        if value is not None and not (_is_real(value) and value >= 0):
+            raise _bad(name, "a finite number >= 0 or null", value)
+    if r.mean_alpha is not None and not (_is_real(r.mean_alpha) and 0.0 <= r.mean_alpha <= 1.0):
+        raise _bad("mean_alpha", "a number in [0, 1] or null", r.mean_alpha)
+    for name in ("request_times", "mode_switch_times", "automatic_switch_times"):
+        value = getattr(r, name)
+        if not isinstance(value, list) or not all(_is_real(t) for t in value):
+            raise _bad(name, "a list of finite times (s)", value)
+    if not isinstance(r.mode_switch_modes, list) or not all(isinstance(m, str) for m in r.mode_switch_modes):
+        raise _bad("mode_switch_modes", "a list of mode names", r.mode_switch_modes)
+    if not isinstance(r.extra, dict):
+        raise _bad("extra", "an object", r.extra)
+
+
+_SAFE_ID = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,127}$")
+"""A ``trial_id`` is also its trace file's stem: no path separator, not hidden."""
 
 
 def _required(cls: type, name: str) -> bool:
@@ -246,3 +348,27 @@ def write_records(path: str | Path, records: Iterable[TrialRecord]) -> None:
     """Append several records (each flushed as by :func:`append_record`)."""
     for record in records:
         append_record(path, record)
+
+
+def assistance_onset(times: ArrayLike, belief: ArrayLike, alpha: ArrayLike, goal: int) -> float | None:
+    """First time from which the belief's argmax is ``goal`` with alpha above 0, and stays so to
+    the last sample; None if the last sample is not such.
+
+    Args:
+        times: ``(T,)`` sample times (s), increasing.
+        belief: ``(T, n_goals)`` goal probabilities.
+        alpha: ``(T,)`` blending factor.
+        goal: Index of the intended goal.
+    """
+    t = np.asarray(times, dtype=float)
+    p = np.asarray(belief, dtype=float)
+    a = np.asarray(alpha, dtype=float)
+    if p.ndim != 2 or len(p) != len(t) or a.shape != t.shape:
+        raise ValueError(f"assistance_onset: times {t.shape}, belief {p.shape}, alpha {a.shape} do not match")
+    if not (0 <= goal < p.shape[1]):
+        raise ValueError(f"assistance_onset: goal {goal} is not one of the {p.shape[1]} goals")
+    ok = (np.argmax(p, axis=1) == goal) & (a > 0.0)
+    if len(ok) == 0 or not ok[-1]:
+        return None
+    bad = np.flatnonzero(~ok)
+    return float(t[bad[-1] + 1] if len(bad) else t[0])

@@ -40,9 +40,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
-from drake_disamb.study.records import TrialRecord
+from drake_disamb.study.data.records import TrialRecord
 
 __all__ = [
     "COUNT_METRICS",
@@ -50,7 +49,6 @@ __all__ = [
     "REPEAT_WINDOW",
     "REQUEST_MERGE",
     "TrialMetrics",
-    "assistance_onset",
     "clean_mode_switches",
     "clean_requests",
     "group_key",
@@ -123,30 +121,6 @@ def is_analysed(record: TrialRecord) -> bool:
     """Whether a trial enters the means and tests: valid and not failed (:func:`trial_success` not
     False; module docstring)."""
     return record.valid and trial_success(record) is not False
-
-
-def assistance_onset(times: ArrayLike, belief: ArrayLike, alpha: ArrayLike, goal: int) -> float | None:
-    """First time from which the belief's argmax is ``goal`` with alpha above 0, and stays so to
-    the last sample; None if the last sample is not such.
-
-    Args:
-        times: ``(T,)`` sample times (s), increasing.
-        belief: ``(T, n_goals)`` goal probabilities.
-        alpha: ``(T,)`` blending factor.
-        goal: Index of the intended goal.
-    """
-    t = np.asarray(times, dtype=float)
-    p = np.asarray(belief, dtype=float)
-    a = np.asarray(alpha, dtype=float)
-    if p.ndim != 2 or len(p) != len(t) or a.shape != t.shape:
-        raise ValueError(f"assistance_onset: times {t.shape}, belief {p.shape}, alpha {a.shape} do not match")
-    if not (0 <= goal < p.shape[1]):
-        raise ValueError(f"assistance_onset: goal {goal} is not one of the {p.shape[1]} goals")
-    ok = (np.argmax(p, axis=1) == goal) & (a > 0.0)
-    if len(ok) == 0 or not ok[-1]:
-        return None
-    bad = np.flatnonzero(~ok)
-    return float(t[bad[-1] + 1] if len(bad) else t[0])
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,8 @@
 """Distributions fitted to behaviour samples: lognormal summaries, a von Mises concentration, request decay.
 
-The samples are those :mod:`drake_disamb.study.calibration` measures on the people's logs (or on a
+The samples are those :mod:`drake_disamb.study.measures.calibration` measures on the people's logs (or on a
 simulated study); the fits summarise them per subject and pooled, as the population
-(:mod:`drake_disamb.study.population`) draws them.
+(:mod:`drake_disamb.study.design.population`) draws them.
 """
 
 from __future__ import annotations

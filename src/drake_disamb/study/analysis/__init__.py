@@ -1,0 +1,1 @@
+"""Analysis: the statistics and the paper's findings beside ours."""

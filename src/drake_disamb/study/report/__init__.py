@@ -1,0 +1,1 @@
+"""The report: the HTML page, its figures and tables."""
