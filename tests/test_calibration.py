@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.authors import AuthorsTrial, mode_name, read_study_trials
+from drake_disamb.core.interfaces import gripper_mode, interface_modes, mode_name
+from drake_disamb.study.authors import AuthorsTrial, read_study_trials
 from drake_disamb.study.calibration import estimate_behaviour, format_estimates
 from drake_disamb.study.outcome import save_trace
 from drake_disamb.study.records import TrialRecord, append_record
@@ -37,7 +37,7 @@ def _trial(
     """A trial of ``interface`` starting in mode index ``initial`` whose user switches are
     ``changes`` (time s, mode index entered); its trace samples the mode every :data:`DT` from
     ``t0`` to ``t_end`` (``duration`` by default)."""
-    modes = MODES[interface]
+    modes = interface_modes(interface)
     t = np.round(np.arange(t0, (duration if t_end is None else t_end) + DT / 2, DT), 6)
     mode = np.full(t.size, float(initial))
     for at, index in changes:
@@ -66,7 +66,7 @@ def _trial(
 
 
 def _trials() -> list[AuthorsTrial]:
-    j, h = len(MODES["joystick"]) - 1, len(MODES["head_array"]) - 1  # the gripper modes: 4 and 6
+    j, h = gripper_mode("joystick"), gripper_mode("head_array")  # the gripper modes: 4 and 6
     return [
         # in, out of and back into the gripper mode: ends there 5 s after its second change into it;
         # the trace starts before the start (as the logs' do), with presses there that do not count

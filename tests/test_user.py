@@ -416,7 +416,7 @@ def test_system_constructor_validation() -> None:
     with pytest.raises(ValueError, match="goal_index"):
         SimulatedUser("joystick", [0, 5], 2)
     with pytest.raises(ValueError, match="kind"):
-        SimulatedUser("sip_and_puff", 0, 2)
+        SimulatedUser("trackball", 0, 2)
     with pytest.raises(ValueError, match="reaction_time"):
         SimulatedUser("joystick", 0, 2, UserConfig(reaction_time=0.015))
 
@@ -430,7 +430,7 @@ def test_diagram_loop_reaches_goal() -> None:
     from drake_disamb.core.blending import BlendingConfig
     from drake_disamb.systems.autonomy import PotentialFieldAutonomy
     from drake_disamb.systems.blending import SharedControlBlender
-    from drake_disamb.systems.interfaces import HeadArrayInterface
+    from drake_disamb.systems.interfaces import make_interface
     from drake_disamb.systems.user import SimulatedUser
 
     class KinematicEndEffector(LeafSystem):
@@ -455,7 +455,7 @@ def test_diagram_loop_reaches_goal() -> None:
     n = len(goals)
     b = DiagramBuilder()
     user = b.AddSystem(SimulatedUser("head_array", 0, n, NO_REQUESTS))
-    iface = b.AddSystem(HeadArrayInterface(initial_mode=5))
+    iface = b.AddSystem(make_interface("head_array", initial_mode=5))
     autonomy = b.AddSystem(PotentialFieldAutonomy(n))
     blender = b.AddSystem(SharedControlBlender(n, BlendingConfig()))
     ee = b.AddSystem(KinematicEndEffector(EE, 0.01))

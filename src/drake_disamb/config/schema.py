@@ -46,12 +46,9 @@ from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
 from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
-from drake_disamb.core.interfaces import MODE_SELECTIONS
+from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS
 from drake_disamb.core.user import UserConfig
 from drake_disamb.station import default_plant_config
-
-INTERFACES: tuple[str, ...] = ("joystick", "head_array")
-"""Interface names accepted by :attr:`Scenario.interface`."""
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
@@ -352,13 +349,15 @@ class Scenario:
     Attributes:
         task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
         description: Free text.
-        interface: ``"joystick"`` or ``"head_array"``.
-        interface_mode_selection: How the joystick's mode button selects a mode: ``"cycle"``
-            (default: the next mode) or ``"direct"`` (a press with the stick deflected selects the
+        interface: A registered interface name (:data:`drake_disamb.core.interfaces.INTERFACES`:
+            ``"joystick"``, ``"head_array"``, ...).
+        interface_mode_selection: How a mode change selects a mode: ``"cycle"`` (default: the
+            next mode) or ``"direct"`` (the joystick: a press with the stick deflected selects the
             mode of the stick's sector, one press per change; centred, it cycles: see
-            :mod:`drake_disamb.core.interfaces`). The simulated user selects the way the interface
-            offers. The head array, with no stick, always cycles: the setting applies to the
-            joystick's trials only, so one setting serves a protocol with both interfaces.
+            :mod:`drake_disamb.core.interfaces.joystick`). The simulated user selects the way the
+            interface offers. A kind that does not offer it (the head array, with no stick)
+            cycles: the setting applies to the trials of the kinds that offer it only, so one
+            setting serves a protocol with several interfaces.
         paradigm: ``"manual"`` (mode button only), ``"disambiguation"`` (plus the request
             button) or ``"automatic"`` (plus the system's own switches, :class:`AutomaticSpec`).
         inference, disambiguation, blending, autonomy, user: Component settings.

@@ -120,14 +120,7 @@ from numpy.typing import ArrayLike, NDArray
 from drake_disamb.core._validation import all_finite, check_real_fields, is_real
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.geometry import orientation_error
-from drake_disamb.core.interfaces import (
-    GRIPPER_DIM,
-    MODE_BUTTON,
-    RAW_SIZE,
-    REQUEST_BUTTON,
-    InterfaceConfig,
-    sector_stick,
-)
+from drake_disamb.core.interfaces import GRIPPER_DIM, RAW_SIZE, InterfaceConfig
 from drake_disamb.core.trials import sample_von_mises_fisher
 
 NOT_COUNTING = -1.0
@@ -538,8 +531,11 @@ def lognormal(median: float, log_sd: float, rng: np.random.Generator | None) -> 
     return float(median * math.exp(log_sd * min(max(rng.standard_normal(), -2.0), 2.0)))
 
 
-def presses_to(mode: int, target: np.ndarray | int, n_modes: int, direct: bool = False) -> np.ndarray | int:
-    """Presses of the mode button from ``mode`` to ``target``: forward cycling, or with ``direct``
+def presses_to(
+    mode: int, target: np.ndarray | int, n_modes: int, direct: bool = False, back: bool = False
+) -> np.ndarray | int:
+    """Mode changes (presses) from ``mode`` to ``target``: forward cycling, the shorter way round
+    with ``back`` (an interface that also steps back, ``Interface.steps_back``), or with ``direct``
     selection (``InterfaceConfig.mode_selection == "direct"``) one for any other mode."""
     if direct:
         return (
@@ -547,13 +543,14 @@ def presses_to(mode: int, target: np.ndarray | int, n_modes: int, direct: bool =
             if isinstance(target, np.ndarray)
             else int(target != mode)
         )
-    return (
+    forward = (
         (np.asarray(target) - mode) % n_modes if isinstance(target, np.ndarray) else (target - mode) % n_modes
     )
+    return np.minimum(forward, n_modes - forward) if back else forward
 
 
 def mode_usefulness(
-    remaining: ArrayLike, mode: int, n_modes: int, press_cost: float, direct: bool = False
+    remaining: ArrayLike, mode: int, n_modes: int, press_cost: float, direct: bool = False, back: bool = False
 ) -> NDArray[np.float64]:
     """Expected usefulness of each arm mode: its remaining error as a share of the largest (0..1),
     minus ``press_cost`` per press it takes to reach it from ``mode`` (:func:`presses_to`; arm modes
@@ -561,7 +558,7 @@ def mode_usefulness(
     r = np.asarray(remaining, dtype=float)
     top = float(np.max(r)) if r.size else 0.0
     share = r / top if top > 0 else np.zeros_like(r)
-    return share - press_cost * presses_to(mode, np.arange(r.size), n_modes, direct)
+    return share - press_cost * presses_to(mode, np.arange(r.size), n_modes, direct, back)
 
 
 def choose_mode(
@@ -572,6 +569,7 @@ def choose_mode(
     rng: np.random.Generator | None,
     exclude_current: bool = False,
     direct: bool = False,
+    back: bool = False,
 ) -> int:
     """The arm mode the user goes for next: Boltzmann choice over :func:`mode_usefulness`.
 
@@ -579,7 +577,8 @@ def choose_mode(
     mode). With ``config.mode_temperature == 0`` (or no ``rng``) it is the mode with the most
     remaining error (ties to the lowest index); else mode ``m`` has probability proportional to
     ``exp(usefulness_m / temperature)``. ``exclude_current`` leaves ``mode`` out. ``direct``: the
-    interface selects modes directly (every other mode one press away, :func:`presses_to`).
+    interface selects modes directly (every other mode one press away, :func:`presses_to`);
+    ``back``: it also steps back (the shorter way round).
     """
     r = np.asarray(remaining, dtype=float).copy()
     if exclude_current and mode < r.size:
@@ -587,7 +586,7 @@ def choose_mode(
     if config.mode_temperature == 0 or rng is None:
         return int(np.argmax(r))
     ok = np.isfinite(r)
-    u = mode_usefulness(np.where(ok, r, 0.0), mode, n_modes, config.press_cost, direct)
+    u = mode_usefulness(np.where(ok, r, 0.0), mode, n_modes, config.press_cost, direct, back)
     logits = np.where(ok, u / config.mode_temperature, -np.inf)
     w = np.exp(logits - np.max(logits))
     return int(rng.choice(r.size, p=w / w.sum()))
@@ -628,12 +627,6 @@ def _pushed(err: NDArray[np.float64], dims: tuple[int, ...], tol: NDArray[np.flo
     if not arm or any(abs(err[dims[k]]) > tol[dims[k]] for k in arm):
         return -1
     return max(arm, key=lambda k: abs(err[dims[k]]) / tol[dims[k]])
-
-
-def _drive(raw: NDArray[np.float64]) -> bool:
-    """Whether a raw signal drives the arm (joystick axes or head-array left/right; a stick deflected
-    with the mode button pressed selects a mode, it does not drive)."""
-    return bool((raw[0] != 0.0 or raw[1] != 0.0) and raw[MODE_BUTTON] == 0.0)
 
 
 def user_step(
@@ -711,7 +704,14 @@ def user_step(
         belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
     )
     new = _decide(state, time, mode, err, interface, config, belief, assisted, reached)
-    if config.release_lag > 0 and not lag_done and not reached and _drive(state.raw) and not _drive(new.raw):
+    driving = interface.variant.is_driving
+    if (
+        config.release_lag > 0
+        and not lag_done
+        and not reached
+        and driving(state.raw)
+        and not driving(new.raw)
+    ):
         # The lag has a stream of its own keyed by this decision's counter, and the counter is not
         # advanced: the decision made when the lag ends replays this one's draws, so the user
         # carries out late what it decided (a pause, a review's or a correction's outcome) instead
@@ -741,7 +741,10 @@ def _decide(
     ends by letting go of the held object (rule 1 with a release)."""
     modes = interface.modes
     n_modes = len(modes)
-    direct = interface.mode_selection == "direct"
+    variant = interface.variant
+    selection = interface.mode_selection
+    direct = selection == "direct"
+    back = variant.steps_back
     zero = np.zeros(RAW_SIZE)
     period = config.period(interface)
     draws = state.draws
@@ -757,20 +760,16 @@ def _decide(
             p *= math.exp(-time / config.request_decay_time)
         return p >= 1.0 or (p > 0 and rng().random() < p)
 
-    def press(button: int, select: int = -1, **changes: object) -> UserState:
+    def press(signal: list[float], **changes: object) -> UserState:
         wait = config.reaction_time
         if config.reaction_time_jitter > 0 or config.reaction_log_sd > 0:
             g = rng()
             if config.reaction_time_jitter > 0:
                 wait += g.uniform(-config.reaction_time_jitter, config.reaction_time_jitter)
             wait = lognormal(wait, config.reaction_log_sd, g)
-        raw = zero.copy()
-        raw[button] = 1.0
-        if select >= 0 and direct:  # the stick into the target's sector, then the press
-            raw[0], raw[1] = sector_stick(select, n_modes)
         return _evolve(
             state,
-            raw=raw,
+            raw=np.array(signal, dtype=float),
             busy_until=time + max(wait, 2.0 * period),
             draws=draws,
             presses=state.presses + 1,
@@ -780,7 +779,7 @@ def _decide(
 
     def request(**changes: object) -> UserState:
         # Every request restarts the "unhelped" timer and drops a mode-cycling target.
-        return press(REQUEST_BUTTON, target_mode=-1, request_mode=mode, request_since=time, **changes)
+        return press(variant.request_raw(), target_mode=-1, request_mode=mode, request_since=time, **changes)
 
     def settle(**changes: object) -> UserState | None:
         if config.settle_time <= 0 or (config.settle_prob < 1.0 and rng().random() >= config.settle_prob):
@@ -796,14 +795,13 @@ def _decide(
         grip = n_modes - 1
         state = _evolve(state, request_mode=-1, judge=False, kept_mode=-1)
         if mode != grip:
-            return press(MODE_BUTTON, grip, target_mode=grip, overshot=False)
+            return press(variant.change_raw(mode, grip, selection), target_mode=grip, overshot=False)
         if state.target_mode == grip:
             state = _evolve(state, target_mode=-1)
             out = settle()
             if out is not None:
                 return out
-        raw = zero.copy()
-        raw[0] = 1.0  # the gripper mode's one dimension: joystick axis_x, head-array left; opens
+        raw = np.array(variant.drive_raw([1.0]))  # the gripper mode's one dimension: opens
         return _evolve(state, raw=raw, target_mode=-1, draws=draws)
 
     # A request was made: wait for the mode it chooses, then settle into it and judge it.
@@ -866,14 +864,21 @@ def _decide(
         state = _evolve(state, judge=False, kept_mode=mode if config.keep_assisted_mode else -1)
         if config.accept_prob < 1.0 and rng().random() >= config.accept_prob:
             g = rng() if config.mode_temperature > 0 else None
-            target = choose_mode(arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct)
+            target = choose_mode(
+                arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct, back=back
+            )
             if target != mode and arm_remaining[target] > 1.0:
-                return press(MODE_BUTTON, target, target_mode=target, overshot=False, kept_mode=-1)
+                return press(
+                    variant.change_raw(mode, target, selection),
+                    target_mode=target,
+                    overshot=False,
+                    kept_mode=-1,
+                )
             target = -1
     # The kept mode: while the assistance helps, the arm approaches the goal in it whatever is left
     # along the mode's own dimensions, so the user keeps using it until the whole goal's remaining
     # error stops falling (rule 5 watches it) or the assistance stops helping.
-    stay = config.stay_while_assisted and interface.kind == "joystick"
+    stay = config.stay_while_assisted and variant.proportional
     keep = (state.kept_mode == mode or stay) and mode < n_modes - 1 and assisted
     if state.kept_mode >= 0 and not keep:
         state = _evolve(state, kept_mode=-1)
@@ -887,7 +892,7 @@ def _decide(
         if overshoot and rng().random() < config.overshoot_prob:
             # One too many (one step on): cycling goes round again to the target. Direct selection
             # is one deliberate press per change: nothing to overshoot.
-            return press(MODE_BUTTON, overshot=True)
+            return press(variant.step_raw(1), overshot=True)
         state = _evolve(state, target_mode=-1, overshot=False)
         out = settle()
         if out is not None:
@@ -902,13 +907,13 @@ def _decide(
         g = rng() if config.mode_temperature > 0 else None
         # A Boltzmann user never "chooses" the exhausted mode it is in (the oracle cannot: it is the least).
         target = choose_mode(
-            arm_remaining, mode, n_modes, config, g, exclude_current=g is not None, direct=direct
+            arm_remaining, mode, n_modes, config, g, exclude_current=g is not None, direct=direct, back=back
         )
         if target == mode:  # unreachable with validated tolerances: nothing left anywhere
             return _evolve(state, raw=zero, target_mode=-1, draws=draws)
-        return press(MODE_BUTTON, target, target_mode=target, overshot=False)
+        return press(variant.change_raw(mode, target, selection), target_mode=target, overshot=False)
     if target >= 0:
-        return press(MODE_BUTTON, target, target_mode=target)
+        return press(variant.change_raw(mode, target, selection), target_mode=target)
     state = _evolve(state, target_mode=-1)
 
     # Rule 5: a mode in which commanding has stopped paying off is left for another one.
@@ -925,10 +930,10 @@ def _decide(
                     return request()
                 g = rng() if config.mode_temperature > 0 else None
                 best = choose_mode(
-                    arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct
+                    arm_remaining, mode, n_modes, config, g, exclude_current=True, direct=direct, back=back
                 )
                 if others[best] > 1.0:
-                    return press(MODE_BUTTON, best, target_mode=best, overshot=False)
+                    return press(variant.change_raw(mode, best, selection), target_mode=best, overshot=False)
             # Nothing else to do: the arm does not follow (the autonomy holds it at another goal,
             # or a limit): ask the system for help if it can, else keep at it and watch again.
             if use_requests:
@@ -943,11 +948,11 @@ def _decide(
         and rng().random() < -math.expm1(-config.mode_review_rate * period)
     ):
         g = rng() if config.mode_temperature > 0 else None
-        choice = choose_mode(arm_remaining, mode, n_modes, config, g, direct=direct)
+        choice = choose_mode(arm_remaining, mode, n_modes, config, g, direct=direct, back=back)
         if choice != mode and arm_remaining[choice] > 1.0:
             if use_requests and request_chance(config.request_instead_prob):
                 return request()  # a change is wanted: ask for it instead, as in rules 4 and 5
-            return press(MODE_BUTTON, choice, target_mode=choice, overshot=False)
+            return press(variant.change_raw(mode, choice, selection), target_mode=choice, overshot=False)
 
     # Pauses (fatigue, thinking).
     if config.pause_rate > 0 and rng().random() < -math.expm1(-config.pause_rate * period):
@@ -960,8 +965,8 @@ def _decide(
     dims = modes[mode]
     tol = _dim_tolerances(config)
     speeds = interface.dim_speeds()
-    raw = zero.copy()
-    if interface.kind == "joystick":
+    raw = zero
+    if variant.proportional:
         axes = [0.0, 0.0]
         active = []
         for k, d in enumerate(dims):
@@ -981,22 +986,21 @@ def _decide(
             stick = stick * lognormal(size, config.deflection_log_sd, g)
             axes = stick.tolist()
         for k in range(2):
-            axis = axes[k]
             if config.axis_noise > 0 and k in active:
-                axis += float(rng().normal(0.0, config.axis_noise))
-            raw[k] = float(np.clip(axis, -1.0, 1.0))
+                axes[k] += float(rng().normal(0.0, config.axis_noise))
+        raw = np.array(variant.drive_raw(axes))
     else:
         d = dims[0]
         if d != GRIPPER_DIM:
             if err[d] > tol[d] or (keep and 0.0 <= err[d]):
-                raw[0] = 1.0
+                raw = np.array(variant.drive_raw([1.0]))
             elif err[d] < -tol[d] or keep:
-                raw[1] = 1.0
+                raw = np.array(variant.drive_raw([-1.0]))
     if (
         config.wrong_press_prob > 0
-        and _drive(raw)
-        and not _drive(state.raw)
+        and variant.is_driving(raw)
+        and not variant.is_driving(state.raw)
         and rng().random() < config.wrong_press_prob
     ):
-        return press(MODE_BUTTON)  # meant to drive, hit the mode button
+        return press(variant.step_raw(1))  # meant to drive, hit the mode-change action
     return _evolve(state, raw=raw, draws=draws)

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from drake_disamb.core.interfaces import interfaces_in
 from drake_disamb.study.figures import ablation_figure, save_figure, source_figures, trace_figures
 from drake_disamb.study.findings import (
     COMPARED,
@@ -252,7 +253,7 @@ def write_report(
             )
         )
         skew_rows = []
-        for interface in ("joystick", "head_array"):
+        for interface in interfaces_in(m.record.interface for m in mine):
             for task in ("reaching", "pouring"):
                 for paradigm in ("disambiguation", "automatic"):
                     sel = [m for m in select_trials(mine, interface, task) if m.record.paradigm == paradigm]
@@ -265,7 +266,7 @@ def write_report(
                             "paradigm": paradigm,
                             "requests": sum(len(m.normalized_request_times) for m in sel),
                             "skewness": request_time_skewness(sel),
-                            "paper": PAPER_SKEWNESS[(interface, task)]
+                            "paper": PAPER_SKEWNESS.get((interface, task))
                             if paradigm == "disambiguation"
                             else None,
                         }
