@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update
+from drake_disamb.core.sampling import lognormal
 from drake_disamb.core.user import (
     UserConfig,
     UserState,
     choose_mode,
-    lognormal,
     mode_usefulness,
     user_step,
 )

@@ -15,6 +15,7 @@ from scipy.io import loadmat, savemat
 
 from drake_disamb.commands import inference_benchmark
 from drake_disamb.core.inference import bayes_step, dft_euler_step, memory_step, uniform_belief
+from drake_disamb.core.sampling import sample_von_mises_fisher
 from drake_disamb.core.trials import (
     METHODS,
     PUBLISHED_ACCURACY,
@@ -26,7 +27,6 @@ from drake_disamb.core.trials import (
     load_trial_mat,
     load_trials,
     replay_trials,
-    sample_von_mises_fisher,
     save_trial_mat,
     score_trial_stream,
     score_trials,

@@ -121,7 +121,7 @@ from drake_disamb.core._validation import all_finite, check_real_fields, is_real
 from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.geometry import orientation_error
 from drake_disamb.core.interfaces import GRIPPER_DIM, RAW_SIZE, InterfaceConfig
-from drake_disamb.core.trials import sample_von_mises_fisher
+from drake_disamb.core.sampling import lognormal, sample_von_mises_fisher
 
 NOT_COUNTING = -1.0
 """``unhelped_since`` value meaning "the autonomy is currently helping" (times are >= 0)."""
@@ -521,14 +521,6 @@ def helped(belief: ArrayLike, goal_index: int, rho1: float) -> bool:
 
 def _draw(config: UserConfig, counter: int) -> np.random.Generator:
     return np.random.default_rng([int(config.seed), int(counter)])
-
-
-def lognormal(median: float, log_sd: float, rng: np.random.Generator | None) -> float:
-    """``median * exp(log_sd * z)``, ``z`` standard normal from ``rng`` truncated to ``[-2, 2]`` (no
-    minute-long waits from the tail); ``median`` if ``log_sd`` is 0."""
-    if log_sd == 0 or rng is None:
-        return float(median)
-    return float(median * math.exp(log_sd * min(max(rng.standard_normal(), -2.0), 2.0)))
 
 
 def presses_to(
