@@ -327,11 +327,11 @@ def test_scenario_fields_resolve() -> None:
 
 def test_the_simulated_user_asks_only_in_the_disambiguation_paradigm() -> None:
     s = load_scenario("reaching")
-    asks = resolve_scenario(s).user
+    asks = resolve_scenario(s).user.requests
     assert asks.request_at_start and asks.request_when_unhelped_for is not None
     for paradigm in ("manual", "automatic"):  # no button / the system switches by itself
         s.paradigm = paradigm
-        user = resolve_scenario(s).user
+        user = resolve_scenario(s).user.requests
         assert not user.request_at_start and user.request_when_unhelped_for is None
         assert user.request_instead_prob == 0.0
 

@@ -82,23 +82,28 @@ def _spec_class(
     exclude: tuple[str, ...] = (),
     doc: str,
 ) -> type:
-    """A mutable dataclass with the fields of the frozen core config ``config_type``.
+    """A mutable dataclass with the fields of the frozen core config ``config_type`` (flat: a
+    config of nested groups with ``flat_types`` / ``flat`` gives every group's fields by name).
 
     Defaults are those of the instance ``defaults``; ``types`` replaces a field's type by one Drake's
     loader reads (a numpy matrix as ``list[list[float]]``); ``exclude`` leaves fields out (the
     resolver sets them). ``spec.to_config(**extra)`` builds the frozen config (lists become arrays).
     """
-    hints = typing.get_type_hints(config_type)
+    if hasattr(config_type, "flat_types"):  # a config of nested groups, written flat
+        hints, values = config_type.flat_types(), defaults.flat()
+    else:
+        hints = typing.get_type_hints(config_type)
+        values = {f.name: getattr(defaults, f.name) for f in dataclasses.fields(config_type)}
     types = types or {}
     fields = []
-    for f in dataclasses.fields(config_type):
-        if f.name in exclude:
+    for key in values:
+        if key in exclude:
             continue
-        tp = types.get(f.name, hints[f.name])
-        value = getattr(defaults, f.name)
+        tp = types.get(key, hints[key])
+        value = values[key]
         if value is not None and type(None) in typing.get_args(tp):  # programming error, at import
-            raise TypeError(f"{name}.{f.name}: an optional field needs the default None, got {value!r}")
-        fields.append((f.name, tp, field(default_factory=functools.partial(copy.deepcopy, value))))
+            raise TypeError(f"{name}.{key}: an optional field needs the default None, got {value!r}")
+        fields.append((key, tp, field(default_factory=functools.partial(copy.deepcopy, value))))
 
     def to_config(self: Any, **extra: Any) -> Any:
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}

@@ -50,7 +50,7 @@ class SimulatedUser(LeafSystem):
 
     State: discrete :meth:`UserState.to_vector <drake_disamb.core.user.UserState.to_vector>` and
     ``raw`` again in a group of its own (the state output port ``raw``), updated every decision
-    period (``config.decision_period``, default the interface's ``control_period``; at least the
+    period (``config.timing.decision_period``, default the interface's ``control_period``; at least the
     control period, so each press is seen as exactly one rising edge) from t = 0; and
     ``[sanitised-input count]``, ``[time of the last warning]`` (s).
 
