@@ -13,7 +13,6 @@ dimensions times their speeds.
 
 from __future__ import annotations
 
-import functools
 import math
 import numbers
 from collections.abc import Callable
@@ -81,6 +80,8 @@ class InterfaceConfig:
     serve_requests: bool = True
     mode_selection: str = "cycle"
     variant: Interface | None = None
+    speed_tuple: tuple[float, ...] = field(init=False, default=(), compare=False, repr=False)
+    """:meth:`dim_speeds` as a tuple (set from the fields; the update reads it every tick)."""
 
     def __post_init__(self) -> None:
         check_kind(self.kind)
@@ -94,6 +95,7 @@ class InterfaceConfig:
         if self.max_angular_speed is None:
             object.__setattr__(self, "max_angular_speed", ang)
         check_real_fields(self, ("max_linear_speed", "max_angular_speed", "gripper_speed", "control_period"))
+        object.__setattr__(self, "speed_tuple", tuple(self.dim_speeds().tolist()))
         if not (is_real(self.button_threshold) and 0.0 < self.button_threshold <= 1.0):
             raise ValueError(
                 "InterfaceConfig.button_threshold: expected a number in (0, 1], "
@@ -276,17 +278,11 @@ def command_from_raw(
     r = np.asarray(clean_raw, dtype=float).tolist()
     dims = config.modes[mode]
     drives = config.variant.drives(r, len(dims))
-    speeds = _dim_speeds(config)
+    speeds = config.speed_tuple
     u7 = [0.0] * 7
     for dim, drive in zip(dims, drives, strict=True):
         u7[dim] = drive * speeds[dim]
     return np.array(u7[:6]), u7[GRIPPER_DIM]
-
-
-@functools.lru_cache(maxsize=64)
-def _dim_speeds(config: InterfaceConfig) -> tuple[float, ...]:
-    """``config.dim_speeds()`` as a tuple, once per (frozen) configuration."""
-    return tuple(config.dim_speeds().tolist())
 
 
 def parse_disambiguation_mode(value: float | None, n_arm_modes: int) -> int | None:
