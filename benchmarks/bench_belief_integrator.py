@@ -9,7 +9,7 @@ The field-theoretic inference system
 (:class:`~drake_disamb.systems.inference.FieldTheoreticIntentInference`) holds the belief as
 continuous state that Drake's simulator integrates. This script plays each of the authors'
 published simulated trials (``../shared/data/tnsre2018_simulated_trajectories`` beside the
-repository, FACTS section 3) into that very system, as the live loop would feed it: a small source
+repository, docs/facts.md section 3) into that very system, as the live loop would feed it: a small source
 system (:class:`TrialPlayback`) holds the command ``u_h`` and the position of the trial's sample at
 each control tick, piecewise constant until the next tick (the interface's state and the loop's
 zero-order hold of the end-effector pose do the same). Tick ``k`` at ``t = k T`` takes sample
@@ -38,7 +38,7 @@ scheme the script prints, over all ticks of all trials:
   goal differs from the reference's;
 - the accuracy (``argmax p`` equals the true goal) with the paper's metric (zeroed stretch counted
   as correct) and the strict one (stretch excluded), averaged over trials as
-  ``drake-disamb inference-benchmark`` does (:func:`~drake_disamb.core.trials.trial_accuracy`),
+  ``drake-disamb inference-benchmark`` does (:func:`~drake_disamb.core.comparison.trial_accuracy`),
   on the tick samples (:func:`tick_trial`);
 - whether the raw state left the simplex before the system's per-tick projection put it back: the
   most negative entry and the largest ``|sum(p) - 1|`` at the end of any integrator step;
@@ -49,7 +49,7 @@ scheme the script prints, over all ticks of all trials:
   included in every scheme alike).
 
 For comparison it also prints the authors' own discretisation replayed by the numpy core
-(:func:`~drake_disamb.core.trials.replay_trials`: explicit Euler, clip and renormalise) at the data's
+(:func:`~drake_disamb.core.comparison.replay_trials`: explicit Euler, clip and renormalise) at the data's
 2 ms (with the authors' parameters on all 100 trials: the numbers of the README's inference table)
 and on the tick samples at ``T``.
 
@@ -80,9 +80,11 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
+from drake_disamb.core.comparison import authors_dft_params, replay_trials, trial_accuracy
 from drake_disamb.core.disambiguation import MICO_DFT
 from drake_disamb.core.inference import DFTParams
-from drake_disamb.core.trials import Trial, authors_dft_params, load_trials, replay_trials, trial_accuracy
+from drake_disamb.core.trial_files import load_trials
+from drake_disamb.core.trials import Trial
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"

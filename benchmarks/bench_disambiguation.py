@@ -5,7 +5,7 @@ Prints the median and 95th-percentile wall time of one call of
 probes, features, scores, mode choice) for:
 
 - the MICO configuration: the ``mico`` preset, the 5 goals of the single-step reaching task
-  (FACTS section 8) with seeded random orientations, 6 dimensions, the head array's 6 arm modes;
+  (docs/facts.md section 9) with seeded random orientations, 6 dimensions, the head array's 6 arm modes;
 - the same with 2, 10 and 50 goals drawn (seeded) in the MICO workspace;
 - the ``authors-r3`` preset (3 dimensions) for reference.
 

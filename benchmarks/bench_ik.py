@@ -20,7 +20,8 @@ from pydrake.multibody.inverse_kinematics import (
 )
 from pydrake.multibody.tree import JacobianWrtVariable
 
-from drake_disamb.ik import IkStatus, JointLimits, VelocityIkSolver
+from drake_disamb.ik import IkStatus, VelocityIkSolver
+from drake_disamb.joint_limits import JointLimits
 from drake_disamb.station import EE_FRAME, MICO_HOME_Q, StationConfig, build_station
 
 

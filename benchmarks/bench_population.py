@@ -10,7 +10,7 @@ mode, through :func:`drake_disamb.trial.run_trial` (the embedded reaching and po
 logs (:func:`drake_disamb.study.metrics.summarize` of :func:`drake_disamb.study.authors.read_trials`,
 the authors' metric definitions) and the ratio simulated / human; the last column adds the people's
 median tail (last command to the end of the trial, which the experimenter stopped) to the simulated
-time. The issue's acceptance asks for every ratio within 0.5..1.5.
+time. A simulated population is accepted when every ratio is within 0.5..1.5.
 
     python benchmarks/bench_population.py [--trials 2] [--duration 180] [--seed 0] [--jsonl FILE]
 

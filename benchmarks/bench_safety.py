@@ -1,11 +1,13 @@
-"""Motion off the command: the figures behind the station's safety contract (issue 11).
+"""Motion off the command: the figures behind the station's safety contract.
 
-Usage: ``python benchmarks/bench_safety.py [--duration 10]``. From five start postures (home, next
-to the wrist singularity, the elbow on its limit, the wrist roll on its limit, a turned posture) it
-holds each pure single-axis command (translations at +/-0.1 m/s, rotations at +/-0.2 and +/-0.67
-rad/s) on the simulated station and prints, per posture, the worst total motion outside the
-commanded direction (cm), the worst speed of that motion (cm/s), the worst rotation outside it
-(rad), and how often each IK status appeared. The acceptance limits are 2 cm and 1 cm/s.
+Usage: ``python benchmarks/bench_safety.py [--duration 10] [--station sim|lcm]``. From five start
+postures (home, next to the wrist singularity, the elbow on its limit, the wrist roll on its limit,
+a turned posture) it holds each pure single-axis command (translations at +/-0.1 m/s, rotations at
++/-0.2 and +/-0.67 rad/s) on the simulated station and prints, per posture, the worst total motion
+outside the commanded direction (cm), the worst speed of that motion (cm/s), the worst rotation
+outside it (rad), and how often each IK status appeared. The acceptance limits are 2 cm and 1 cm/s.
+``--station lcm`` holds the commands over the LCM path: the station on a ``memq://`` bus with the
+simulated driver behind ``lcmt_jaco_status`` / ``lcmt_jaco_command`` (one period of latency).
 """
 
 from __future__ import annotations
@@ -41,13 +43,15 @@ def postures() -> dict[str, tuple[float, ...]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=10.0, help="seconds each command is held")
+    parser.add_argument("--station", choices=("sim", "lcm"), default="sim", help="the station's backend")
     args = parser.parse_args()
+    print(f"station: {args.station}")
     commands = [(a, s) for a in range(3) for s in (0.1, -0.1)]
     commands += [(a, s) for a in range(3, 6) for s in (0.2, -0.2, 0.67, -0.67)]
     print(f"{'posture':26s} {'off cm':>7s} {'off cm/s':>9s} {'off rad':>8s}  statuses")
     worst = np.zeros(3)
     for name, q in postures().items():
-        hold = CommandHold(q)
+        hold = CommandHold(q, on_wire=args.station == "lcm")
         figures = np.zeros(3)
         statuses: Counter[str] = Counter()
         for axis, speed in commands:

@@ -1,5 +1,7 @@
-"""Helpers shared by the test files: the CLI in a child process, stopped by a signal, and the
-recording-screenshot script of ``diagrams/`` (its Chromium flags serve the browser tests too)."""
+"""Helpers shared by the test files: the CLI in a child process, stopped by a signal, the
+recording-screenshot script of ``diagrams/`` (its Chromium flags serve the browser tests too), and
+quaternion helpers the tests use as references (normalising without checks, the rotation matrix,
+a pose moved by a twist)."""
 
 from __future__ import annotations
 
@@ -12,6 +14,17 @@ import sys
 import time
 from pathlib import Path
 from types import ModuleType
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core._kernels import _normalize_quaternion_rows
+from drake_disamb.core.geometry import (
+    check_vectors,
+    normalized_quaternions,
+    quat_from_rotvec_unchecked,
+    quat_multiply_unchecked,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 SRC = REPO / "src"
@@ -75,3 +88,50 @@ def screenshot_script() -> ModuleType:
     module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(module)  # type: ignore[union-attr]
     return module
+
+
+def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`drake_disamb.core.geometry.normalized_quaternions` without its checks, on the kernel
+    the core's fused paths use: ``q`` is a float array ``(..., 4)`` of finite quaternions whose
+    norms are at least 1e-12 and do not overflow."""
+    rows = np.ascontiguousarray(q, dtype=float).reshape(-1, 4)
+    out = np.empty_like(rows)
+    _normalize_quaternion_rows(rows, out)
+    return out.reshape(np.shape(q))
+
+
+def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
+    """Rotation matrix ``R`` (``(..., 3, 3)``) with ``R @ v`` rotating ``v`` by ``q``."""
+    u = normalized_quaternions(q, "q")
+    w, x, y, z = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
+    rows = (
+        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
+    )
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+def integrate_pose(
+    position: ArrayLike, quat: ArrayLike, twist_vw: ArrayLike, dt: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Move a pose by a constant world-frame twist for ``dt`` seconds.
+
+    Args:
+        position: ``(..., 3)`` positions (m).
+        quat: ``(..., 4)`` orientations ``[qw, qx, qy, qz]``.
+        twist_vw: ``(..., 6)`` twists ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s) in W.
+        dt: Duration (s), finite and >= 0.
+
+    Returns:
+        ``(position + v dt, exp(w dt) (x) quat)`` broadcast together; the quaternion is unit.
+    """
+    if not (np.isfinite(dt) and dt >= 0):
+        raise ValueError(f"dt: expected a finite number >= 0, got {dt!r}")
+    p = check_vectors(position, 3, "position")
+    q = normalized_quaternions(quat, "quat")
+    t = check_vectors(twist_vw, 6, "twist_vw")
+    new_position = p + t[..., :3] * dt
+    new_quat = quat_multiply_unchecked(quat_from_rotvec_unchecked(t[..., 3:6] * dt), q)
+    w, x, y, z = new_quat[..., 0:1], new_quat[..., 1:2], new_quat[..., 2:3], new_quat[..., 3:4]
+    return new_position, new_quat / np.sqrt(w * w + x * x + y * y + z * z)

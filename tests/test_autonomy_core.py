@@ -12,7 +12,7 @@ IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 def _reference(position, quat, goal_positions, goal_quats, cfg: PotentialFieldConfig) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """Goal-by-goal loop straight from the formula in FACTS section 6."""
+    """Goal-by-goal loop straight from the paper's formula (Section "Study Methods", Shared Control)."""
     n = len(goal_positions)
     out = np.zeros((n, 6))
     for i in range(n):
@@ -185,8 +185,9 @@ def test_from_poses_unchecked_is_the_composition_it_replaces(seed: int) -> None:
     """The control loop's path (checked=False: one compiled call, _field_one_pose) gives exactly the
     numbers of normalising with normalized_quaternions_unchecked and running the broadcasting
     kernel path, repellers acting or not, unnormalised quaternions included."""
+    from support import normalized_quaternions_unchecked
+
     from drake_disamb.core.autonomy import _potential_field_commands, potential_field_commands_from_poses
-    from drake_disamb.core.geometry import normalized_quaternions_unchecked
 
     rng = np.random.default_rng(seed)
     config = PotentialFieldConfig(repeller_radius=0.2)

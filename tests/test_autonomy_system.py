@@ -121,7 +121,7 @@ def test_constructor_validation() -> None:
 
 
 def test_usable_poses() -> None:
-    from drake_disamb.systems.sanitized import usable_poses
+    from drake_disamb.system_helpers.sanitized import usable_poses
 
     good = np.array([0.1, -0.2, 0.3, *IDENTITY])
     assert usable_poses(good, np.tile(good, 3))

@@ -12,10 +12,10 @@ import functools
 import numpy as np
 import pytest
 from pydrake.systems.framework import LeafSystem
+from support import quat_to_matrix
 
 from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario, with_overrides
-from drake_disamb.core.geometry import quat_to_matrix
 from drake_disamb.trial import TrialResult, run_trial
 
 
@@ -107,7 +107,7 @@ def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "stage") ->
             "stage",
             marks=pytest.mark.xfail(
                 strict=True,
-                reason="direction-preserving IK (issue 11): from the left container the path to the "
+                reason="direction-preserving IK (ik.py's contract): from the left container the path to the "
                 "low right platform drives the elbow (joint 3) onto its limit, where -z, +x and +y all "
                 "need it further; the IK stops there as it must, and the simulated user never backs "
                 "off (-x or -y) to route around. Needs a user that retreats when blocked, or "

@@ -165,7 +165,7 @@ def test_core_configs_are_declared_once() -> None:
     assert [f.name for f in dataclasses.fields(DFTSpec)] == dft
     core = [name for name in UserConfig.flat_types() if name not in ("seed", "rho1")]
     assert [f.name for f in dataclasses.fields(UserBehaviorSpec)] == core
-    assert DFTSpec().to_config(agreement_measure=InferenceSpec().agreement) == preset("mico").dft
+    assert DFTSpec().to_config(agreement_measure=InferenceSpec().agreement) == preset("mico").inference.params
 
 
 # ------------------------------------------------------------------------------------------------
@@ -255,9 +255,11 @@ def test_a_non_mico_preset_projects_with_the_live_inference(method: str) -> None
     handles = build_shared_control_diagram(s)
     projection = handles.systems["disambiguation"].config
     live_dft = s.inference.dft.to_config(agreement_measure=s.inference.agreement)
-    assert projection.dft == live_dft and projection.dft is handles.config.dft
-    assert projection.dft != preset("authors-r3").dft
-    assert projection.inference == method
+    assert projection.inference is handles.config.inference  # the very same method, parameters and all
+    assert projection.inference.name == method
+    if method == "dft":
+        assert projection.inference.params == live_dft
+        assert projection.inference.params != preset("authors-r3").inference.params
     assert projection.potential_field == handles.systems["autonomy"].config == s.autonomy.to_config()
     # The preset still decides how the projection probes.
     authors = preset("authors-r3")

@@ -13,7 +13,7 @@ import pytest
 from support import cli_process, interrupt
 
 from drake_disamb.cli import main
-from drake_disamb.plotting import nonzero_segments, plot_goal_probabilities
+from drake_disamb.plotting import goal_probability_figure, nonzero_segments
 
 
 @pytest.mark.parametrize(
@@ -102,11 +102,11 @@ def test_nonzero_segments() -> None:
     assert nonzero_segments(t, np.zeros((8, 6))) == []
 
 
-def test_plot_rejects_mismatched_shapes(tmp_path: Path) -> None:
+def test_plot_rejects_mismatched_shapes() -> None:
     with pytest.raises(ValueError, match="belief"):
-        plot_goal_probabilities(np.arange(3), np.ones((4, 2)), tmp_path / "x.png")
+        goal_probability_figure(np.arange(3), np.ones((4, 2)))
     with pytest.raises(ValueError, match="goal_names"):
-        plot_goal_probabilities(np.arange(3), np.ones((3, 2)) / 2, tmp_path / "x.png", goal_names=["a"])
+        goal_probability_figure(np.arange(3), np.ones((3, 2)) / 2, goal_names=["a"])
 
 
 # ----------------------------------------------------------------------------------------------

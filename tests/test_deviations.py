@@ -63,10 +63,10 @@ def test_scenario_agreement_reaches_the_live_inference_and_the_projection(measur
     s = load_scenario("reaching")
     s.inference.agreement = measure
     handles = build_shared_control_diagram(s)
-    assert handles.config.dft.agreement_measure == measure
+    assert handles.config.inference.params.agreement_measure == measure
     assert handles.systems["inference"].params.agreement_measure == measure
     projection = handles.systems["disambiguation"].config
-    assert projection.dft.agreement_measure == measure  # the forward projection runs the same update
+    assert projection.inference is handles.config.inference  # the forward projection runs the same update
 
 
 def test_agreement_measure_decides_the_start_pose_mode() -> None:

@@ -1,4 +1,4 @@
-"""Fuzz ``drake-disamb disambiguate`` (issue 11): random and mutated case lists and random bytes give
+"""Fuzz ``drake-disamb disambiguate``: random and mutated case lists and random bytes give
 a clean result (exit 0 or 1, one JSON list on stdout) or a clean error (exit 2, one line on stderr),
 never an uncaught exception or a hang. Seeded (``derandomize``) and bounded, so it runs in CI."""
 

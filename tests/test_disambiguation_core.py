@@ -8,9 +8,11 @@ import zlib
 
 import numpy as np
 import pytest
+from support import integrate_pose
 
 from drake_disamb.core.autonomy import potential_field_commands
 from drake_disamb.core.disambiguation import (
+    MICO_DFT,
     DisambiguationConfig,
     DisambiguationResult,
     authors_r3_config,
@@ -19,8 +21,14 @@ from drake_disamb.core.disambiguation import (
     preset,
     select_mode,
 )
-from drake_disamb.core.geometry import integrate_pose, orientation_error, quat_from_rotvec
-from drake_disamb.core.inference import bayes_step, dft_euler_step
+from drake_disamb.core.geometry import orientation_error, quat_from_rotvec
+from drake_disamb.core.inference import (
+    BayesInference,
+    DFTInference,
+    MemoryInference,
+    bayes_step,
+    dft_euler_step,
+)
 
 HEAD_ARRAY_MODES = [[0], [1], [2], [3], [4], [5]]
 JOYSTICK_MODES = [[0, 1], [0, 2], [3, 5], [4]]
@@ -28,7 +36,7 @@ IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 # ----------------------------------------------------------------------------------------------
-# Slow reference: one probe, one step, one goal pair at a time, written from the paper/FACTS.
+# Slow reference: one probe, one step, one goal pair at a time, written from the paper (Algorithm 1).
 # ----------------------------------------------------------------------------------------------
 
 
@@ -47,13 +55,12 @@ def _reference(belief, position, orientation, goals, goal_quats, modes, cfg: Dis
             q = np.array(orientation, dtype=float)
             history = []
             for _ in range(nc):
-                if cfg.inference == "dft":
+                if isinstance(cfg.inference, DFTInference):
+                    dft = cfg.inference.params
                     ua = potential_field_commands(x, q, goals, goal_quats, cfg.potential_field)
-                    p = dft_euler_step(
-                        p, u, x, goals, cfg.dft, cfg.delta_t, ua if cfg.dft.agreement else None
-                    )
+                    p = dft_euler_step(p, u, x, goals, dft, cfg.delta_t, ua if dft.agreement else None)
                 else:
-                    p = bayes_step(p, u, x, goals, cfg.bayes_transition, cfg.bayes_sigma)
+                    p = bayes_step(p, u, x, goals, cfg.inference.transition, cfg.inference.sigma)
                 x, q = integrate_pose(x, q, u, cfg.delta_t)
                 history.append((p.copy(), x.copy(), q.copy()))
             p_b, x_b, q_b = history[nb - 1]
@@ -106,13 +113,15 @@ def test_vectorised_core_matches_loop_reference(name: str) -> None:
             P = np.eye(n) + rng.uniform(0, 0.01, (n, n))
             cfg = preset("authors-r3", transition=P / P.sum(axis=1, keepdims=True))
         elif name == "mico-bayes":
-            cfg = mico_config(inference="bayes")
+            cfg = mico_config(inference=BayesInference())
         elif name == "mico-undivided":
             cfg = mico_config(upsilon_normalization="none", w=0.3)
         elif name == "mico-displacement":
             cfg = mico_config(upsilon_normalization="displacement", t_c=2.5)
         elif name == "mico-cosine":
-            cfg = mico_config(dft=dataclasses.replace(mico_config().dft, agreement_measure="cosine"))
+            cfg = mico_config(
+                inference=DFTInference(dataclasses.replace(MICO_DFT, agreement_measure="cosine"))
+            )
         else:
             cfg = preset("mico")
         modes = HEAD_ARRAY_MODES if trial % 2 else JOYSTICK_MODES
@@ -160,7 +169,7 @@ def test_goals_differing_only_in_orientation_choose_a_rotational_mode() -> None:
     res = disambiguate([0.5, 0.5], [0.0, -0.3, 0.2], goals, JOYSTICK_MODES, goal_orientations=goal_quats)
     assert res.mode == 2  # {wx, wz}
     # Without the agreement term nothing can tell them apart: the current mode is kept.
-    cfg = mico_config(dft=dataclasses.replace(mico_config().dft, agreement=False))
+    cfg = mico_config(inference=DFTInference(dataclasses.replace(MICO_DFT, agreement=False)))
     res = disambiguate(
         [0.5, 0.5], [0.0, -0.3, 0.2], goals, HEAD_ARRAY_MODES, cfg, goal_orientations=goal_quats
     )
@@ -314,7 +323,7 @@ def test_result_to_dict_and_explain() -> None:
         ({"goal_orientations": [IDENTITY, [0.0, 1e155, 0.0, 0.0]]}, "goal_orientations: .* overflows"),
         ({"position": [0.0, 1000.5, 0.0]}, r"position: expected coordinates within \+/-1000 m"),
         ({"goals": [[0.3, 0, 0], [0, 0, -1e300]]}, r"goal_positions\[1\]: expected coordinates within"),
-        ({"goals": np.zeros((1001, 3)), "belief": np.full(1001, 1 / 1001)}, r"n <= 1000 \(MAX_GOALS\)"),
+        ({"goals": np.zeros((101, 3)), "belief": np.full(101, 1 / 101)}, r"n <= 100 \(MAX_GOALS\)"),
         ({"belief": [10**400, 0]}, "belief: expected an array of numbers"),
         ({"current_mode": -1}, "current_mode"),
         ({"config": preset("authors-r3", transition=np.eye(3))}, "transition"),
@@ -342,7 +351,10 @@ def test_bad_requests_raise_value_error(kwargs: dict, message: str) -> None:
         ({"t_c": 1.0}, "t_c"),
         ({"w": 1.5}, r"\.w"),
         ({"delta_t": 0.0}, "delta_t"),
-        ({"inference": "memory"}, "inference"),
+        (
+            {"inference": MemoryInference()},
+            r"inference: expected an inference method with a forward projection \(dft, bayes\)",
+        ),
         ({"tie_tolerance": -1.0}, "tie_tolerance"),
         ({"probe_speed_rotation": 4.0}, "probe_speed_rotation"),
     ],
@@ -356,15 +368,16 @@ def test_presets() -> None:
     r3 = authors_r3_config()
     assert r3.dimensions == (0, 1, 2) and r3.probe_speed_translation == 0.2
     assert r3.upsilon_normalization == "none"
-    assert (r3.dft.tau1, r3.dft.tau2, r3.dft.lam) == (10.0, 10.0, 200.0)
-    assert r3.dft.directedness and not r3.dft.agreement and not r3.dft.proximity
+    dft = r3.inference.params
+    assert (dft.tau1, dft.tau2, dft.lam) == (10.0, 10.0, 200.0)
+    assert dft.directedness and not dft.agreement and not dft.proximity
     assert (r3.steps_b, r3.steps_c, r3.w) == (10, 20, 0.5)
     assert preset("mico") == DisambiguationConfig()
     for name in ("mico", "authors-r3"):
         with pytest.raises(ValueError, match="transition"):
             preset(name, transition=[[0.5, 0.5], [0.0, 0.9]])
-    with pytest.raises(ValueError, match="bayes_transition"):
-        mico_config(inference="bayes").with_transition([[0.5, 0.5], [0.0, 0.9]])
+    with pytest.raises(ValueError, match="BayesInference.transition"):
+        mico_config(inference=BayesInference()).with_transition([[0.5, 0.5], [0.0, 0.9]])
     with pytest.raises(ValueError, match="preset"):
         preset("nope")
 
@@ -377,12 +390,15 @@ def test_presets() -> None:
 @pytest.mark.parametrize("name", ["mico", "authors-r3"])
 def test_probe_plan_displacement_matches_integrated_poses(name: str) -> None:
     """The cached displacements equal those of poses integrated step by step from any start pose."""
-    from drake_disamb.core.disambiguation import forward_projection
+    from drake_disamb.core.disambiguation import forward_projection, make_request
 
     cfg = preset(name)
     rng = np.random.default_rng(11)
     belief, position, orientation, goals, goal_quats = _random_scene(rng, 3)
-    proj = forward_projection(belief, position, orientation, goals, goal_quats, cfg)
+    request = make_request(
+        belief, position, goals, [[0]], cfg, orientation=orientation, goal_orientations=goal_quats
+    )
+    proj = forward_projection(request)
     assert proj.displacement.shape == (2, len(cfg.dimensions))
     for col, k in enumerate(cfg.dimensions):
         for row, sign in enumerate((1.0, -1.0)):
@@ -397,7 +413,7 @@ def test_probe_plan_displacement_matches_integrated_poses(name: str) -> None:
             expected = x_c[k] - x_b[k] if k < 3 else orientation_error(q_b, q_c)[k - 3]
             assert proj.displacement[row, col] == pytest.approx(expected, rel=1e-12, abs=1e-15)
     proj.displacement[:] = 0.0  # a copy: the cached plan is untouched
-    again = forward_projection(belief, position, orientation, goals, goal_quats, cfg)
+    again = forward_projection(request)
     assert np.all(np.abs(again.displacement) > 0)
 
 
@@ -463,7 +479,7 @@ def test_explain_names_a_near_tie() -> None:
 
 @pytest.mark.parametrize("n", [1, 2, 5, 50])
 def test_pairwise_spread_by_sorting_equals_the_sum_over_all_pairs(n: int) -> None:
-    from drake_disamb.core.disambiguation import _pairwise_abs_sum
+    from drake_disamb.core.disambiguation.algorithm1 import _pairwise_abs_sum
 
     rng = np.random.default_rng(n)
     a = rng.normal(size=(2, 3, n))

@@ -150,7 +150,6 @@ def test_a_drifted_belief_is_renormalised() -> None:
 
 @pytest.mark.parametrize("error", [ValueError("goal_positions: expected shape (n, 3)"), RuntimeError("bug")])
 def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exception) -> None:
-    from drake_disamb.systems import disambiguation as module
 
     def broken(*args: object, **kwargs: object) -> None:
         raise error
@@ -159,7 +158,7 @@ def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exceptio
     context = _fixed_context(system, [0.5, 0.5])
     simulator = Simulator(system, context)
     simulator.AdvanceTo(0.015)
-    monkeypatch.setattr(module, "select_disambiguating_mode", broken)
+    monkeypatch.setattr(system.method, "select", broken)
     with pytest.raises(type(error), match=re.escape(str(error))):
         system.GetOutputPort("disambiguation_mode").Eval(context)
     system.GetInputPort("request_count").FixValue(context, [1.0])

@@ -5,15 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support import integrate_pose, quat_to_matrix
 
 from drake_disamb.core.geometry import (
-    integrate_pose,
+    normalized_quaternions,
     orientation_error,
     quat_conjugate,
     quat_from_rotvec,
     quat_multiply,
-    quat_normalize,
-    quat_to_matrix,
     quat_to_rotvec,
 )
 
@@ -136,9 +135,9 @@ def test_integrate_pose_batched() -> None:
 @pytest.mark.parametrize(
     ("call", "message"),
     [
-        (lambda: quat_normalize([1.0, 0.0, 0.0]), r"q: expected shape \(\.\.\., 4\)"),
-        (lambda: quat_normalize([0.0, 0.0, 0.0, 0.0]), "zero norm"),
-        (lambda: quat_normalize([1e200, 0.0, 0.0, 0.0]), "norm overflows"),
+        (lambda: normalized_quaternions([1.0, 0.0, 0.0], "q"), r"q: expected shape \(\.\.\., 4\)"),
+        (lambda: normalized_quaternions([0.0, 0.0, 0.0, 0.0], "q"), "zero norm"),
+        (lambda: normalized_quaternions([1e200, 0.0, 0.0, 0.0], "q"), "norm overflows"),
         (lambda: quat_to_rotvec([np.nan, 0.0, 0.0, 1.0]), "q: expected finite"),
         (lambda: quat_from_rotvec([1.0, 2.0]), r"rotvec: expected shape \(\.\.\., 3\)"),
         (lambda: orientation_error([1, 0, 0, 0], [1, 0, 0]), "q_to"),
@@ -174,8 +173,9 @@ def test_public_results_are_c_contiguous_and_kernels_broadcast_row_by_row() -> N
 def test_compiled_checks_agree_with_numpy() -> None:
     """all_finite and normalized_quaternions_unchecked run compiled loops on float64 arrays; they
     must give numpy's answers, and anything else goes through numpy."""
-    from drake_disamb.core._validation import all_finite
-    from drake_disamb.core.geometry import normalized_quaternions_unchecked
+    from support import normalized_quaternions_unchecked
+
+    from drake_disamb.core.validation import all_finite
 
     rng = np.random.default_rng(3)
     for special in (np.nan, np.inf, -np.inf, 1e308, -1e308, 0.0):

@@ -9,14 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_disamb.ik import (
-    IkParams,
-    IkStatus,
-    JointLimits,
-    VelocityIkSolver,
-    solve_velocity_ik,
-    velocity_bounds,
-)
+from drake_disamb.ik import IkParams, IkStatus, VelocityIkSolver, solve_velocity_ik
+from drake_disamb.joint_limits import JointLimits, velocity_bounds
 
 DT = 0.01
 LIMITS = JointLimits(

@@ -15,8 +15,9 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
+from drake_disamb.core.comparison import authors_dft_params, replay_trials
 from drake_disamb.core.inference import DFTParams, bayes_step, dft_mass_conserving_rhs, memory_step
-from drake_disamb.core.trials import authors_dft_params, load_trial_mat, replay_trials
+from drake_disamb.core.trial_files import load_trial_mat
 from drake_disamb.systems.inference import (
     FieldTheoreticIntentInference,
     MemoryBasedIntentInference,

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import (
-    GRIPPER_DIM,
     InterfaceConfig,
     InterfaceState,
     command_from_raw,
@@ -15,6 +14,7 @@ from drake_disamb.core.interfaces import (
     sanitize_raw,
 )
 from drake_disamb.core.interfaces.joystick import DIRECT_SELECT_DEFLECTION, sector_mode, sector_stick
+from drake_disamb.core.layout import GRIPPER_DIM
 
 DT = 0.01
 

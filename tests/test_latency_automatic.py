@@ -276,7 +276,7 @@ EE_POSE = np.array([0.0, 0.0, 0.1, *IDENTITY])
 def test_disambiguation_system_runs_the_chosen_method(method: str) -> None:
     modes = [[0], [1], [2], [3], [4], [5]]
     system = DisambiguationSystem(2, modes, method=method)
-    assert system.method == method
+    assert system.method.name == method
     context = system.CreateDefaultContext()
     belief = np.array([0.55, 0.45])
     system.GetInputPort("belief").FixValue(context, belief)
@@ -299,7 +299,9 @@ def test_disambiguation_system_runs_the_chosen_method(method: str) -> None:
 
 
 def test_disambiguation_system_rejects_an_unknown_method() -> None:
-    with pytest.raises(ValueError, match=r"method: expected one of .* got 'fisher'"):
+    with pytest.raises(
+        ValueError, match=r"mode-selection method: expected one of algorithm1, entropy, kl, got 'fisher'"
+    ):
         DisambiguationSystem(2, [[0], [1]], method="fisher")
 
 
@@ -311,14 +313,14 @@ def test_disambiguation_system_rejects_an_unknown_method() -> None:
 def test_scenario_fields_resolve() -> None:
     s = load_scenario("reaching")
     c = resolve_scenario(s)
-    assert c.disambiguation_method == "algorithm1" and c.automatic is None
+    assert c.disambiguation_method.name == "algorithm1" and c.automatic is None
     assert c.interface.request_latency == 0.0 and c.interface.serve_requests
     s.paradigm = "automatic"
     s.disambiguation.method = "kl"
     s.disambiguation.request_latency = 2.25
     s.disambiguation.automatic.request_button = False
     c = resolve_scenario(s)
-    assert c.disambiguation_method == "kl" and c.interface.request_latency == 2.25
+    assert c.disambiguation_method.name == "kl" and c.interface.request_latency == 2.25
     assert c.automatic is not None and c.automatic.confidence_threshold == c.rhos[0]  # rho1 by default
     assert not c.interface.serve_requests and c.disambiguation is not None
     s.disambiguation.automatic.confidence_threshold = 0.5

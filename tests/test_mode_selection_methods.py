@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import integrate_pose
 
 from drake_disamb.core.autonomy import potential_field_commands
 from drake_disamb.core.disambiguation import (
@@ -18,7 +19,6 @@ from drake_disamb.core.disambiguation import (
     mico_config,
     select_disambiguating_mode,
 )
-from drake_disamb.core.geometry import integrate_pose
 from drake_disamb.core.inference import dft_euler_step
 
 HEAD_ARRAY_MODES = [[0], [1], [2], [3], [4], [5]]
@@ -52,7 +52,8 @@ def _projected_beliefs_at_t_b(belief, position, goals, cfg: DisambiguationConfig
             p, x, q = np.array(belief, dtype=float), np.array(position, dtype=float), IDENTITY.copy()
             for _ in range(round(cfg.t_b / cfg.delta_t)):
                 ua = potential_field_commands(x, q, goals, quats, cfg.potential_field)
-                p = dft_euler_step(p, u, x, goals, cfg.dft, cfg.delta_t, ua if cfg.dft.agreement else None)
+                dft = cfg.inference.params
+                p = dft_euler_step(p, u, x, goals, dft, cfg.delta_t, ua if dft.agreement else None)
                 x, q = integrate_pose(x, q, u, cfg.delta_t)
             out[row, col] = p
     return out
@@ -133,14 +134,16 @@ def test_joystick_mode_scores_the_mean_over_its_probes() -> None:
 
 def test_dispatch_by_name() -> None:
     args = ([0.5, 0.5], np.zeros(3), MIRRORED, HEAD_ARRAY_MODES)
-    assert MODE_SELECTION_METHODS == ("algorithm1", "entropy", "kl")
+    assert MODE_SELECTION_METHODS.names() == ("algorithm1", "entropy", "kl")
     a1 = select_disambiguating_mode("algorithm1", *args, current_mode=0)
     np.testing.assert_array_equal(a1.mode_scores, disambiguate(*args, current_mode=0).mode_scores)
     assert a1.method == "algorithm1"
     for name in ("entropy", "kl"):
         got = select_disambiguating_mode(name, *args, current_mode=0)
         np.testing.assert_array_equal(got.mode_scores, METHODS[name](*args, current_mode=0).mode_scores)
-    with pytest.raises(ValueError, match=r"method: expected one of .* got 'fisher'"):
+    with pytest.raises(
+        ValueError, match=r"mode-selection method: expected one of algorithm1, entropy, kl, got .fisher."
+    ):
         select_disambiguating_mode("fisher", *args)
 
 

@@ -475,7 +475,7 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
 
 
 def test_the_request_decay_fit_recovers_known_parameters() -> None:
-    from drake_disamb.study.calibration import fit_request_decay
+    from drake_disamb.study.fits import fit_request_decay
 
     rng = np.random.default_rng(3)
     events = []

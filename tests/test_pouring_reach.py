@@ -20,10 +20,11 @@ from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import Solve
+from support import quat_to_matrix
 
 from drake_disamb.builder import start_ee_pose
 from drake_disamb.config import Scenario, load_scenario, scene_objects
-from drake_disamb.core.geometry import orientation_error, quat_to_matrix
+from drake_disamb.core.geometry import orientation_error
 from drake_disamb.station import (
     ARM_JOINTS,
     EE_FRAME,
@@ -33,7 +34,7 @@ from drake_disamb.station import (
     build_station,
 )
 
-# The controller: speeds of the head array (FACTS section 5), gain 2/s; success as the task's.
+# The controller: speeds of the head array (docs/facts.md section 6), gain 2/s; success as the task's.
 LINEAR_SPEED, ANGULAR_SPEED, GAIN = 0.1, 0.2, 2.0
 MAX_TIME = 20.0  # s of simulated driving per leg
 
@@ -55,7 +56,7 @@ class _Driver:
         self.ctx = self.plant.CreateDefaultContext()
         self.frame = self.plant.GetFrameByName(EE_FRAME)
         self.q_idx = [self.plant.GetJointByName(n).position_start() for n in ARM_JOINTS]
-        self.ik = DifferentialIKIntegrator(self.plant, config)
+        self.ik = DifferentialIKIntegrator(self.plant, config, geometry=station.geometry)
         self.ik_ctx = self.ik.CreateDefaultContext()
         self.period = config.control_period
 

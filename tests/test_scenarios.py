@@ -26,14 +26,14 @@ from drake_disamb.config import (
 )
 from drake_disamb.core.geometry import orientation_error
 
-FACTS_REACHING = [
+STUDY_REACHING = [
     (0.328, -0.516, 0.100),
     (-0.116, -0.579, 0.132),
     (0.124, -0.531, 0.442),
     (-0.346, -0.389, 0.220),
     (-0.376, -0.180, 0.102),
 ]
-FACTS_POURING = [
+STUDY_POURING = [
     (0.3314, -0.206, 0.100),
     (0.306, -0.550, 0.256),
     (-0.05, -0.627, 0.225),
@@ -54,11 +54,11 @@ def test_reaching_has_the_study_goals_and_defaults() -> None:
     assert s.success.position_tolerance == pytest.approx(0.02)
     assert s.success.orientation_tolerance == pytest.approx(0.15)
     assert s.n_stages == 1 and s.n_goals == 5
-    np.testing.assert_allclose([g.position for g in s.goals], FACTS_REACHING)
+    np.testing.assert_allclose([g.position for g in s.goals], STUDY_REACHING)
     poses = s.stage_goal_poses(0)
     np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0)
     # Documented orientation: home (pointing down) leaned toward the object's azimuth.
-    from drake_disamb.core.geometry import quat_to_matrix
+    from support import quat_to_matrix
 
     for pose, lean in zip(poses, [30, 35, 60, 25, 15], strict=True):
         z_axis = quat_to_matrix(pose[3:])[:, 2]
@@ -73,15 +73,15 @@ def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
     assert [st.name for st in s.stages] == ["pour", "place"]
     pour = [tuple(g.position) for g in s.stage_goals(0)]
     place = [tuple(g.position) for g in s.stage_goals(1)]
-    assert set(pour) == {FACTS_POURING[1], FACTS_POURING[3]}
-    assert set(place) == {FACTS_POURING[0], FACTS_POURING[2]}
+    assert set(pour) == {STUDY_POURING[1], STUDY_POURING[3]}
+    assert set(place) == {STUDY_POURING[0], STUDY_POURING[2]}
     assert s.carried_object is not None
     assert s.hold_time(0) == pytest.approx(1.0) and s.hold_time(1) == pytest.approx(s.success.hold_time)
     # the cup is let go at its place (the study's people ended pouring trials in the gripper mode)
     assert s.releases() == [False, True] and s.stages[1].release_opening == pytest.approx(0.10)
     # Side grasp: the cup's axis is the end-effector x axis; upright (x_E up) at the placing poses,
     # rolled about the horizontal approach axis (z_E) by 60-75 degrees at the pour poses.
-    from drake_disamb.core.geometry import quat_to_matrix
+    from support import quat_to_matrix
 
     assert s.start_joint_positions is not None
     for pose in s.stage_goal_poses(1):
@@ -223,7 +223,7 @@ def test_default_scenario_object_is_invalid_without_goals() -> None:
 
 
 # ------------------------------------------------------------------------------------------------
-# Validation that matches the README: trials it lets through can be run (issue 11, item 4)
+# Validation that matches the README: trials it lets through can be run
 # ------------------------------------------------------------------------------------------------
 
 
@@ -247,12 +247,19 @@ def _warm() -> None:
 
 
 def test_table_top_comes_from_the_station_model() -> None:
-    from drake_disamb.clearance import arm_lowest_point, table_top_z
-    from drake_disamb.station import MICO_HOME_Q
+    from drake_disamb.station import MICO_HOME_Q, build_station
+    from drake_disamb.station.geometry import model_geometry
 
-    assert table_top_z() == pytest.approx(0.0, abs=1e-12)
-    assert arm_lowest_point(MICO_HOME_Q)[0] > 0.1
-    assert arm_lowest_point(load_scenario("pouring").start_joint_positions)[0] > 0.1
+    geometry = model_geometry()
+    assert geometry.table_top == pytest.approx(0.0, abs=1e-12)
+    assert geometry.arm_lowest_point(MICO_HOME_Q)[0] > 0.1
+    assert geometry.arm_lowest_point(load_scenario("pouring").start_joint_positions)[0] > 0.1
+    # A built station measures its own plant, with the same answers.
+    own = build_station().geometry
+    assert own.plant is not geometry.plant
+    assert own.table_top == geometry.table_top
+    assert own.arm_lowest_point(MICO_HOME_Q) == geometry.arm_lowest_point(MICO_HOME_Q)
+    assert np.array_equal(own.gripper_points_in_ee(), geometry.gripper_points_in_ee())
 
 
 def test_goal_under_the_table_is_rejected() -> None:
@@ -332,8 +339,10 @@ def test_start_posture_inside_the_table_is_rejected() -> None:
 
 
 def test_start_posture_counts_the_carried_object() -> None:
-    from drake_disamb.clearance import Solid, arm_lowest_point, pose_matrix
+    from drake_disamb.clearance import Solid, pose_matrix
+    from drake_disamb.station.geometry import model_geometry
 
+    arm_lowest_point = model_geometry().arm_lowest_point
     q = load_scenario("pouring").start_joint_positions
     cup = Solid("cup", "cylinder", (0.035, 0.6), pose_matrix([0.0, 0.0, 0.0, 0.7071, 0.0, 0.7071, 0.0]))
     low, part = arm_lowest_point(q, [cup])  # a 60 cm cup, upright in the gripper 30 cm above the table
@@ -376,7 +385,7 @@ def test_period_bounds_are_inclusive() -> None:
 
 
 def test_too_many_stages_or_goals_fail_before_any_quadratic_work() -> None:
-    from drake_disamb.config import MAX_GOALS
+    from drake_disamb.core.validation import MAX_GOALS
 
     data = _reaching_dict()
     data["stages"] = [{"name": f"s{k}"} for k in range(20_000)]

@@ -375,7 +375,7 @@ def test_embedded_in_a_bigger_diagram() -> None:
 # ----------------------------------------------------------------------------------------------
 def test_diff_ik_integrator_alone(rig: Rig) -> None:
     config = StationConfig()
-    sys = DifferentialIKIntegrator(rig.station.control_plant, config)
+    sys = DifferentialIKIntegrator(rig.station.control_plant, config, geometry=rig.station.geometry)
     ctx = sys.CreateDefaultContext()
     sys.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
     # Small enough that the first step from rest meets the acceleration limits at full speed.

@@ -192,7 +192,13 @@ def test_one_trial_field_by_field() -> None:
     assert r.success is None and r.reached_goals is None and r.valid and r.source == "authors"
     assert r.assistance_onset is None  # pouring: the stage goals are not logged
     assert 0.0 < r.mean_alpha < 0.7
-    assert set(trial.trace) == {"t", "belief", "alpha", "u", "mode", "u_h", "t_u_h"}
+    assert set(trial.trace) == {
+        "t", "belief", "alpha", "u", "mode", "u_h", "t_u_h",
+        "request_mode_scores", "request_dim_scores", "request_mode_ids",
+    }  # fmt: skip
+    k = r.requests
+    assert trial.trace["request_mode_scores"].shape == (k, 6)  # the head array's arm modes
+    assert trial.trace["request_dim_scores"].shape == (k, 6) and len(trial.trace["request_mode_ids"]) == k
     n = len(trial.trace["t"])
     assert trial.trace["belief"].shape == (n, 4) and trial.trace["u"].shape == (n, 6)
     assert trial.trace["u_h"].shape[1] == 6 and len(trial.trace["t_u_h"]) == len(trial.trace["u_h"])

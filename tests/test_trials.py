@@ -14,23 +14,23 @@ import pytest
 from scipy.io import loadmat, savemat
 
 from drake_disamb.commands import inference_benchmark
-from drake_disamb.core.inference import bayes_step, dft_euler_step, memory_step, uniform_belief
-from drake_disamb.core.sampling import sample_von_mises_fisher
-from drake_disamb.core.trials import (
+from drake_disamb.core.comparison import (
     METHODS,
     PUBLISHED_ACCURACY,
-    GeneratorConfig,
-    Trial,
     authors_dft_params,
-    generate_trials,
-    iter_generated_chunks,
-    load_trial_mat,
-    load_trials,
     replay_trials,
-    save_trial_mat,
     score_trial_stream,
     score_trials,
     trial_accuracy,
+)
+from drake_disamb.core.inference import bayes_step, dft_euler_step, memory_step, uniform_belief
+from drake_disamb.core.sampling import sample_von_mises_fisher
+from drake_disamb.core.trial_files import load_trial_mat, load_trials, save_trial_mat
+from drake_disamb.core.trials import (
+    GeneratorConfig,
+    Trial,
+    generate_trials,
+    iter_generated_chunks,
 )
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"

@@ -7,8 +7,9 @@ import re
 
 import numpy as np
 import pytest
+from support import integrate_pose
 
-from drake_disamb.core.geometry import integrate_pose, quat_from_rotvec
+from drake_disamb.core.geometry import quat_from_rotvec
 from drake_disamb.core.interfaces import (
     InterfaceConfig,
     command_from_raw,

@@ -20,7 +20,7 @@ from drake_disamb.config import (
     scenario_from_dict,
     scenario_from_yaml,
 )
-from drake_disamb.core._validation import bounded_repr, check_real_range, is_real
+from drake_disamb.core.validation import bounded_repr, check_real_range, is_real
 from drake_disamb.yaml_safety import (
     MAX_YAML_BYTES,
     MAX_YAML_DEPTH,
@@ -59,7 +59,7 @@ def _bomb(levels: int = 9, key: str = "description") -> str:
 
 
 # ------------------------------------------------------------------------------------------------
-# The probes of issue 11 at the YAML level
+# Hostile inputs at the YAML level
 # ------------------------------------------------------------------------------------------------
 
 

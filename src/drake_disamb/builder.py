@@ -102,26 +102,39 @@ class SharedControlDiagram:
         sampler = self.systems["ee_pose_sampler"]
         sampler.GetMyMutableContextFromRoot(root_context).SetDiscreteState(np.asarray(station_pose))
 
+    def station_fault(self, root_context: Context) -> str:
+        """The reason of the station's latched fault in ``root_context``, or ``""`` (a simulated
+        station has no ``fault`` port and never faults)."""
+        if "fault" not in self.station.outputs:
+            return ""
+        from drake_disamb.station.lcm.faults import Fault
+
+        diagram = self.station.diagram
+        code = diagram.GetOutputPort("fault").Eval(diagram.GetMyContextFromRoot(root_context))[0]
+        return Fault(int(code)).reason
+
+    def stop_station(self) -> None:
+        """Command the arm to stop (the zero command, several times) if the station is on a wire."""
+        if self.station.link is not None:
+            self.station.link.stop_arm()
+
     def goal_names(self, stage: int) -> list[str]:
         """Goal names in belief-slot order for ``stage``."""
         return [g.name for g in self.scenario.stage_goals(stage)]
 
 
 def _make_inference(config: TrialConfig, control_period: float) -> System:
-    from drake_disamb.systems import inference as inf
+    from drake_disamb.systems.inference import inference_system
 
-    n = config.n_goals
-    if config.inference_method == "dft":
-        return inf.FieldTheoreticIntentInference(n, config.dft, control_period)
-    if config.inference_method == "bayes":  # sigma and transition: the forward projection's too
-        return inf.RecursiveBayesIntentInference(n, control_period=control_period)
-    return inf.MemoryBasedIntentInference(n, control_period=control_period)
+    # The method and its parameters are the forward projection's too.
+    return inference_system(config.inference, config.n_goals, control_period)
 
 
 def build_shared_control_diagram(
     scenario: Scenario,
     meshcat: Meshcat | None = None,
     input_source: System | None = None,
+    backend: Any = None,
 ) -> SharedControlDiagram:
     """Assemble the full shared-control diagram of ``scenario``.
 
@@ -131,17 +144,19 @@ def build_shared_control_diagram(
             active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
         input_source: A system with one 4-vector output port ``raw`` to drive the interface
             instead of the simulated user (a recorded log, a live device, a fault injector).
+        backend: The station backend (:mod:`drake_disamb.station.backends`); ``None`` is the
+            in-process simulation.
 
     Raises:
         ValueError: an invalid scenario, or a goal on top of the gripper's start position.
     """
-    from drake_disamb.station import build_station
+    from drake_disamb.station.backends import make_station
 
     config = resolve_scenario(scenario)
     n = config.n_goals
     builder = DiagramBuilder()
 
-    station = build_station(config.station, meshcat=meshcat)
+    station = make_station(backend, config.station, meshcat=meshcat)
     builder.AddSystem(station.diagram)
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])
@@ -179,7 +194,15 @@ def build_shared_control_diagram(
         user = builder.AddSystem(input_source)
         if not user.get_name():
             user.set_name("input_source")
-    builder.Connect(user.GetOutputPort("raw"), interface.GetInputPort("raw"))
+    raw = user.GetOutputPort("raw")
+    if input_source is not None and meshcat is not None and station.link is not None:
+        # A person at the page drives a real arm: losing the page releases every signal.
+        from drake_disamb.systems.deadman import PageDeadman
+
+        deadman = builder.AddNamedSystem("deadman", PageDeadman(meshcat, scenario.control_period))
+        builder.Connect(raw, deadman.GetInputPort("raw_in"))
+        raw = deadman.GetOutputPort("raw")
+    builder.Connect(raw, interface.GetInputPort("raw"))
 
     # The control loop (every scenario.control_period, 10 ms by default) sees the end-effector pose
     # sampled at its ticks (as the MICO's Cartesian interface reports it); this also keeps plant
@@ -258,7 +281,6 @@ def build_shared_control_diagram(
         systems["automatic_trigger"] = trigger
 
     if meshcat is not None:
-        from drake_disamb.clearance import table_top_z
         from drake_disamb.systems import visualization
 
         vis = builder.AddSystem(visualization.visualizer_for_scenario(meshcat, scenario, modes))
@@ -266,7 +288,7 @@ def build_shared_control_diagram(
         if vis.HasInputPort("stage"):
             builder.Connect(task.GetOutputPort("stage"), vis.GetInputPort("stage"))
         bounds = visualization.illustration_bounds(plant, station.scene_graph)
-        visualization.frame_workspace(meshcat, *bounds, work_height=table_top_z())
+        visualization.frame_workspace(meshcat, *bounds, work_height=station.geometry.table_top)
         builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
         builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
         builder.Connect(station.diagram.GetOutputPort("ee_pose"), vis.GetInputPort("ee_pose"))
@@ -298,9 +320,7 @@ def build_shared_control_diagram(
 
 
 def start_ee_pose(station: Any) -> NDArray[np.float64]:
-    """``[x, y, z, qw, qx, qy, qz]`` of the end effector in the station's default (start) state."""
-    from drake_disamb.station import EE_FRAME
-
-    plant = station.plant
-    X = plant.GetFrameByName(EE_FRAME).CalcPoseInWorld(plant.CreateDefaultContext())
-    return np.concatenate((X.translation(), X.rotation().ToQuaternion().wxyz()))
+    """``[x, y, z, qw, qx, qy, qz]`` of the end effector at the start: the station's ``ee_pose``
+    output in its default context (the simulated arm's home, or the measured arm's pose)."""
+    diagram = station.diagram
+    return np.asarray(diagram.GetOutputPort("ee_pose").Eval(diagram.CreateDefaultContext())).copy()

@@ -11,6 +11,7 @@ import sys
 COMMANDS: dict[str, str] = {
     "demo": "demo",
     "station-demo": "station_demo",
+    "mico-driver": "mico_driver",
     "inference-benchmark": "inference_benchmark",
     "disambiguate": "disambiguate",
     "study": "study",

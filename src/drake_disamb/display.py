@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference
+
 EXPLANATIONS = (
     "sphere size, opacity: goal probability",
     "at the gripper: the active mode",
@@ -152,7 +154,7 @@ def belief_caption(scenario: Any) -> str:
         "Bottom strip: disambiguation requests, manual mode switches and the stretches where the user "
         "commands the arm (u_h \u2260 0)."
     )
-    if scenario.inference.method != "dft":
+    if not issubclass(INFERENCE_METHODS.get(scenario.inference.method), DFTInference):
         return first
     dft = scenario.inference.dft
     held = ""

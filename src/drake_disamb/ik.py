@@ -1,6 +1,7 @@
-"""Direction-preserving differential inverse kinematics: joint velocities for a commanded
-end-effector twist that move the end effector along that twist and nowhere else (pure numpy, no
-pydrake).
+"""Direction-preserving differential IK: the end effector moves along the commanded twist or not at all.
+
+Joint velocities for a commanded end-effector twist that move the end effector along that twist and
+nowhere else (pure numpy, no pydrake).
 
 The station's :class:`~drake_disamb.station.DifferentialIKIntegrator` calls
 :meth:`VelocityIkSolver.solve` once per control tick with the Jacobian at the integrated set point.
@@ -8,9 +9,8 @@ Everything here works on plain arrays: ``J`` is any ``(m, n)`` Jacobian (the sta
 6 x 6 MICO Jacobian in the paper's row order ``[v; w]``) and ``V`` the commanded twist in the same
 row order and units (m/s, rad/s).
 
-The module is longer than the project's ~500 lines on purpose: it is one algorithm whose safety
-contract (below) is argued across the bounds, the speed along the command and the null-space
-pull; split into files, no one of them could be checked against the contract on its own.
+The joint limits and the box of joint velocities they allow in one step are
+:mod:`drake_disamb.joint_limits`; this module chooses the step inside that box.
 
 The safety contract
 -------------------
@@ -37,9 +37,10 @@ How a step is chosen
 --------------------
 1. **Fast path.** When ``J`` is square and ``np.linalg.solve`` gives ``v_V`` with a residual under
    ``1e-9`` (a near-singular ``J`` gives a huge but exact ``v_V``), the speed ``t`` is the largest
-   in ``[0, |V|_inf]`` for which ``t v_V`` meets every bound of :func:`velocity_bounds` (position,
-   velocity, acceleration). Near a singularity ``v_V`` grows like ``1 / sigma_min``, so the arm
-   slows smoothly to a stop as it approaches it instead of being pushed through it.
+   in ``[0, |V|_inf]`` for which ``t v_V`` meets every bound of
+   :func:`~drake_disamb.joint_limits.velocity_bounds` (position, velocity, acceleration). Near a
+   singularity ``v_V`` grows like ``1 / sigma_min``, so the arm slows smoothly to a stop as it
+   approaches it instead of being pushed through it.
 2. **Rank-deficient or non-square ``J``.** An SVD splits ``J``: directions with singular value
    above ``null_threshold`` are inverted exactly; if the command has a component outside their
    span (more than ``1e-6`` of it) no joint motion produces it and ``t = 0``: the command is
@@ -81,6 +82,8 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.joint_limits import JointLimits, finite_vector, step_bounds
+
 _RANGE_TOL = 1e-6
 """Relative part of a command outside the span of J beyond which the command is refused."""
 
@@ -110,58 +113,6 @@ class IkStatus(IntEnum):
     WORKSPACE = 6
     """The command was slowed or stopped along its own direction at the edge of the allowed
     workspace (the station's floor above the table top)."""
-
-
-@dataclass(frozen=True)
-class JointLimits:
-    """Per-joint limits, ``n`` joints.
-
-    Attributes:
-        lower, upper: Position limits (rad or m), ``lower <= upper``.
-        velocity: Speed limits (rad/s or m/s), positive; the velocity box is ``[-velocity, velocity]``.
-        acceleration: Acceleration limits (rad/s^2 or m/s^2), positive; ``inf`` disables them.
-    """
-
-    lower: NDArray[np.float64]
-    upper: NDArray[np.float64]
-    velocity: NDArray[np.float64]
-    acceleration: NDArray[np.float64]
-
-    def __post_init__(self) -> None:
-        arrays = {}
-        for name in ("lower", "upper", "velocity", "acceleration"):
-            value = getattr(self, name)
-            try:
-                a = np.array(value, dtype=float).reshape(-1)
-            except (TypeError, ValueError):
-                raise ValueError(f"JointLimits.{name}: expected numbers, got {value!r}") from None
-            arrays[name] = a
-        n = arrays["lower"].size
-        if n == 0:
-            raise ValueError("JointLimits.lower: expected at least one joint, got []")
-        for name, a in arrays.items():
-            if a.size != n:
-                raise ValueError(f"JointLimits.{name}: expected {n} numbers, got {a.tolist()}")
-            if np.any(np.isnan(a)):
-                raise ValueError(f"JointLimits.{name}: expected numbers, got {a.tolist()}")
-        if np.any(arrays["lower"] > arrays["upper"]):
-            raise ValueError(
-                f"JointLimits.upper: expected >= lower {arrays['lower'].tolist()}, "
-                f"got {arrays['upper'].tolist()}"
-            )
-        for name in ("velocity", "acceleration"):
-            a = arrays[name]
-            if np.any(~(a > 0)) or (name == "velocity" and not np.all(np.isfinite(a))):
-                kind = "finite positive" if name == "velocity" else "positive"
-                raise ValueError(f"JointLimits.{name}: expected {kind} numbers, got {a.tolist()}")
-        for name, a in arrays.items():
-            a.setflags(write=False)
-            object.__setattr__(self, name, a)
-
-    @property
-    def size(self) -> int:
-        """Number of joints."""
-        return int(self.lower.size)
 
 
 @dataclass(frozen=True)
@@ -224,8 +175,9 @@ class IkSolution:
     """One differential-IK step.
 
     Attributes:
-        v: Joint velocities (n), inside the position and velocity bounds of :func:`velocity_bounds`
-            (and inside the acceleration bounds too unless the commanded line misses them).
+        v: Joint velocities (n), inside the position and velocity bounds of
+            :func:`~drake_disamb.joint_limits.velocity_bounds` (and inside the acceleration bounds
+            too unless the commanded line misses them).
         status: How much of the command was achieved and why not all of it (:class:`IkStatus`).
         alpha: Achieved fraction of the command along it, ``(J v) . V / |V|^2`` (1 for a zero command).
         error: Relative tracking error ``|J v - alpha V| / |V|``: the motion outside the command's
@@ -241,93 +193,6 @@ class IkSolution:
     error: float
     sigma_min: float
     limiting_joints: tuple[int, ...] = ()
-
-
-def _vector(name: str, value: ArrayLike, n: int) -> NDArray[np.float64]:
-    try:
-        a = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected {n} numbers, got {value!r}") from None
-    if a.size != n:
-        raise ValueError(f"{name}: expected {n} numbers, got {a.tolist()}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: expected finite numbers, got {a.tolist()}")
-    return a
-
-
-def velocity_bounds(
-    q: ArrayLike, v_prev: ArrayLike, dt: float, limits: JointLimits, speed_factor: float = 1.0
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The box ``[lo, hi]`` of joint velocities allowed for one step of length ``dt``.
-
-    It is the intersection of the position bounds, the velocity bounds (``speed_factor`` times
-    ``limits.velocity``; a joint already faster than that slows to it at its acceleration limit)
-    and the acceleration bounds (``|v - v_prev| <= acceleration * dt``). The
-    position bounds brake: towards a limit a joint may go no faster than it can still stop on it at
-    its acceleration limit (``v <= -a dt / 2 + sqrt((a dt / 2)^2 + 2 a d)`` for a distance ``d``),
-    and never past it (``q + v dt`` inside ``[lower, upper]``). Where the acceleration interval
-    misses the position/velocity interval of a joint (e.g. moving fast right next to a limit), the
-    position/velocity bound nearest to it wins: ``lo = hi`` = that bound. ``q`` outside the
-    position limits is treated as on them (the bound then moves it back inside).
-    """
-    n = limits.size
-    q = _vector("velocity_bounds.q", q, n)
-    v_prev = _vector("velocity_bounds.v_prev", v_prev, n)
-    if not (math.isfinite(dt) and dt > 0):
-        raise ValueError(f"velocity_bounds.dt: expected a finite positive number, got {dt!r}")
-    if not (isinstance(speed_factor, int | float) and 0 < speed_factor <= 1):
-        raise ValueError(f"velocity_bounds.speed_factor: expected a number in (0, 1], got {speed_factor!r}")
-    return _bounds(q, v_prev, dt, limits, float(speed_factor))
-
-
-def _position_velocity_bounds(
-    q: NDArray[np.float64],
-    dt: float,
-    limits: JointLimits,
-    speed_factor: float,
-    v_prev: NDArray[np.float64] | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The braking position bounds and the velocity bounds (no acceleration bounds). They hold 0
-    when ``q`` is inside its limits; outside them ``lo = hi`` points back inside. The reduced
-    speed limit ``speed_factor * velocity`` is soft: a joint faster than it (``v_prev``) slows
-    down to it at its acceleration limit, not in one step."""
-    vmax = limits.velocity * speed_factor
-    if speed_factor < 1.0 and v_prev is not None:
-        ramp = np.abs(v_prev) - np.minimum(limits.acceleration, 1e12) * dt
-        vmax = np.minimum(limits.velocity, np.maximum(vmax, ramp))
-    ad = np.minimum(limits.acceleration, 1e12) * dt * 0.5
-    up = np.maximum(limits.upper - q, 0.0)
-    down = np.maximum(q - limits.lower, 0.0)
-    brake_up = np.sqrt(ad * ad + 4.0 * ad / dt * up) - ad  # sqrt((a dt/2)^2 + 2 a d) - a dt/2
-    brake_down = np.sqrt(ad * ad + 4.0 * ad / dt * down) - ad
-    hi = np.minimum(np.minimum(brake_up, up / dt), vmax)
-    lo = np.maximum(np.maximum(-brake_down, -down / dt), -vmax)
-    back_up = q < limits.lower  # outside a limit: head straight back, as fast as allowed
-    back_down = q > limits.upper
-    lo = np.where(back_up, np.minimum((limits.lower - q) / dt, vmax), lo)
-    hi = np.where(back_up, lo, hi)
-    hi = np.where(back_down, np.maximum((limits.upper - q) / dt, -vmax), hi)
-    lo = np.where(back_down, hi, lo)
-    return lo, hi
-
-
-def _bounds(
-    q: NDArray[np.float64],
-    v_prev: NDArray[np.float64],
-    dt: float,
-    limits: JointLimits,
-    speed_factor: float = 1.0,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    lo_pv, hi_pv = _position_velocity_bounds(q, dt, limits, speed_factor, v_prev)
-    da = limits.acceleration * dt
-    lo = np.maximum(lo_pv, v_prev - da)
-    hi = np.minimum(hi_pv, v_prev + da)
-    empty = lo > hi
-    if empty.any():  # the acceleration interval misses: the nearest position/velocity bound wins
-        nearest = np.where(v_prev - da > hi_pv, hi_pv, lo_pv)
-        lo = np.where(empty, nearest, lo)
-        hi = np.where(empty, nearest, hi)
-    return lo, hi
 
 
 def _speed_interval(
@@ -395,7 +260,9 @@ class VelocityIkSolver:
         self.dt = float(dt)
         self.params = params or IkParams()
         n = limits.size
-        self.q_nominal = None if q_nominal is None else _vector("VelocityIkSolver.q_nominal", q_nominal, n)
+        self.q_nominal = (
+            None if q_nominal is None else finite_vector("VelocityIkSolver.q_nominal", q_nominal, n)
+        )
         self._n = n
         # The limits as Python floats, for the per-joint loops of a step (an infinite acceleration
         # limit counts as 1e12; the weight of the nearest-point fallback is 1 / acceleration^2).
@@ -544,7 +411,7 @@ class VelocityIkSolver:
         command its speed or direction)."""
         if not v_null.any():
             return v
-        lo, hi = _bounds(q, v_prev, self.dt, self.limits)
+        lo, hi = step_bounds(q, v_prev, self.dt, self.limits)
         interval = _speed_interval(v, v_null, lo, hi)
         if interval is None or interval[0] > 1.0:
             return v
@@ -649,9 +516,9 @@ def solve_velocity_ik(
         raise ValueError(f"solve_velocity_ik.J: expected shape (m, {n}), got shape {Ja.shape}")
     if not np.all(np.isfinite(Ja)):
         raise ValueError(f"solve_velocity_ik.J: expected finite numbers, got {Ja.tolist()}")
-    Va = _vector("solve_velocity_ik.V", V, Ja.shape[0])
-    qa = _vector("solve_velocity_ik.q", q, n)
-    va = _vector("solve_velocity_ik.v_prev", v_prev, n)
+    Va = finite_vector("solve_velocity_ik.V", V, Ja.shape[0])
+    qa = finite_vector("solve_velocity_ik.q", q, n)
+    va = finite_vector("solve_velocity_ik.v_prev", v_prev, n)
     if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
         raise ValueError(f"solve_velocity_ik.dt: expected a finite positive number, got {dt!r}")
     return VelocityIkSolver(limits, dt, params, q_nominal).solve(Ja, Va, qa, va)
@@ -661,8 +528,6 @@ __all__ = [
     "IkParams",
     "IkSolution",
     "IkStatus",
-    "JointLimits",
     "VelocityIkSolver",
     "solve_velocity_ik",
-    "velocity_bounds",
 ]

@@ -8,7 +8,6 @@ probabilities on top (each goal in its own colour, the intended goal thicker and
 legend), and below them a strip with the requests, the mode switches and the stretches of
 non-zero command. Vertical lines mark the stage changes of a multi-step task and the end of the
 trial (goal reached, time limit or interruption); an optional caption explains the picture.
-:func:`plot_goal_probabilities` writes that figure to a file.
 """
 
 from __future__ import annotations
@@ -257,19 +256,6 @@ def goal_probability_figure(
     top = 0.88 if n_stages > 1 and stage_names else 0.92
     fig.subplots_adjust(left=0.11, right=right, top=top, bottom=bottom)
     return fig
-
-
-def plot_goal_probabilities(times: ArrayLike, belief: ArrayLike, path: str | Path, **kwargs: Any) -> Path:
-    """Write :func:`goal_probability_figure` (same arguments) to ``path`` (PNG, PDF, SVG ...).
-
-    Args:
-        times, belief, kwargs: As for :func:`goal_probability_figure`.
-        path: Output file; its parent directory is created.
-
-    Returns:
-        The path written.
-    """
-    return _save(goal_probability_figure(times, belief, **kwargs), path)
 
 
 def trial_outcome(result: Any) -> str:

@@ -6,7 +6,8 @@ for a while and measures, at every control step, the end effector's motion outsi
 direction: for the translation, the displacement minus its (non-negative) part along the command's
 linear velocity (all of it for a pure rotation command); for the orientation, likewise about the
 command's angular velocity. ``tests/test_station_safety.py`` asserts the limits on it and
-``benchmarks/bench_safety.py`` prints the figures.
+``benchmarks/bench_safety.py`` prints the figures, on the simulated station or over the LCM path
+(the station on a ``memq://`` bus with the simulated driver behind the messages).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pydrake.math import RotationMatrix
 from pydrake.systems.analysis import Simulator
 
 from drake_disamb.station import IkStatus, StationConfig, build_station
+from drake_disamb.station.build import Station
 
 __all__ = ["CommandHold", "HoldResult"]
 
@@ -59,16 +61,32 @@ class CommandHold:
         home_q: Start joint angles (rad, DH).
         config: Station settings (``home_q`` is replaced); defaults when ``None``.
         step: Sampling period (s) of the measurement; the station's control period by default.
+        on_wire: Hold the command over the LCM path instead: the station on a ``memq://`` bus with
+            the simulated driver (started at ``home_q``) behind the messages, both rebuilt for
+            every run (the driver's arm cannot be reset from the controller's side).
     """
 
     def __init__(
-        self, home_q: tuple[float, ...], config: StationConfig | None = None, step: float | None = None
+        self,
+        home_q: tuple[float, ...],
+        config: StationConfig | None = None,
+        step: float | None = None,
+        on_wire: bool = False,
     ) -> None:
         import dataclasses  # noqa: PLC0415
 
-        config = dataclasses.replace(config or StationConfig(), home_q=tuple(home_q))
-        self.step = float(step or config.control_period)
-        self.station = build_station(config)
+        self.config = dataclasses.replace(config or StationConfig(), home_q=tuple(home_q))
+        self.step = float(step or self.config.control_period)
+        self.on_wire = on_wire
+        self._build()
+
+    def _build(self) -> None:
+        if self.on_wire:
+            from drake_disamb.station.backends import InProcessLcm  # noqa: PLC0415
+
+            self.station: Station = InProcessLcm(lcm_url="memq://").build(self.config)
+        else:
+            self.station = build_station(self.config)
         self.sim = Simulator(self.station.diagram)
         self.ctx = self.sim.get_mutable_context()
         self.station.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [0.0])
@@ -78,12 +96,17 @@ class CommandHold:
 
     def run(self, V: NDArray[np.float64], duration: float) -> HoldResult:
         """Hold the paper-order command ``V`` (m/s, rad/s, world frame) for ``duration`` seconds."""
-        self.ctx.SetTimeStateAndParametersFrom(self._start)
-        self.sim.Initialize()
+        if self.on_wire:
+            self._build()
+        else:
+            self.ctx.SetTimeStateAndParametersFrom(self._start)
+            self.sim.Initialize()
         V = np.asarray(V, dtype=float)
         self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, V)
         pose = self.station.diagram.GetOutputPort("ee_pose")
-        status = self.station.diagram.GetOutputPort("ik_status")
+        diff_ik = self.station.diff_ik
+        status = diff_ik.GetOutputPort("ik_status")
+        status_ctx = diff_ik.GetMyContextFromRoot(self.ctx)
         scale = float(np.max(np.abs(V))) or 1.0
         v, w = V[:3] / scale, V[3:] / scale  # directions only: no overflow for a huge command
         e_v = v / np.linalg.norm(v) if v.any() else np.zeros(3)
@@ -108,7 +131,7 @@ class CommandHold:
             r.progress += along if v.any() else turn
             if k < first_second:
                 r.progress_1s = r.progress
-            r.statuses.append(IkStatus(int(status.Eval(self.ctx)[0])))
+            r.statuses.append(IkStatus(int(status.Eval(status_ctx)[0])))
             p_prev = p
         r.displacement = float(np.linalg.norm(p_prev[:3] - p0[:3]))
         return r

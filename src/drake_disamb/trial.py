@@ -56,6 +56,7 @@ class TrialResult:
         rho1: The assistance threshold used.
         interrupted: The trial was stopped early by a stop request or ``KeyboardInterrupt``
             (:func:`run_trial`); the metrics and logs cover the trial up to ``time``.
+        fault: Why a station on a wire stopped the trial (its latched fault), or ``""``.
     """
 
     scenario: Scenario
@@ -82,6 +83,7 @@ class TrialResult:
     interrupted: bool = False
     automatic_switches: int = 0
     automatic_switch_times: list[float] = field(default_factory=list)
+    fault: str = ""
 
 
 def _log(
@@ -139,6 +141,7 @@ def run_trial(
 
     bar = SimulationProgress(sc.duration) if progress is True else (progress or None)
     stopped = [False]
+    watch_fault = "fault" in handles.station.outputs
 
     def monitor(context) -> EventStatus:
         if bar is not None:
@@ -146,12 +149,14 @@ def run_trial(
         if stop_requested is not None and stop_requested():
             stopped[0] = True
             return EventStatus.ReachedTermination(task, "stop requested")
+        if watch_fault and handles.station_fault(context):
+            return EventStatus.ReachedTermination(task, "station fault")
         # ``context`` is the simulator's own root context: its task subcontext is ``task_context``.
         if stop_at_success and task.is_done(task_context):
             return EventStatus.ReachedTermination(task, "task done")
         return EventStatus.DidNothing()
 
-    if bar is not None or stop_requested is not None or stop_at_success:  # else nothing to watch
+    if bar is not None or stop_requested is not None or stop_at_success or watch_fault:
         simulator.set_monitor(monitor)
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
@@ -161,6 +166,8 @@ def run_trial(
         simulator.AdvanceTo(sc.duration)
     except KeyboardInterrupt:
         stopped[0] = True
+    finally:
+        handles.stop_station()  # on a wire: the zero command, several times (also on an exception)
     wall = _time.perf_counter() - start
     if bar is not None:
         bar.close()
@@ -210,4 +217,5 @@ def run_trial(
         interrupted=stopped[0],
         automatic_switches=len(automatic_switches),
         automatic_switch_times=automatic_switches,
+        fault=handles.station_fault(root),
     )

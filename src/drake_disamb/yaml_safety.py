@@ -12,7 +12,7 @@ check a file's size and encoding first.
 Every failure is a ``ValueError`` whose message starts with the source (a file name, or what the
 caller passes) and names the line and, where there is one, the field path, e.g.
 ``task.yaml, line 12: duplicate key 'position' in scenario.goals[1] (first at line 10)``.
-Values in messages are cut before formatting (:func:`~drake_disamb.core._validation.bounded_repr`).
+Values in messages are cut before formatting (:func:`~drake_disamb.core.validation.bounded_repr`).
 
 Limits (module constants, overridable per call):
 
@@ -35,7 +35,7 @@ from yaml.constructor import SafeConstructor
 from yaml.nodes import ScalarNode
 from yaml.resolver import Resolver
 
-from drake_disamb.core._validation import bounded_repr
+from drake_disamb.core.validation import bounded_repr
 
 MAX_YAML_BYTES: int = 1 << 20
 """Largest YAML input accepted (bytes of UTF-8); the embedded scenarios are about 5 kB."""
@@ -45,7 +45,7 @@ MAX_YAML_DEPTH: int = 32
 
 MAX_YAML_NODES: int = 50_000
 """Most values (scalars, mappings and sequences) accepted; the embedded scenarios have about 300.
-Loading costs about 10 us per value, so this bounds the loader's time too."""
+Loading time grows with the number of values, so this bounds the loader's time too."""
 
 MAX_NUMBER_CHARS: int = 100
 """Longest plain number accepted (characters); Python refuses to read an integer of over 4300 digits."""

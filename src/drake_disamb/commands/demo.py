@@ -63,6 +63,7 @@ from drake_disamb.commands._meshcat import (
 )
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
+from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
 from drake_disamb.core.interfaces import INTERFACES
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
@@ -112,6 +113,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (no recording)")
+    add_station_arguments(parser)
     add_meshcat_arguments(parser)
     add_wait_argument(parser)
     parser.add_argument(
@@ -227,6 +229,7 @@ def metrics_dict(result, live: bool = False) -> dict[str, Any]:  # noqa: ANN001 
         "mean_alpha": _finite_or_none(result.mean_alpha),
         "wall_time": float(result.wall_time),
         "realtime_rate": _finite_or_none(result.realtime_rate),
+        **({"station_fault": result.fault} if getattr(result, "fault", "") else {}),
     }
 
 
@@ -384,6 +387,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(exc)
     try:
         scenario = _scenario(args)
+        backend = station_backend(args)
     except ValueError as exc:
         return _error(exc)
 
@@ -412,8 +416,10 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     watched = meshcat is not None and (args.live or _waits_for_browser(args))
     with announce_kernel_compilation(_say):
         try:
-            handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
-        except ValueError as exc:
+            handles = build_shared_control_diagram(
+                scenario, meshcat=meshcat, input_source=source, backend=backend
+            )
+        except (ValueError, RuntimeError) as exc:
             return _error(exc)
         if watched:
             # Someone will watch from the first tick: compile (or load) every kernel now, not then.
@@ -435,6 +441,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             source.remove_controls()
     if result.interrupted:
         print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {result.time:.2f} s", flush=True)
+    if result.fault:
+        print(f"station fault at {result.time:.2f} s: {result.fault}", file=sys.stderr, flush=True)
     print(format_metrics(result))
     try:
         written = [write_metrics(result, out, live=args.live)]
@@ -450,6 +458,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         print(f"recorded trial {trial_id} of {args.subject}")
     for path in written:
         print(f"wrote {path}")
+    if result.fault:
+        return EXIT_STATION_FAULT
     if result.interrupted:
         return EXIT_INTERRUPTED
     hold = args.hold if args.hold is not None else (5.0 if watching else 0.0)

@@ -1,5 +1,5 @@
-"""``drake-disamb disambiguate``: run Algorithm 1 (or ``--method entropy | kl``) on scenes given as JSON,
-print JSON results."""
+"""``drake-disamb disambiguate``: run a mode-selection method (Algorithm 1 by default, ``--method``
+any registered one) on scenes given as JSON, print JSON results."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import json
 import re
 import reprlib
 import sys
+from collections.abc import Callable, Iterator
 from typing import Any
 
 HELP = "Choose the disambiguating control mode (Algorithm 1) for scenes given as JSON."
@@ -26,7 +27,7 @@ Case fields:
                      preference); coordinates bounded like position
   modes              [[0, 1], [2], ...]  control modes as dimension indices (0 = vx ... 5 = wz)
   current_mode       i  index of the mode in use (optional; kept on ties)
-  preset             "mico" or "authors-r3" (optional, default --preset)
+  preset             a preset's name: mico or authors-r3 (optional, default --preset)
   transition_matrix  [[...], ...]  n x n row-stochastic goal-transition matrix (optional)
 
 Result fields: "mode" (index into modes, or null when the current mode is kept), "best_mode",
@@ -94,7 +95,7 @@ _CORE_FIELD = {
     "current_mode": "current_mode",
     "transition": "transition_matrix",
     "DFTParams.transition": "transition_matrix",
-    "DisambiguationConfig.bayes_transition": "transition_matrix",
+    "BayesInference.transition": "transition_matrix",
 }
 
 
@@ -142,6 +143,32 @@ def _short(value: Any) -> str:
         return f"<{type(value).__name__}>"
 
 
+class _Registered:
+    """``argparse`` choices read from the core when first needed (parsing this sub-command, or its
+    help), so that building the command line imports no numpy: iterating gives the names."""
+
+    def __init__(self, names: Callable[[], Any]) -> None:
+        self._names = names
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._names()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names())
+
+
+def _method_names() -> Any:
+    from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
+
+    return MODE_SELECTION_METHODS
+
+
+def _preset_names() -> tuple[str, ...]:
+    from drake_disamb.core.disambiguation import PRESETS
+
+    return PRESETS
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the sub-command's options."""
     parser.description = HELP + "\n\n" + DESCRIPTION
@@ -153,15 +180,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--preset",
         default="mico",
-        choices=("mico", "authors-r3"),
-        help="Preset for cases that do not name one (default: mico).",
+        choices=_Registered(_preset_names),
+        metavar="PRESET",
+        help="Preset for cases that do not name one: %(choices)s (default: mico).",
     )
     parser.add_argument(
         "--method",
         default="algorithm1",
-        choices=("algorithm1", "entropy", "kl"),
-        help="Mode selection: the paper's Algorithm 1 (default), the minimum expected entropy or the "
-        "maximum expected KL divergence of the projected belief (same projection, same output format).",
+        choices=_Registered(_method_names),
+        metavar="METHOD",
+        help="Mode-selection method, one of %(choices)s: the paper's Algorithm 1 (default), the minimum "
+        "expected entropy or the maximum expected KL divergence of the projected belief (all on the "
+        "same projection; each result names its method).",
     )
     parser.add_argument(
         "--explain",
@@ -320,14 +350,12 @@ def _numbers(value: Any, field: str, size: int | None = None) -> list[float]:
 
 
 def _solve_case(case: Any, default_preset: str, method: str = "algorithm1") -> Any:
-    """Validate one case and run the core's ``method``; raises :class:`CaseError`."""
-    import functools
-
+    """Validate one case and run the registered mode-selection ``method``; raises :class:`CaseError`."""
     import numpy as np
 
-    from drake_disamb.core.disambiguation import disambiguate, preset, select_disambiguating_mode
+    from drake_disamb.core.disambiguation import PRESETS, make_request, mode_selection_method, preset
 
-    solve = disambiguate if method == "algorithm1" else functools.partial(select_disambiguating_mode, method)
+    chosen = mode_selection_method(method)
 
     if not isinstance(case, dict):
         raise CaseError("case", f"expected a JSON object, got {_short(case)}")
@@ -365,8 +393,8 @@ def _solve_case(case: Any, default_preset: str, method: str = "algorithm1") -> A
     if current is not None and (isinstance(current, bool) or not isinstance(current, int) or current < 0):
         raise CaseError("current_mode", f"expected a non-negative integer, got {_short(current)}")
     name = case.get("preset", default_preset)
-    if not isinstance(name, str) or name not in ("mico", "authors-r3"):
-        raise CaseError("preset", f"expected 'mico' or 'authors-r3', got {_short(name)}")
+    if not isinstance(name, str) or name not in PRESETS:
+        raise CaseError("preset", f"expected {' or '.join(map(repr, PRESETS))}, got {_short(name)}")
     transition = case.get("transition_matrix")
     if transition is not None:
         if not isinstance(transition, list) or len(transition) != len(rows):
@@ -376,7 +404,7 @@ def _solve_case(case: Any, default_preset: str, method: str = "algorithm1") -> A
         transition = [_numbers(r, "transition_matrix", len(rows)) for r in transition]
     try:
         config = preset(name, transition=transition)
-        return solve(
+        request = make_request(
             belief,
             position,
             goal_positions,
@@ -386,6 +414,7 @@ def _solve_case(case: Any, default_preset: str, method: str = "algorithm1") -> A
             goal_orientations=goal_orientations,
             current_mode=current,
         )
+        return chosen.select(request)
     except ValueError as exc:
         message = str(exc)
         prefix = message.split(":", 1)[0]

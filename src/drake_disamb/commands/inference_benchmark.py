@@ -19,7 +19,7 @@ MAX_GENERATED = 1_000_000
 HELP = "Compare DFT, recursive Bayes and memory-based intent inference on simulated trials."
 
 DESCRIPTION = """\
-Replays simulated teleoperation trials (FACTS section 3) through the three inference methods and
+Replays simulated teleoperation trials (docs/facts.md section 3) through the three inference methods and
 prints, per method, the paper's accuracy metric (the zeroed-input stretch counts as correct) and
 the strict metric (that stretch excluded), mean and standard deviation over trials.
 
@@ -79,7 +79,7 @@ def _summary(scores: dict[str, dict[str, Any]]) -> dict[str, dict[str, float]]:
 
 def format_table(summary: dict[str, dict[str, float]], n_trials: int, source: str) -> str:
     """The printed comparison table (percent, mean +/- standard deviation over trials)."""
-    from drake_disamb.core.trials import METHOD_LABELS, PUBLISHED_ACCURACY
+    from drake_disamb.core.comparison import METHOD_LABELS, PUBLISHED_ACCURACY
 
     lines = [
         f"Intent inference accuracy over {n_trials} trials ({source})",
@@ -115,7 +115,7 @@ def plot_comparison(trial, beliefs, scores, example: int, path: str | Path) -> N
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from drake_disamb.core.trials import METHOD_LABELS, METHODS
+    from drake_disamb.core.comparison import METHOD_LABELS, METHODS
     from drake_disamb.plotting import GOAL_COLORS
 
     n_trials = len(next(iter(scores.values()))["published"])
@@ -199,13 +199,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from drake_disamb.core.trials import (
-        chunk_seed,
-        iter_generated_chunks,
-        iter_loaded_chunks,
-        score_trial_stream,
-        trial_paths,
-    )
+    from drake_disamb.core.comparison import score_trial_stream
+    from drake_disamb.core.trial_files import iter_loaded_chunks, trial_paths
+    from drake_disamb.core.trials import chunk_seed, iter_generated_chunks
 
     progress = not args.quiet and sys.stderr.isatty()
     if args.generate is not None and not 1 <= args.generate <= MAX_GENERATED:

@@ -3,9 +3,13 @@
 With Meshcat it runs at real time when started from a terminal, and as fast as it can from a script
 (standard input not a terminal).
 
+``--station lcm --lcm-url URL`` drives an arm behind an LCM driver instead (a Kinova Gen2 arm's, or
+``drake-disamb mico-driver``).
+
 Exit status: 0 done, 2 bad arguments (one line on stderr naming the option and value, checked
-before anything is built, ``--out`` included), 130 stopped by Ctrl-C (SIGINT) or SIGTERM, which
-end the simulation between steps and still print where the arm got to.
+before anything is built, ``--out`` included), 3 a station fault (the arm on the wire was commanded
+to stop), 130 stopped by Ctrl-C (SIGINT) or SIGTERM, which end the simulation between steps and
+still print where the arm got to.
 """
 
 from __future__ import annotations
@@ -24,11 +28,12 @@ import numpy as np
 from drake_disamb.commands._meshcat import add_meshcat_arguments, attended, start_meshcat
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
+from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
 
 MIN_TIME_STEP = 1e-3
 """Smallest ``--time-step`` (s): finer plant steps make a demo take hours for no visible gain."""
 
-HELP = "Drive the simulated MICO through a scripted Cartesian velocity pattern (square, wrist roll, gripper)."
+HELP = "Drive the MICO (simulated, or on LCM) through a scripted Cartesian velocity pattern."
 
 
 @dataclass(frozen=True)
@@ -139,6 +144,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help=f"plant time step, s, from {MIN_TIME_STEP:g} to the control period (default: StationConfig)",
     )
+    add_station_arguments(parser)
 
 
 def _error(message: object) -> int:
@@ -192,11 +198,12 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         _check_arguments(args)
         segments = pattern(args.speed)
         out = check_output_dir(args.out, "--out")
+        backend = station_backend(args)
     except ValueError as exc:
         return _error(exc)
 
     from drake_disamb.diagram_io import write_diagram_graph
-    from drake_disamb.station import build_station
+    from drake_disamb.station.backends import make_station
 
     try:
         config = _station_config(args.time_step)
@@ -209,13 +216,17 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
-    station = build_station(config, meshcat=meshcat)
+    try:
+        station = make_station(backend, config, meshcat=meshcat)
+    except RuntimeError as exc:
+        return _error(exc)
     if meshcat is not None:
-        from drake_disamb.clearance import table_top_z
         from drake_disamb.systems.visualization import frame_workspace, illustration_bounds
 
         frame_workspace(
-            meshcat, *illustration_bounds(station.plant, station.scene_graph), work_height=table_top_z()
+            meshcat,
+            *illustration_bounds(station.plant, station.scene_graph),
+            work_height=station.geometry.table_top,
         )
     try:
         written = write_diagram_graph(station.diagram, out / "station")
@@ -233,12 +244,16 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         stopped = run_pattern(station, simulator, args.duration, segments, stop_requested=stop)
     except KeyboardInterrupt:
         stopped = True
+    finally:
+        if station.link is not None:  # on a wire: the zero command, several times
+            station.link.stop_arm()
     wall = time.perf_counter() - wall
     simulated = ctx.get_time() - t0
     if stopped:
         print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {simulated:.2f} s", flush=True)
     p1 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
-    status = int(station.diagram.GetOutputPort("ik_status").Eval(ctx)[0])
+    diff_ik = station.diff_ik
+    status = int(diff_ik.GetOutputPort("ik_status").Eval(diff_ik.GetMyContextFromRoot(ctx))[0])
     np.set_printoptions(precision=4, suppress=True)
     print(f"start EE position  {p0[:3]} m, final {p1[:3]} m")
     print(
@@ -250,6 +265,12 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     )
     rate = f"{simulated / wall:.2f}" if wall > 0 else "inf"
     print(f"simulated {simulated:.2f} s in {wall:.2f} s wall: real-time rate {rate}")
+    if "fault" in station.outputs and station.diagram.GetOutputPort("fault").Eval(ctx)[0]:
+        from drake_disamb.station.lcm.faults import Fault
+
+        fault = Fault(int(station.diagram.GetOutputPort("fault").Eval(ctx)[0]))
+        print(f"station fault: {fault.reason}", file=sys.stderr, flush=True)
+        return EXIT_STATION_FAULT
     if stopped:
         return EXIT_INTERRUPTED
     if meshcat is not None and args.hold > 0 and not stop:

@@ -18,6 +18,7 @@ STUDY_COMMANDS: dict[str, str] = {
     "report": "study_report",
     "import-authors": "study_import_authors",
     "calibrate": "study_calibrate",
+    "identify": "study_identify",
 }
 
 

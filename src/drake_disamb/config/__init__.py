@@ -21,7 +21,6 @@ from drake_disamb.config.resolve import TrialConfig, resolve_scenario, scene_obj
 from drake_disamb.config.schema import (
     INFERENCE_METHODS,
     INTERFACES,
-    MAX_GOALS,
     PARADIGMS,
     AutomaticSpec,
     BlendingSpec,
@@ -61,7 +60,6 @@ __all__ = [
     "EMBEDDED_TASKS",
     "INFERENCE_METHODS",
     "INTERFACES",
-    "MAX_GOALS",
     "MICO_REACH",
     "MICO_SHOULDER_POSITION",
     "MIN_START_CLEARANCE",

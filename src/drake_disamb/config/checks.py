@@ -17,7 +17,7 @@ an integer (not a bool); a ``bool`` true or false; a ``str`` a string (one of th
 ``choices``, when it has them); a ``list`` a list (of one of the field's ``size`` lengths and at
 most ``max_items`` long, when given); ``X | None`` also ``None``; a dataclass or Drake struct a
 mapping with no unknown key and every ``required`` key. Values in messages are cut
-(:func:`~drake_disamb.core._validation.bounded_repr`).
+(:func:`~drake_disamb.core.validation.bounded_repr`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import types
 import typing
 from typing import Any
 
-from drake_disamb.core._validation import bounded_repr, is_real
+from drake_disamb.core.validation import bounded_repr, is_real
 
 
 def fmt(value: Any) -> str:

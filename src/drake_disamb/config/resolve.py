@@ -4,19 +4,24 @@
 and returns a :class:`TrialConfig`:
 
 - the blending thresholds ``(rho1, rho2, rho3)``, resolved once for the scenario's number of goals
-  (:func:`~drake_disamb.core.blending.resolve_rhos`, the paper's ``1.2 / n`` and ``1.4 / n`` where
-  the scenario leaves them out): the blender gets them written out, the simulated user its
+  (:meth:`~drake_disamb.core.blending.BlendingConfig.rhos`, the paper's ``1.2 / n`` and ``1.4 / n``
+  where the scenario leaves them out, or ``1 / n`` plus ``rho1_above_uniform`` /
+  ``rho2_above_uniform``): the blender gets them written out, the simulated user its
   ``rho1``, the trial result reports ``rho1``;
 - the DFT parameters and the potential field, one instance each, shared by the live inference,
   the autonomy and the disambiguation's forward projection. Whatever the preset, the projection
   runs the live belief update: the preset fixes how it probes (dimensions, probe speeds, step,
   horizons, weights), and its method, DFT parameters (with ``inference.agreement``, the agreement
   term's form) and potential field are replaced by the scenario's, as is its Upsilon normalisation
-  when ``disambiguation.upsilon_normalization`` is set. The ``memory`` method has no forward
-  projection, so the disambiguation paradigm refuses it;
-- the mode-selection method, the request latency (the interface's: it delays the switch) and, in
-  the Automatic paradigm, the trigger (its ``confidence_threshold`` written out as ``rho1`` when
-  left out; without its request button the interface logs presses but serves none);
+  when ``disambiguation.upsilon_normalization`` is set. The live inference and the projection
+  hold the very same inference method (with its parameters). A method without a forward
+  projection (``memory``) is refused by the disambiguation paradigm;
+- the inference method and the mode-selection method (the registered variants the scenario
+  names, :data:`~drake_disamb.core.inference.INFERENCE_METHODS` and
+  :data:`~drake_disamb.core.disambiguation.MODE_SELECTION_METHODS`), the request latency (the
+  interface's: it delays the switch) and, in the Automatic paradigm, the trigger (its
+  ``confidence_threshold`` written out as ``rho1`` when left out; without its request
+  button the interface logs presses but serves none);
 - the interface's mode selection (``interface_mode_selection``: the joystick's; the head array
   always cycles);
 - the simulated user's config (its seed is the scenario's; in the manual and automatic paradigms
@@ -40,14 +45,19 @@ import numpy as np
 from drake_disamb.config.checks import cut, fmt
 from drake_disamb.config.schema import Scenario
 from drake_disamb.config.validation import check_scenario
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
-from drake_disamb.core.blending import BlendingConfig, resolve_rhos
-from drake_disamb.core.disambiguation import DisambiguationConfig, preset
-from drake_disamb.core.inference import DFTParams
+from drake_disamb.core.blending import BlendingConfig
+from drake_disamb.core.disambiguation import (
+    DisambiguationConfig,
+    ModeSelectionMethod,
+    mode_selection_method,
+    preset,
+)
+from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
 from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS, InterfaceConfig
 from drake_disamb.core.user import UserConfig
+from drake_disamb.core.validation import is_real
 
 T = TypeVar("T")
 
@@ -63,12 +73,13 @@ class TrialConfig:
         blending: The blender's config, ``rho1`` and ``rho2`` written out.
         autonomy: The potential field of the autonomy, the live inference's agreement term and the
             forward projection.
-        inference_method: ``"dft"``, ``"bayes"`` or ``"memory"``.
-        dft: The DFT parameters of the live inference and of the forward projection (the agreement
-            term's form from ``inference.agreement``).
+        inference: The live inference's method with its parameters (for the DFT the scenario's
+            ``inference.dft``, the agreement term's form from ``inference.agreement``); the forward
+            projection runs this same method.
         disambiguation: The forward projection's config (``None`` in the manual paradigm): the
-            preset's probing with the live inference's method, ``dft`` and ``autonomy``.
-        disambiguation_method: The mode-selection method (``"algorithm1"``, ``"entropy"``, ``"kl"``).
+            preset's probing with ``inference`` and ``autonomy``.
+        disambiguation_method: The mode-selection method (the variant ``disambiguation.method``
+            names).
         automatic: The Automatic paradigm's trigger, ``confidence_threshold`` written out
             (``None`` in the other paradigms).
         user: The simulated user's config (seed and ``rho1`` set).
@@ -83,15 +94,14 @@ class TrialConfig:
     rhos: tuple[float, float, float]
     blending: BlendingConfig
     autonomy: PotentialFieldConfig
-    inference_method: str
-    dft: DFTParams
+    inference: InferenceMethod
     disambiguation: DisambiguationConfig | None
     user: UserConfig
     user_goals: tuple[int, ...]
     interface: InterfaceConfig
     station: Any
     simulator: Any
-    disambiguation_method: str = "algorithm1"
+    disambiguation_method: ModeSelectionMethod
     automatic: AutomaticConfig | None = None
 
 
@@ -114,31 +124,33 @@ def _check_dft_sizes(dft: DFTParams, n: int, path: str) -> None:
 
 def projection_config(
     preset_name: str,
-    method: str,
-    dft: DFTParams,
+    method: InferenceMethod,
     autonomy: PotentialFieldConfig,
     path: str = "scenario",
     upsilon_normalization: str | None = None,
 ) -> DisambiguationConfig:
-    """The forward projection's config: preset ``preset_name``'s probing, the live belief update.
+    """The forward projection's config: preset ``preset_name``'s probing, the live belief update
+    ``method`` (the same instance the live inference runs).
 
     ``upsilon_normalization`` replaces the preset's unless ``None``.
 
     Raises:
-        ValueError: for the ``memory`` method, which has no forward projection.
+        ValueError: for a method without a forward projection (``memory``).
     """
-    if method == "memory":
+    if not isinstance(method, ProjectedInference):
+        projected = [repr(m.name) for m in INFERENCE_METHODS.variants() if issubclass(m, ProjectedInference)]
+        names = " and ".join(filter(None, (", ".join(projected[:-1]), projected[-1])))
         raise ValueError(
             f"{path}.inference.method: the disambiguation paradigm projects the belief forward with the "
-            f"live inference's update, which exists for 'dft' and 'bayes' (use the manual paradigm), "
-            f"got 'memory'"
+            f"live inference's update, which exists for {names} (use the manual paradigm), "
+            f"got {method.name!r}"
         )
     base = preset(preset_name)
     ups = base.upsilon_normalization if upsilon_normalization is None else upsilon_normalization
     return _named(
         f"{path}.disambiguation",
         lambda: dataclasses.replace(
-            base, inference=method, dft=dft, potential_field=autonomy, upsilon_normalization=ups
+            base, inference=method, potential_field=autonomy, upsilon_normalization=ups
         ),
     )
 
@@ -156,13 +168,18 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     check_scenario(s, name)
     n = s.n_goals
     blending = _named(f"{name}.blending", s.blending.to_config)
-    rhos = _named(f"{name}.blending", lambda: resolve_rhos(n, blending.rho1, blending.rho2, blending.rho3))
-    blending = dataclasses.replace(blending, rho1=rhos[0], rho2=rhos[1])
+    rhos = _named(f"{name}.blending", lambda: blending.rhos(n))
+    blending = dataclasses.replace(
+        blending, rho1=rhos[0], rho2=rhos[1], rho1_above_uniform=None, rho2_above_uniform=None
+    )
     autonomy = _named(f"{name}.autonomy", s.autonomy.to_config)
     dft = _named(
         f"{name}.inference.dft", lambda: s.inference.dft.to_config(agreement_measure=s.inference.agreement)
     )
     _check_dft_sizes(dft, n, f"{name}.inference.dft")
+    inference = _named(
+        f"{name}.inference.method", lambda: INFERENCE_METHODS.get(s.inference.method).from_settings(dft)
+    )
     user = _named(f"{name}.user.config", lambda: s.user.config.to_config(seed=s.seed, rho1=rhos[0]))
     disambiguation = None
     if s.paradigm != "disambiguation":
@@ -173,8 +190,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
     if s.paradigm != "manual":
         disambiguation = projection_config(
             s.disambiguation.preset,
-            s.inference.method,
-            dft,
+            inference,
             autonomy,
             name,
             s.disambiguation.upsilon_normalization,
@@ -222,15 +238,16 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         rhos=rhos,
         blending=blending,
         autonomy=autonomy,
-        inference_method=s.inference.method,
-        dft=dft,
+        inference=inference,
         disambiguation=disambiguation,
         user=user,
         user_goals=tuple(s.belief_slot(k, int(g)) for k, g in enumerate(s.user.goals)),
         interface=interface,
         station=station,
         simulator=copy.copy(s.simulator_config),
-        disambiguation_method=s.disambiguation.method,
+        disambiguation_method=_named(
+            f"{name}.disambiguation.method", lambda: mode_selection_method(s.disambiguation.method)
+        ),
         automatic=automatic,
     )
 

@@ -45,28 +45,21 @@ from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
-from drake_disamb.core.inference import AGREEMENT_MEASURES, DFTParams
+from drake_disamb.core.inference import AGREEMENT_MEASURES, INFERENCE_METHODS, DFTParams
 from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS
+from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.user import UserConfig
+from drake_disamb.core.validation import MAX_GOALS
 from drake_disamb.station import default_plant_config
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
 
-INFERENCE_METHODS: tuple[str, ...] = ("dft", "bayes", "memory")
-"""Intent-inference methods accepted by :attr:`InferenceSpec.method`."""
-
 GOAL_SETS: tuple[str, ...] = ("stage", "task")
 """What the belief is over (:attr:`InferenceSpec.goal_set`)."""
 
-SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
-"""Object shapes; their ``size`` has 3, 2 and 1 entries (:data:`SHAPE_SIZES`)."""
-
-SHAPE_SIZES: dict[str, int] = {"box": 3, "cylinder": 2, "sphere": 1}
-"""Entries of an object's ``size`` per shape."""
-
-MAX_GOALS: int = 100
-"""Most goals a scenario may have (all stages together); the study's tasks have 4 and 5."""
+SHAPES: tuple[str, ...] = tuple(SHAPE_SIZES)
+"""Object shapes; their ``size`` entries are :data:`drake_disamb.core.layout.SHAPE_SIZES`."""
 
 
 def _meta(**kwargs: Any) -> dict[str, Any]:
@@ -242,7 +235,8 @@ class InferenceSpec:
     """Intent inference.
 
     Attributes:
-        method: ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
+        method: A name registered in :data:`drake_disamb.core.inference.INFERENCE_METHODS`:
+            ``"dft"`` (field-theoretic, continuous state), ``"bayes"`` or ``"memory"``.
         dft: Parameters of the field-theoretic update (default the ``mico`` preset's). The
             disambiguation's forward projection runs the same update with the same parameters.
         agreement: Form of the DFT's agreement term (when ``dft.agreement`` is on), live and in
@@ -278,10 +272,10 @@ class DisambiguationSpec:
             speeds, step and horizons, weights). The belief update it projects with is always the
             live one: the method and DFT parameters of :attr:`Scenario.inference` and the
             potential field of :attr:`Scenario.autonomy` replace the preset's own.
-        method: How the mode is chosen from the forward projection: ``"algorithm1"`` (the paper),
-            ``"entropy"`` (minimum expected entropy of the projected belief) or ``"kl"`` (maximum
-            expected KL divergence from the current belief); see
-            :func:`drake_disamb.core.disambiguation.select_disambiguating_mode`.
+        method: How the mode is chosen from the forward projection, a name registered in
+            :data:`drake_disamb.core.disambiguation.MODE_SELECTION_METHODS`: ``"algorithm1"`` (the
+            paper), ``"entropy"`` (minimum expected entropy of the projected belief) or ``"kl"``
+            (maximum expected KL divergence from the current belief).
         request_latency: Seconds (finite, >= 0) from a request press (or an automatic trigger) to
             the mode switch; the mode is the one chosen at the switch time. The paper's system took
             2 to 2.5 s; 0 (default) switches in the press's control tick.
@@ -373,8 +367,8 @@ class Scenario:
         plant_config: Drake's ``MultibodyPlantConfig`` of the arm (SAP, joint PD). Its
             ``time_step`` (s, in [1 ms, 100 ms] and at most the control period) defaults to the
             control period: the arm only receives new set points every control tick, the PD is
-            integrated implicitly, and the loop runs about 8 times faster than with a 1 ms plant
-            (``benchmarks/bench_loop.py`` prints both); 0.001 resolves contact finer.
+            integrated implicitly, and the loop runs several times faster than with a 1 ms plant
+            (``benchmarks/bench_loop.py --time-step 0.001`` prints it); 0.001 resolves contact finer.
         duration: Simulated-time limit (s) of a trial.
         success: Success tolerance.
         seed: Seed of every random draw in the trial.

@@ -6,10 +6,10 @@ an unknown key, a wrong type, a NaN or infinite number, a vector of the wrong le
 that is not one of its field's choices). Then:
 
 - a ``control_period`` or ``plant_config.time_step`` outside [1 ms, 100 ms]
-  (:data:`~drake_disamb.core._validation.TIME_STEP_RANGE`), a plant step above the period, or a
+  (:data:`~drake_disamb.core.validation.TIME_STEP_RANGE`), a plant step above the period, or a
   ``plant_config`` the station cannot use (:func:`drake_disamb.station.check_plant_config`);
 - a ``simulator_config`` Drake would refuse, or that does not start at t = 0;
-- no goal, more than :data:`~drake_disamb.config.schema.MAX_GOALS` goals, more stages than goals,
+- no goal, more than :data:`~drake_disamb.core.validation.MAX_GOALS` goals, more stages than goals,
   stages with different numbers of goals;
 - a goal out of the arm's reach (:data:`MICO_REACH` from the shoulder);
 - a goal below the table: with the end effector at the goal pose, the gripper (closed or open) and
@@ -20,7 +20,7 @@ that is not one of its field's choices). Then:
   one can count as reaching the other, and each goal's repeller pushes the arm off the other;
 - start joint angles outside the joint limits, or that put a link, a finger or the carried object
   less than :data:`MIN_TABLE_CLEARANCE` above the table top (forward kinematics of the station's
-  model, :mod:`drake_disamb.clearance`);
+  model, :mod:`drake_disamb.station.geometry`);
 - a simulated user whose intended goals or success tolerances do not fit the task.
 
 Every error is a ``ValueError`` naming the field path and the value, e.g.
@@ -37,14 +37,16 @@ from typing import Any
 import numpy as np
 
 from drake_disamb.config.checks import check_data, fmt
-from drake_disamb.config.schema import MAX_GOALS, SHAPE_SIZES, Scenario, SuccessSpec, to_plain
-from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
+from drake_disamb.config.schema import Scenario, SuccessSpec, to_plain
+from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference
+from drake_disamb.core.layout import SHAPE_SIZES
+from drake_disamb.core.validation import MAX_GOALS, TIME_STEP_RANGE, check_real_range
 
 MICO_SHOULDER_POSITION: tuple[float, float, float] = (0.0, 0.0, 0.2755)
-"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (FACTS section 7)."""
+"""Position (m, in W) of the MICO's shoulder joint: D1 above the base (docs/facts.md section 8)."""
 
 MICO_REACH: float = 0.7
-"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (FACTS section 7)."""
+"""Radius (m) about the shoulder beyond which a goal is rejected as out of reach (docs/facts.md section 8)."""
 
 MIN_START_CLEARANCE: float = 0.05
 """A goal closer than this (m) to the gripper's start position is rejected: the task would be trivial."""
@@ -131,7 +133,11 @@ def _check_belief_integrator(s: Scenario, name: str) -> None:
     Euler to a negative belief and costing it 2 points of accuracy)."""
     c = s.simulator_config
     limit = FIXED_STEP_STABILITY.get(c.integration_scheme)
-    if s.inference.method != "dft" or c.use_error_control or limit is None:
+    if (
+        not issubclass(INFERENCE_METHODS.get(s.inference.method), DFTInference)
+        or c.use_error_control
+        or limit is None
+    ):
         return
     rate = belief_rate_bound(s)
     if c.max_step_size * rate > limit:
@@ -182,8 +188,8 @@ def _solid(label: str, obj: Any, pose: Sequence[float]) -> Any:
 def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     """Check every field and cross-field constraint of ``scenario`` (see the module docstring).
 
-    The table and start-posture checks use the station's model (:mod:`drake_disamb.clearance`,
-    which imports pydrake).
+    The table and start-posture checks use the station's model
+    (:func:`drake_disamb.station.geometry.model_geometry`, which imports pydrake).
 
     Raises:
         ValueError: naming the field path (``scenario.goals[2].position`` ...) and the value.
@@ -234,9 +240,11 @@ def _check_release(opening: float, path: str) -> None:
 
 
 def _check_goals(s: Scenario, held: Sequence[Any], name: str) -> None:
-    from drake_disamb import clearance  # pydrake: imported when a scenario with goals is checked
+    from drake_disamb import clearance
+    from drake_disamb.station.geometry import model_geometry  # pydrake: imported when goals are checked
 
-    table = clearance.table_top_z()
+    geometry = model_geometry()
+    table = geometry.table_top
     names: set[str] = set()
     shoulder = np.asarray(MICO_SHOULDER_POSITION)
     for i, g in enumerate(s.goals):
@@ -251,7 +259,7 @@ def _check_goals(s: Scenario, held: Sequence[Any], name: str) -> None:
                 f"{path}.stage: expected a stage index in [0, {len(s.stages) - 1}], got {fmt(g.stage)}"
             )
         _check_object(g.object, f"{path}.object")
-        low, part = clearance.gripper_lowest_point([*pos, *g.orientation], held)
+        low, part = geometry.gripper_lowest_point([*pos, *g.orientation], held)
         if low < table + MIN_TABLE_CLEARANCE:
             raise ValueError(
                 f"{path}.position: goal {fmt(g.name)} is too low: with the end effector there, "
@@ -327,17 +335,18 @@ def _check_separation(s: Scenario, name: str) -> None:
 
 def _check_start_posture(q: Sequence[float], held: Sequence[Any], path: str) -> None:
     """Reject start joint angles outside the joint limits or that put the arm into the table."""
-    from drake_disamb import clearance
+    from drake_disamb.station.geometry import model_geometry
 
-    table = clearance.table_top_z()
-    lower, upper = clearance.arm_joint_limits()
+    geometry = model_geometry()
+    table = geometry.table_top
+    lower, upper = geometry.joint_limits()
     for k, (v, lo, hi) in enumerate(zip(q, lower, upper, strict=True)):
         if not lo <= v <= hi:
             raise ValueError(
                 f"{path}[{k}]: expected an angle within joint {k + 1}'s limits [{lo:.4f}, {hi:.4f}] rad, "
                 f"got {fmt(v)}"
             )
-    low, part = clearance.arm_lowest_point(q, held)
+    low, part = geometry.arm_lowest_point(q, held)
     if low < table + MIN_TABLE_CLEARANCE:
         raise ValueError(
             f"{path}: the start posture puts {part} at z = {low:.4f} m, less than {MIN_TABLE_CLEARANCE} m "

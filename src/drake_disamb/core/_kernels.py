@@ -26,7 +26,7 @@ _SMALL_ANGLE = 1e-8
 
 
 # ----------------------------------------------------------------------------------------------
-# Checks of a control tick's inputs (used by _validation and geometry)
+# Checks of a control tick's inputs (used by validation and geometry)
 # ----------------------------------------------------------------------------------------------
 
 
@@ -224,7 +224,7 @@ def _cosine_to_unit(
 ) -> tuple[float, float]:  # pragma: no cover - compiled
     """``((v / |v|) . w, |v|)`` for a unit (or zero) ``w``; 0 where ``v = 0``.
 
-    As ``inference._safe_unit``: when ``|v|`` is not finite, non-finite components of ``v`` are read as
+    As ``inference.belief.safe_unit``: when ``|v|`` is not finite, non-finite components of ``v`` are read as
     0 and ``v`` is first divided by its largest absolute component. The returned length is the
     plain one (``inf`` or NaN then).
     """
@@ -407,7 +407,7 @@ def _guard_row(p, r, guard_rate, f):  # pragma: no cover - compiled
 @njit(cache=True)
 def _euler_rows(p, p0, drive, d0, P, tau1, dt, out, o0, B):  # pragma: no cover - compiled
     """``out[o0 + r] = normalize(p[p0 + r] + dt (drive[d0 + r] - P^T p[p0 + r] / tau1))`` for
-    ``r < B`` (rows of 2-D arrays; ``P`` and ``dt`` per row or shared, see ``inference._BeliefRows``)."""
+    ``r < B`` (rows of 2-D arrays; ``P`` and ``dt`` per row or shared, see ``inference.dft._BeliefRows``)."""
     n = out.shape[1]
     for r in range(B):
         h = dt[r] if dt.shape[0] > 1 else dt[0]

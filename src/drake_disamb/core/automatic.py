@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from drake_disamb.core._validation import bounded_repr, check_real_fields, is_real
+from drake_disamb.core.validation import bounded_repr, check_real_fields, is_real
 
 COMMAND_THRESHOLD = 1e-9
 """A command counts as given when some entry of ``u_h`` exceeds this (m/s or rad/s), as in the trial's

@@ -2,7 +2,7 @@
 
 Paper, Section "Shared Control": every goal ``g`` has a potential field that treats ``g`` as an
 attractor and every *other* goal as a repeller; the autonomy command is the sum of the attractor
-and repeller velocities, in the full 6-D Cartesian space (FACTS section 6). For goal ``i``::
+and repeller velocities, in the full 6-D Cartesian space. For goal ``i``::
 
     v_i = k_t (x_gi - x_r) + sum_{j != i, |x_r - x_gj| < rho} (x_r - x_gj) / (mu |x_r - x_gj|^2)
     w_i = k_r * orientation_error(q_r, q_gi)
@@ -27,12 +27,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _field_one_pose, _field_rows
-from drake_disamb.core._validation import all_finite, check_real_fields
 from drake_disamb.core.geometry import (
     check_vectors,
     normalized_quaternions,
 )
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
+from drake_disamb.core.validation import all_finite, check_real_fields
 
 REPELLER_SPEED_CAP_FACTOR = 1e3
 """A single repeller's speed is capped at this multiple of ``max_linear_speed`` (keeps it finite)."""
@@ -51,7 +51,7 @@ class PotentialFieldConfig:
         max_linear_speed: Saturation of the translational part (m/s).
         max_angular_speed: Saturation of the rotational part (rad/s).
 
-    The defaults suit the MICO tasks (goals 0.2-0.4 m apart, FACTS section 8): 1/s attractors reach
+    The defaults suit the MICO tasks (goals 0.2-0.4 m apart, docs/facts.md section 9): 1/s attractors reach
     the 0.2 m/s cap farther than 0.2 m from the goal and slow down smoothly inside it; a repeller
     felt within 0.1 m pushes at 0.02 m/s at its edge and at the full 0.2 m/s 1 cm from a goal.
     """
@@ -123,7 +123,7 @@ def _commands_from_one_pose(
     """:func:`_field` for one pose ``(7,)`` and ``(n, 7)`` goal poses (finite, quaternions of norm at
     least 1e-12) in one compiled call (:func:`~drake_disamb.core._kernels._field_one_pose`): the
     same kernels, in the same order, on the same numbers as normalising the quaternions
-    (:func:`~drake_disamb.core.geometry.normalized_quaternions_unchecked`) and laying out the rows
+    (:func:`~drake_disamb.core._kernels._normalize_quaternion_rows`) and laying out the rows
     first, without that work in numpy (a control loop computes one row per tick)."""
     out = np.empty((1, goal_poses.shape[0], 6))
     _field_one_pose(np.ascontiguousarray(ee_pose), np.ascontiguousarray(goal_poses), *_gains(config), out)
@@ -205,7 +205,7 @@ def potential_field_commands_from_poses(
     shapes are the caller's business (a Drake port fixes them). A non-finite entry or a (near) zero
     quaternion is a ``ValueError`` naming the argument, as there. ``checked=False`` skips those
     checks: the caller has already checked the poses (every entry finite, each quaternion's norm
-    at least 1e-12 and finite, e.g. :func:`drake_disamb.systems.sanitized.usable_poses`), and they
+    at least 1e-12 and finite, e.g. :func:`drake_disamb.system_helpers.sanitized.usable_poses`), and they
     are not checked twice per control tick.
     """
     if not checked:

@@ -1,6 +1,6 @@
 """Blending-based shared control (numpy, with a numba-compiled row kernel).
 
-Paper, equations (sc) and (alpha) (FACTS section 6)::
+Paper, Section "Study Methods" (Shared Control), equation (sc) and the alpha rule after it::
 
     u = alpha * u_{a, g*} + (1 - alpha) * u_h,        g* = argmax_i p_i
 
@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import _alpha_rows, _blend_rows, _has_input_rows, _shared_control_rows
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.rows import as_rows, batch_shape
+from drake_disamb.core.validation import check_real_fields, is_real
 
 RHO1_TIMES_N = 1.2
 """Paper default: ``rho1 = 1.2 / n_g``."""
@@ -160,9 +160,13 @@ class BlendingConfig:
             blending.assist_without_input=true``), the paper's law fails reaching trials the
             default completes (README, "Where we differ from the paper").
         max_linear_speed: Limit (m/s) on the norm of the blended translation. The default is the
-            largest blended translation seen in the study logs (FACTS section 5).
+            largest blended translation seen in the study logs (docs/facts.md section 6).
         max_angular_speed: Limit (rad/s) on the norm of the blended rotation; default the largest
             joystick rotation in the logs.
+        rho1_above_uniform: With ``rho1`` left out, ``rho1 = 1 / n_goals + rho1_above_uniform``
+            instead of the paper's ``1.2 / n_goals`` (the study's system: 0.05, which its logs show
+            for 4 and 5 goals; ``drake-disamb study identify``). ``None``: the paper's.
+        rho2_above_uniform: The same for ``rho2`` (the study's system: 0.10).
     """
 
     rho1: float | None = None
@@ -171,9 +175,24 @@ class BlendingConfig:
     assist_without_input: bool = False
     max_linear_speed: float = 0.26
     max_angular_speed: float = 0.67
+    rho1_above_uniform: float | None = None
+    rho2_above_uniform: float | None = None
 
     def __post_init__(self) -> None:
         check_real_fields(self, ("max_linear_speed", "max_angular_speed"))
+        for name, explicit in (("rho1", self.rho1), ("rho2", self.rho2)):
+            margin = getattr(self, f"{name}_above_uniform")
+            if margin is None:
+                continue
+            if not (is_real(margin) and -1.0 <= margin <= 1.0):
+                raise ValueError(
+                    f"BlendingConfig.{name}_above_uniform: expected a number in [-1, 1], got {margin!r}"
+                )
+            if explicit is not None:
+                raise ValueError(
+                    f"BlendingConfig.{name}_above_uniform: give {name} or {name}_above_uniform, not both "
+                    f"(got {name}={explicit!r} and {name}_above_uniform={margin!r})"
+                )
         if not isinstance(self.assist_without_input, bool):
             raise ValueError(
                 "BlendingConfig.assist_without_input: expected True or False, "
@@ -181,8 +200,16 @@ class BlendingConfig:
             )
 
     def rhos(self, n_goals: int) -> tuple[float, float, float]:
-        """``(rho1, rho2, rho3)`` for ``n_goals`` goals (validated)."""
-        return resolve_rhos(n_goals, self.rho1, self.rho2, self.rho3)
+        """``(rho1, rho2, rho3)`` for ``n_goals`` goals (validated), the ``*_above_uniform``
+        margins written out as ``1 / n_goals + margin``."""
+        r1, r2 = self.rho1, self.rho2
+        if self.rho1_above_uniform is not None or self.rho2_above_uniform is not None:
+            resolve_rhos(n_goals, 0.0, 1.0)  # checks n_goals before dividing by it
+        if self.rho1_above_uniform is not None:
+            r1 = 1.0 / n_goals + self.rho1_above_uniform
+        if self.rho2_above_uniform is not None:
+            r2 = 1.0 / n_goals + self.rho2_above_uniform
+        return resolve_rhos(n_goals, r1, r2, self.rho3)
 
 
 def shared_control(

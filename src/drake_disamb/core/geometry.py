@@ -32,15 +32,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core._kernels import (
     _SMALL_ANGLE,
-    _normalize_quaternion_rows,
     _orientation_error_rows,
     _pose_error_rows,
     _quat_multiply_rows,
     _rotvec_rows,
     _usable_pose_rows,
 )
-from drake_disamb.core._validation import all_finite
 from drake_disamb.core.rows import as_rows, batch_shape
+from drake_disamb.core.validation import all_finite
 
 # ----------------------------------------------------------------------------------------------
 # Validation
@@ -80,17 +79,6 @@ def normalized_quaternions(q: ArrayLike, name: str) -> NDArray[np.float64]:
 def _quaternion_norms(a: NDArray[np.float64]) -> NDArray[np.float64]:
     """Norms of quaternions ``(..., 4)``, keepdims (what ``np.linalg.norm`` computes)."""
     return np.sqrt(np.add.reduce(a * a, axis=-1, keepdims=True))
-
-
-def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """:func:`normalized_quaternions` without its checks: ``q`` is a float array ``(..., 4)`` of
-    finite quaternions whose norms are at least 1e-12 and do not overflow (the caller checked).
-    A compiled loop (numpy's reduction over a last axis of 4 costs several microseconds, and a
-    control tick normalises the end effector's and the goals' orientations)."""
-    rows = np.ascontiguousarray(q, dtype=float).reshape(-1, 4)
-    out = np.empty_like(rows)
-    _normalize_quaternion_rows(rows, out)
-    return out.reshape(np.shape(q))
 
 
 def poses_usable(poses: NDArray[np.float64], max_entry: float, min_quaternion_norm: float) -> bool:
@@ -164,11 +152,6 @@ def orientation_error_unchecked(
 # ----------------------------------------------------------------------------------------------
 
 
-def quat_normalize(q: ArrayLike) -> NDArray[np.float64]:
-    """Unit quaternions ``q / |q|``, shape ``(..., 4)``. A zero quaternion is a ``ValueError``."""
-    return normalized_quaternions(q, "q")
-
-
 def quat_multiply(q1: ArrayLike, q2: ArrayLike) -> NDArray[np.float64]:
     """Hamilton product ``q1 (x) q2`` (apply ``q2`` first, then ``q1``), broadcasting."""
     a = check_vectors(q1, 4, "q1")
@@ -192,18 +175,6 @@ def quat_to_rotvec(q: ArrayLike) -> NDArray[np.float64]:
     ``q`` and ``-q`` give the same result (the shortest rotation); ``q`` need not be unit.
     """
     return _quat_to_rotvec(normalized_quaternions(q, "q"))
-
-
-def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
-    """Rotation matrix ``R`` (``(..., 3, 3)``) with ``R @ v`` rotating ``v`` by ``q``."""
-    u = normalized_quaternions(q, "q")
-    w, x, y, z = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
-    rows = (
-        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-    )
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def orientation_error(q_from: ArrayLike, q_to: ArrayLike) -> NDArray[np.float64]:
@@ -264,36 +235,3 @@ def pose_errors(ee_pose: ArrayLike, goal_poses: ArrayLike) -> tuple[NDArray[np.f
     dist, angle = np.empty(n), np.empty(n)
     _pose_error_rows(x, g, dist, angle)
     return dist, angle
-
-
-def _integrate_pose(
-    position: NDArray[np.float64], quat: NDArray[np.float64], twist_vw: NDArray[np.float64], dt: float
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    new_position = position + twist_vw[..., :3] * dt
-    new_quat = quat_multiply_unchecked(quat_from_rotvec_unchecked(twist_vw[..., 3:6] * dt), quat)
-    w, x, y, z = new_quat[..., 0:1], new_quat[..., 1:2], new_quat[..., 2:3], new_quat[..., 3:4]
-    new_quat = new_quat / np.sqrt(w * w + x * x + y * y + z * z)
-    return new_position, new_quat
-
-
-def integrate_pose(
-    position: ArrayLike, quat: ArrayLike, twist_vw: ArrayLike, dt: float
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Move a pose by a constant world-frame twist for ``dt`` seconds.
-
-    Args:
-        position: ``(..., 3)`` positions (m).
-        quat: ``(..., 4)`` orientations ``[qw, qx, qy, qz]``.
-        twist_vw: ``(..., 6)`` twists ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s) in W.
-        dt: Duration (s), finite and >= 0.
-
-    Returns:
-        ``(position + v dt, exp(w dt) (x) quat)`` broadcast together; the quaternion is unit.
-    """
-    if not (np.isfinite(dt) and dt >= 0):
-        raise ValueError(f"dt: expected a finite number >= 0, got {dt!r}")
-    p = check_vectors(position, 3, "position")
-    q = normalized_quaternions(quat, "quat")
-    t = check_vectors(twist_vw, 6, "twist_vw")
-    new_position, new_quat = _integrate_pose(p, q, t, float(dt))
-    return new_position, new_quat

@@ -1,9 +1,16 @@
-"""The simulated MICO station: a MultibodyPlant arm on a table, joint PD plus gravity compensation,
-and a differential-IK integrator that turns the paper's end-effector velocity command into joint
-set points; built as one Diagram with named exported ports (Drake's ``MakeHardwareStation``
-pattern).
+"""The MICO station: one Diagram with named exported ports that turns the paper's end-effector
+velocity command into arm motion through a differential-IK integrator, built from a backend
+choice (Drake's ``MakeHardwareStation(scenario, meshcat, hardware=...)`` pattern): the in-process
+simulation (a MultibodyPlant arm on a table, joint PD plus gravity compensation) or a real or
+simulated arm behind LCM.
 
 Modules:
+
+- :mod:`~drake_disamb.station.backends`: the registry of backends (one module each) and
+  :func:`~drake_disamb.station.backends.make_station`, the one entry point.
+- :mod:`~drake_disamb.station.ports`: the ports every backend provides, and the ones only the
+  simulation (or only a wire) has.
+- :mod:`~drake_disamb.station.geometry`: the clearance geometry read from a station's own plant.
 
 - :mod:`~drake_disamb.station.config`: joint and frame names, the home posture (read from the
   model directives), :class:`SceneObject` and :class:`StationConfig`.

@@ -32,8 +32,10 @@ same systems (``"plant"``, ``"scene_graph"``, ``"diff_ik"``, ``"gripper_integrat
 ``diff_ik.control_plant()``). A subsystem's context inside any enclosing root context is
 ``system.GetMyContextFromRoot(root_context)`` (:meth:`Station.plant_context` for the plant).
 
-Station ports (velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``, not Drake's
-``[w; v]``; W is the world frame, which coincides with ``mico_link_base``):
+Station ports, those every backend provides (:mod:`~drake_disamb.station.ports`) and the
+simulation's own ``ik_status`` and ``query_object`` (velocities are in the paper's order
+``[vx, vy, vz, wx, wy, wz]``, not Drake's ``[w; v]``; W is the world frame, which coincides with
+``mico_link_base``):
 
 - input ``ee_velocity_command`` (6): desired spatial velocity of ``mico_end_effector``, m/s and
   rad/s, expressed in W, taken at the end-effector origin.
@@ -55,20 +57,21 @@ the station's state is untouched.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from pydrake.geometry import CollisionFilterDeclaration, Meshcat, Role, SceneGraph
 from pydrake.math import RigidTransform
-from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
+from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import Frame, JointActuatorIndex, ModelInstanceIndex, PdControllerGains
 from pydrake.systems.controllers import InverseDynamics
-from pydrake.systems.framework import Context, Diagram, DiagramBuilder
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder, InputPort, OutputPort
 from pydrake.systems.primitives import Demultiplexer, MatrixGain, Multiplexer
 
-from drake_disamb.paths import MODELS_PACKAGE, mico_directives, mico_urdf, models_dir
+from drake_disamb.paths import mico_directives, mico_urdf
 from drake_disamb.station.config import (
     ARM_JOINTS,
     ARM_MODEL_NAME,
@@ -78,31 +81,28 @@ from drake_disamb.station.config import (
     FINGER_MAX_OPENING,
     SceneObject,
     StationConfig,
+    model_parser,
 )
+from drake_disamb.station.geometry import StationGeometry
+from drake_disamb.station.ports import SHARED_INPUTS, SHARED_OUTPUTS, SIMULATION_OUTPUTS
 from drake_disamb.station.systems import DifferentialIKIntegrator, EndEffectorState, GripperOpeningIntegrator
 
-STATION_INPUTS: tuple[str, ...] = ("ee_velocity_command", "gripper_command")
-"""Names of the station diagram's exported input ports."""
-STATION_OUTPUTS: tuple[str, ...] = (
-    "ee_pose",
-    "ee_velocity",
-    "arm_joint_state",
-    "gripper_opening",
-    "ik_status",
-    "query_object",
-)
-"""Names of the station diagram's exported output ports."""
+STATION_INPUTS: tuple[str, ...] = SHARED_INPUTS
+"""Names of the simulated station diagram's exported input ports."""
+STATION_OUTPUTS: tuple[str, ...] = SHARED_OUTPUTS + SIMULATION_OUTPUTS
+"""Names of the simulated station diagram's exported output ports."""
 
 
 @dataclass(frozen=True)
 class Station:
-    """A built station: its Diagram and typed handles on the systems inside it.
+    """A built station (any backend): its Diagram and typed handles on the systems inside it.
 
     Attributes:
         diagram: The station Diagram (named ``"station"``) with the exported ports
-            :data:`STATION_INPUTS` and :data:`STATION_OUTPUTS`; add it to a builder, or simulate it
-            on its own.
-        plant: The simulated MultibodyPlant (subsystem ``"plant"``: discrete, SAP, gravity on).
+            :data:`~drake_disamb.station.ports.SHARED_INPUTS`, and ``outputs``; add it to a builder,
+            or simulate it on its own.
+        plant: The station's MultibodyPlant (subsystem ``"plant"``): the simulated arm (discrete,
+            SAP, gravity on), or on a wire the model that the measured angles pose.
         scene_graph: Its SceneGraph (subsystem ``"scene_graph"``).
         arm: Model instance of the MICO (arm and gripper) in ``plant``.
         control_plant: Arm-only continuous plant (plus objects held in the gripper) that the
@@ -112,6 +112,10 @@ class Station:
         config: The configuration used.
         scene_objects: All scene objects added (the config's first).
         meshcat: The Meshcat instance the station draws into, if any.
+        geometry: The clearance geometry of ``plant`` (the IK's floor uses it).
+        outputs: Names of the exported output ports (:data:`STATION_OUTPUTS` for the simulation).
+        link: On a wire, the :class:`~drake_disamb.station.lcm.bus.CommandLink` (its
+            ``stop_arm()`` sends the zero command several times); ``None`` in simulation.
     """
 
     diagram: Diagram
@@ -119,21 +123,18 @@ class Station:
     scene_graph: SceneGraph
     arm: ModelInstanceIndex
     control_plant: MultibodyPlant
-    diff_ik: DifferentialIKIntegrator
-    gripper: GripperOpeningIntegrator
+    diff_ik: DifferentialIKIntegrator | None
+    gripper: GripperOpeningIntegrator | None
     config: StationConfig
     scene_objects: tuple[SceneObject, ...]
     meshcat: Meshcat | None = None
+    geometry: StationGeometry | None = None
+    outputs: tuple[str, ...] = STATION_OUTPUTS
+    link: Any = None
 
     def plant_context(self, root_context: Context) -> Context:
         """The plant's context inside ``root_context`` (the station's or any enclosing diagram's)."""
         return self.plant.GetMyContextFromRoot(root_context)
-
-
-def _parser(plant: MultibodyPlant) -> Parser:
-    parser = Parser(plant)
-    parser.package_map().Add(MODELS_PACKAGE, str(models_dir()))
-    return parser
 
 
 def _add_objects(
@@ -160,7 +161,7 @@ def _add_objects(
 
 def _make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
     plant = MultibodyPlant(time_step=0.0)
-    (arm,) = _parser(plant).AddModels(str(mico_urdf()))
+    (arm,) = model_parser(plant).AddModels(str(mico_urdf()))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(BASE_FRAME, arm))
     _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
     plant.Finalize()
@@ -213,6 +214,65 @@ def build_station(
             ``config.home_q`` outside the joint limits.
     """
     config = config or StationConfig()
+    return _build_plant_station(config, scene_objects, meshcat, _ik_set_points)
+
+
+@dataclass(frozen=True)
+class _SetPoints:
+    """What a set-point source adds to the plant station: the arm's and the fingers' desired
+    states (12 and 4 ports) and the ports it exports."""
+
+    arm_desired: OutputPort
+    finger_desired: OutputPort
+    inputs: dict[str, InputPort]
+    outputs: dict[str, OutputPort]
+    diff_ik: DifferentialIKIntegrator | None = None
+    gripper: GripperOpeningIntegrator | None = None
+
+
+def _ik_set_points(
+    builder: DiagramBuilder,
+    config: StationConfig,
+    control_plant: MultibodyPlant,
+    control_arm: ModelInstanceIndex,
+    objects: Sequence[SceneObject],
+    geometry: StationGeometry,
+    arm_state: OutputPort,
+    finger_state: OutputPort,
+) -> _SetPoints:
+    """The simulated station's set points: the differential IK and the gripper integrator."""
+    diff_ik = builder.AddNamedSystem(
+        "diff_ik",
+        DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects, geometry=geometry),
+    )
+    gripper = builder.AddNamedSystem(
+        "gripper_integrator",
+        GripperOpeningIntegrator(
+            config.control_period, FINGER_MAX_OPENING, config.home_gripper_opening, config.warn_interval
+        ),
+    )
+    builder.Connect(arm_state, diff_ik.GetInputPort("arm_joint_state"))
+    builder.Connect(finger_state, gripper.GetInputPort("finger_state"))
+    return _SetPoints(
+        arm_desired=diff_ik.GetOutputPort("desired_state"),
+        finger_desired=gripper.GetOutputPort("finger_desired_state"),
+        inputs={
+            "ee_velocity_command": diff_ik.GetInputPort("ee_velocity_command"),
+            "gripper_command": gripper.GetInputPort("gripper_command"),
+        },
+        outputs={"ik_status": diff_ik.GetOutputPort("ik_status")},
+        diff_ik=diff_ik,
+        gripper=gripper,
+    )
+
+
+def _build_plant_station(
+    config: StationConfig,
+    scene_objects: Iterable[SceneObject],
+    meshcat: Meshcat | None,
+    set_points: Callable[..., _SetPoints],
+) -> Station:
+    """The plant, its PD and gravity compensation, with the set points ``set_points`` adds."""
     objects = tuple(config.scene_objects) + tuple(scene_objects)
     names = [o.name for o in objects]
     for k, obj in enumerate(objects):
@@ -223,7 +283,7 @@ def build_station(
     builder = DiagramBuilder()
 
     plant, scene_graph = AddMultibodyPlant(config.plant_config, builder)
-    ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, _parser(plant))
+    ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
     ee_frame = plant.GetFrameByName(EE_FRAME, arm)
     _add_objects(plant, objects, ee_frame, only_attached=False)
@@ -270,25 +330,25 @@ def build_station(
     builder.Connect(state, finger_state.get_input_port())
     builder.Connect(finger_state.get_output_port(), gripper_opening.get_input_port())
 
-    diff_ik = builder.AddNamedSystem(
-        "diff_ik", DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects)
+    geometry = StationGeometry.from_plant(plant, scene_graph, arm)
+    points = set_points(
+        builder,
+        config,
+        control_plant,
+        control_arm,
+        objects,
+        geometry,
+        arm_state.get_output_port(),
+        finger_state.get_output_port(),
     )
-    gripper = builder.AddNamedSystem(
-        "gripper_integrator",
-        GripperOpeningIntegrator(
-            config.control_period, FINGER_MAX_OPENING, config.home_gripper_opening, config.warn_interval
-        ),
-    )
-    builder.Connect(arm_state.get_output_port(), diff_ik.GetInputPort("arm_joint_state"))
-    builder.Connect(finger_state.get_output_port(), gripper.GetInputPort("finger_state"))
 
     # Desired state: the set points regrouped as [q_d; v_d] in ARM_JOINTS + FINGER_JOINTS order,
     # then mapped to the plant's actuator order (each actuator drives one of those joints).
     arm_split = builder.AddNamedSystem("arm_set_point_demux", Demultiplexer([6, 6]))
     finger_split = builder.AddNamedSystem("finger_set_point_demux", Demultiplexer([2, 2]))
     mux = builder.AddNamedSystem("desired_state_mux", Multiplexer([6, 2, 6, 2]))
-    builder.Connect(diff_ik.GetOutputPort("desired_state"), arm_split.get_input_port())
-    builder.Connect(gripper.GetOutputPort("finger_desired_state"), finger_split.get_input_port())
+    builder.Connect(points.arm_desired, arm_split.get_input_port())
+    builder.Connect(points.finger_desired, finger_split.get_input_port())
     for k, port in enumerate(
         (arm_split.get_output_port(0), finger_split.get_output_port(0))
         + (arm_split.get_output_port(1), finger_split.get_output_port(1))
@@ -329,14 +389,18 @@ def build_station(
             builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration, prefix="station")
         )
 
-    builder.ExportInput(diff_ik.GetInputPort("ee_velocity_command"), "ee_velocity_command")
-    builder.ExportInput(gripper.GetInputPort("gripper_command"), "gripper_command")
-    builder.ExportOutput(ee_state.GetOutputPort("ee_pose"), "ee_pose")
-    builder.ExportOutput(ee_state.GetOutputPort("ee_velocity"), "ee_velocity")
-    builder.ExportOutput(arm_state.get_output_port(), "arm_joint_state")
-    builder.ExportOutput(gripper_opening.get_output_port(), "gripper_opening")
-    builder.ExportOutput(diff_ik.GetOutputPort("ik_status"), "ik_status")
-    builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
+    for name, port in points.inputs.items():
+        builder.ExportInput(port, name)
+    outputs = {
+        "ee_pose": ee_state.GetOutputPort("ee_pose"),
+        "ee_velocity": ee_state.GetOutputPort("ee_velocity"),
+        "arm_joint_state": arm_state.get_output_port(),
+        "gripper_opening": gripper_opening.get_output_port(),
+        **points.outputs,
+        "query_object": scene_graph.get_query_output_port(),
+    }
+    for name, port in outputs.items():
+        builder.ExportOutput(port, name)
     diagram = builder.Build()
     diagram.set_name("station")
 
@@ -346,9 +410,11 @@ def build_station(
         scene_graph=scene_graph,
         arm=arm,
         control_plant=control_plant,
-        diff_ik=diff_ik,
-        gripper=gripper,
+        diff_ik=points.diff_ik,
+        gripper=points.gripper,
         config=config,
         scene_objects=objects,
         meshcat=meshcat,
+        geometry=geometry,
+        outputs=tuple(outputs),
     )

@@ -21,12 +21,13 @@ from numpy.typing import NDArray
 from pydrake.common.eigen_geometry import Quaternion
 from pydrake.geometry import Box, Cylinder, Sphere
 from pydrake.math import RigidTransform
-from pydrake.multibody.parsing import LoadModelDirectives
-from pydrake.multibody.plant import MultibodyPlantConfig
+from pydrake.multibody.parsing import LoadModelDirectives, Parser
+from pydrake.multibody.plant import MultibodyPlant, MultibodyPlantConfig
 from pydrake.multibody.tree import SpatialInertia
 
-from drake_disamb.core._validation import TIME_STEP_RANGE, check_real_range
-from drake_disamb.paths import mico_directives
+from drake_disamb.core.layout import SHAPE_SIZES
+from drake_disamb.core.validation import TIME_STEP_RANGE, check_real_range
+from drake_disamb.paths import MODELS_PACKAGE, mico_directives, models_dir
 
 ARM_JOINTS: tuple[str, ...] = tuple(f"mico_joint_{i}" for i in range(1, 7))
 """The six arm joints, base to wrist; their angles are Kinova's classic-DH angles (rad)."""
@@ -39,6 +40,13 @@ EE_FRAME = "mico_end_effector"
 
 FINGER_MAX_OPENING = 0.12
 """Largest distance between the fingertip pads (m): each finger travels 0 .. 0.06 m."""
+
+
+def model_parser(plant: MultibodyPlant) -> Parser:
+    """A Parser into ``plant`` that resolves our models' package (never the network)."""
+    parser = Parser(plant)
+    parser.package_map().Add(MODELS_PACKAGE, str(models_dir()))
+    return parser
 
 
 def _directive_home() -> tuple[NDArray[np.float64], float]:
@@ -67,7 +75,6 @@ where its singularities are."""
 MICO_HOME_Q.setflags(write=False)
 
 
-_SHAPE_SIZES = {"box": 3, "cylinder": 2, "sphere": 1}
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
@@ -114,9 +121,9 @@ class SceneObject:
         owner = f"SceneObject({self.name!r})"
         if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
             raise ValueError(f"SceneObject.name: expected an identifier-like string, got {self.name!r}")
-        if self.shape not in _SHAPE_SIZES:
-            raise ValueError(f"{owner}.shape: expected one of {sorted(_SHAPE_SIZES)}, got {self.shape!r}")
-        size = _finite_vector(owner, "size", self.size, _SHAPE_SIZES[self.shape])
+        if self.shape not in SHAPE_SIZES:
+            raise ValueError(f"{owner}.shape: expected one of {sorted(SHAPE_SIZES)}, got {self.shape!r}")
+        size = _finite_vector(owner, "size", self.size, SHAPE_SIZES[self.shape])
         if np.any(size <= 0):
             raise ValueError(f"{owner}.size: expected positive numbers, got {size.tolist()}")
         pose = _finite_vector(owner, "pose", self.pose, 7)

@@ -32,11 +32,13 @@ from pydrake.systems.framework import (
     LeafSystem,
 )
 
-from drake_disamb.clearance import Solid, gripper_points_in_ee, table_top_z
-from drake_disamb.core._validation import all_finite
-from drake_disamb.ik import IkParams, IkStatus, JointLimits, VelocityIkSolver
+from drake_disamb.clearance import Solid
+from drake_disamb.core.validation import all_finite
+from drake_disamb.ik import IkParams, IkStatus, VelocityIkSolver
+from drake_disamb.joint_limits import JointLimits
 from drake_disamb.station.config import ARM_JOINTS, ARM_MODEL_NAME, EE_FRAME, SceneObject, StationConfig
-from drake_disamb.systems.sanitized import SanitizedInputCounter
+from drake_disamb.station.geometry import StationGeometry
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 
 IkIntegratorState = namedview(
     "IkIntegratorState", [f"{j}_q_d" for j in ARM_JOINTS] + [f"{j}_v_d" for j in ARM_JOINTS]
@@ -105,8 +107,9 @@ class DifferentialIKIntegrator(LeafSystem):
 
     Discrete state: the set point ``[q_d (6), v_d (6)]`` (:data:`IkIntegratorState`), ``[status
     (1)]`` and the sanitised-input count with its warning time
-    (:class:`~drake_disamb.systems.sanitized.SanitizedInputCounter`); the outputs are state output
-    ports (no Python callback to read them).
+    (:class:`~drake_disamb.system_helpers.sanitized.SanitizedInputCounter`); the outputs are state
+    output ports (no Python callback to read them). The floor's table top and the gripper's points
+    come from ``geometry``, the station's own :class:`~drake_disamb.station.geometry.StationGeometry`.
     """
 
     def __init__(
@@ -115,6 +118,8 @@ class DifferentialIKIntegrator(LeafSystem):
         config: StationConfig,
         arm_instance: ModelInstanceIndex | None = None,
         held_objects: Sequence[SceneObject] = (),
+        *,
+        geometry: StationGeometry,
     ) -> None:
         super().__init__()
         self._plant = control_plant
@@ -148,14 +153,14 @@ class DifferentialIKIntegrator(LeafSystem):
             )
         nominal = np.array(config.nominal_posture) if config.nominal_posture is not None else home
 
-        self._floor = None if config.table_clearance is None else table_top_z() + config.table_clearance
+        self._floor = None if config.table_clearance is None else geometry.table_top + config.table_clearance
         self._floor_time_constant = max(0.1, self._period)
         held = [
             Solid(o.name, o.shape, tuple(o.size), o.transform().GetAsMatrix4())
             for o in held_objects
             if o.attached_to_gripper
         ]
-        self._gripper_points = gripper_points_in_ee(held)
+        self._gripper_points = geometry.gripper_points_in_ee(held)
         self._ik = VelocityIkSolver(
             JointLimits(lower, upper, vmax, amax),
             self._period,
@@ -176,6 +181,11 @@ class DifferentialIKIntegrator(LeafSystem):
     def control_plant(self) -> MultibodyPlant:
         """The arm-only plant the integrator computes its Jacobian on (owned by the caller)."""
         return self._plant
+
+    @property
+    def velocity_limits(self) -> NDArray[np.float64]:
+        """Joint speed limits (rad/s) the integrator respects."""
+        return self._vmax.copy()
 
     @property
     def joint_position_limits(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -265,7 +275,7 @@ class GripperOpeningIntegrator(LeafSystem):
     @endsystem
 
     Discrete state ``[opening_d (m), speed_d (m/s)]`` (:data:`GripperIntegratorState`), plus the
-    sanitised-input count (:class:`~drake_disamb.systems.sanitized.SanitizedInputCounter`); the opening
+    sanitised-input count (:class:`~drake_disamb.system_helpers.sanitized.SanitizedInputCounter`); the opening
     is clamped to ``[0, max_opening]``, initialised from ``finger_state`` when the simulator
     initialises.
     """

@@ -19,8 +19,8 @@ How each field is made (times are seconds from the trial's ``start_time``):
 - ``initial_mode``: the mode logged in ``current_mode``'s second row (the order file's 0-based
   initial mode agrees with it after the corrections), named as in
   :func:`drake_disamb.core.interfaces.interface_modes` by its position in the interface's cycle
-  (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``, FACTS
-  section 5; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
+  (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``,
+  docs/facts.md section 6; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
   ``extra["initial_mode_id"]``.
 - ``request_times``: the rows of ``assistance_requested`` after the placeholder. Every request
   made one mode switch of its own (the disambiguation system's), logged in ``mode_switches`` at
@@ -50,7 +50,11 @@ The trace has ``t`` (the ``alpha`` sample times, from the first logged sample, w
 the start), ``belief`` (``goal_probabilities``), ``alpha``, ``u`` (``blended_vel``) and ``mode``
 (index into the interface's modes of the mode in force at each sample), all on ``t``; ``u_h``
 (``user_vel``, about 100 Hz) was logged without times: it is stored as logged, with ``t_u_h``
-spreading its samples evenly over ``t``'s span (an approximation). No ``ee_pose`` was logged.
+spreading its samples evenly over ``t``'s span (an approximation); ``request_mode_scores`` and
+``request_dim_scores`` are the scores computed at each request (``cmode_conf_disamb`` per score
+column of the interface's modes, ``cdim_conf_disamb`` per dimension vx ... wz; one row per request,
+without the time column), ``request_mode_ids`` the authors' id of the mode each request switched
+to (the ``current_mode`` row nearest its switch). No ``ee_pose`` was logged.
 Velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``.
 """
 
@@ -254,6 +258,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
     current = _events(data, "current_mode", path, 2)
     requested = _events(data, "assistance_requested", path, 2)
     scores = np.asarray(data.get("cmode_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
+    dim_scores = np.asarray(data.get("cdim_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
     if len(switches) < 1 or len(current) < 1:
         raise ValueError(f"{path}: mode_switches / current_mode lack the initial-mode row")
     if len(scores) != len(requested):
@@ -359,6 +364,11 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
         "mode": mode_index,
         "u_h": user_vel,
         "t_u_h": t_u_h,
+        "request_mode_scores": scores[:, :-1],
+        "request_dim_scores": dim_scores[:, :-1],
+        "request_mode_ids": np.array(
+            [current[int(np.argmin(np.abs(cm_t - switch_t[k]))), 0] for k in own], dtype=np.int64
+        ),
     }
     return AuthorsTrial(record, trace, request_switch_times=switch_t[own])
 

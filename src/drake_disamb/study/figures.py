@@ -17,13 +17,13 @@ from typing import Any
 
 import numpy as np
 
+from drake_disamb.config.schema import PARADIGMS
 from drake_disamb.core.interfaces import INTERFACES, interfaces_in
 from drake_disamb.study.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
 from drake_disamb.study.metrics import TrialMetrics
 
 __all__ = ["ablation_figure", "save_figure", "source_figures", "trace_figures"]
 
-PARADIGMS = ("manual", "disambiguation", "automatic")
 PARADIGM_COLORS = {"manual": "#9e9e9e", "disambiguation": "#1f77b4", "automatic": "#2ca02c"}
 TASKS = ("reaching", "pouring")
 

@@ -1,8 +1,8 @@
 """The paper's findings beside ours, and one study folder's means beside another's.
 
-:func:`findings` is the table "the paper's finding / ours / agree?" of ``study report`` (FACTS
-section 9 and the data README's manual means); :func:`compare_summaries` is its ``--compare``
-section (issue 13's acceptance: simulated means within 50 % of the people's).
+:func:`findings` is the table "the paper's finding / ours / agree?" of ``study report`` (paper
+Section "Results" and the data README's manual means); :func:`compare_summaries` is its ``--compare``
+section (the criterion for a simulated population: its means within 50 % of the people's).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ PAPER_SKEWNESS = {
     ("head_array", "reaching"): 0.35,
     ("head_array", "pouring"): 0.22,
 }
-"""The paper's request-time skewness (Table "skewness", FACTS section 9)."""
+"""The paper's request-time skewness (paper Section "Results", Table "skewness")."""
 
 PAPER_MANUAL_SWITCHES = {
     ("joystick", "reaching"): 2.38,
@@ -50,7 +50,7 @@ PAPER_MANUAL_SWITCHES = {
 """Manual user-mode-switch means over the paper's 8 subjects (data README)."""
 
 WITHIN = 0.5
-"""``--compare`` flags a ratio outside ``[1 - WITHIN, 1 + WITHIN]`` (issue 13: within 50 %)."""
+"""``--compare`` flags a ratio outside ``[1 - WITHIN, 1 + WITHIN]`` (within 50 %)."""
 
 
 def select_trials(
@@ -109,9 +109,9 @@ def _verdict(ok: bool | None) -> str:
 def findings(
     trials: Sequence[TrialMetrics], tests: Sequence[dict[str, Any]], source: str
 ) -> list[dict[str, str]]:
-    """The table "the paper's finding / ours / agree?": one row per result of FACTS section 9 (and
-    the data README's manual means), each computed from ``trials`` of ``source`` with the
-    criterion used for "agree"."""
+    """The table "the paper's finding / ours / agree?": one row per result of the paper's
+    Section "Results" (and the data README's manual means), each computed from ``trials`` of
+    ``source`` with the criterion used for "agree"."""
     rows: list[dict[str, str]] = []
 
     def add(paper: str, ours: str, ok: bool | None, criterion: str) -> None:

@@ -1,7 +1,7 @@
 """The study's metrics as the paper and the authors computed them, from :class:`TrialRecord` s.
 
-FACTS section 9 and the data README; the authors' analysis is ``loadData.m`` / ``parse_data.m``
-of their repository. Per trial (:func:`trial_metrics`):
+Paper Section "Study Methods" (Metrics) and docs/facts.md section 10; the authors' analysis is
+``loadData.m`` / ``parse_data.m`` of their repository. Per trial (:func:`trial_metrics`):
 
 - **raw counts**: the record's ``mode_switches`` (the user's own presses), ``requests`` and
   ``button_presses`` (their sum);

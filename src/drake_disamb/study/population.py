@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.user import UserConfig
+from drake_disamb.core.validation import is_real
 
 __all__ = ["LogNormal", "PopulationConfig", "Subject", "Uniform", "draw_subjects"]
 

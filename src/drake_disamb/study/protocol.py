@@ -3,7 +3,7 @@
 A :class:`Protocol` says who is tested on what: subjects x interfaces x tasks x paradigms x trials
 per condition, the mode-selection method, the request latency, each task's start poses and how
 the order of conditions is counterbalanced. The embedded default (``study/protocol.yaml``,
-:func:`default_protocol`) is the paper's (FACTS section 9): 8 subjects, joystick and head array,
+:func:`default_protocol`) is the paper's (Section "Study Methods"): 8 subjects, joystick and head array,
 reaching and pouring, Manual 3 + Disambiguation 5 + Automatic 5 trials per condition (416 trials),
 Algorithm 1, a request latency uniform in [2.0, 2.5] s, 3 start poses per task, and a joystick that
 selects each mode with one press (``interface_mode_selection: direct``, as the study's did).
@@ -44,6 +44,7 @@ import yaml
 from pydrake.common.yaml import yaml_load_typed
 
 from drake_disamb.config.checks import check_data, cut, fmt
+from drake_disamb.config.system_presets import SYSTEM_PRESETS
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
 from drake_disamb.core.interfaces import MODE_SELECTIONS
 from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
@@ -67,7 +68,7 @@ __all__ = [
     "validate_protocol",
 ]
 
-METHODS: tuple[str, ...] = MODE_SELECTION_METHODS
+METHODS = MODE_SELECTION_METHODS  # the registry itself: a method registered later is accepted
 """Mode-selection methods of the contract's ``Scenario.disambiguation.method``."""
 
 COUNTERBALANCE: tuple[str, ...] = ("rotation", "none")
@@ -142,6 +143,9 @@ class Protocol:
             interface's modes, the gripper mode included, as the study drew them (its trial-order
             file: joystick 0..4, head array 0..6, each about equally often); ``arm``: over the arm
             modes only.
+        system: The system every trial runs (:mod:`drake_disamb.config.system_presets`): ``mico``
+            (the scenario's defaults) or ``tnsre2020_study`` (the paper's study's system, as its
+            logs show it), applied before an ablation's overrides.
     """
 
     subjects: int = 8
@@ -154,6 +158,7 @@ class Protocol:
     duration: float | None = None
     interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
     initial_modes: str = field(default="all", metadata=_meta(choices=INITIAL_MODES))
+    system: str = field(default="mico", metadata=_meta(choices=SYSTEM_PRESETS))
 
     @property
     def n_trials(self) -> int:

@@ -8,7 +8,7 @@ half-written last line is what a kill can leave, and :func:`read_records` with `
 it off (the trial is then run again). Any other malformed line is an error naming the file and the
 line number.
 
-Times are seconds from the trial's start. Counts follow the paper (FACTS section 9):
+Times are seconds from the trial's start. Counts follow the paper (Section "Study Methods", Metrics):
 ``mode_switches`` are the user's own mode-button presses (switches made by a disambiguation
 request or by the Automatic paradigm are not in it), ``requests`` the disambiguation requests,
 ``button_presses = mode_switches + requests``. Raw counts, before the authors' cleaning (requests

@@ -17,7 +17,7 @@
 ``--compare OTHER_DIR`` adds ``compare.json``
 (:func:`drake_disamb.study.findings.compare_summaries`) and a section setting this folder's means beside
 the other's per interface, task and paradigm, with their ratio and whether it is within 50 %
-(issue 13's acceptance for simulated versus human users).
+(the criterion for simulated versus human users).
 
 On an ablation folder (``DIR/ablation.json``, written by ``study ablate``), :func:`write_report`
 writes the combined report instead: for every setting, the paradigm effect on button presses
@@ -329,8 +329,8 @@ def write_report(
         sections.append(f"<h2>Compared with {html.escape(str(compare))}</h2>")
         sections.append(
             '<p class="note">Ratio = this folder / the other; flagged (red) outside 50 % '
-            "(issue 13's acceptance: "
-            "the simulated population's means within 50 % of the people's).</p>"
+            "(the criterion for a simulated population: "
+            "its means within 50 % of the people's).</p>"
         )
         cols = ["interface", "task", "paradigm", "source", "other_source"]
         for name in COMPARED:

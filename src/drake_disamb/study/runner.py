@@ -19,7 +19,8 @@ whatever the executor, the worker count and the order of completion. Resume: the
 ``trial_id`` s of ``trials.jsonl`` (read with ``repair=True``: a half-written last line, which a
 kill can leave, is cut and its trial run again) are skipped.
 
-A trial's scenario (:func:`build_scenario`): the embedded task, then the trial's interface,
+A trial's scenario (:func:`build_scenario`): the embedded task with the protocol's system preset
+(:mod:`drake_disamb.config.system_presets`), then the trial's interface,
 paradigm, intended goals, initial mode, start posture (the task's start posture plus the start
 pose's joint offsets), seed, the protocol's duration, the joystick's mode selection
 (``Scenario.interface_mode_selection``), the mode-selection method and the drawn request
@@ -176,10 +177,11 @@ def check_overrides(overrides: dict[str, Any], option: str = "--switch") -> None
 def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
     """The validated :class:`~drake_disamb.config.Scenario` of a trial (module docstring)."""
     from drake_disamb.config import scenario_from_dict
+    from drake_disamb.config.system_presets import apply_system_preset
     from drake_disamb.station.config import MICO_HOME_Q
 
     protocol = context.protocol
-    plain = copy.deepcopy(_task_plain(spec.task))
+    plain = apply_system_preset(copy.deepcopy(_task_plain(spec.task)), protocol.get("system", "mico"))
     plain["interface"] = spec.interface
     plain["paradigm"] = spec.paradigm
     plain["seed"] = spec.scenario_seed

@@ -12,10 +12,10 @@ from pydrake.systems.framework import (
     LeafSystem,
 )
 
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
+from drake_disamb.core.validation import is_real
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.systems._status import DID_NOTHING
-from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["PotentialFieldAutonomy"]
 
@@ -48,7 +48,7 @@ class PotentialFieldAutonomy(LeafSystem):
             from state.
 
     **Unusable poses.** A pose with a NaN or infinite entry, an entry beyond ``1e150``, or a
-    quaternion of (near) zero norm (:func:`~drake_disamb.systems.sanitized.usable_poses`,
+    quaternion of (near) zero norm (:func:`~drake_disamb.system_helpers.sanitized.usable_poses`,
     checked before the core is called), gives an all-zero ``u_a`` (the arm is then only driven by
     the user) instead of propagating NaN. Every ``control_period`` (first at t = 0) a discrete
     update checks the inputs again and, if they are unusable, adds one to

@@ -16,10 +16,10 @@ from pydrake.systems.framework import (
     ValueProducer,
 )
 
-from drake_disamb.core._validation import all_finite, is_real
 from drake_disamb.core.blending import BlendingConfig, shared_control
+from drake_disamb.core.validation import all_finite, is_real
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 from drake_disamb.systems._status import DID_NOTHING
-from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 

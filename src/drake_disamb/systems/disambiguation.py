@@ -2,8 +2,9 @@
 and the Automatic paradigm's trigger.
 
 All the algorithms live in the core (:mod:`drake_disamb.core.disambiguation`,
-:mod:`drake_disamb.core.automatic`); :class:`DisambiguationSystem` only reads its inputs, calls
-:func:`~drake_disamb.core.disambiguation.select_disambiguating_mode` and keeps the last result;
+:mod:`drake_disamb.core.automatic`); :class:`DisambiguationSystem` only reads its inputs, makes a
+:class:`~drake_disamb.core.disambiguation.DisambiguationRequest`, runs its mode-selection method's
+``select`` on it and keeps the last result;
 :class:`AutomaticTrigger` holds the trigger's state and runs
 :func:`~drake_disamb.core.automatic.automatic_trigger_update` every control period.
 """
@@ -21,23 +22,22 @@ from pydrake.systems.framework import BasicVector, Context, DiscreteValues, Even
 
 from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import (
-    MODE_SELECTION_METHODS,
     DisambiguationConfig,
     DisambiguationResult,
-    select_disambiguating_mode,
+    ModeSelectionMethod,
+    make_request,
+    mode_selection_method,
     validate_modes,
 )
+from drake_disamb.core.layout import POSE_SIZE
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.systems._status import DID_NOTHING
-from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
 
-POSE_SIZE = 7
-"""A pose on a vector port: ``[x, y, z, qw, qx, qy, qz]``."""
-
 
 @dataclass(frozen=True)
-class _Request:
+class _Inputs:
     """The inputs of one disambiguation request (a snapshot of the input ports)."""
 
     belief: NDArray[np.float64]
@@ -114,7 +114,7 @@ class DisambiguationSystem(LeafSystem):
 
     **Unusable inputs.** A belief that is not a probability vector up to scale (a NaN/inf or
     negative entry, or no positive one), a non-finite ``current_mode``, or a pose that is not
-    finite or has an unusable quaternion (:func:`~drake_disamb.systems.sanitized.usable_poses`)
+    finite or has an unusable quaternion (:func:`~drake_disamb.system_helpers.sanitized.usable_poses`)
     are detected before the core is called: ``disambiguation_mode`` is then -1 (the mode is kept)
     and, when the interface served such a request, the next update adds one to
     ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other
@@ -144,9 +144,10 @@ class DisambiguationSystem(LeafSystem):
         n_goals: Number of goals.
         modes: The arm modes (dimension indices), as tuples.
         config: The :class:`~drake_disamb.core.disambiguation.DisambiguationConfig`.
-        method: The mode-selection method, one of
-            :data:`~drake_disamb.core.disambiguation.MODE_SELECTION_METHODS` (``"algorithm1"``,
-            ``"entropy"``, ``"kl"``; :func:`~drake_disamb.core.disambiguation.select_disambiguating_mode`).
+        method: The mode-selection method (a
+            :class:`~drake_disamb.core.disambiguation.ModeSelectionMethod`); the constructor also
+            takes a name registered in
+            :data:`~drake_disamb.core.disambiguation.MODE_SELECTION_METHODS`.
     """
 
     def __init__(
@@ -155,7 +156,7 @@ class DisambiguationSystem(LeafSystem):
         modes: Sequence[Sequence[int]],
         config: DisambiguationConfig | None = None,
         control_period: float = 0.01,
-        method: str = "algorithm1",
+        method: str | ModeSelectionMethod = "algorithm1",
     ) -> None:
         super().__init__()
         if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
@@ -167,9 +168,7 @@ class DisambiguationSystem(LeafSystem):
         self.config = DisambiguationConfig() if config is None else config
         if not isinstance(self.config, DisambiguationConfig):
             raise ValueError(f"config: expected a DisambiguationConfig, got {config!r}")
-        if method not in MODE_SELECTION_METHODS:
-            raise ValueError(f"method: expected one of {MODE_SELECTION_METHODS}, got {method!r}")
-        self.method = method
+        self.method = mode_selection_method(method)
 
         n = self.n_goals
         self._belief = self.DeclareVectorInputPort("belief", n)
@@ -201,19 +200,20 @@ class DisambiguationSystem(LeafSystem):
         # One request on a small scene now, so that the compiled kernels of the core are loaded
         # (a fraction of a second, once per process) before a simulation, not at the user's first
         # request in a live session.
-        select_disambiguating_mode(
-            self.method,
-            np.full(n, 1.0 / n),
-            np.zeros(3),
-            0.1 * np.arange(3.0 * n).reshape(n, 3) + 0.2,
-            self.modes,
-            self.config,
+        self.method.select(
+            make_request(
+                np.full(n, 1.0 / n),
+                np.zeros(3),
+                0.1 * np.arange(3.0 * n).reshape(n, 3) + 0.2,
+                self.modes,
+                self.config,
+            )
         )
 
     # ------------------------------------------------------------------------------------------
 
-    def _read(self, context: Context) -> _Request:
-        return _Request(
+    def _read(self, context: Context) -> _Inputs:
+        return _Inputs(
             belief=np.array(self._belief.Eval(context), dtype=float),
             ee_pose=np.array(self._ee_pose.Eval(context), dtype=float),
             goal_poses=np.array(self._goal_poses.Eval(context), dtype=float),
@@ -231,9 +231,9 @@ class DisambiguationSystem(LeafSystem):
             )
         )
 
-    def _unpack(self, snapshot: NDArray[np.float64]) -> _Request:
+    def _unpack(self, snapshot: NDArray[np.float64]) -> _Inputs:
         n = self.n_goals
-        return _Request(
+        return _Inputs(
             belief=snapshot[:n].copy(),
             ee_pose=snapshot[n : n + POSE_SIZE].copy(),
             goal_poses=snapshot[n + POSE_SIZE : n + POSE_SIZE + n * POSE_SIZE].copy(),
@@ -248,7 +248,7 @@ class DisambiguationSystem(LeafSystem):
         p = np.maximum(p, 0.0) / p.max()  # scaled first: the sum cannot overflow
         return p / p.sum()
 
-    def _unusable(self, request: _Request) -> str | None:
+    def _unusable(self, request: _Inputs) -> str | None:
         """Why ``request`` cannot be solved (an input out of range), or None if it can."""
         if self._normalised_belief(request.belief) is None:
             return f"belief: expected a probability vector, got {request.belief.tolist()!r}"
@@ -261,7 +261,7 @@ class DisambiguationSystem(LeafSystem):
             )
         return None
 
-    def _solve(self, request: _Request) -> DisambiguationResult | None:
+    def _solve(self, request: _Inputs) -> DisambiguationResult | None:
         """Run the core on one request; an unusable one (see :meth:`_unusable`) gives None (keep the
         mode). Any error of the core propagates."""
         if self._unusable(request) is not None:
@@ -269,16 +269,17 @@ class DisambiguationSystem(LeafSystem):
         p = self._normalised_belief(request.belief)
         current = round(request.current_mode)
         goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
-        return select_disambiguating_mode(
-            self.method,
-            p,
-            request.ee_pose[:3],
-            goals[:, :3],
-            self.modes,
-            self.config,
-            orientation=request.ee_pose[3:],
-            goal_orientations=goals[:, 3:],
-            current_mode=current if current >= 0 else None,
+        return self.method.select(
+            make_request(
+                p,
+                request.ee_pose[:3],
+                goals[:, :3],
+                self.modes,
+                self.config,
+                orientation=request.ee_pose[3:],
+                goal_orientations=goals[:, 3:],
+                current_mode=current if current >= 0 else None,
+            )
         )
 
     def get_last_result(self, context: Context) -> DisambiguationResult | None:
@@ -298,7 +299,7 @@ class DisambiguationSystem(LeafSystem):
         if served[0] < 0.5:
             output.set_value(_NO_REQUEST)
             return
-        # Algorithm 1 is a pure function of the served request: a one-entry memo keeps a result
+        # The method is a pure function of the served request: a one-entry memo keeps a result
         # from being recomputed when the state is rewritten with the same request every tick.
         key = served.tobytes()
         if self._memo is None or self._memo[0] != key:

@@ -29,10 +29,14 @@ When ``goal_poses`` differs from the goal set the system last saw (by more than
 ``goal_change_tolerance`` in any entry), the next periodic update resets the belief to the rest
 state over the new set (the multi-step task). The algorithms are the numpy core's
 (:mod:`drake_disamb.core.inference`); these systems only hold state and move data.
+
+:func:`inference_system` builds the system of a core inference method, chosen by the method's
+type (a new method registers its system with ``inference_system.register``).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import replace
 
@@ -49,11 +53,14 @@ from pydrake.systems.framework import (
     ValueProducer,
 )
 
-from drake_disamb.core._validation import all_finite
 from drake_disamb.core.inference import (
     BAYES_SIGMA,
+    BayesInference,
+    DFTInference,
     DFTParams,
     DFTRow,
+    InferenceMethod,
+    MemoryInference,
     bayes_step,
     check_transition,
     dft_drive,
@@ -62,8 +69,9 @@ from drake_disamb.core.inference import (
     rest_state,
     sanitize_command,
 )
+from drake_disamb.core.validation import all_finite
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 from drake_disamb.systems._status import DID_NOTHING
-from drake_disamb.systems.sanitized import SanitizedInputCounter
 
 SIMPLEX_TOLERANCE = 1e-12
 """Largest ``|sum(p) - 1|``, and largest ``-min(p)``, the DFT system's periodic projection leaves
@@ -495,3 +503,27 @@ class MemoryBasedIntentInference(_DiscreteInference):
             x_prev = x_now
         p, cost = memory_step(belief, cost, x_prev, x_now, x_start, x_g, self._P)
         return p, np.concatenate([[float(cost)], x_start, x_now])
+
+
+@functools.singledispatch
+def inference_system(method: InferenceMethod, n_goals: int, control_period: float) -> LeafSystem:
+    """The Drake system running ``method`` (with its configuration) over ``n_goals`` goals, updated
+    every ``control_period`` seconds; chosen by the method's type."""
+    raise ValueError(
+        f"inference method {method.name!r}: no Drake system is registered for {type(method).__name__}"
+    )
+
+
+@inference_system.register
+def _(method: DFTInference, n_goals: int, control_period: float) -> LeafSystem:
+    return FieldTheoreticIntentInference(n_goals, method.params, control_period)
+
+
+@inference_system.register
+def _(method: BayesInference, n_goals: int, control_period: float) -> LeafSystem:
+    return RecursiveBayesIntentInference(n_goals, method.transition, method.sigma, control_period)
+
+
+@inference_system.register
+def _(method: MemoryInference, n_goals: int, control_period: float) -> LeafSystem:
+    return MemoryBasedIntentInference(n_goals, method.transition, control_period)

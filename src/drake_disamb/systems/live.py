@@ -20,8 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.interfaces import INTERFACES, LIVE_PULSES, RAW_SIZE, InterfaceConfig, check_kind
+from drake_disamb.core.validation import check_real_fields, is_real
 
 __all__ = [
     "AXIS_SLIDERS",

@@ -11,7 +11,7 @@ from pydrake.systems.framework import Context, DiscreteValues, EventStatus, Leaf
 
 from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.user import UserConfig, UserState, user_step
-from drake_disamb.systems.sanitized import SanitizedInputCounter, usable_poses
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 
 __all__ = ["SimulatedUser", "UserConfig"]
 
@@ -55,7 +55,7 @@ class SimulatedUser(LeafSystem):
     ``[sanitised-input count]``, ``[time of the last warning]`` (s).
 
     **Unusable inputs.** A pose with a NaN/inf entry or an unusable quaternion
-    (:func:`~drake_disamb.systems.sanitized.usable_poses`), a mode that is not an integer index
+    (:func:`~drake_disamb.system_helpers.sanitized.usable_poses`), a mode that is not an integer index
     of the interface's modes, or a negative or non-finite stage (checked before the policy is
     called) make the user let go (raw zeros) for that update, add one to
     ``sanitized_input_count`` and warn (at most once per second of simulated time). Any other

@@ -36,6 +36,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
+from drake_disamb.core.layout import GRIPPER_DIM
 from drake_disamb.display import LegendRow
 
 ROOT = "/shared_control"
@@ -60,7 +61,6 @@ GOAL_PALETTE: tuple[tuple[float, float, float], ...] = (
 visualizer uses its objects' colours (:func:`drake_disamb.display.goal_colors`)."""
 
 AXIS_COLORS = ((0.9, 0.1, 0.1), (0.1, 0.8, 0.1), (0.1, 0.3, 0.95))
-GRIPPER_DIM = 6
 
 
 def goal_color(index: int) -> tuple[float, float, float]:
@@ -202,16 +202,6 @@ class SharedControlVisualizer(LeafSystem):
     def goal_colors(self) -> list[list[tuple[float, float, float]]]:
         """``[stage][goal]`` the ``(r, g, b)`` the spheres are drawn in."""
         return [[tuple(float(c) for c in rgb) for rgb in stage] for stage in self._colors]  # type: ignore[misc]
-
-    @property
-    def legend_names(self) -> list[str]:
-        """The control-panel rows of the legend (HTML), in order."""
-        return list(self._legend)
-
-    def remove_legend(self) -> None:
-        """Delete the legend's rows from the Meshcat control panel."""
-        for name in self._legend:
-            self._meshcat.DeleteButton(name, strict=False)
 
     # -- scene creation -----------------------------------------------------------------------
 

@@ -14,8 +14,6 @@ import importlib
 import pkgutil
 
 from drake_disamb.core.interfaces.base import (
-    DIM_NAMES,
-    GRIPPER_DIM,
     INTERFACES,
     LIVE_PULSES,
     MODE_BUTTON,
@@ -50,8 +48,6 @@ for _module in pkgutil.iter_modules(__path__):
         importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = [
-    "DIM_NAMES",
-    "GRIPPER_DIM",
     "INTERFACES",
     "LIVE_PULSES",
     "MODE_BUTTON",

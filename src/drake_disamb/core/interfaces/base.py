@@ -28,14 +28,10 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Literal, TypeVar
 
+from drake_disamb.core.layout import DIM_NAMES, GRIPPER_DIM
+
 if TYPE_CHECKING:
     from drake_disamb.core.interfaces.update import InterfaceConfig
-
-GRIPPER_DIM = 6
-"""Dimension index of the gripper in a control mode (0..5 are vx, vy, vz, wx, wy, wz)."""
-
-DIM_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz", "gripper")
-"""Human-readable names of the dimension indices 0..6."""
 
 RAW_SIZE = 4
 """Length of the raw signal vector of every interface."""
@@ -287,8 +283,6 @@ def sign(value: float) -> float:
 
 
 __all__ = [
-    "DIM_NAMES",
-    "GRIPPER_DIM",
     "INTERFACES",
     "LIVE_PULSES",
     "MODE_BUTTON",

@@ -3,7 +3,7 @@
 The study's head array (paper Section "Study Methods"): the *back* switch cycles through 7 modes
 ``vx, vy, vz, wx, wy, wz, gripper`` (the default :attr:`HeadArray.mode_order`); *left* / *right*
 drive the selected dimension in the positive / negative direction at a fixed speed, 0.1 m/s or
-0.2 rad/s (the study's logs).
+0.2 rad/s (the study's logs, docs/facts.md section 6).
 
 Raw signal ``[left, right, back, disambiguation_button]``, every entry a 0/1 switch level (a level
 ``>= button_threshold`` counts as closed). ``left - right`` drives the selected dimension (both

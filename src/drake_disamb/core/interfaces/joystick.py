@@ -3,7 +3,8 @@
 The study's joystick (paper Section "Study Methods"): continuous axes in ``[-1, 1]``, a mode button
 that cycles through 5 control modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper`` (the default
 :attr:`Joystick.mode_order`), or, with ``InterfaceConfig.mode_selection = "direct"``, selects one
-directly. Speeds at full deflection: 0.13 m/s and 0.4 rad/s (the study's logs).
+directly. Speeds at full deflection: 0.13 m/s and 0.4 rad/s (the study's logs, docs/facts.md
+section 6).
 
 Raw signal ``[axis_x, axis_y, mode_button, disambiguation_button]``: axes clipped to ``[-1, 1]``,
 buttons 0/1 (a level ``>= button_threshold`` counts as pressed). The k-th dimension of the current
@@ -11,7 +12,7 @@ mode is driven by the k-th axis (a one-dimensional mode and the gripper mode use
 
 **Direct selection** (``"direct"``): the study's joystick selected a mode with one action
 (consecutive logged modes step forward, back, two or three places about equally, and some repeat
-the mode), so here a press *with the stick deflected* (``|(axis_x, axis_y)| >=``
+the mode: docs/facts.md section 6), so here a press *with the stick deflected* (``|(axis_x, axis_y)| >=``
 :data:`DIRECT_SELECT_DEFLECTION`) selects the mode of the stick direction's sector, and a press
 with the stick centred cycles as before. The ``n`` modes have equal sectors of ``360 / n``
 degrees, clockwise like a clock face from straight up (``+axis_y``): mode ``k``'s sector is

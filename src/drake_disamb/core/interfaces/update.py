@@ -22,9 +22,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._validation import check_real_fields, is_real
 from drake_disamb.core.interfaces.base import (
-    GRIPPER_DIM,
     INTERFACES,
     MODE_SELECTIONS,
     RAW_SIZE,
@@ -32,6 +30,8 @@ from drake_disamb.core.interfaces.base import (
     Interface,
     check_kind,
 )
+from drake_disamb.core.layout import GRIPPER_DIM
+from drake_disamb.core.validation import check_real_fields, is_real
 
 EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch", "automatic_switch"]
 

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core._validation import bounded_repr, is_real
+from drake_disamb.core.validation import bounded_repr, is_real
 
 if TYPE_CHECKING:
     from drake_disamb.core.interfaces import InterfaceConfig

@@ -26,7 +26,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.interfaces import GRIPPER_DIM, RAW_SIZE, InterfaceConfig
+from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
+from drake_disamb.core.layout import GRIPPER_DIM
 from drake_disamb.core.sampling import lognormal, sample_von_mises_fisher
 from drake_disamb.core.user.config import UserConfig
 from drake_disamb.core.user.judgement import choose_mode, dim_tolerances, draw, mode_remaining

@@ -20,8 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 
-from drake_disamb.core._validation import is_real
 from drake_disamb.core.geometry import poses_usable
+from drake_disamb.core.validation import is_real
 
 __all__ = [
     "MAX_POSE_ENTRY",

@@ -1,4 +1,6 @@
-"""Small checks shared by the core's config dataclasses (and by the scenario and station configs).
+"""Input checks and input bounds shared by every layer.
+
+Used by the core's config dataclasses, the scenario and station configs and the systems' port checks.
 
 Error messages format values with :func:`bounded_repr`, never with a bare ``repr()``: a value read
 from a file can be huge (a long string, a YAML structure expanded from aliases, an integer with
@@ -20,6 +22,11 @@ TIME_STEP_RANGE: tuple[float, float] = (1e-3, 0.1)
 """Accepted range (s) of a control period or a plant time step, bounds included. Below 1 ms a 60 s
 trial takes hours of wall time (``control_period: 1e-6`` is sixty million ticks); above 100 ms the
 100 Hz velocity interface of the MICO is sampled too coarsely for the joint PD to track it."""
+
+MAX_GOALS: int = 100
+"""Most goals a scenario (all stages together) or a disambiguation request may have. The study's
+tasks have 4 and 5; the bound only keeps absurd input out (a request's cost grows with the goal
+count, a scenario's goals are bodies in the plant)."""
 
 
 def is_real(value: object) -> bool:
@@ -53,7 +60,7 @@ def all_finite(*arrays: NDArray[np.float64]) -> bool:
     """True if every entry of every array is finite.
 
     Float64 numpy arrays go through a compiled loop (a control tick checks a few small arrays
-    several times, where numpy's ``isfinite(a).all()`` costs a microsecond or two per array);
+    several times, where numpy's ``isfinite(a).all()`` costs more than the check itself);
     anything else (other dtypes, lists, scalars) through ``np.isfinite(a).all()``. Unlike a sum,
     neither overflows, so huge finite values (a command of 1e308) raise no numpy
     ``RuntimeWarning`` at every tick.

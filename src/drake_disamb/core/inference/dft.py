@@ -1,26 +1,19 @@
-"""Intent-inference updates: field-theoretic (DFT), recursive Bayes and memory-based.
-
-Every function here takes numpy arrays and broadcasts over any number of leading batch
-dimensions, so the same update serves a single live step, a vectorised replay of hundreds of
-trials, and the disambiguation forward projection of all probe directions at once. The hot
-per-row work (the input nonlinearity ``xi``, the right-hand side and flow, the Euler update, the
-clip-and-normalise projection) is written once as a numba-compiled row kernel
-(:mod:`drake_disamb.core._kernels`) that the array functions here call; numpy's cost per call
-would otherwise dominate on the small arrays of a control step.
+"""Field-theoretic (DFT) intent inference: the input nonlinearity, the drive, the flow and the
+authors' Euler step (paper equation dft_ii), and the ``dft`` variant of the inference registry.
 
 Shapes (``...`` is any batch shape, ``n`` the number of goals):
 
 - ``p``: belief, ``(..., n)``, a probability vector.
 - ``u_h``: human command, ``(..., d)`` with ``d`` = 3 (``[vx, vy, vz]``, m/s) or 6
-  (``[vx, vy, vz, wx, wy, wz]``, m/s and rad/s). Only the first three entries enter the
-  directedness term; entries 3..5 enter the agreement term.
+  (``[vx, vy, vz, wx, wy, wz]``, m/s and rad/s, world frame). Only the first three entries enter
+  the directedness term; entries 3..5 enter the agreement term.
 - ``x_r``: end-effector (robot) position, ``(..., 3)``, m.
 - ``x_g``: goal positions, ``(..., n, 3)``, m.
 - ``u_a``: per-goal autonomy commands, ``(..., n, 6)`` (only needed for the agreement term).
 - ``transition``: goal-transition matrix ``P``, ``(n, n)`` or batched ``(..., n, n)``.
 
-The DFT right-hand side is paper equation (dft_ii) with the time constant split in two, as in the
-authors' code (FACTS section 1)::
+The right-hand side is paper equation (dft_ii) with the time constant split in two, as in the
+authors' code (docs/facts.md section 1)::
 
     f(p) = -(1/tau1) P^T p + drive,   drive = rest/tau2 + lambda @ sigma(xi)
 
@@ -29,47 +22,37 @@ it for every sample of every trial in one call (:func:`dft_drive`) and then run 
 recursion (:func:`dft_euler_update`). Two integrations are offered:
 
 - :func:`dft_euler_step`: the authors' discretisation (explicit Euler, clip entries <= 0 to the
-  smallest positive double, renormalise). Used to replay published data.
+  smallest positive double, renormalise). Used to replay published data and by the
+  disambiguation's forward projection.
 - :func:`dft_mass_conserving_rhs`: ``f(p) - p * sum(f(p))``, the first-order equivalent whose
   flow keeps ``sum(p) = 1`` exactly under any explicit Runge-Kutta method. Drake integrates this
   as continuous state.
 
-The two baselines share one recursion, :func:`posterior_update` (posterior proportional to
-``likelihood * P^T p``), with the likelihoods of :func:`bayes_likelihood` and
-:func:`memory_log_likelihood`.
-
-The module is longer than the project's ~500 lines because it holds three inference methods that
-share one batched row layout, validation and belief projection; splitting them would spread those
-shared pieces across files.
+The hot per-row work (``xi``, the right-hand side and flow, the Euler update) is a numba kernel
+of :mod:`drake_disamb.core._kernels` that these array functions call.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core._kernels import (
-    _dft_flow_rows,
-    _euler_rollout_rows,
-    _euler_rows,
-    _normalize_rows,
-    _xi_rows,
+from drake_disamb.core._kernels import _dft_flow_rows, _euler_rollout_rows, _euler_rows, _xi_rows
+from drake_disamb.core.inference.belief import (
+    check_probability_vector,
+    check_transition,
+    sanitize_command,
+    uniform_belief,
 )
-from drake_disamb.core._validation import all_finite, is_real
+from drake_disamb.core.inference.methods import INFERENCE_METHODS, ProjectedInference
 from drake_disamb.core.rows import as_rows, batch_shape, shared_rows
-
-TINY = np.finfo(float).tiny
-"""Smallest positive normal double: what the authors' code clips non-positive entries to."""
-
-
-BAYES_SIGMA = np.pi / 2.0
-"""Standard deviation (rad) of the Gaussian angle likelihood of the recursive Bayes baseline."""
-
-BAYES_COS_DECIMALS = 5
-"""The authors round the cosine to this many decimals before ``arccos``."""
+from drake_disamb.core.validation import is_real
 
 AGREEMENT_MEASURES: tuple[str, ...] = ("dot", "cosine")
 """Forms of the DFT's agreement term (:attr:`DFTParams.agreement_measure`): the paper's plain dot
@@ -160,136 +143,6 @@ _DIRECTEDNESS_ONLY = DFTParams()
 _AGREEMENT_ONLY = {
     m: DFTParams(directedness=False, agreement=True, agreement_measure=m) for m in AGREEMENT_MEASURES
 }
-
-
-# ----------------------------------------------------------------------------------------------
-# Validation and helpers
-# ----------------------------------------------------------------------------------------------
-
-
-def check_probability_vector(p: ArrayLike, name: str) -> NDArray[np.float64]:
-    """``p`` as a float array whose last axis is a probability vector, else ``ValueError``."""
-    a = np.asarray(p, dtype=float)
-    if a.ndim == 0 or a.shape[-1] < 1:
-        raise ValueError(f"{name}: expected a probability vector, got {p!r}")
-    if not np.all(np.isfinite(a)) or np.any(a < 0) or not np.allclose(a.sum(axis=-1), 1.0, atol=1e-9):
-        raise ValueError(f"{name}: expected non-negative entries summing to 1, got {a.tolist()!r}")
-    return a
-
-
-def check_transition(P: ArrayLike, name: str) -> NDArray[np.float64]:
-    """``P`` as a float array of square row-stochastic matrices (last two axes), else ``ValueError``."""
-    a = np.asarray(P, dtype=float)
-    if a.ndim < 2 or a.shape[-1] != a.shape[-2]:
-        raise ValueError(f"{name}: expected a square (n, n) matrix, got shape {a.shape}")
-    if not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ValueError(f"{name}: expected finite non-negative entries, got {a.tolist()!r}")
-    if not np.allclose(a.sum(axis=-1), 1.0, atol=1e-6):
-        raise ValueError(f"{name}: rows must sum to 1 (row-stochastic), got row sums {a.sum(axis=-1)!r}")
-    return a
-
-
-def _safe_unit(
-    v: NDArray[np.float64], axis: int = -1, norm: NDArray[np.float64] | None = None
-) -> NDArray[np.float64]:
-    """Unit vectors along ``axis``; zero (and non-finite) vectors map to zero.
-
-    Non-finite entries are read as 0, and huge (but finite) vectors are first divided by their
-    largest absolute entry so that the norm does not overflow (only when the plain norm is not
-    finite, so the common case costs one norm and one division). ``norm``, when given, must be
-    ``_norm(v, axis)`` (a caller that already has it saves computing it again).
-    """
-    v = np.asarray(v, dtype=float)
-    if norm is None:
-        norm = _norm(v, axis)
-    if not np.isfinite(np.add.reduce(norm, axis=None)):
-        v = np.where(np.isfinite(v), v, 0.0)
-        scale = np.max(np.abs(v), axis=axis, keepdims=True)
-        v = np.divide(v, scale, out=np.zeros_like(v), where=scale > 0)
-        norm = _norm(v, axis)
-    return v / np.where(norm > 0, norm, np.inf)  # zero vectors: 0 / inf = 0
-
-
-def _sqnorm(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Squared Euclidean norm over the last axis (axis dropped)."""
-    return np.einsum("...k,...k->...", v, v)
-
-
-def _norm(v: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
-    """Euclidean norm along ``axis`` with the axis kept (einsum: much faster on short axes)."""
-    if axis == -1 or axis == v.ndim - 1:  # the common case: no axis moves (they cost more than the sum)
-        return np.sqrt(np.einsum("...k,...k->...", v, v))[..., None]
-    v = np.moveaxis(v, axis, -1)
-    return np.moveaxis(np.sqrt(np.einsum("...k,...k->...", v, v))[..., None], -1, axis)
-
-
-def sanitize_command(u_h: ArrayLike) -> NDArray[np.float64]:
-    """Return ``u_h`` as floats, with every command that has a non-finite entry replaced by 0.
-
-    The belief must stay a probability vector whatever the input: a command with a NaN or an
-    infinite entry carries no usable direction, so the whole command (last axis) is read as
-    "no input" (CONTRIBUTING: such commands are treated as zero).
-    """
-    u = np.asarray(u_h, dtype=float)
-    if all_finite(u):
-        return u
-    return np.where(np.all(np.isfinite(u), axis=-1, keepdims=True), u, 0.0)
-
-
-def transition_prior(p: NDArray[np.float64], transition: ArrayLike | None) -> NDArray[np.float64]:
-    """``P^T p`` over the last axis (``P`` row-stochastic); identity when ``transition`` is None.
-
-    ``transition`` may be one ``(n, n)`` matrix or a batch ``(..., n, n)`` broadcasting with the
-    batch shape of ``p``.
-    """
-    if transition is None:
-        return p
-    # (P^T p)_j = sum_i p_i P_ij
-    return np.einsum("...i,...ij->...j", p, np.asarray(transition, dtype=float))
-
-
-def normalize_belief(p: ArrayLike) -> NDArray[np.float64]:
-    """Clip entries <= 0 (and NaN ones) to :data:`TINY` and divide by the sum (last axis).
-
-    This is the authors' projection back onto the simplex after each step. Should an entry be
-    ``+inf`` (or the sum overflow), the mass goes uniformly to the infinite entries (or the vector
-    is first scaled by its maximum), so the result is always a probability vector.
-    """
-    a = np.asarray(p, dtype=float)
-    if a.ndim == 0:
-        raise ValueError(f"p: expected shape (..., n), got a scalar {p!r}")
-    if a.size == 0:
-        return a.copy()
-    rows = np.array(a.reshape(-1, a.shape[-1]), order="C")  # our own copy, normalised in place
-    _normalize_rows(rows)
-    return rows.reshape(a.shape)
-
-
-def uniform_belief(n_goals: int, batch_shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
-    """The uniform belief over ``n_goals`` goals."""
-    if n_goals < 1:
-        raise ValueError(f"n_goals must be at least 1, got {n_goals}")
-    return np.full((*batch_shape, n_goals), 1.0 / n_goals)
-
-
-def rest_state(n_goals: int, rest: ArrayLike | None = None) -> NDArray[np.float64]:
-    """The rest state: ``rest`` validated as a probability vector of ``n_goals`` entries, or uniform."""
-    if rest is None:
-        return uniform_belief(n_goals)
-    r = check_probability_vector(rest, "rest")
-    if r.shape[-1] != n_goals:
-        raise ValueError(f"rest: expected {n_goals} entries (one per goal), got {r.shape[-1]}")
-    return r
-
-
-def _has_command(u_h: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """True where the (sanitised) command is non-zero, shape ``(..., 1)``."""
-    return np.logical_or.reduce(u_h != 0.0, axis=-1, keepdims=True)  # np.any, minus its wrapper
-
-
-# ----------------------------------------------------------------------------------------------
-# Field-theoretic (DFT) inference
-# ----------------------------------------------------------------------------------------------
 
 
 def directedness(u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike) -> NDArray[np.float64]:
@@ -684,115 +537,74 @@ def dft_euler_step(
     return dft_euler_update(p, dft_drive(u_h, x_r, x_g, params, u_a), params, dt)
 
 
-# ----------------------------------------------------------------------------------------------
-# Shared recursion of the two baselines
-# ----------------------------------------------------------------------------------------------
+@INFERENCE_METHODS.register
+@dataclass(frozen=True)
+class DFTInference(ProjectedInference):
+    """Field-theoretic inference (the paper's): live, the continuous flow
+    :func:`dft_mass_conserving_rhs`; projected, the authors' Euler step :func:`dft_euler_step`
+    (drive :func:`dft_drive`, recursion :func:`dft_euler_rollout`).
 
-
-def posterior_update(
-    p: ArrayLike, likelihood: ArrayLike, transition: ArrayLike | None = None
-) -> NDArray[np.float64]:
-    """Posterior proportional to ``likelihood * (P^T p)``, renormalised (clip as the DFT)."""
-    p = np.asarray(p, dtype=float)
-    return normalize_belief(np.asarray(likelihood, dtype=float) * transition_prior(p, transition))
-
-
-# ----------------------------------------------------------------------------------------------
-# Recursive Bayesian update
-# ----------------------------------------------------------------------------------------------
-
-
-def _round_half_away(x: NDArray[np.float64], decimals: int) -> NDArray[np.float64]:
-    """MATLAB's ``round(x, decimals)``: ties go away from zero (numpy's round goes to even)."""
-    scale = 10.0**decimals
-    return np.sign(x) * np.floor(np.abs(x) * scale + 0.5) / scale
-
-
-def bayes_likelihood(
-    u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike, sigma: float = BAYES_SIGMA
-) -> NDArray[np.float64]:
-    """Gaussian density (mean 0, std ``sigma``) of the angle between ``u_h[:3]`` and each goal.
-
-    The cosine is rounded to 5 decimals (ties away from zero, as MATLAB) before ``arccos``
-    (authors' code). A zero command gives a uniform likelihood. A goal at the robot's position
-    has no direction: its angle is taken as pi/2 (neither towards nor away).
-    Returns shape ``(..., n)``.
+    Attributes:
+        params: The DFT parameters (transition matrix and rest state included).
     """
-    u_raw = sanitize_command(u_h)[..., :3]
-    u = _safe_unit(u_raw)
-    d = _safe_unit(np.asarray(x_g, dtype=float) - np.asarray(x_r, dtype=float)[..., None, :])
-    cos = _round_half_away(np.einsum("...k,...nk->...n", u, d), BAYES_COS_DECIMALS)
-    angle = np.arccos(np.clip(cos, -1.0, 1.0))
-    lik = np.exp(-0.5 * (angle / sigma) ** 2) / (sigma * np.sqrt(2.0 * np.pi))
-    return np.where(_has_command(u_raw), lik, 1.0)
 
+    name: ClassVar[str] = "dft"
+    label: ClassVar[str] = "field-theoretic"
+    continuous: ClassVar[bool] = True
+    replay_padding: ClassVar[float] = -np.inf
+    params: DFTParams = field(default_factory=DFTParams)
 
-def bayes_step(
-    p: ArrayLike,
-    u_h: ArrayLike,
-    x_r: ArrayLike,
-    x_g: ArrayLike,
-    transition: ArrayLike | None = None,
-    sigma: float = BAYES_SIGMA,
-) -> NDArray[np.float64]:
-    """Posterior proportional to ``likelihood(u_h | g) * (P^T p)``, renormalised."""
-    return posterior_update(p, bayes_likelihood(u_h, x_r, x_g, sigma), transition)
+    def __post_init__(self) -> None:
+        if not isinstance(self.params, DFTParams):
+            raise ValueError(f"DFTInference.params: expected DFTParams, got {self.params!r}")
 
+    @classmethod
+    def from_settings(cls, dft: DFTParams) -> DFTInference:
+        return cls(dft)
 
-# ----------------------------------------------------------------------------------------------
-# Memory-based prediction (Dragan & Srinivasa 2013, as in the authors' code)
-# ----------------------------------------------------------------------------------------------
+    @property
+    def transition(self) -> NDArray[np.float64] | None:  # type: ignore[override]
+        return self.params.transition
 
+    @property
+    def needs_autonomy(self) -> bool:
+        return bool(self.params.agreement)
 
-def memory_log_likelihood(
-    cost: ArrayLike, x_cur: ArrayLike, x_start: ArrayLike, x_g: ArrayLike
-) -> NDArray[np.float64]:
-    """``log`` of the memory-based likelihood ``exp(-C - |x_cur - g|^2) / exp(-|x_start - g|^2)``.
+    def evidence(
+        self, u_h: ArrayLike, x_r: ArrayLike, x_g: ArrayLike, u_a: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
+        return dft_drive(u_h, x_r, x_g, self.params, u_a)
 
-    ``cost`` ``(...)`` is the running path cost C, ``x_cur`` ``(..., 3)`` the position the
-    cost-to-go is measured from, ``x_start`` ``(..., 3)`` the trial's start. Shape ``(..., n)``.
-    Non-finite positions are read as "no evidence" (log-likelihood 0 for every goal).
-    """
-    x_g = np.asarray(x_g, dtype=float)
-    to_go = _sqnorm(x_g - np.asarray(x_cur, dtype=float)[..., None, :])
-    start = _sqnorm(x_g - np.asarray(x_start, dtype=float)[..., None, :])
-    log_lik = start - to_go - np.asarray(cost, dtype=float)[..., None]
-    if np.isfinite(log_lik).all():
-        return log_lik
-    return np.where(np.all(np.isfinite(log_lik), axis=-1, keepdims=True), log_lik, 0.0)
+    def rollout(self, p: ArrayLike, evidence: ArrayLike, dt: float) -> NDArray[np.float64]:
+        return dft_euler_rollout(p, evidence, self.params, dt)
 
+    def replayer(
+        self, transition: NDArray[np.float64], dt: NDArray[np.float64]
+    ) -> Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]:
+        """The authors' Euler step (:func:`dft_euler_update`) of the first ``len(p)`` rows, with
+        their transition matrices and steps (the parameters built once per batch size)."""
+        params_by_rows: dict[int, DFTParams] = {}
 
-def likelihood_from_log(log_lik: ArrayLike) -> NDArray[np.float64]:
-    """``exp(log_lik)`` scaled by ``exp(-max)`` per row (same posterior, no overflow)."""
-    log_lik = np.asarray(log_lik, dtype=float)
-    return np.exp(log_lik - np.max(log_lik, axis=-1, keepdims=True))
+        def step(p: NDArray[np.float64], drive: NDArray[np.float64]) -> NDArray[np.float64]:
+            b = len(p)
+            if b not in params_by_rows:
+                params_by_rows[b] = dataclasses.replace(self.params, transition=transition[:b])
+            return dft_euler_update(p, drive, params_by_rows[b], dt[:b])
 
+        return step
 
-def path_cost_increment(x_prev: ArrayLike, x_next: ArrayLike) -> NDArray[np.float64]:
-    """``|x_next - x_prev|^2``, the memory-based running cost of one move (0 if non-finite)."""
-    step = _sqnorm(np.asarray(x_next, dtype=float) - np.asarray(x_prev, dtype=float))
-    return np.where(np.isfinite(step), step, 0.0)
+    def with_transition(self, transition: ArrayLike | None) -> DFTInference:
+        P = None if transition is None else np.asarray(transition, dtype=float)
+        return DFTInference(dataclasses.replace(self.params, transition=P))
 
-
-def memory_step(
-    p: ArrayLike,
-    cost: ArrayLike,
-    x_prev: ArrayLike,
-    x_next: ArrayLike,
-    x_start: ArrayLike,
-    x_g: ArrayLike,
-    transition: ArrayLike | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """One memory-based update after the robot moved from ``x_prev`` to ``x_next``.
-
-    ``cost`` (shape ``(...)``) is the running path cost ``C = sum |x_{t+1} - x_t|^2`` so far; it
-    is first increased by ``|x_next - x_prev|^2``. As in the authors' code the cost-to-go is
-    measured from ``x_prev`` (the position the step started from): the likelihood of goal g is
-    ``exp(-C - |x_prev - g|^2) / exp(-|x_start - g|^2)``, applied recursively: posterior
-    proportional to ``likelihood * (P^T p)``. A non-finite step adds no cost.
-
-    Returns ``(p_new, cost_new)``.
-    """
-    cost_new = np.asarray(cost, dtype=float) + path_cost_increment(x_prev, x_next)
-    lik = likelihood_from_log(memory_log_likelihood(cost_new, x_prev, x_start, x_g))
-    return posterior_update(p, lik, transition), cost_new
+    def check_goal_count(self, n: int) -> None:
+        P = self.params.transition
+        if P is not None and np.shape(P) != (n, n):
+            raise ValueError(
+                f"transition: expected a {n}x{n} matrix (one row per goal), got shape {np.shape(P)}"
+            )
+        if self.params.rest is not None and np.shape(self.params.rest) != (n,):
+            raise ValueError(f"dft.rest: expected {n} entries, got {np.asarray(self.params.rest).tolist()!r}")
+        lam = np.asarray(self.params.lam, dtype=float)
+        if lam.ndim != 0 and lam.shape != (n, n):
+            raise ValueError(f"dft.lam: expected a scalar or a {n}x{n} matrix, got shape {lam.shape}")

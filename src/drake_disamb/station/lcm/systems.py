@@ -1,0 +1,264 @@
+"""The LeafSystems of a station on LCM, each usable on its own with a fixed context:
+
+- :class:`JacoStatusReceiver`: waits for each status (the controller's clock), checks it, keeps
+  the measurement in its state, and latches a fault (the watchdog, a joint outside the limits);
+- :class:`ModelEndEffectorState`: measured arm angles -> ``ee_pose`` / ``ee_velocity`` from our
+  model (paper order ``[vx, vy, vz, wx, wy, wz]`` in W);
+- :class:`JacoCommandSender`: the IK's joint velocities and the gripper's finger speeds -> one
+  ``lcmt_jaco_command`` per control tick, zero once a fault is latched, clamped to the speed limits.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from numpy.typing import NDArray
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import JacobianWrtVariable, ModelInstanceIndex
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
+
+from drake_disamb.station.config import ARM_JOINTS, EE_FRAME
+from drake_disamb.station.lcm.bus import CommandLink, StatusInbox
+from drake_disamb.station.lcm.faults import Fault
+from drake_disamb.station.lcm.messages import StatusReading, make_command, read_status
+from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
+
+LIMIT_TOLERANCE = 1e-6
+"""Rounding allowed (rad) beyond a joint limit before a measured angle counts as outside it."""
+
+
+class JacoStatusReceiver(LeafSystem):
+    """The controller's clock and the arm's measurement: at every tick, waits for a fresh status.
+
+    Every ``period`` it polls the bus until a status arrives that decodes, has 6 joints and 2
+    fingers, is finite and has a ``utime`` after the last one used (others are dropped and counted
+    on ``sanitized_input_count``); of several (a burst) the latest is used, and the ones skipped
+    are counted as missed (LCM over UDP keeps only the latest message of a channel, so there they
+    show only as a gap in ``utime``). A status that puts a
+    joint outside the model's limits latches :attr:`Fault.JOINT_LIMIT`; no usable status within
+    ``status_timeout`` seconds (wall clock) of the last one latches :attr:`Fault.STATUS_TIMEOUT`.
+    Once a fault is latched it no longer waits and its measurement holds still (velocities zero).
+
+    @system
+    name: JacoStatusReceiver
+    output_ports:
+    - arm_joint_state (12): measured DH angles (rad) then velocities (rad/s)
+    - finger_state (4): finger slides (m) then speeds (m/s)
+    - fault (1): the latched Fault code (0 while none)
+    - status_count (3): statuses used, dropped, and missed (skipped between two used ones, by
+      their utime: a burst, or a tick that came late)
+    - sanitized_input_count (1): ticks at which a status was dropped
+    @endsystem
+
+    Discrete state: the four output groups, plus ``[utime of the status used (us)]``; all start
+    from the ``first`` status (the station's start check).
+    """
+
+    def __init__(
+        self,
+        inbox: StatusInbox,
+        first: StatusReading,
+        lower: NDArray[np.float64],
+        upper: NDArray[np.float64],
+        period: float,
+        status_timeout: float,
+        warn_interval: float = 1.0,
+    ) -> None:
+        super().__init__()
+        self._inbox = inbox
+        self._lower, self._upper = np.asarray(lower, float), np.asarray(upper, float)
+        self._timeout = float(status_timeout)
+        self._period_us = period * 1e6
+        self._arm = self.DeclareDiscreteState(np.concatenate([first.q, first.v]))
+        self._finger = self.DeclareDiscreteState(np.concatenate([first.finger_q, first.finger_v]))
+        self._fault = self.DeclareDiscreteState([float(Fault.NONE)])
+        self._counts = self.DeclareDiscreteState(np.zeros(3))
+        self._utime = self.DeclareDiscreteState([float(first.utime)])
+        self._sanitized = SanitizedInputCounter(self, warn_interval)
+        self.DeclareStateOutputPort("arm_joint_state", self._arm)
+        self.DeclareStateOutputPort("finger_state", self._finger)
+        self.DeclareStateOutputPort("fault", self._fault)
+        self.DeclareStateOutputPort("status_count", self._counts)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+
+    def last_utime(self, context: Context) -> int:
+        """The ``utime`` (us) of the status used last in ``context``."""
+        return int(context.get_discrete_state(self._utime).get_value()[0])
+
+    def fault(self, context: Context) -> Fault:
+        """The fault latched in ``context``."""
+        return Fault(int(context.get_discrete_state(self._fault).get_value()[0]))
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        if self.fault(context) != Fault.NONE:
+            return EventStatus.DidNothing()
+        arm = context.get_discrete_state(self._arm).get_value()
+        last_utime = int(context.get_discrete_state(self._utime).get_value()[0])
+        used, dropped, missed = context.get_discrete_state(self._counts).get_value()
+        previous_utime = last_utime
+        good: StatusReading | None = None
+        good_at = 0.0
+        fault = Fault.NONE
+        reason = ""
+        while True:
+            now = time.monotonic()
+            self._inbox.poll(min(max(self._inbox.last_good + self._timeout - now, 0.0), 0.002))
+            for data, received in self._inbox.take():
+                reading, why = read_status(data, last_utime, arm[:6] if good is None else good.q)
+                if reading is None:
+                    dropped += 1
+                    reason = reason or why
+                    continue
+                if np.any(reading.q < self._lower - LIMIT_TOLERANCE) or np.any(
+                    reading.q > self._upper + LIMIT_TOLERANCE
+                ):
+                    fault = Fault.JOINT_LIMIT
+                    reason = f"joint angles {np.round(reading.q, 4).tolist()} rad outside the model's limits"
+                    break
+                good, good_at, last_utime = reading, received, reading.utime
+            if fault != Fault.NONE or good is not None:
+                break
+            if time.monotonic() >= self._inbox.last_good + self._timeout:
+                fault = Fault.STATUS_TIMEOUT
+                break
+        if reason:
+            self._sanitized.record(context, discrete_state, f"status dropped or refused: {reason}")
+        if fault != Fault.NONE:
+            discrete_state.get_mutable_vector(self._fault).SetAtIndex(0, float(fault))
+            held = np.concatenate([arm[:6], np.zeros(6)])
+            discrete_state.get_mutable_vector(self._arm).SetFromVector(held)
+            finger = context.get_discrete_state(self._finger).get_value()
+            discrete_state.get_mutable_vector(self._finger).SetFromVector(
+                np.concatenate([finger[:2], np.zeros(2)])
+            )
+        else:
+            assert good is not None
+            self._inbox.last_good = good_at
+            discrete_state.get_mutable_vector(self._arm).SetFromVector(np.concatenate([good.q, good.v]))
+            discrete_state.get_mutable_vector(self._finger).SetFromVector(
+                np.concatenate([good.finger_q, good.finger_v])
+            )
+            discrete_state.get_mutable_vector(self._utime).SetAtIndex(0, float(good.utime))
+            used += 1
+            missed += max(0, round((good.utime - previous_utime) / self._period_us) - 1)
+        discrete_state.get_mutable_vector(self._counts).SetFromVector([used, dropped, missed])
+        return EventStatus.Succeeded()
+
+
+class ModelEndEffectorState(LeafSystem):
+    """Pose and spatial velocity of ``mico_end_effector`` from measured arm angles, on our model.
+
+    @system
+    name: ModelEndEffectorState
+    input_ports:
+    - arm_joint_state (12): DH angles (rad) then velocities (rad/s)
+    output_ports:
+    - ee_pose (7): [x, y, z, qw, qx, qy, qz] of the end effector in W (m)
+    - ee_velocity (6): [vx, vy, vz, wx, wy, wz] of its origin in W (m/s, rad/s; paper order)
+    @endsystem
+
+    The forward kinematics run on a scratch context of ``plant`` (arm-only, owned by the caller),
+    like the differential IK's Jacobian.
+    """
+
+    def __init__(self, plant: MultibodyPlant, arm: ModelInstanceIndex) -> None:
+        super().__init__()
+        self._plant = plant
+        self._ctx = plant.CreateDefaultContext()
+        joints = [plant.GetJointByName(n, arm) for n in ARM_JOINTS]
+        self._q_idx = [j.position_start() for j in joints]
+        self._v_idx = [j.velocity_start() for j in joints]
+        self._frame = plant.GetFrameByName(EE_FRAME, arm)
+        self._input = self.DeclareVectorInputPort("arm_joint_state", 12)
+        ticket = {self._input.ticket()}
+        self.DeclareVectorOutputPort("ee_pose", 7, self._calc_pose, prerequisites_of_calc=ticket)
+        self.DeclareVectorOutputPort("ee_velocity", 6, self._calc_velocity, prerequisites_of_calc=ticket)
+
+    def _pose_at(self, q: NDArray[np.float64]) -> None:
+        x = self._plant.GetPositions(self._ctx)
+        x[self._q_idx] = q
+        self._plant.SetPositions(self._ctx, x)
+
+    def _calc_pose(self, context: Context, output: BasicVector) -> None:
+        self._pose_at(np.asarray(self._input.Eval(context))[:6])
+        X = self._frame.CalcPoseInWorld(self._ctx)
+        output.SetFromVector(np.concatenate([X.translation(), X.rotation().ToQuaternion().wxyz()]))
+
+    def _calc_velocity(self, context: Context, output: BasicVector) -> None:
+        state = np.asarray(self._input.Eval(context))
+        self._pose_at(state[:6])
+        world = self._plant.world_frame()
+        J = self._plant.CalcJacobianSpatialVelocity(
+            self._ctx, JacobianWrtVariable.kV, self._frame, np.zeros(3), world, world
+        )[:, self._v_idx]
+        V = J @ state[6:]  # Drake's [w; v]
+        output.SetFromVector(np.concatenate([V[3:], V[:3]]))
+
+
+class JacoCommandSender(LeafSystem):
+    """Publishes one ``lcmt_jaco_command`` per control tick: the IK's joint velocities and the
+    gripper's finger speeds, zero once a fault is latched or when a value is not finite, and
+    scaled (all joints alike, so the direction is kept) to the joint speed limits.
+
+    @system
+    name: JacoCommandSender
+    input_ports:
+    - desired_state (12): the IK's set point q_d (rad) then v_d (rad/s), DH
+    - finger_desired_state (4): finger slides (m) then speeds (m/s)
+    - fault (1): the receiver's latched Fault code
+    output_ports:
+    - command (8): the last command's DH joint velocities (rad/s) and finger speeds (m/s)
+    @endsystem
+    """
+
+    def __init__(
+        self,
+        link: CommandLink,
+        inbox: StatusInbox,
+        velocity_limits: NDArray[np.float64],
+        finger_speed_limit: float,
+        period: float,
+    ) -> None:
+        super().__init__()
+        self._link = link
+        self._inbox = inbox
+        self._vmax = np.asarray(velocity_limits, dtype=float)
+        self._fmax = float(finger_speed_limit)
+        self._desired = self.DeclareVectorInputPort("desired_state", 12)
+        self._finger = self.DeclareVectorInputPort("finger_desired_state", 4)
+        self._fault = self.DeclareVectorInputPort("fault", 1)
+        self.DeclareVectorOutputPort("command", 8, self._calc_command)
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def command(
+        self, context: Context
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The set point q_d (6, rad) and the clamped joint and finger velocities of ``context``."""
+        desired = np.asarray(self._desired.Eval(context), dtype=float)
+        finger = np.asarray(self._finger.Eval(context), dtype=float)
+        q, v, fv = desired[:6], desired[6:], finger[2:]
+        if self._fault.Eval(context)[0] != Fault.NONE or not (
+            np.all(np.isfinite(desired)) and np.all(np.isfinite(fv))
+        ):
+            return q, np.zeros(6), np.zeros(2)
+        scale = float(np.min(self._vmax / np.maximum(np.abs(v), 1e-300)))
+        if scale < 1.0:
+            v = v * scale
+        return q, v, np.clip(fv, -self._fmax, self._fmax)
+
+    def _calc_command(self, context: Context, output: BasicVector) -> None:
+        _, v, fv = self.command(context)
+        output.SetFromVector(np.concatenate([v, fv]))
+
+    def _publish(self, context: Context) -> EventStatus:
+        q, v, fv = self.command(context)
+        finger_q = np.asarray(self._finger.Eval(context), dtype=float)[:2]
+        utime = int(round(context.get_time() * 1e6))
+        finger_q = np.where(np.isfinite(finger_q), finger_q, 0.0)
+        q = np.where(np.isfinite(q), q, 0.0)
+        self._link.publish(make_command(utime, q, v, finger_q, fv), answered_at=self._inbox.last_good)
+        return EventStatus.Succeeded()
+
+
+__all__ = ["LIMIT_TOLERANCE", "JacoCommandSender", "JacoStatusReceiver", "ModelEndEffectorState"]

@@ -1,0 +1,76 @@
+"""The layers contract (``[tool.importlinter]`` in pyproject.toml): the package keeps it, and an
+upward import, Drake in the core, a private module imported from another package or an import
+circle between sibling packages each break it."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from support import REPO, SRC
+
+LINT = "import sys; from importlinter.cli import lint_imports_command; sys.exit(lint_imports_command())"
+
+
+def _lint(root: Path, src: Path) -> subprocess.CompletedProcess[str]:
+    """``lint-imports`` run in ``root`` (its pyproject.toml) on the package found in ``src``."""
+    env = dict(os.environ, PYTHONPATH=str(src))
+    return subprocess.run(
+        [sys.executable, "-c", LINT, "--no-cache"],
+        cwd=root,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def test_the_package_keeps_its_layers() -> None:
+    run = _lint(REPO, SRC)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "broken" not in run.stdout.lower().replace("0 broken", "")
+
+
+@pytest.fixture(scope="module")
+def package_copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A copy of the repository's pyproject.toml and of the package's Python files."""
+    root = tmp_path_factory.mktemp("layers")
+    shutil.copy(REPO / "pyproject.toml", root / "pyproject.toml")
+    shutil.copytree(
+        SRC / "drake_disamb", root / "src" / "drake_disamb", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    return root
+
+
+@pytest.mark.parametrize(
+    ("module", "line", "contract", "shown"),
+    [
+        # The core reaching up to the study (an upward import, and a circle core <-> study).
+        ("core/layout.py", "import drake_disamb.study.records", "Layers import one way", "core.layout -> "),
+        # The station reaching up to the builder.
+        ("station/config.py", "from drake_disamb import builder", "Layers import one way", "builder"),
+        # Drake in the numpy core.
+        ("core/layout.py", "import pydrake.math", "The core is numpy", "pydrake"),
+        # A private module of another package.
+        ("builder.py", "from drake_disamb.core import _kernels", "A private module", "_kernels"),
+        # Two siblings of one layer (independent) importing each other.
+        ("display.py", "import drake_disamb.paths", "Layers import one way", "drake_disamb.paths"),
+    ],
+)
+def test_a_forbidden_import_breaks_the_contract(
+    package_copy: Path, module: str, line: str, contract: str, shown: str
+) -> None:
+    path = package_copy / "src" / "drake_disamb" / module
+    original = path.read_text()
+    path.write_text(original + f"\n{line}  # injected by tests/test_layers.py\n")
+    try:
+        run = _lint(package_copy, package_copy / "src")
+    finally:
+        path.write_text(original)
+    assert run.returncode != 0, run.stdout
+    broken = run.stdout.split("Broken contracts", 1)[-1]
+    assert contract in broken and shown in broken, run.stdout

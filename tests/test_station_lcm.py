@@ -1,0 +1,556 @@
+"""The station on LCM: the angle mapping, the messages, the in-process form on one memq:// bus
+(the same arm motion and trial as the simulation), and safety on the wire."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+from drake import lcmt_jaco_command
+from pydrake.lcm import DrakeLcm
+from pydrake.systems.analysis import Simulator
+
+from drake_disamb.station import MICO_HOME_Q, StationConfig, build_station
+from drake_disamb.station.backends import BACKENDS, InProcessLcm, Lcm, load_station_choice
+from drake_disamb.station.lcm import mapping
+from drake_disamb.station.lcm.driver import DEFAULT_COMMAND_CHANNEL, DEFAULT_STATUS_CHANNEL, SimulatedDriver
+from drake_disamb.station.lcm.faults import Fault
+from drake_disamb.station.lcm.messages import make_status, read_command, read_status
+from drake_disamb.station.lcm.station import build_lcm_station
+
+PERIOD = 0.01
+
+
+# ----------------------------------------------------------------------------------------------
+# The mapping and the messages.
+# ----------------------------------------------------------------------------------------------
+def test_actuator_angles_map_to_the_dh_angles_as_kinova_defines_them() -> None:
+    q = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
+    theta = mapping.dh_from_actuator(q, reference=mapping.JOINT_SIGNS * q + mapping.JOINT_OFFSETS)
+    expected = [-0.1, 0.2 - math.pi / 2, 0.3 + math.pi / 2, 0.4, 0.5 - math.pi, 0.6 + math.pi / 2]
+    np.testing.assert_allclose(theta, expected, atol=1e-12)
+    np.testing.assert_allclose(mapping.actuator_from_dh(theta), q, atol=1e-12)
+    np.testing.assert_allclose(mapping.dh_velocity([1, 1, 1, 1, 1, 1]), [-1, 1, 1, 1, 1, 1])
+    # An actuator angle is known modulo 2 pi: the DH angle nearest the reference is taken.
+    theta_home = np.array(MICO_HOME_Q)
+    wrapped = mapping.actuator_from_dh(theta_home) + 2 * math.pi * np.array([1, -1, 0, 1, 2, -1])
+    np.testing.assert_allclose(mapping.dh_from_actuator(wrapped, theta_home), theta_home, atol=1e-9)
+
+
+def test_finger_units_map_to_the_slides() -> None:
+    np.testing.assert_allclose(mapping.finger_slide([0.0, mapping.FINGER_CLOSED]), [0.06, 0.0])
+    np.testing.assert_allclose(mapping.finger_units(mapping.finger_slide([12.5, 80.0])), [12.5, 80.0])
+    assert mapping.FINGER_CLOSED == pytest.approx(118.68, abs=0.01)  # Drake's Jaco scale
+    assert mapping.finger_slide_rate([mapping.FINGER_CLOSED])[0] == pytest.approx(-0.06)  # closing
+
+
+def _status(utime: int = 10, q=None, joints: int = 6, fingers: int = 2) -> bytes:
+    msg = make_status(
+        utime, np.array(MICO_HOME_Q) if q is None else q, np.zeros(6), np.full(2, 0.04), np.zeros(2)
+    )
+    msg.num_joints, msg.num_fingers = joints, fingers
+    msg.joint_position = list(msg.joint_position)[:joints] + [0.0] * max(0, joints - 6)
+    msg.joint_velocity = list(msg.joint_velocity)[:joints] + [0.0] * max(0, joints - 6)
+    msg.joint_torque = msg.joint_torque_external = msg.joint_current = [0.0] * joints
+    msg.finger_position = (list(msg.finger_position) + [0.0])[:fingers]
+    msg.finger_velocity = msg.finger_torque = msg.finger_torque_external = msg.finger_current = [
+        0.0
+    ] * fingers
+    return msg.encode()
+
+
+def test_a_status_reads_back_in_our_models_terms() -> None:
+    reading, why = read_status(_status(), None, np.array(MICO_HOME_Q))
+    assert why == ""
+    np.testing.assert_allclose(reading.q, MICO_HOME_Q, atol=1e-12)
+    np.testing.assert_allclose(reading.finger_q, [0.04, 0.04], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("data", "last", "reason"),
+    [
+        (_status(joints=7, fingers=3), None, "num_joints / num_fingers: expected 6 / 2, got 7 / 3"),
+        (_status(q=np.array([np.nan, 0, 0, 0, 0, 0])), None, "joint_position: expected finite numbers"),
+        (_status(utime=10), 10, "utime repeated"),
+        (_status(utime=5), 10, "utime went back"),
+        (b"not a status", None, "undecodable status"),
+    ],
+)
+def test_bad_statuses_are_dropped(data: bytes, last: int | None, reason: str) -> None:
+    reading, why = read_status(data, last, np.array(MICO_HOME_Q))
+    assert reading is None and why.startswith(reason), why
+
+
+def test_bad_commands_are_ignored_by_the_driver() -> None:
+    msg = lcmt_jaco_command()
+    msg.num_joints, msg.joint_position, msg.joint_velocity = 6, [0.0] * 6, [float("nan")] + [0.0] * 5
+    msg.num_fingers, msg.finger_position, msg.finger_velocity = 2, [0.0] * 2, [0.0] * 2
+    assert read_command(msg.encode())[0] is None
+    msg.joint_velocity = [0.1] * 6
+    v, fv = read_command(msg.encode())[0]
+    np.testing.assert_allclose(v, [-0.1, 0.1, 0.1, 0.1, 0.1, 0.1])
+
+
+def test_the_backends_are_chosen_by_a_yaml_tag() -> None:
+    backend = load_station_choice("station: !Lcm {lcm_url: 'memq://', status_timeout: 0.05}")
+    assert isinstance(backend, Lcm) and backend.status_timeout == 0.05
+    assert set(BACKENDS) == {"sim", "lcm"}
+    from drake_disamb.commands._station import STATION_CHOICES
+
+    assert set(STATION_CHOICES) == set(BACKENDS)
+    with pytest.raises(ValueError, match=r"registered backends: !Sim, !Lcm"):
+        load_station_choice("station: !Ros {}")
+    with pytest.raises(
+        ValueError, match=r"station\.status_timeout: expected a number in \(0.005, 1\], got 0"
+    ):
+        Lcm(status_timeout=0).check()
+
+
+# ----------------------------------------------------------------------------------------------
+# The in-process form: the station steps the driver on one memq:// bus.
+# ----------------------------------------------------------------------------------------------
+class Wire:
+    """A station on LCM with the simulated driver on one memq:// bus, and a tap on the commands."""
+
+    def __init__(self, extra=None, settings: Lcm | None = None) -> None:  # noqa: ANN001
+        self.settings = settings or Lcm(lcm_url="memq://")
+        self.driver = SimulatedDriver(DrakeLcm("memq://"), StationConfig())
+        self.lcm = self.driver.lcm
+        self.commands: list[tuple[float, np.ndarray]] = []
+        self.lcm.Subscribe(DEFAULT_COMMAND_CHANNEL, self._tap)
+        self.extra = extra
+
+        def pump() -> None:
+            self.driver.step()
+            if self.extra is not None:
+                self.extra(self)
+
+        self.station = build_lcm_station(self.settings, StationConfig(), lcm=self.lcm, pump=pump)
+        d = self.station.diagram
+        self.simulator = Simulator(d)
+        self.ctx = self.simulator.get_mutable_context()
+        d.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
+        d.GetInputPort("gripper_command").FixValue(self.ctx, [0.0])
+
+    def _tap(self, data: bytes) -> None:
+        msg = lcmt_jaco_command.decode(data)
+        self.commands.append(
+            (time.monotonic(), np.array(list(msg.joint_velocity) + list(msg.finger_velocity)))
+        )
+
+    def command(self, V) -> None:  # noqa: ANN001
+        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.asarray(V, float))
+
+    def out(self, name: str) -> np.ndarray:
+        return np.asarray(self.station.diagram.GetOutputPort(name).Eval(self.ctx)).copy()
+
+    def receiver(self):  # noqa: ANN201
+        return self.station.diagram.GetSubsystemByName("status_receiver")
+
+    def counts(self) -> np.ndarray:
+        r = self.receiver()
+        return np.asarray(r.GetOutputPort("status_count").Eval(r.GetMyContextFromRoot(self.ctx)))
+
+
+def test_the_arm_on_the_wire_moves_as_the_simulated_station_does() -> None:
+    wire = Wire()
+    sim = build_station(StationConfig())
+    sim_sim = Simulator(sim.diagram)
+    sim_ctx = sim_sim.get_mutable_context()
+    sim.diagram.GetInputPort("gripper_command").FixValue(sim_ctx, [0.0])
+    for V in ([0.05, 0, 0, 0, 0, 0], [0, 0, 0.04, 0, 0, 0.2]):
+        wire.command(V)
+        sim.diagram.GetInputPort("ee_velocity_command").FixValue(sim_ctx, V)
+        t = wire.ctx.get_time() + 1.0
+        wire.simulator.AdvanceTo(t)
+        sim_sim.AdvanceTo(t)
+        p_wire, p_sim = wire.out("ee_pose"), sim.diagram.GetOutputPort("ee_pose").Eval(sim_ctx)
+        assert np.linalg.norm(p_wire[:3] - p_sim[:3]) < 1e-3  # one period of latency: < 1 mm here
+    # One command per status, never more: the driver's statuses, the station's ticks, the commands.
+    used = wire.counts()[0]
+    assert abs(len(wire.commands) - used) <= 1 and abs(wire.driver.statuses - used) <= 1
+    assert wire.out("fault")[0] == Fault.NONE
+
+
+def test_watchdog_latches_a_fault_and_commands_zero_when_the_driver_dies() -> None:
+    wire = Wire()
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    wire.simulator.AdvanceTo(0.5)
+    assert np.any(np.abs(wire.commands[-1][1]) > 1e-3)
+    link = wire.station.link
+    publish = link.publish
+    after: list[tuple[float, np.ndarray]] = []  # (publication time, command) from the kill on
+
+    def timed(msg, answered_at=None) -> None:  # noqa: ANN001
+        after.append((time.monotonic(), np.array(list(msg.joint_velocity) + list(msg.finger_velocity))))
+        publish(msg, answered_at)
+
+    link.publish = timed
+    wire.driver.kill()
+    killed = time.monotonic()
+    wire.simulator.AdvanceTo(0.6)
+    assert wire.out("fault")[0] == Fault.STATUS_TIMEOUT
+    zero_at = next(t for t, c in after if not np.any(c))
+    assert zero_at - killed <= 3 * PERIOD + 0.005  # within 3 status periods
+    assert all(not np.any(c) for t, c in after if t >= zero_at)  # latched: zero from then on
+    assert not np.any(wire.out("arm_joint_state")[6:])
+
+
+def test_zero_is_sent_several_times_when_the_controller_stops() -> None:
+    wire = Wire()
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    wire.simulator.AdvanceTo(0.3)
+    wire.lcm.HandleSubscriptions(0)
+    before = len(wire.commands)
+    wire.station.link.stop_arm()
+    wire.station.link.stop_arm()  # once only
+    wire.lcm.HandleSubscriptions(0)
+    zeros = wire.commands[before:]
+    assert len(zeros) == wire.settings.zero_command_repeats and all(not np.any(c) for _, c in zeros)
+
+
+def _inject(data_of):  # noqa: ANN001, ANN202
+    """A pump extra that publishes ``data_of(wire)`` once, on the third tick."""
+    calls = [0]
+
+    def extra(wire: Wire) -> None:
+        calls[0] += 1
+        if calls[0] == 3:
+            wire.lcm.Publish(DEFAULT_STATUS_CHANNEL, data_of(wire))
+
+    return extra
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        lambda w: _status(utime=10**9, q=np.array([np.nan] * 6)),
+        lambda w: _status(utime=10**9, joints=7, fingers=3),
+        lambda w: _status(utime=1),  # gone back
+        lambda w: _status(utime=w.driver.statuses * 10_000, q=np.array(MICO_HOME_Q) + 0.3),  # repeated
+    ],
+    ids=["nan", "sizes", "utime_back", "utime_repeated"],
+)
+def test_a_bad_status_is_dropped_never_commanded(bad) -> None:  # noqa: ANN001
+    wire = Wire(extra=_inject(bad))
+    wire.simulator.AdvanceTo(0.1)
+    assert wire.counts()[1] == 1  # dropped
+    assert wire.out("fault")[0] == Fault.NONE
+    assert all(not np.any(c) for _, c in wire.commands)  # the zero command stays zero
+    np.testing.assert_allclose(wire.out("arm_joint_state")[:6], MICO_HOME_Q, atol=1e-3)
+
+
+def test_an_out_of_limit_status_stops_the_arm() -> None:
+    def bad(w: Wire) -> bytes:
+        q = np.array(MICO_HOME_Q)
+        q[1] = 4.5  # joint 2 (range [-0.75, 3.89] rad) beyond its limits, whichever 2 pi turn
+        return _status(utime=w.driver.statuses * 10_000 + 5_000, q=q)
+
+    wire = Wire(extra=_inject(bad))
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    wire.simulator.AdvanceTo(0.2)
+    assert wire.out("fault")[0] == Fault.JOINT_LIMIT
+    wire.lcm.HandleSubscriptions(0)
+    n_moving = sum(1 for _, c in wire.commands if np.any(c))
+    assert n_moving <= 3 and not np.any(wire.commands[-1][1])
+
+
+def test_a_burst_is_read_as_its_latest_status() -> None:
+    def extra(wire: Wire) -> None:
+        if wire.driver.statuses == 5:
+            wire.driver.step()
+            wire.driver.step()
+
+    wire = Wire(extra=extra)
+    wire.simulator.AdvanceTo(0.1)
+    used, dropped, missed = wire.counts()
+    assert missed == 2 and dropped == 0
+    assert len(wire.commands) <= used + 1
+
+
+def test_start_checks_name_what_is_wrong() -> None:
+    lcm = DrakeLcm("memq://")
+    with pytest.raises(
+        RuntimeError, match=r"no usable arm status on 'KINOVA_JACO_STATUS' at memq:// within 0.1 s"
+    ):
+        build_lcm_station(Lcm(lcm_url="memq://", start_timeout=0.1), StationConfig(), lcm=lcm)
+    with pytest.raises(
+        RuntimeError, match=r"the last one was dropped: num_joints / num_fingers: expected 6 / 2"
+    ):
+        build_lcm_station(
+            Lcm(lcm_url="memq://", start_timeout=0.1),
+            StationConfig(),
+            lcm=lcm,
+            pump=lambda: lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(joints=7, fingers=3)),
+        )
+    q = np.array(MICO_HOME_Q)
+    q[1] = 4.5
+    with pytest.raises(
+        RuntimeError, match=r"first status puts joint 2 at -1.7832 rad, outside the model's limits"
+    ):
+        build_lcm_station(
+            Lcm(lcm_url="memq://", start_timeout=0.1),
+            StationConfig(),
+            lcm=lcm,
+            pump=lambda: lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(q=q)),
+        )
+
+
+def test_the_station_starts_where_the_arm_is() -> None:
+    from drake_disamb.builder import start_ee_pose
+
+    driver = SimulatedDriver(DrakeLcm("memq://"), StationConfig(home_q=tuple(np.array(MICO_HOME_Q) + 0.05)))
+    station = InProcessLcm(lcm_url="memq://", driver=driver).build(StationConfig())
+    plant = station.plant  # the model the statuses pose: its default posture is the measured one
+    X = plant.GetFrameByName("mico_end_effector").CalcPoseInWorld(plant.CreateDefaultContext())
+    np.testing.assert_allclose(start_ee_pose(station)[:3], X.translation(), atol=1e-9)
+    reference = build_station(StationConfig()).diagram
+    home = reference.GetOutputPort("ee_pose").Eval(reference.CreateDefaultContext())
+    assert np.linalg.norm(start_ee_pose(station)[:3] - home[:3]) > 0.01  # not the model's home
+
+
+def test_the_seeded_trial_on_the_wire_matches_the_simulated_one() -> None:
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    scenario = load_scenario("reaching")
+    sim = run_trial(scenario, progress=False)
+    handles = build_shared_control_diagram(scenario, backend=InProcessLcm(lcm_url="memq://"))
+    wire = run_trial(handles, progress=False)
+    assert wire.fault == "" and wire.success == sim.success and wire.reached_goals == sim.reached_goals
+    assert abs(wire.mode_switches - sim.mode_switches) <= 1 and abs(wire.requests - sim.requests) <= 1
+    n = min(len(sim.logs["ee_pose"][1]), len(wire.logs["ee_pose"][1]))
+    gap = np.linalg.norm(sim.logs["ee_pose"][1][:n, :3] - wire.logs["ee_pose"][1][:n, :3], axis=1)
+    assert gap.max() < 0.01, gap.max()
+
+
+# ----------------------------------------------------------------------------------------------
+# Two processes over UDP multicast on loopback: the driver, then the controller.
+# ----------------------------------------------------------------------------------------------
+MULTICAST_HELP = (
+    "UDP multicast on loopback does not work here; on Linux: `sudo ip link set lo multicast on` and "
+    "`sudo ip route add 239.0.0.0/8 dev lo` (see the README, On a real arm)"
+)
+
+
+def multicast_url(port: int) -> str:
+    """A udpm:// URL on loopback that delivers here, or skip the test saying how to enable it."""
+    url = f"udpm://239.255.76.67:{port}?ttl=0"
+    try:
+        lcm = DrakeLcm(url)
+    except RuntimeError as exc:
+        pytest.skip(f"{MULTICAST_HELP} ({exc})")
+    got: list[bytes] = []
+    lcm.Subscribe("DRAKE_DISAMB_PROBE", got.append)
+    lcm.Publish("DRAKE_DISAMB_PROBE", b"probe")
+    lcm.HandleSubscriptions(500)
+    if not got:
+        pytest.skip(MULTICAST_HELP)
+    return url
+
+
+@pytest.mark.slow
+def test_two_processes_run_the_seeded_trial_as_the_simulation_does() -> None:
+    from support import cli_process, wait_for_line
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    url = multicast_url(7681)
+    driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    try:
+        wait_for_line(driver, "mico-driver:", timeout=60)
+        scenario = load_scenario("reaching")
+        handles = build_shared_control_diagram(scenario, backend=Lcm(lcm_url=url))
+        wire = run_trial(handles, progress=False)
+    finally:
+        driver.terminate()
+        driver.communicate(timeout=30)
+    sim = run_trial(scenario, progress=False)
+    assert wire.fault == "" and wire.success and wire.reached_goals == sim.reached_goals
+    assert abs(wire.mode_switches - sim.mode_switches) <= 1 and abs(wire.requests - sim.requests) <= 1
+    n = min(len(sim.logs["ee_pose"][1]), len(wire.logs["ee_pose"][1]))
+    gap = np.linalg.norm(sim.logs["ee_pose"][1][:n, :3] - wire.logs["ee_pose"][1][:n, :3], axis=1)
+    assert gap.max() < 0.01, gap.max()
+
+
+@pytest.mark.slow
+def test_killing_the_driver_mid_trial_stops_the_arm_and_the_demo(tmp_path) -> None:  # noqa: ANN001
+    import json
+    import signal
+
+    from support import cli_process, wait_for_line
+
+    url = multicast_url(7683)
+    tap = DrakeLcm(url)
+    seen: list[tuple[float, np.ndarray]] = []
+    tap.Subscribe(
+        DEFAULT_COMMAND_CHANNEL,
+        lambda data: seen.append((time.monotonic(), np.array(lcmt_jaco_command.decode(data).joint_velocity))),
+    )
+    driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    wait_for_line(driver, "mico-driver:", timeout=60)
+    demo = cli_process(
+        "demo", "--station", "lcm", "--lcm-url", url, "--no-meshcat", "--quiet", "--out", str(tmp_path)
+    )
+    try:
+        wait_for_line(demo, "running the trial", timeout=120)
+        end = time.monotonic() + 2.5
+        while time.monotonic() < end:
+            tap.HandleSubscriptions(10)
+        driver.send_signal(signal.SIGKILL)
+        killed = time.monotonic()
+        end = killed + 1.0
+        while time.monotonic() < end:
+            tap.HandleSubscriptions(10)
+        _, err = demo.communicate(timeout=60)
+    finally:
+        driver.kill()
+        demo.kill()
+    assert demo.returncode == 3, err
+    assert "station fault" in err and "commanded to stop" in err
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert "no fresh arm status" in metrics["station_fault"]
+    assert any(np.any(c) for t, c in seen if t < killed)  # it was moving
+    zero_at = next(t for t, c in seen if t >= killed and not np.any(c))
+    assert zero_at - killed <= 3 * PERIOD + 0.02
+    assert all(not np.any(c) for t, c in seen if t >= zero_at)
+
+
+def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:
+    from drake_disamb.systems.deadman import PageDeadman
+
+    class Page:
+        connections = 1
+
+        def GetNumActiveConnections(self) -> int:  # noqa: N802 (Meshcat's name)
+            return self.connections
+
+    page = Page()
+    deadman = PageDeadman(page, PERIOD, timeout=0.5)
+    simulator = Simulator(deadman)
+    ctx = simulator.get_mutable_context()
+    deadman.GetInputPort("raw_in").FixValue(ctx, [0.7, 0.0, 0.0, 0.0])
+    simulator.AdvanceTo(1.0)
+    assert deadman.GetOutputPort("raw").Eval(ctx)[0] == 0.7
+    page.connections = 0
+    simulator.AdvanceTo(1.45)
+    assert deadman.GetOutputPort("raw").Eval(ctx)[0] == 0.7  # not yet
+    simulator.AdvanceTo(1.6)
+    assert (
+        not np.any(deadman.GetOutputPort("raw").Eval(ctx)) and deadman.GetOutputPort("released").Eval(ctx)[0]
+    )
+    page.connections = 1
+    simulator.AdvanceTo(1.7)
+    assert deadman.GetOutputPort("raw").Eval(ctx)[0] == 0.7
+
+
+def test_the_driver_stops_the_arm_when_commands_stop_and_ignores_bad_ones() -> None:
+    wire = Wire()
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    wire.simulator.AdvanceTo(0.5)
+    driver = wire.driver
+    moving = driver.joint_positions()
+    for _ in range(3):
+        driver.step()
+    assert np.linalg.norm(driver.joint_positions() - moving) > 1e-4  # still obeying the last command
+    for _ in range(60):  # no command for 0.6 s: the arm stops (the PD settles)
+        driver.step()
+    stopped = driver.joint_positions()
+    for _ in range(10):
+        driver.step()
+    assert np.linalg.norm(driver.joint_positions() - stopped) < 1e-5
+    bad = lcmt_jaco_command()
+    bad.num_joints, bad.joint_position, bad.joint_velocity = 6, [0.0] * 6, [float("nan"), 0.3, 0, 0, 0, 0]
+    bad.num_fingers, bad.finger_position, bad.finger_velocity = 2, [0.0] * 2, [0.0] * 2
+    dropped = driver.dropped
+    for _ in range(10):
+        wire.lcm.Publish(DEFAULT_COMMAND_CHANNEL, bad.encode())
+        driver.step()
+    assert driver.dropped == dropped + 10
+    assert np.linalg.norm(driver.joint_positions() - stopped) < 2e-5
+
+
+def test_the_commands_name_a_bad_station_option(capsys, tmp_path) -> None:  # noqa: ANN001
+    from drake_disamb.cli import main
+
+    assert main(["mico-driver", "--lcm-url", "bogus", "--quiet"]) == 2
+    assert "--lcm-url: expected a URL such as udpm://" in capsys.readouterr().err
+    assert main(["demo", "--lcm-url", "memq://", "--no-meshcat", "--out", str(tmp_path)]) == 2
+    assert "--lcm-url: the sim station has no bus (add --station lcm)" in capsys.readouterr().err
+    args = ["station-demo", "--station", "lcm", "--lcm-url", "nourl", "--no-meshcat", "--out", str(tmp_path)]
+    assert main(args) == 2
+    assert "--lcm-url: station.lcm_url: expected a URL" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("stop", ["signal", "exception"])
+def test_a_trial_that_stops_sends_zero_several_times(stop: str) -> None:
+    """A stop request (Ctrl-C, SIGTERM: the commands' flag) or an exception: zero, several times."""
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    backend = InProcessLcm(lcm_url="memq://")
+    handles = build_shared_control_diagram(load_scenario("reaching"), backend=backend)
+    seen: list[np.ndarray] = []
+    backend.driver.lcm.Subscribe(
+        DEFAULT_COMMAND_CHANNEL,
+        lambda data: seen.append(np.array(lcmt_jaco_command.decode(data).joint_velocity)),
+    )
+    calls = [0]
+
+    def stop_requested() -> bool:
+        calls[0] += 1
+        if calls[0] == 150:
+            if stop == "exception":
+                raise RuntimeError("a failure in the loop")
+            return True
+        return False
+
+    if stop == "exception":
+        with pytest.raises(RuntimeError, match="a failure in the loop"):
+            run_trial(handles, progress=False, stop_requested=stop_requested)
+    else:
+        assert run_trial(handles, progress=False, stop_requested=stop_requested).interrupted
+    backend.driver.lcm.HandleSubscriptions(0)
+    repeats = Lcm().zero_command_repeats
+    assert any(np.any(c) for c in seen[:-repeats])  # it was moving
+    assert len(seen) > repeats and all(not np.any(c) for c in seen[-repeats:])
+
+
+def test_a_live_input_on_the_wire_passes_through_the_deadman() -> None:
+    from pydrake.geometry import Meshcat, MeshcatParams
+    from pydrake.systems.framework import LeafSystem
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+
+    class HeldSwitch(LeafSystem):  # a person holding the left switch, as the live page would report
+        def __init__(self) -> None:
+            super().__init__()
+            self.DeclareVectorOutputPort("raw", 4, lambda context, out: out.SetFromVector([1.0, 0, 0, 0]))
+
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    handles = build_shared_control_diagram(
+        load_scenario("reaching"),
+        meshcat=meshcat,
+        input_source=HeldSwitch(),
+        backend=InProcessLcm(lcm_url="memq://"),
+    )
+    deadman = handles.diagram.GetSubsystemByName("deadman")
+    interface = handles.systems["interface"]
+    simulator = Simulator(handles.diagram)
+    ctx = simulator.get_mutable_context()
+    handles.initialize(ctx)
+    simulator.AdvanceTo(1.0)  # no browser at the page: released after 0.5 s
+    assert deadman.GetOutputPort("released").Eval(deadman.GetMyContextFromRoot(ctx))[0] == 1.0
+    assert not np.any(interface.GetInputPort("raw").Eval(interface.GetMyContextFromRoot(ctx)))
+    handles.stop_station()
+    sim_handles = build_shared_control_diagram(
+        load_scenario("reaching"), meshcat=meshcat, input_source=HeldSwitch()
+    )
+    assert not sim_handles.diagram.HasSubsystemNamed("deadman")  # the simulated arm: unchanged
