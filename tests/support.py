@@ -100,18 +100,6 @@ def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float
     return out.reshape(np.shape(q))
 
 
-def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
-    """Rotation matrix ``R`` (``(..., 3, 3)``) with ``R @ v`` rotating ``v`` by ``q``."""
-    u = normalized_quaternions(q, "q")
-    w, x, y, z = u[..., 0], u[..., 1], u[..., 2], u[..., 3]
-    rows = (
-        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-    )
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
-
-
 def integrate_pose(
     position: ArrayLike, quat: ArrayLike, twist_vw: ArrayLike, dt: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

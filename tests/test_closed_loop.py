@@ -12,10 +12,10 @@ import functools
 import numpy as np
 import pytest
 from pydrake.systems.framework import LeafSystem
-from support import quat_to_matrix
 
 from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario, with_overrides
+from drake_disamb.core.geometry import quat_to_matrix
 from drake_disamb.trial import TrialResult, run_trial
 
 

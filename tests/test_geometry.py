@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from support import integrate_pose, quat_to_matrix
+from support import integrate_pose
 
 from drake_disamb.core.geometry import (
     normalized_quaternions,
@@ -13,6 +13,7 @@ from drake_disamb.core.geometry import (
     quat_conjugate,
     quat_from_rotvec,
     quat_multiply,
+    quat_to_matrix,
     quat_to_rotvec,
 )
 

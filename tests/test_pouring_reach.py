@@ -20,11 +20,10 @@ from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.multibody.inverse_kinematics import InverseKinematics
 from pydrake.solvers import Solve
-from support import quat_to_matrix
 
 from drake_disamb.builder import start_ee_pose
 from drake_disamb.config import Scenario, load_scenario, scene_objects
-from drake_disamb.core.geometry import orientation_error
+from drake_disamb.core.geometry import orientation_error, quat_to_matrix
 from drake_disamb.station import (
     ARM_JOINTS,
     EE_FRAME,

@@ -58,7 +58,7 @@ def test_reaching_has_the_study_goals_and_defaults() -> None:
     poses = s.stage_goal_poses(0)
     np.testing.assert_allclose(np.linalg.norm(poses[:, 3:], axis=1), 1.0)
     # Documented orientation: home (pointing down) leaned toward the object's azimuth.
-    from support import quat_to_matrix
+    from drake_disamb.core.geometry import quat_to_matrix
 
     for pose, lean in zip(poses, [30, 35, 60, 25, 15], strict=True):
         z_axis = quat_to_matrix(pose[3:])[:, 2]
@@ -81,7 +81,7 @@ def test_pouring_has_two_stages_that_switch_goal_sets() -> None:
     assert s.releases() == [False, True] and s.stages[1].release_opening == pytest.approx(0.10)
     # Side grasp: the cup's axis is the end-effector x axis; upright (x_E up) at the placing poses,
     # rolled about the horizontal approach axis (z_E) by 60-75 degrees at the pour poses.
-    from support import quat_to_matrix
+    from drake_disamb.core.geometry import quat_to_matrix
 
     assert s.start_joint_positions is not None
     for pose in s.stage_goal_poses(1):
