@@ -26,12 +26,9 @@ import numbers
 from abc import ABC, abstractmethod
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Literal, TypeVar
+from typing import ClassVar, Literal, TypeVar
 
 from drake_disamb.core.layout import DIM_NAMES, GRIPPER_DIM
-
-if TYPE_CHECKING:
-    from drake_disamb.core.interfaces.update import InterfaceConfig
 
 RAW_SIZE = 4
 """Length of the raw signal vector of every interface."""
@@ -179,12 +176,12 @@ class Interface(ABC):
         level = clean[MODE_BUTTON]
         return (1 if level > 0.5 and memory <= 0.5 else 0), level
 
-    def select(self, mode: int, step: int, clean: list[float], config: InterfaceConfig) -> int:
-        """The mode a mode change ``step`` selects from ``mode`` (default: the next / previous one,
-        cycling)."""
+    def select(self, mode: int, step: int, clean: list[float], selection: str) -> int:
+        """The mode a mode change ``step`` selects from ``mode`` with the interface's
+        ``mode_selection`` (default: the next / previous one, cycling)."""
         return (int(mode) + step) % len(self.modes)
 
-    def held(self, clean: list[float], memory: float, config: InterfaceConfig) -> list[float]:
+    def held(self, clean: list[float], memory: float, selection: str) -> list[float]:
         """The sanitised signal the commands are computed from, after the mode events (default:
         ``clean``)."""
         return clean

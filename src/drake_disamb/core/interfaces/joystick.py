@@ -32,12 +32,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from drake_disamb.core.interfaces.base import RAW_SIZE, Interface, LiveControl, register
-
-if TYPE_CHECKING:
-    from drake_disamb.core.interfaces.update import InterfaceConfig
 
 DIRECT_SELECT_DEFLECTION = 0.5
 """Stick deflection (norm of ``(axis_x, axis_y)``, of full deflection 1) from which a mode-button
@@ -104,18 +100,18 @@ class Joystick(Interface):
             1.0 if d >= threshold else 0.0,
         ]
 
-    def select(self, mode: int, step: int, clean: list[float], config: InterfaceConfig) -> int:
+    def select(self, mode: int, step: int, clean: list[float], selection: str) -> int:
         """The next mode (``"cycle"``, or a centred stick), or the stick sector's mode (``"direct"``,
         the stick deflected; possibly ``mode`` itself)."""
         n = len(self.modes)
-        if config.mode_selection == "direct":
+        if selection == "direct":
             chosen = sector_mode(clean[0], clean[1], n)
             if chosen is not None:
                 return chosen
         return (int(mode) + step) % n
 
-    def held(self, clean: list[float], memory: float, config: InterfaceConfig) -> list[float]:
-        if config.mode_selection == "direct" and memory > 0.5:
+    def held(self, clean: list[float], memory: float, selection: str) -> list[float]:
+        if selection == "direct" and memory > 0.5:
             clean[0] = clean[1] = 0.0  # a held mode button: the stick selects, it does not drive
         return clean
 

@@ -364,12 +364,12 @@ def interface_update(
 
     step, memory = variant.mode_event(values, state.prev_mode_button)
     if step:
-        new = variant.select(mode, step, values, config)
+        new = variant.select(mode, step, values, config.mode_selection)
         events.append(InterfaceEvent(float(time), "mode_switch", mode, new))
         mode = new
         switches += 1
 
-    clean = np.array(variant.held(values, memory, config))
+    clean = np.array(variant.held(values, memory, config.mode_selection))
     due, automatic = state.pending_due, state.pending_automatic
     request_level = clean[REQUEST_BUTTON]
     if request_level > 0.5 and state.prev_request_button <= 0.5:
