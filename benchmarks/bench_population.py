@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_disamb.config import load_scenario, validate_scenario, with_overrides
+from drake_disamb.core.interfaces import interface_modes
 from drake_disamb.study.data.authors import read_trials
 from drake_disamb.study.design.population import draw_subjects
 from drake_disamb.study.design.protocol import default_protocol
@@ -52,7 +53,7 @@ def run_one(itf: str, task: str, par: str, subject, seed: int) -> dict:
     goals = [int(rng.integers(len(base.stage_goals(k)))) for k in range(base.n_stages)]
     s = with_overrides(base, interface=itf, paradigm=par, seed=seed, goal=goals)
     s = dataclasses.replace(s, interface_mode_selection=default_protocol().interface_mode_selection)
-    n_modes = 5 if itf == "joystick" else 7
+    n_modes = len(interface_modes(itf))
     user = dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
     s = validate_scenario(
         dataclasses.replace(s, user=user, duration=ARGS.duration, initial_mode=int(rng.integers(n_modes)))

@@ -10,8 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_disamb.core.interfaces import MODES
-from drake_disamb.study.data.authors import mode_name
+from drake_disamb.core.interfaces import gripper_mode, interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder, save_trace
 from drake_disamb.study.data.records import TrialRecord, append_record
 from drake_disamb.study.measures.calibration import estimate_behaviour, format_estimates
@@ -37,7 +36,7 @@ def _trial(
     """A trial of ``interface`` starting in mode index ``initial`` whose user switches are
     ``changes`` (time s, mode index entered); its trace samples the mode every :data:`DT` from
     ``t0`` to ``t_end`` (``duration`` by default)."""
-    modes = MODES[interface]
+    modes = interface_modes(interface)
     t = np.round(np.arange(t0, (duration if t_end is None else t_end) + DT / 2, DT), 6)
     mode = np.full(t.size, float(initial))
     for at, index in changes:
@@ -66,7 +65,7 @@ def _trial(
 
 
 def _trials() -> list[LoggedTrial]:
-    j, h = len(MODES["joystick"]) - 1, len(MODES["head_array"]) - 1  # the gripper modes: 4 and 6
+    j, h = gripper_mode("joystick"), gripper_mode("head_array")  # the gripper modes: 4 and 6
     return [
         # in, out of and back into the gripper mode: ends there 5 s after its second change into it;
         # the trace starts before the start (as the logs' do), with presses there that do not count

@@ -182,10 +182,10 @@ def test_constructor_validation() -> None:
 
 
 def test_interface_switches_mode_in_the_request_period() -> None:
-    from drake_disamb.systems.interfaces import HeadArrayInterface
+    from drake_disamb.systems.interfaces import make_interface
 
     builder = DiagramBuilder()
-    interface = builder.AddSystem(HeadArrayInterface(initial_mode=0))
+    interface = builder.AddSystem(make_interface("head_array", initial_mode=0))
     disamb = builder.AddSystem(DisambiguationSystem(2, interface.arm_modes, control_period=0.01))
     for name, value in (("belief", [0.5, 0.5]), ("ee_pose", EE_POSE), ("goal_poses", GOAL_POSES.ravel())):
         source = builder.AddSystem(ConstantVectorSource(np.asarray(value, dtype=float)))

@@ -6,16 +6,14 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import (
-    DIRECT_SELECT_DEFLECTION,
     InterfaceConfig,
     InterfaceState,
     command_from_raw,
     initial_state,
     interface_update,
     sanitize_raw,
-    sector_mode,
-    sector_stick,
 )
+from drake_disamb.core.interfaces.joystick import DIRECT_SELECT_DEFLECTION, sector_mode, sector_stick
 from drake_disamb.core.layout import GRIPPER_DIM
 
 DT = 0.01
@@ -38,7 +36,7 @@ def test_mode_lists() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "field"),
     [
-        ({"kind": "sip_and_puff"}, "kind"),
+        ({"kind": "trackball"}, "kind"),
         ({"kind": "joystick", "initial_mode": 5}, "initial_mode"),
         ({"kind": "head_array", "initial_mode": -1}, "initial_mode"),
         ({"max_linear_speed": 0.0}, "max_linear_speed"),
@@ -171,9 +169,9 @@ class _Driver:
 
 
 def test_joystick_mode_cycling_counts_rising_edges_only() -> None:
-    from drake_disamb.systems.interfaces import JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(JoystickInterface())
+    d = _Driver(make_interface("joystick"))
     seen = []
     for _ in range(5):  # press and hold for 3 ticks, release for 2: one switch per press
         for _ in range(3):
@@ -197,9 +195,9 @@ def test_joystick_mode_cycling_counts_rising_edges_only() -> None:
 
 
 def test_head_array_back_cycles_seven_modes() -> None:
-    from drake_disamb.systems.interfaces import HeadArrayInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(HeadArrayInterface(initial_mode=5))
+    d = _Driver(make_interface("head_array", initial_mode=5))
     modes = []
     for _ in range(8):
         d.tick([0, 0, 1, 0])
@@ -210,9 +208,9 @@ def test_head_array_back_cycles_seven_modes() -> None:
 
 
 def test_request_switches_mode_in_the_same_update() -> None:
-    from drake_disamb.systems.interfaces import HeadArrayInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(HeadArrayInterface(initial_mode=0), disambiguation_mode=4)
+    d = _Driver(make_interface("head_array", initial_mode=0), disambiguation_mode=4)
     d.tick([1, 0, 0, 1])  # left held and request pressed in the same update
     assert d.scalar("mode") == 4  # switched by this very update
     assert d.scalar("request_count") == 1 and d.scalar("mode_switch_count") == 0
@@ -227,9 +225,9 @@ def test_request_switches_mode_in_the_same_update() -> None:
 
 
 def test_request_minus_one_keeps_mode() -> None:
-    from drake_disamb.systems.interfaces import JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(JoystickInterface(initial_mode=2), disambiguation_mode=-1)
+    d = _Driver(make_interface("joystick", initial_mode=2), disambiguation_mode=-1)
     d.tick([0, 0, 0, 1])
     d.tick([0, 0, 0, 0])
     d.tick([0, 0, 0, 1])
@@ -239,17 +237,17 @@ def test_request_minus_one_keeps_mode() -> None:
 
 
 def test_request_without_disambiguation_system_is_logged_only() -> None:
-    from drake_disamb.systems.interfaces import JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(JoystickInterface(initial_mode=3))  # disambiguation_mode left unconnected
+    d = _Driver(make_interface("joystick", initial_mode=3))  # disambiguation_mode left unconnected
     d.tick([0, 0, 0, 1])
     assert d.scalar("mode") == 3 and d.scalar("request_count") == 1
 
 
 def test_nonfinite_raw_gives_zero_command() -> None:
-    from drake_disamb.systems.interfaces import JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(JoystickInterface())
+    d = _Driver(make_interface("joystick"))
     d.tick([0.5, 0.5, 0, 0])
     np.testing.assert_allclose(d.out("u_h"), [0.065, 0.065, 0, 0, 0, 0])
     with pytest.warns(RuntimeWarning, match="non-finite"):
@@ -263,48 +261,48 @@ def test_nonfinite_raw_gives_zero_command() -> None:
 
 
 def test_speed_limits_and_clipping_are_config_fields() -> None:
-    from drake_disamb.systems.interfaces import HeadArrayInterface, JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(JoystickInterface(max_linear_speed=0.05, max_angular_speed=0.3, initial_mode=2))
+    d = _Driver(make_interface("joystick", max_linear_speed=0.05, max_angular_speed=0.3, initial_mode=2))
     d.tick([5.0, -5.0, 0, 0])  # clipped to [1, -1]
     np.testing.assert_allclose(d.out("u_h"), [0, 0, 0, 0.3, 0, -0.3])
-    d = _Driver(HeadArrayInterface(max_linear_speed=0.07, initial_mode=2))
+    d = _Driver(make_interface("head_array", max_linear_speed=0.07, initial_mode=2))
     d.tick([0, 1, 0, 0])
     np.testing.assert_allclose(d.out("u_h"), [0, 0, -0.07, 0, 0, 0])
 
 
 def test_gripper_mode_drives_only_the_gripper() -> None:
-    from drake_disamb.systems.interfaces import JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(JoystickInterface(initial_mode=4, gripper_speed=0.03))
+    d = _Driver(make_interface("joystick", initial_mode=4, gripper_speed=0.03))
     d.tick([-1.0, 1.0, 0, 0])
     np.testing.assert_array_equal(d.out("u_h"), np.zeros(6))
     assert d.scalar("gripper_command") == pytest.approx(-0.03)
-    d = _Driver(JoystickInterface(initial_mode=0))
+    d = _Driver(make_interface("joystick", initial_mode=0))
     d.tick([-1.0, 1.0, 0, 0])
     assert d.scalar("gripper_command") == 0.0
 
 
 def test_outputs_come_from_state() -> None:
-    from drake_disamb.systems.interfaces import HeadArrayInterface, JoystickInterface
+    from drake_disamb.systems.interfaces import make_interface
 
-    for system in (JoystickInterface(), HeadArrayInterface()):
+    for system in (make_interface("joystick"), make_interface("head_array")):
         raw = system.GetInputPort("raw").get_index()
         disamb = system.GetInputPort("disambiguation_mode").get_index()
         for i in range(system.num_output_ports()):
             assert not system.HasDirectFeedthrough(raw, i)
             assert not system.HasDirectFeedthrough(disamb, i)
     # The raw signal is only seen after an update.
-    system = JoystickInterface()
+    system = make_interface("joystick")
     ctx = system.CreateDefaultContext()
     system.GetInputPort("raw").FixValue(ctx, [1.0, 1.0, 0.0, 0.0])
     np.testing.assert_array_equal(system.GetOutputPort("u_h").Eval(ctx), np.zeros(6))
 
 
 def test_set_mode_and_attributes() -> None:
-    from drake_disamb.systems.interfaces import HeadArrayInterface, JoystickInterface, make_interface
+    from drake_disamb.systems.interfaces import make_interface
 
-    joy = JoystickInterface()
+    joy = make_interface("joystick")
     assert joy.modes == [[0, 1], [0, 2], [3, 5], [4], [6]] and joy.arm_modes == joy.modes[:-1]
     assert joy.raw_layout == ("axis_x", "axis_y", "mode_button", "disambiguation_button")
     ctx = joy.CreateDefaultContext()
@@ -313,11 +311,13 @@ def test_set_mode_and_attributes() -> None:
     with pytest.raises(ValueError, match="mode"):
         joy.set_mode(ctx, 5)
     head = make_interface(InterfaceConfig(kind="head_array", initial_mode=6))
-    assert isinstance(head, HeadArrayInterface)
+    assert head.get_name() == "head_array"
     assert head.GetOutputPort("mode").Eval(head.CreateDefaultContext())[0] == 6
     assert len(head.arm_modes) == 6
-    with pytest.raises(ValueError, match="kind"):
-        JoystickInterface(InterfaceConfig(kind="head_array"))
+    with pytest.raises(ValueError, match="kind: expected one of"):
+        make_interface("trackball")
+    with pytest.raises(ValueError, match="config"):
+        make_interface(3)  # type: ignore[arg-type]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -389,3 +389,83 @@ def test_cycle_selection_ignores_the_stick_and_drives_while_pressing() -> None:
 def test_mode_selection_validation(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         InterfaceConfig(**kwargs)
+
+
+# ---------------------------------------------------------------------------------------------
+# the registry and the variants
+# ---------------------------------------------------------------------------------------------
+
+
+def test_registry_lists_the_kinds_in_rank_order_and_names_them_in_errors() -> None:
+    from drake_disamb.core.interfaces import INTERFACES, check_kind, interfaces_in
+
+    assert list(INTERFACES)[:2] == ["joystick", "head_array"]
+    assert [k.rank for k in INTERFACES.values()] == sorted(k.rank for k in INTERFACES.values())
+    assert interfaces_in(["head_array", "joystick", "head_array", "other"]) == ["joystick", "head_array"]
+    with pytest.raises(ValueError, match=r"interface kind: expected one of \('joystick', 'head_array'"):
+        check_kind("trackball")
+
+
+@pytest.mark.parametrize("name", ["joystick", "head_array"])
+def test_every_kind_drives_steps_and_requests_through_its_own_raw_signal(name: str) -> None:
+    """What the simulated user and the live page rely on, read from the variant alone."""
+    from drake_disamb.core.interfaces import INTERFACES
+
+    kind = INTERFACES[name]
+    cfg = InterfaceConfig(kind=name)
+    assert cfg.variant is kind and cfg.modes == kind.modes and cfg.modes[-1] == (GRIPPER_DIM,)
+    assert len(kind.raw_layout) == 4 and kind.raw_layout[-1] == "disambiguation_button"
+    assert any(c.role == "request" for c in kind.live_controls) and kind.live_help
+    s = initial_state(cfg)
+    s, _ = interface_update(s, kind.drive_raw([1.0]), 0.0, cfg)  # drive mode 0 positive
+    u, _ = command_from_raw(s.held_raw, s.mode, cfg)
+    assert u[kind.modes[0][0]] == pytest.approx(kind.default_speeds[0])
+    assert kind.is_driving(kind.drive_raw([-1.0]))
+    s, events = interface_update(s, kind.step_raw(1), 0.01, cfg)
+    s, more = interface_update(s, np.zeros(4), 0.02, cfg)
+    assert s.mode == 1 and [e.kind for e in events + more] == ["mode_switch"]
+    s, events = interface_update(s, kind.request_raw(), 0.03, cfg)
+    assert [e.kind for e in events] == ["disambiguation_request"]
+
+
+def test_the_mode_order_is_a_field_of_the_variant() -> None:
+    from drake_disamb.core.interfaces.head_array import HeadArray
+
+    order = ((0,), (1,), (2,), (5,), (3,), (4,))
+    cfg = InterfaceConfig(kind="head_array", variant=HeadArray(mode_order=order))
+    assert cfg.modes == (*order, (GRIPPER_DIM,)) and cfg.arm_modes == order
+    s, _ = interface_update(initial_state(cfg), [0.0, 0.0, 1.0, 0.0], 0.0, cfg)  # next mode: wz
+    s, _ = interface_update(s, [0.0, 0.0, 0.0, 0.0], 0.01, cfg)
+    s, _ = interface_update(s, [0.0, 0.0, 1.0, 0.0], 0.02, cfg)
+    s, _ = interface_update(s, [0.0, 0.0, 1.0, 0.0], 0.03, cfg)
+    s, _ = interface_update(s, [0.0, 0.0, 1.0, 0.0], 0.04, cfg)  # held: one press
+    s, _ = interface_update(s, [0.0, 0.0, 0.0, 0.0], 0.05, cfg)
+    s, _ = interface_update(s, [0.0, 0.0, 1.0, 0.0], 0.06, cfg)
+    s, _ = interface_update(s, [1.0, 0.0, 0.0, 0.0], 0.07, cfg)
+    assert s.mode == 3
+    u, _ = command_from_raw(s.held_raw, s.mode, cfg)
+    assert u.tolist() == [0.0, 0.0, 0.0, 0.0, 0.0, pytest.approx(0.2)]
+    assert HeadArray().mode_steps(1, 0) == 6  # forward only: round the cycle
+
+
+@pytest.mark.parametrize(
+    ("order", "message"),
+    [
+        (((0,), (1,)), "every arm dimension"),
+        (((0, 1), (2,), (3,), (4,), (5,)), "1 to 1 arm dimension"),
+        (((0,), (0,), (1,), (2,), (3,), (4,), (5,)), "distinct"),
+        (((0,), (1,), (2,), (3,), (4,), (6,)), r"\[0, 5\]"),
+    ],
+)
+def test_mode_order_validation(order: tuple, message: str) -> None:
+    from drake_disamb.core.interfaces.head_array import HeadArray
+
+    with pytest.raises(ValueError, match=rf"HeadArray\.mode_order: .*{message}"):
+        HeadArray(mode_order=order)
+
+
+def test_a_variant_of_another_kind_is_rejected() -> None:
+    from drake_disamb.core.interfaces.head_array import HeadArray
+
+    with pytest.raises(ValueError, match="InterfaceConfig.variant: expected a joystick variant"):
+        InterfaceConfig(kind="joystick", variant=HeadArray())

@@ -15,7 +15,7 @@ from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic
 from drake_disamb.core.disambiguation import select_disambiguating_mode
 from drake_disamb.core.interfaces import InterfaceConfig, InterfaceState, initial_state, interface_update
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
-from drake_disamb.systems.interfaces import HeadArrayInterface
+from drake_disamb.systems.interfaces import make_interface
 
 DT = 0.01
 PRESS = [0.0, 0.0, 0.0, 1.0]
@@ -224,7 +224,7 @@ class _Interface:
     """A head array stepped tick by tick with fixed inputs."""
 
     def __init__(self, config: InterfaceConfig, choice: float) -> None:
-        self.system = HeadArrayInterface(config)
+        self.system = make_interface(config)
         self.sim = Simulator(self.system)
         self.ctx = self.sim.get_mutable_context()
         self.system.GetInputPort("disambiguation_mode").FixValue(self.ctx, [choice])
@@ -329,11 +329,11 @@ def test_scenario_fields_resolve() -> None:
 
 def test_the_simulated_user_asks_only_in_the_disambiguation_paradigm() -> None:
     s = load_scenario("reaching")
-    asks = resolve_scenario(s).user
+    asks = resolve_scenario(s).user.requests
     assert asks.request_at_start and asks.request_when_unhelped_for is not None
     for paradigm in ("manual", "automatic"):  # no button / the system switches by itself
         s.paradigm = paradigm
-        user = resolve_scenario(s).user
+        user = resolve_scenario(s).user.requests
         assert not user.request_at_start and user.request_when_unhelped_for is None
         assert user.request_instead_prob == 0.0
 

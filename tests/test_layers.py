@@ -50,7 +50,12 @@ def package_copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
     ("module", "line", "contract", "shown"),
     [
         # The core reaching up to the study (an upward import, and a circle core <-> study).
-        ("core/layout.py", "import drake_disamb.study.records", "Layers import one way", "core.layout -> "),
+        (
+            "core/layout.py",
+            "import drake_disamb.study.data.records",
+            "Layers import one way",
+            "core.layout -> ",
+        ),
         # The station reaching up to the builder.
         ("station/config.py", "from drake_disamb import builder", "Layers import one way", "builder"),
         # Drake in the numpy core.

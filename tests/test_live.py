@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update, sector_stick
+from drake_disamb.core.interfaces import INTERFACES, InterfaceConfig, initial_state, interface_update
+from drake_disamb.core.interfaces.joystick import sector_stick
 from drake_disamb.systems.live import (
     AXIS_SLIDERS,
-    LIVE_CONTROLS,
     LiveInputConfig,
     LiveState,
     MeshcatLiveInput,
@@ -90,7 +90,7 @@ def test_a_live_mode_click_with_the_stick_deflected_selects_directly() -> None:
 
 def test_validation_and_state_round_trip() -> None:
     with pytest.raises(ValueError, match="kind"):
-        live_raw_step(LiveState(), 0.0, "sip_and_puff", np.zeros(4))
+        live_raw_step(LiveState(), 0.0, "trackball", np.zeros(4))
     with pytest.raises(ValueError, match="hold_time"):
         LiveInputConfig(hold_time=0.0)
     with pytest.raises(ValueError, match="dead_zone"):
@@ -143,13 +143,13 @@ class FakePage:
         return self.gamepad
 
     def click(self, index: int, kind: str = "head_array") -> None:
-        self.buttons[LIVE_CONTROLS[kind][index][0]] += 1
+        self.buttons[INTERFACES[kind].live_controls[index].label] += 1
 
 
 def test_system_adds_its_controls_and_removes_them() -> None:
     page = FakePage()
     system = MeshcatLiveInput(page, HEAD)
-    assert sorted(page.keycodes.values()) == sorted(k for _, k in LIVE_CONTROLS["head_array"])
+    assert sorted(page.keycodes.values()) == sorted(c.keycode for c in INTERFACES["head_array"].live_controls)
     system.remove_controls()
     assert page.buttons == {}
     page = FakePage()
@@ -236,7 +236,7 @@ def test_real_meshcat_button_click_reaches_the_raw_signal() -> None:
 
     meshcat = Meshcat(MeshcatParams(host="localhost"))
     system = MeshcatLiveInput(meshcat, HEAD)
-    name = LIVE_CONTROLS["head_array"][2][0]  # Back
+    name = INTERFACES["head_array"].live_controls[2].label  # Back
     meshcat._InjectWebsocketMessage(message=_msgpack_str_map({"type": "button", "name": name}))
     assert meshcat.GetButtonClicks(name) == 1
     simulator = Simulator(system)

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from support import screenshot_script
 
-from drake_disamb.core.interfaces import InterfaceConfig
-from drake_disamb.systems.live import AXIS_SLIDERS, LIVE_CONTROLS, MeshcatLiveInput
+from drake_disamb.core.interfaces import INTERFACES, InterfaceConfig
+from drake_disamb.systems.live import AXIS_SLIDERS, MeshcatLiveInput
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMEDRIVER = shutil.which("chromedriver")
@@ -67,7 +67,7 @@ def page() -> Iterator[Callable[[str], tuple[Any, Any, MeshcatLiveInput]]]:
         opened.append((driver, system))
         driver.get(meshcat.web_url())
         _wait(lambda: meshcat.GetNumActiveConnections() > 0, "the browser never connected")
-        first = LIVE_CONTROLS[kind][-1][0]  # every interface has the request button
+        first = INTERFACES[kind].live_controls[-1].label  # every interface has the request button
         _wait(lambda: driver.execute_script(FIND_CONTROL, first), "the page never showed the controls")
         return meshcat, driver, system
 
@@ -87,7 +87,7 @@ def _raw(system: MeshcatLiveInput) -> np.ndarray:
 
 def test_head_array_key_presses_and_repeats_reach_the_raw_signal(page) -> None:  # noqa: ANN001
     meshcat, driver, system = page("head_array")
-    left = LIVE_CONTROLS["head_array"][0][0]
+    left = INTERFACES["head_array"].live_controls[0].label
     driver.execute_script(KEYDOWN, "ArrowLeft", False)
     for _ in range(4):  # what a held key sends after the auto-repeat delay
         driver.execute_script(KEYDOWN, "ArrowLeft", True)

@@ -19,7 +19,7 @@ from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import DisambiguationSystem
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
-from drake_disamb.systems.interfaces import EventLog, HeadArrayInterface
+from drake_disamb.systems.interfaces import EventLog, make_interface
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
 GOALS = np.array([[0.3, -0.4, 0.1, *IDENTITY], [-0.2, -0.5, 0.2, 0.0, 1.0, 0.0, 0.0]])
@@ -117,7 +117,7 @@ def test_dft_drive_is_computed_once_per_input_change(monkeypatch: pytest.MonkeyP
 
 
 def test_interface_outputs_are_state_and_follow_set_mode() -> None:
-    interface = HeadArrayInterface(InterfaceConfig(kind="head_array", initial_mode=0))
+    interface = make_interface(InterfaceConfig(kind="head_array", initial_mode=0))
     ctx = interface.CreateDefaultContext()
     interface.GetInputPort("raw").FixValue(ctx, [1.0, 0.0, 0.0, 0.0])  # "left": + along the mode
     interface.GetInputPort("disambiguation_mode").FixValue(ctx, [-1.0])

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update
+from drake_disamb.core.sampling import lognormal
 from drake_disamb.core.user import (
     UserConfig,
     UserState,
     choose_mode,
-    lognormal,
     mode_usefulness,
     user_step,
 )
@@ -58,11 +58,15 @@ def run_fixed_mode(config, mode, interface=JOY, until=3.0, ee=EE, belief=None):
 
 
 def test_new_fields_default_to_the_deterministic_user() -> None:
-    cfg = UserConfig()
-    assert cfg.decision_period is None and cfg.direction_kappa is None and cfg.request_decay_time is None
-    assert cfg.mode_temperature == 0 and cfg.pause_rate == 0 and cfg.wrong_press_prob == 0
-    assert cfg.request_prob == 1 and cfg.accept_prob == 1 and cfg.request_instead_prob == 0
-    assert cfg.aim_error == 0 and cfg.correction_prob == 0 and not cfg.keep_assisted_mode
+    cfg = UserConfig().flat()
+    assert (
+        cfg["decision_period"] is None
+        and cfg["direction_kappa"] is None
+        and cfg["request_decay_time"] is None
+    )
+    assert cfg["mode_temperature"] == 0 and cfg["pause_rate"] == 0 and cfg["wrong_press_prob"] == 0
+    assert cfg["request_prob"] == 1 and cfg["accept_prob"] == 1 and cfg["request_instead_prob"] == 0
+    assert cfg["aim_error"] == 0 and cfg["correction_prob"] == 0 and not cfg["keep_assisted_mode"]
     # No draw is made by the default user (the draw counter keys every random number).
     states = run_fixed_mode(QUIET, 1, until=1.0)
     assert all(s.draws == 0 for s in states)
@@ -89,7 +93,7 @@ def test_new_fields_are_validated(field: str, value: float) -> None:
 
 
 def test_without_requests_turns_every_request_off() -> None:
-    cfg = UserConfig(request_instead_prob=0.5).without_requests()
+    cfg = UserConfig(request_instead_prob=0.5).without_requests().requests
     assert (
         not cfg.request_at_start and cfg.request_when_unhelped_for is None and cfg.request_instead_prob == 0
     )
@@ -637,7 +641,7 @@ def test_subjects_apply_to_a_scenario_and_survive_yaml() -> None:
                 "request_when_unhelped_for",
             ):
                 continue
-            assert getattr(user, key) == value, key
+            assert user.flat()[key] == value, key
         if paradigm == "manual":
-            assert not user.request_at_start and user.request_instead_prob == 0
-            assert user.request_when_unhelped_for is None
+            assert not user.requests.request_at_start and user.requests.request_instead_prob == 0
+            assert user.requests.request_when_unhelped_for is None

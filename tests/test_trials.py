@@ -24,13 +24,13 @@ from drake_disamb.core.comparison import (
     trial_accuracy,
 )
 from drake_disamb.core.inference import bayes_step, dft_euler_step, memory_step, uniform_belief
+from drake_disamb.core.sampling import sample_von_mises_fisher
 from drake_disamb.core.trial_files import load_trial_mat, load_trials, save_trial_mat
 from drake_disamb.core.trials import (
     GeneratorConfig,
     Trial,
     generate_trials,
     iter_generated_chunks,
-    sample_von_mises_fisher,
 )
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"

@@ -162,7 +162,7 @@ def test_a_stalled_mode_is_left_for_the_other_mode_with_most_left() -> None:
     # Mode vx, 0.2 m (20 tolerances) to go, but the arm does not move (a joint limit, say): after
     # stall_time of commanding, the user targets vz (0.05 m left), the other mode with work left.
     states = _drive_head_array(NO_REQUESTS, lambda t: EE, 2.0)
-    assert NO_REQUESTS.stall_time == 2.0
+    assert NO_REQUESTS.mode_choice.stall_time == 2.0
     assert all(s.raw[0] == 1.0 for s in states[:-1])  # driving +x up to 1.99 s
     assert states[-1].raw[2] == 1.0 and states[-1].target_mode == 2  # back pressed toward vz
     assert states[-1].progress_mode == -1  # the watch restarts after the press
@@ -417,7 +417,7 @@ def test_system_constructor_validation() -> None:
     with pytest.raises(ValueError, match="goal_index"):
         SimulatedUser("joystick", [0, 5], 2)
     with pytest.raises(ValueError, match="kind"):
-        SimulatedUser("sip_and_puff", 0, 2)
+        SimulatedUser("trackball", 0, 2)
     with pytest.raises(ValueError, match="reaction_time"):
         SimulatedUser("joystick", 0, 2, UserConfig(reaction_time=0.015))
 
@@ -431,7 +431,7 @@ def test_diagram_loop_reaches_goal() -> None:
     from drake_disamb.core.blending import BlendingConfig
     from drake_disamb.systems.autonomy import PotentialFieldAutonomy
     from drake_disamb.systems.blending import SharedControlBlender
-    from drake_disamb.systems.interfaces import HeadArrayInterface
+    from drake_disamb.systems.interfaces import make_interface
     from drake_disamb.systems.user import SimulatedUser
 
     class KinematicEndEffector(LeafSystem):
@@ -456,7 +456,7 @@ def test_diagram_loop_reaches_goal() -> None:
     n = len(goals)
     b = DiagramBuilder()
     user = b.AddSystem(SimulatedUser("head_array", 0, n, NO_REQUESTS))
-    iface = b.AddSystem(HeadArrayInterface(initial_mode=5))
+    iface = b.AddSystem(make_interface("head_array", initial_mode=5))
     autonomy = b.AddSystem(PotentialFieldAutonomy(n))
     blender = b.AddSystem(SharedControlBlender(n, BlendingConfig()))
     ee = b.AddSystem(KinematicEndEffector(EE, 0.01))
@@ -580,7 +580,7 @@ def test_with_stay_while_assisted_a_joystick_user_keeps_any_mode_while_the_assis
     helping = np.array([0.9, 0.1])
     stay = dataclasses.replace(NO_REQUESTS, stay_while_assisted=True, mode_review_rate=1000.0)
     s = step(own, 1.0, 0, interface=JOY, config=stay, ee=ee, belief=helping)
-    assert 0.0 < s.raw[0] <= stay.min_axis + 1e-12 and s.raw[2] == 0.0  # a small push toward +x
+    assert 0.0 < s.raw[0] <= stay.command.min_axis + 1e-12 and s.raw[2] == 0.0  # a small push toward +x
     away = step(own, 1.0, 0, interface=JOY, config=stay, ee=ee, belief=np.array([0.5, 0.5]))
     assert away.raw[2] == 1.0  # no assistance: x is done, it goes for z
     plain = dataclasses.replace(stay, stay_while_assisted=False)
@@ -720,3 +720,35 @@ def test_system_releases_per_stage() -> None:
     np.testing.assert_array_equal(out.Eval(ctx), [1, 0, 0, 0])  # left: opens the gripper
     with pytest.raises(ValueError, match=r"releases: expected one bool per stage \(2\), got \[True\]"):
         SimulatedUser("head_array", [0, 1], 2, releases=[True])
+
+
+def test_user_config_groups_take_flat_fields_and_replace() -> None:
+    from drake_disamb.core.user import FIELD_GROUPS, RequestConfig, TimingConfig
+
+    cfg = UserConfig(reaction_time=0.5, request_prob=0.4, seed=3)
+    assert cfg.timing == TimingConfig(reaction_time=0.5) and cfg.requests == RequestConfig(request_prob=0.4)
+    assert cfg.seed == 3 and cfg.flat()["reaction_time"] == 0.5
+    again = dataclasses.replace(cfg, settle_time=0.2, pause_rate=0.1)
+    assert (
+        again.timing.reaction_time == 0.5
+        and again.timing.settle_time == 0.2
+        and again.pauses.pause_rate == 0.1
+    )
+    assert UserConfig(timing=TimingConfig(reaction_time=0.5), request_prob=0.4, seed=3) == cfg
+    assert set(FIELD_GROUPS) | {"seed", "rho1"} <= set(UserConfig.flat_types())
+    assert list(UserConfig.flat_types()) == list(UserConfig().flat())
+    assert UserConfig(**UserConfig(aim_error=0.2).flat()) == UserConfig(aim_error=0.2)
+    with pytest.raises(ValueError, match=r"UserConfig: unknown fields \['reaction'\]"):
+        UserConfig(reaction=0.5)
+    with pytest.raises(ValueError, match=r"UserConfig\.timing: expected a TimingConfig"):
+        UserConfig(timing=RequestConfig())
+    with pytest.raises(ValueError, match=r"UserConfig\.pause_duration: expected a finite number > 0"):
+        UserConfig(pause_duration=0.0)
+
+
+def test_the_rules_are_one_function_each_in_order() -> None:
+    from drake_disamb.core.user import rules
+
+    names = [rule.__name__ for rule in rules.RULES]
+    assert names[0] == "release_rule" and names[-1] == "pause_rule" and len(set(names)) == len(names)
+    assert names.index("request_rule") < names.index("target_rule") < names.index("stall_rule")

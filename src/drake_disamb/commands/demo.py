@@ -64,26 +64,9 @@ from drake_disamb.commands._meshcat import (
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
+from drake_disamb.core.interfaces import INTERFACES
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
-
-
-LIVE_HELP = {
-    "head_array": (
-        "Live: drive from the Meshcat page (click into it first). Hold the Left (+) or Right (-)\n"
-        "arrow key to drive the mode's dimension (a tap drives it for 0.6 s); Down switches to the\n"
-        "next mode, Space asks the robot for the disambiguating mode. The trial ends at the goal\n"
-        "given by --goal (default 0), after --duration, or when you press Ctrl-C here (the metrics,\n"
-        "figure and recording so far are kept)."
-    ),
-    "joystick": (
-        "Live: drive from the Meshcat page (click into it first) or plug in a gamepad. A/D and S/W\n"
-        "step the two axes, C centres them, M switches mode, Space asks the robot for the\n"
-        "disambiguating mode. The trial ends at the goal given by --goal (default 0), after --duration,\n"
-        "or when you press Ctrl-C here (the metrics, figure and recording so far are kept)."
-    ),
-}
-"""What ``--live`` prints before the trial, per interface."""
 
 
 def _goal_arg(text: str) -> int | list[int]:
@@ -114,7 +97,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="reaching",
         help="embedded task name (reaching, pouring) or a scenario YAML path (default: reaching)",
     )
-    parser.add_argument("--interface", default=None, help="head_array or joystick (default: the scenario's)")
+    parser.add_argument(
+        "--interface",
+        default=None,
+        help=f"{', '.join(INTERFACES)} (default: the scenario's)",
+    )
     parser.add_argument(
         "--paradigm", default=None, help="manual, disambiguation or automatic (default: the scenario's)"
     )
@@ -440,7 +427,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     if meshcat is not None:
         _show_url(meshcat, args, stop)
     if args.live:
-        print(LIVE_HELP[scenario.interface], flush=True)
+        print(INTERFACES[scenario.interface].live_help, flush=True)
     print(
         f"running the trial (up to {scenario.duration:g} s simulated); Ctrl-C stops it and keeps the results",
         flush=True,

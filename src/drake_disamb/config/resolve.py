@@ -55,7 +55,7 @@ from drake_disamb.core.disambiguation import (
     preset,
 )
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
-from drake_disamb.core.interfaces import MODE_SELECTIONS, InterfaceConfig
+from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS, InterfaceConfig
 from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import is_real
 
@@ -219,8 +219,8 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
             initial_mode=s.initial_mode,
             request_latency=float(latency),
             serve_requests=automatic is None or automatic.request_button,
-            # The head array has no stick to select with: it always cycles.
-            mode_selection=selection if s.interface == "joystick" else "cycle",
+            # A kind that does not offer the selection (the head array: no stick) cycles.
+            mode_selection=selection if selection in INTERFACES[s.interface].mode_selections else "cycle",
         ),
     )
     home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}

@@ -46,14 +46,11 @@ from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
 from drake_disamb.core.inference import AGREEMENT_MEASURES, INFERENCE_METHODS, DFTParams
-from drake_disamb.core.interfaces import MODE_SELECTIONS
+from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS
 from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import MAX_GOALS
 from drake_disamb.station import default_plant_config
-
-INTERFACES: tuple[str, ...] = ("joystick", "head_array")
-"""Interface names accepted by :attr:`Scenario.interface`."""
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
@@ -78,23 +75,28 @@ def _spec_class(
     exclude: tuple[str, ...] = (),
     doc: str,
 ) -> type:
-    """A mutable dataclass with the fields of the frozen core config ``config_type``.
+    """A mutable dataclass with the fields of the frozen core config ``config_type`` (flat: a
+    config of nested groups with ``flat_types`` / ``flat`` gives every group's fields by name).
 
     Defaults are those of the instance ``defaults``; ``types`` replaces a field's type by one Drake's
     loader reads (a numpy matrix as ``list[list[float]]``); ``exclude`` leaves fields out (the
     resolver sets them). ``spec.to_config(**extra)`` builds the frozen config (lists become arrays).
     """
-    hints = typing.get_type_hints(config_type)
+    if hasattr(config_type, "flat_types"):  # a config of nested groups, written flat
+        hints, values = config_type.flat_types(), defaults.flat()
+    else:
+        hints = typing.get_type_hints(config_type)
+        values = {f.name: getattr(defaults, f.name) for f in dataclasses.fields(config_type)}
     types = types or {}
     fields = []
-    for f in dataclasses.fields(config_type):
-        if f.name in exclude:
+    for key in values:
+        if key in exclude:
             continue
-        tp = types.get(f.name, hints[f.name])
-        value = getattr(defaults, f.name)
+        tp = types.get(key, hints[key])
+        value = values[key]
         if value is not None and type(None) in typing.get_args(tp):  # programming error, at import
-            raise TypeError(f"{name}.{f.name}: an optional field needs the default None, got {value!r}")
-        fields.append((f.name, tp, field(default_factory=functools.partial(copy.deepcopy, value))))
+            raise TypeError(f"{name}.{key}: an optional field needs the default None, got {value!r}")
+        fields.append((key, tp, field(default_factory=functools.partial(copy.deepcopy, value))))
 
     def to_config(self: Any, **extra: Any) -> Any:
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
@@ -346,13 +348,15 @@ class Scenario:
     Attributes:
         task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
         description: Free text.
-        interface: ``"joystick"`` or ``"head_array"``.
-        interface_mode_selection: How the joystick's mode button selects a mode: ``"cycle"``
-            (default: the next mode) or ``"direct"`` (a press with the stick deflected selects the
+        interface: A registered interface name (:data:`drake_disamb.core.interfaces.INTERFACES`:
+            ``"joystick"``, ``"head_array"``, ...).
+        interface_mode_selection: How a mode change selects a mode: ``"cycle"`` (default: the
+            next mode) or ``"direct"`` (the joystick: a press with the stick deflected selects the
             mode of the stick's sector, one press per change; centred, it cycles: see
-            :mod:`drake_disamb.core.interfaces`). The simulated user selects the way the interface
-            offers. The head array, with no stick, always cycles: the setting applies to the
-            joystick's trials only, so one setting serves a protocol with both interfaces.
+            :mod:`drake_disamb.core.interfaces.joystick`). The simulated user selects the way the
+            interface offers. A kind that does not offer it (the head array, with no stick)
+            cycles: the setting applies to the trials of the kinds that offer it only, so one
+            setting serves a protocol with several interfaces.
         paradigm: ``"manual"`` (mode button only), ``"disambiguation"`` (plus the request
             button) or ``"automatic"`` (plus the system's own switches, :class:`AutomaticSpec`).
         inference, disambiguation, blending, autonomy, user: Component settings.

@@ -1,9 +1,8 @@
-"""Interface systems: a 2-axis joystick and a 3-switch head array, each with a request button.
+"""The interface system: any registered kind of control interface as a Drake LeafSystem.
 
 The logic (raw layout, modes, speeds, edge detection, request handling) is in
-:mod:`drake_disamb.core.interfaces`; these systems hold its state and run its update every
-control period. Both share :class:`InterfaceSystem`; :class:`JoystickInterface` and
-:class:`HeadArrayInterface` only choose the interface kind.
+:mod:`drake_disamb.core.interfaces` (one module per kind); :class:`InterfaceSystem` holds its
+state and runs its update every control period, whatever the kind (:func:`make_interface`).
 """
 
 from __future__ import annotations
@@ -16,7 +15,6 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
 
 from drake_disamb.core.interfaces import (
-    RAW_LAYOUTS,
     RAW_SIZE,
     InterfaceConfig,
     InterfaceEvent,
@@ -27,14 +25,7 @@ from drake_disamb.core.interfaces import (
 )
 from drake_disamb.systems._status import DID_NOTHING
 
-__all__ = [
-    "EventLog",
-    "HeadArrayInterface",
-    "InterfaceEvent",
-    "InterfaceSystem",
-    "JoystickInterface",
-    "make_interface",
-]
+__all__ = ["EventLog", "InterfaceEvent", "InterfaceSystem", "make_interface"]
 
 
 class EventLog(tuple):
@@ -76,11 +67,11 @@ class InterfaceSystem(LeafSystem):
         - event_log
 
     Input ports:
-        raw (4): the device signals. Joystick ``[axis_x, axis_y, mode_button,
-            disambiguation_button]`` (axes in [-1, 1], clipped; buttons 0/1). Head array ``[left,
-            right, back, disambiguation_button]`` (switches 0/1). Levels ``>= button_threshold``
-            (0.5) count as pressed; NaN/inf entries are read as 0 (counted in
-            ``nonfinite_count``, warned once).
+        raw (4): the device signals in the kind's layout (``raw_layout``; e.g. joystick
+            ``[axis_x, axis_y, mode_button, disambiguation_button]``, axes in [-1, 1], clipped,
+            buttons 0/1; head array ``[left, right, back, disambiguation_button]``, switches 0/1).
+            Levels ``>= button_threshold`` (0.5) count as pressed; NaN/inf entries are read as 0
+            (counted in ``nonfinite_count``, warned once).
         disambiguation_mode (1): the disambiguation system's choice, an index into ``arm_modes``
             or -1 = keep the current mode. Evaluated only in an update that serves a disambiguation:
             ``config.request_latency`` after a request press (the same update when it is 0) or an
@@ -132,7 +123,8 @@ class InterfaceSystem(LeafSystem):
         self.config = config
         self.modes: list[list[int]] = [list(m) for m in config.modes]
         self.arm_modes: list[list[int]] = [list(m) for m in config.arm_modes]
-        self.raw_layout: tuple[str, ...] = RAW_LAYOUTS[config.kind]
+        self.raw_layout: tuple[str, ...] = config.raw_layout
+        self.set_name(config.kind)
 
         initial = initial_state(config)
         self._fixed_point: bytes | None = None  # see _update
@@ -238,50 +230,11 @@ class InterfaceSystem(LeafSystem):
             discrete_state.get_mutable_vector(self._output_groups[name]).SetFromVector(value)
 
 
-class JoystickInterface(InterfaceSystem):
-    """2-axis joystick with a mode button and a request button (5 modes, see :class:`InterfaceSystem`).
-
-    Modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper``; ``axis_x`` drives the first dimension of
-    the mode, ``axis_y`` the second. Speeds at full deflection: 0.13 m/s, 0.4 rad/s by default.
-    The mode button cycles the modes, or with ``config.mode_selection == "direct"`` selects the mode
-    of the stick's sector when the stick is deflected (:func:`~drake_disamb.core.interfaces.sector_mode`).
-    Ports as :class:`InterfaceSystem`: inputs ``raw`` (4: axis_x, axis_y, mode_button,
-    disambiguation_button), ``disambiguation_mode`` (1), ``automatic_request_count`` (1); outputs
-    ``u_h`` (6), ``gripper_command`` (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count``
-    (1), ``nonfinite_count`` (1), ``served_count`` (1), ``event_log`` (abstract).
-    """
-
-    def __init__(self, config: InterfaceConfig | None = None, **overrides: object) -> None:
-        cfg = config if config is not None else InterfaceConfig(kind="joystick")
-        cfg = replace(cfg, **overrides) if overrides else cfg
-        if cfg.kind != "joystick":
-            raise ValueError(f"config.kind: expected 'joystick', got {cfg.kind!r}")
-        super().__init__(cfg)
-        self.set_name("joystick")
-
-
-class HeadArrayInterface(InterfaceSystem):
-    """3-switch head array with a request button (7 single-dimension modes, see :class:`InterfaceSystem`).
-
-    ``back`` cycles ``vx, vy, vz, wx, wy, wz, gripper``; ``left`` / ``right`` drive the selected
-    dimension positive / negative at 0.1 m/s or 0.2 rad/s by default. Ports as
-    :class:`InterfaceSystem`: inputs ``raw`` (4: left, right, back, disambiguation_button),
-    ``disambiguation_mode`` (1), ``automatic_request_count`` (1); outputs ``u_h`` (6),
-    ``gripper_command`` (1), ``mode`` (1), ``request_count`` (1), ``mode_switch_count`` (1),
-    ``nonfinite_count`` (1), ``served_count`` (1), ``event_log`` (abstract).
-    """
-
-    def __init__(self, config: InterfaceConfig | None = None, **overrides: object) -> None:
-        cfg = config if config is not None else InterfaceConfig(kind="head_array")
-        cfg = replace(cfg, **overrides) if overrides else cfg
-        if cfg.kind != "head_array":
-            raise ValueError(f"config.kind: expected 'head_array', got {cfg.kind!r}")
-        super().__init__(cfg)
-        self.set_name("head_array")
-
-
-def make_interface(config: InterfaceConfig) -> InterfaceSystem:
-    """The interface system for ``config.kind``."""
-    if config.kind == "joystick":
-        return JoystickInterface(config)
-    return HeadArrayInterface(config)
+def make_interface(config: InterfaceConfig | str, **overrides: object) -> InterfaceSystem:
+    """The interface system of ``config`` (or of the registered kind named ``config``, with its
+    defaults), with ``overrides`` of :class:`~drake_disamb.core.interfaces.InterfaceConfig` fields;
+    named after its kind."""
+    cfg = InterfaceConfig(kind=config) if isinstance(config, str) else config
+    if not isinstance(cfg, InterfaceConfig):
+        raise ValueError(f"config: expected an InterfaceConfig or an interface name, got {config!r}")
+    return InterfaceSystem(replace(cfg, **overrides) if overrides else cfg)

@@ -2,9 +2,12 @@
 
 :class:`MeshcatLiveInput` adds controls to the Meshcat page (on-page buttons with keyboard
 shortcuts, sliders, and the browser's Gamepad API) and turns them into the interface's raw signal
-(:data:`drake_disamb.core.interfaces.RAW_LAYOUTS`), the same port a simulated user or a recorded log
-drives. The mapping from what the page reports to the raw signal is the pure function
-:func:`live_raw_step`, tested without a browser.
+(its ``raw_layout``), the same port a simulated user or a recorded log drives. Every kind lists its
+page's buttons, their keys and what each does (``Interface.live_controls``, roles
+:data:`~drake_disamb.core.interfaces.LiveRole`) and the raw signals that drive, step the mode and
+request (``drive_raw``, ``pulse_raw``); this module knows no kind by name. The mapping from what
+the page reports to the raw signal is the pure function :func:`live_raw_step`, tested without a
+browser.
 """
 
 from __future__ import annotations
@@ -17,33 +20,27 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core.interfaces import MODE_BUTTON, RAW_SIZE, REQUEST_BUTTON, InterfaceConfig
+from drake_disamb.core.interfaces import INTERFACES, LIVE_PULSES, RAW_SIZE, InterfaceConfig, check_kind
 from drake_disamb.core.validation import check_real_fields, is_real
 
-__all__ = ["LIVE_CONTROLS", "LiveInputConfig", "LiveState", "MeshcatLiveInput", "live_raw_step"]
+__all__ = [
+    "AXIS_SLIDERS",
+    "LIVE_BUTTONS",
+    "LiveInputConfig",
+    "LiveState",
+    "MeshcatLiveInput",
+    "live_raw_step",
+]
 
-LIVE_CONTROLS: dict[str, tuple[tuple[str, str], ...]] = {
-    "head_array": (
-        ("Left switch: + [ArrowLeft]", "ArrowLeft"),
-        ("Right switch: - [ArrowRight]", "ArrowRight"),
-        ("Back switch: next mode [ArrowDown]", "ArrowDown"),
-        ("Request disambiguation [Space]", "Space"),
-    ),
-    "joystick": (
-        ("Center the axes [KeyC]", "KeyC"),
-        ("", ""),
-        ("Mode button [KeyM]", "KeyM"),
-        ("Request disambiguation [Space]", "Space"),
-    ),
-}
-"""Meshcat buttons ``(name, keycode)`` per interface, in the raw layout's order (joystick entry 0 re-
-centres the axis sliders, entry 1 is unused). A keycode is a browser ``KeyboardEvent.code``."""
+LIVE_BUTTONS = 6
+"""Most buttons a kind's live page may have (the length of :attr:`LiveState.clicks`)."""
 
 AXIS_SLIDERS: tuple[tuple[str, str, str], ...] = (
     ("Axis x [KeyA / KeyD]", "KeyA", "KeyD"),
     ("Axis y [KeyS / KeyW]", "KeyS", "KeyW"),
 )
-"""Joystick axis sliders ``(name, decrement keycode, increment keycode)``, each in ``[-1, 1]``."""
+"""Axis sliders ``(name, decrement keycode, increment keycode)``, each in ``[-1, 1]``, of a kind with
+``live_axes`` (the joystick)."""
 
 
 @dataclass(frozen=True)
@@ -51,12 +48,12 @@ class LiveInputConfig:
     """How page events become raw signals.
 
     Attributes:
-        hold_time: Seconds a click (or key press) on a head-array Left/Right switch keeps it
-            closed; another press extends it. The Meshcat page counts every keydown, the
+        hold_time: Seconds a click (or key press) on a drive button (head-array Left/Right switch)
+            keeps it closed; another press extends it. The Meshcat page counts every keydown, the
             browser's auto-repeats of a held key included (checked in Chromium 156), and this is
             longer than the usual auto-repeat delay (about 0.5 s), so a held key drives
             continuously. A press on the other direction opens the first at once.
-        slider_step: Step (of the full deflection 1) of the joystick axis sliders and their keys.
+        slider_step: Step (of the full deflection 1) of the axis sliders and their keys.
         dead_zone: Gamepad stick deflections below this read as 0.
     """
 
@@ -77,24 +74,26 @@ class LiveState:
     """What the live input remembers between control ticks.
 
     Attributes:
-        clicks: Button click counts already seen, in :data:`LIVE_CONTROLS` order (4).
-        pending: Presses of the mode and request buttons not yet passed on (2): a press lasts one
-            control period and is followed by a release, so clicks closer than two periods queue.
-        hold_until: Head array: time (s) until which the Left and Right switches stay closed (2).
+        clicks: Button click counts already seen, in the kind's ``live_controls`` order
+            (:data:`LIVE_BUTTONS`, zeros past the kind's buttons).
+        pending: Pulses not yet passed on, per :data:`~drake_disamb.core.interfaces.LIVE_PULSES`
+            (next mode, previous mode, request): a pulse lasts one control period and is followed
+            by a release, so clicks closer than two periods queue.
+        hold_until: Time (s) until which the positive and negative drive buttons stay closed (2).
         pad_buttons: Gamepad mode and request buttons at the last tick (2; rising edges count).
         raw: The raw signal of the last tick (4).
     """
 
-    clicks: NDArray[np.float64] = field(default_factory=lambda: np.zeros(4))
-    pending: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+    clicks: NDArray[np.float64] = field(default_factory=lambda: np.zeros(LIVE_BUTTONS))
+    pending: NDArray[np.float64] = field(default_factory=lambda: np.zeros(len(LIVE_PULSES)))
     hold_until: NDArray[np.float64] = field(default_factory=lambda: np.full(2, -np.inf))
     pad_buttons: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE))
 
-    VECTOR_SIZE = 4 + 2 + 2 + 2 + RAW_SIZE
+    VECTOR_SIZE = LIVE_BUTTONS + len(LIVE_PULSES) + 2 + 2 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
-        """Flat ``[clicks (4), pending (2), hold_until (2), pad_buttons (2), raw (4)]``."""
+        """Flat ``[clicks (6), pending (3), hold_until (2), pad_buttons (2), raw (4)]``."""
         return np.concatenate([self.clicks, self.pending, self.hold_until, self.pad_buttons, self.raw])
 
     @classmethod
@@ -103,7 +102,10 @@ class LiveState:
         v = np.asarray(x, dtype=float)
         if v.shape != (cls.VECTOR_SIZE,):
             raise ValueError(f"LiveState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
-        return cls(v[0:4].copy(), v[4:6].copy(), v[6:8].copy(), v[8:10].copy(), v[10:].copy())
+        b, p = LIVE_BUTTONS, LIVE_BUTTONS + len(LIVE_PULSES)
+        return cls(
+            v[:b].copy(), v[b:p].copy(), v[p : p + 2].copy(), v[p + 2 : p + 4].copy(), v[p + 4 :].copy()
+        )
 
 
 def _dead_zone(value: float, dead_zone: float) -> float:
@@ -121,45 +123,69 @@ def live_raw_step(
     pad_buttons: tuple[float, float] = (0.0, 0.0),
     config: LiveInputConfig | None = None,
 ) -> LiveState:
-    """One control tick: the page's click counts (and, for the joystick, the axes and the gamepad's
-    mode/request buttons) to the next state, whose ``raw`` is the interface's raw signal.
+    """One control tick: the page's click counts (and, for a kind with ``live_axes``, the axes and
+    the gamepad's mode/request buttons) to the next state, whose ``raw`` is the interface's raw
+    signal.
+
+    Drive buttons (roles ``drive+`` / ``drive-``) stay closed for ``config.hold_time`` after a
+    click (a click on the other direction opens the first at once); the axes drive a kind with
+    ``live_axes``. A pulse (next / previous mode, request) is the kind's ``pulse_raw`` for one
+    period, made only while its raw entries were and are otherwise at rest, and followed by a
+    period with them at rest, so each click is one mode event or request.
 
     Args:
         state: The state after the previous tick.
         time: Current time (s).
-        kind: ``"head_array"`` or ``"joystick"``.
-        clicks: Cumulative click counts of the four :data:`LIVE_CONTROLS` buttons.
-        axes: Joystick ``(axis_x, axis_y)`` in ``[-1, 1]`` (non-finite reads as 0).
+        kind: A registered interface name.
+        clicks: Cumulative click counts of the kind's ``live_controls`` buttons, in their order.
+        axes: ``(axis_x, axis_y)`` in ``[-1, 1]`` (non-finite reads as 0).
         pad_buttons: Gamepad ``(mode, request)`` button levels (pressed at ``>= 0.5``).
         config: Timing and dead zone.
     """
     cfg = LiveInputConfig() if config is None else config
-    if kind not in LIVE_CONTROLS:
-        raise ValueError(f"kind: expected one of {', '.join(LIVE_CONTROLS)}, got {kind!r}")
-    counts = np.asarray(clicks, dtype=float)
+    variant = INTERFACES[check_kind(kind)]
+    controls = variant.live_controls
+    given = np.asarray(clicks, dtype=float).reshape(-1)
+    if given.size > len(controls):
+        raise ValueError(f"clicks: expected at most {len(controls)} counts for {kind}, got {given.tolist()}")
+    counts = np.zeros(LIVE_BUTTONS)
+    counts[: given.size] = given
     new = np.maximum(counts - state.clicks, 0.0)  # a count never decreases; guard anyway
     pending = state.pending.copy()
-    pending += new[[MODE_BUTTON, REQUEST_BUTTON]]
-    pads = np.array([float(b) >= 0.5 for b in pad_buttons], dtype=float)
-    pending += (pads > state.pad_buttons).astype(float)  # gamepad rising edges
     hold = state.hold_until.copy()
-    raw = np.zeros(RAW_SIZE)
-    if kind == "head_array":
-        for i, other in ((0, 1), (1, 0)):
-            if new[i] > 0:
-                hold[i] = time + cfg.hold_time
-                hold[other] = -np.inf
-        raw[0] = float(time < hold[0])
-        raw[1] = float(time < hold[1])
+    for i, control in enumerate(controls):
+        if control.role in LIVE_PULSES:
+            pending[LIVE_PULSES.index(control.role)] += new[i]
+        elif control.role in ("drive+", "drive-") and new[i] > 0:
+            j = 0 if control.role == "drive+" else 1
+            hold[j] = time + cfg.hold_time
+            hold[1 - j] = -np.inf
+    pads = np.array([float(b) >= 0.5 for b in pad_buttons], dtype=float)
+    rising = (pads > state.pad_buttons).astype(float)  # gamepad rising edges
+    pending[LIVE_PULSES.index("next")] += rising[0]
+    pending[LIVE_PULSES.index("request")] += rising[1]
+    if variant.live_axes:
+        drives = [_dead_zone(float(axes[0]), 0.0), _dead_zone(float(axes[1]), 0.0)]
     else:
-        raw[0] = _dead_zone(float(axes[0]), 0.0)
-        raw[1] = _dead_zone(float(axes[1]), 0.0)
-    # Buttons: one period pressed, then at least one released, so each click is one rising edge.
-    for k, button in enumerate((MODE_BUTTON, REQUEST_BUTTON)):
-        if state.raw[button] == 0.0 and pending[k] > 0:
-            raw[button] = 1.0
+        drives = [float(time < hold[0]) - float(time < hold[1])]
+    raw = np.array(variant.drive_raw(drives), dtype=float)
+    before = state.raw
+    for k, role in enumerate(LIVE_PULSES):
+        if pending[k] <= 0:
+            continue
+        pulse = np.asarray(variant.pulse_raw(role), dtype=float)
+        entries = pulse != 0.0
+        if np.all(before[entries] == 0.0) and np.all(raw[entries] == 0.0):
+            raw[entries] = pulse[entries]
             pending[k] -= 1
-    return LiveState(clicks=counts.copy(), pending=pending, hold_until=hold, pad_buttons=pads, raw=raw)
+    for role in LIVE_PULSES:  # the period after a pulse: its entries at rest (a release)
+        if role == "previous" and not any(c.role == "previous" for c in controls):
+            continue
+        pulse = np.asarray(variant.pulse_raw(role), dtype=float)
+        entries = pulse != 0.0
+        if np.all(before[entries] == pulse[entries]):
+            raw[entries] = 0.0
+    return LiveState(clicks=counts, pending=pending, hold_until=hold, pad_buttons=pads, raw=raw)
 
 
 class MeshcatLiveInput(LeafSystem):
@@ -172,10 +198,11 @@ class MeshcatLiveInput(LeafSystem):
         - raw
 
     Output ports:
-        raw (4): the interface's raw signal (:data:`~drake_disamb.core.interfaces.RAW_LAYOUTS`),
-            computed at the last update and held (no direct feedthrough).
+        raw (4): the interface's raw signal (in its ``raw_layout``), computed at the last update
+            and held (no direct feedthrough).
 
-    Controls it adds to the page (:data:`LIVE_CONTROLS`, :data:`AXIS_SLIDERS`):
+    Controls it adds to the page: the kind's ``live_controls`` buttons and, for a kind with
+    ``live_axes``, :data:`AXIS_SLIDERS` and a browser gamepad. The study's two kinds:
 
     - head array: buttons Left, Right (drive the mode's dimension +/-; each click or key press
       keeps the switch closed for ``config.hold_time``, so a held key drives continuously), Back
@@ -206,12 +233,14 @@ class MeshcatLiveInput(LeafSystem):
         self.meshcat = meshcat
         self.interface = interface
         self.config = LiveInputConfig() if config is None else config
-        self._buttons = [name for name, _ in LIVE_CONTROLS[interface.kind]]
-        for name, keycode in LIVE_CONTROLS[interface.kind]:
-            if name:
-                meshcat.AddButton(name, keycode)
+        self._variant = INTERFACES[interface.kind]
+        self._buttons = [control.label for control in self._variant.live_controls]
+        self._centre = [k for k, c in enumerate(self._variant.live_controls) if c.role == "center"]
+        for control in self._variant.live_controls:
+            if control.label:
+                meshcat.AddButton(control.label, control.keycode)
         self._sliders: list[str] = []
-        if interface.kind == "joystick":
+        if self._variant.live_axes:
             for name, down, up in AXIS_SLIDERS:
                 meshcat.AddSlider(name, -1.0, 1.0, self.config.slider_step, 0.0, down, up)
                 self._sliders.append(name)
@@ -233,7 +262,7 @@ class MeshcatLiveInput(LeafSystem):
         clicks = np.array([float(m.GetButtonClicks(name)) if name else 0.0 for name in self._buttons])
         axes = (0.0, 0.0)
         pad = (0.0, 0.0)
-        if self.interface.kind == "joystick":
+        if self._variant.live_axes:
             gamepad = m.GetGamepad()
             if gamepad.index is not None and len(gamepad.axes) >= 2:
                 dz = self.config.dead_zone
@@ -248,7 +277,7 @@ class MeshcatLiveInput(LeafSystem):
         before = LiveState.from_vector(context.get_discrete_state(self._state_index).get_value())
         clicks, axes, pad = self._read_page()
         after = live_raw_step(before, context.get_time(), self.interface.kind, clicks, axes, pad, self.config)
-        if self.interface.kind == "joystick" and clicks[0] > before.clicks[0]:  # re-centre the sliders
+        if any(clicks[k] > before.clicks[k] for k in self._centre):  # re-centre the sliders
             for name in self._sliders:
                 self.meshcat.SetSliderValue(name, 0.0)
         discrete_state.get_mutable_vector(self._state_index).SetFromVector(after.to_vector())

@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core.interfaces import RAW_LAYOUTS, RAW_SIZE, InterfaceConfig
+from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.user import UserConfig, UserState, user_step
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 
@@ -17,7 +17,7 @@ __all__ = ["SimulatedUser", "UserConfig"]
 
 
 class SimulatedUser(LeafSystem):
-    """A simulated user of a joystick or head array (policy in :mod:`drake_disamb.core.user`).
+    """A simulated user of any registered interface (policy in :mod:`drake_disamb.core.user`).
 
     .. pydrake_system::
 
@@ -44,14 +44,13 @@ class SimulatedUser(LeafSystem):
 
     Output ports:
         raw (4): the interface's raw signal, computed at the last update and held (no direct
-            feedthrough). Joystick ``[axis_x, axis_y, mode_button, disambiguation_button]``; head
-            array ``[left, right, back, disambiguation_button]``. Button presses last one decision
-            period and are followed by at least two decision periods with everything released.
+            feedthrough), in the interface's ``raw_layout``. Presses (mode changes, requests) last
+            one decision period and are followed by at least two decision periods with everything released.
         sanitized_input_count (1): updates so far whose inputs were unusable (see below).
 
     State: discrete :meth:`UserState.to_vector <drake_disamb.core.user.UserState.to_vector>` and
     ``raw`` again in a group of its own (the state output port ``raw``), updated every decision
-    period (``config.decision_period``, default the interface's ``control_period``; at least the
+    period (``config.timing.decision_period``, default the interface's ``control_period``; at least the
     control period, so each press is seen as exactly one rising edge) from t = 0; and
     ``[sanitised-input count]``, ``[time of the last warning]`` (s).
 
@@ -116,7 +115,7 @@ class SimulatedUser(LeafSystem):
             raise ValueError(f"releases: expected one bool per stage ({len(indices)}), got {releases!r}")
         self.releases: tuple[bool, ...] = tuple(bool(f) for f in flags)
         self.n_goals = int(n_goals)
-        self.raw_layout = RAW_LAYOUTS[self.interface.kind]
+        self.raw_layout = self.interface.raw_layout
 
         self._state_index = self.DeclareDiscreteState(UserState().to_vector())
         # The raw signal again, in a group of its own: the output is a state output port (its

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.study.measures.metrics import TrialMetrics, request_time_skewness
 
 __all__ = [
@@ -29,7 +30,7 @@ __all__ = [
     "select_trials",
 ]
 
-INTERFACE_NAMES = {"joystick": "Joystick", "head_array": "Head array", "all": "both interfaces"}
+INTERFACE_NAMES = {**{name: kind.label for name, kind in INTERFACES.items()}, "all": "all interfaces"}
 TASK_NAMES = {"reaching": "Single-step (reaching)", "pouring": "Multi-step (pouring)", "all": "both tasks"}
 
 PAPER_SKEWNESS = {

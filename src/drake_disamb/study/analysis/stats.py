@@ -34,13 +34,14 @@ from typing import Any
 
 import numpy as np
 
+from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.metrics import METRICS, TrialMetrics, trial_metrics
 
 __all__ = [
     "BOOTSTRAP",
     "MIXED_METRICS",
-    "INTERFACES",
+    "INTERFACE_STRATA",
     "PAIRS",
     "TASKS",
     "rank_biserial",
@@ -54,7 +55,8 @@ PAIRS: tuple[tuple[str, str], ...] = (
     ("manual", "automatic"),
     ("disambiguation", "automatic"),
 )
-INTERFACES = ("joystick", "head_array", "all")
+INTERFACE_STRATA = (*INTERFACES, "all")
+"""The interface strata of the tests: every registered interface, and all together."""
 TASKS = ("reaching", "pouring", "all")
 BOOTSTRAP = 2000
 """Bootstrap resamples for the effect size's confidence interval."""
@@ -238,7 +240,7 @@ def run_tests(
     for source in sorted({r.source for r in records}):
         mine = [m for m in trials if m.record.source == source]
         for metric in metrics:
-            for interface in INTERFACES:
+            for interface in INTERFACE_STRATA:
                 for task in TASKS:
                     for a, b in PAIRS:
                         va = values_of(mine, metric, interface, task, a)

@@ -18,7 +18,7 @@ How each field is made (times are seconds from the trial's ``start_time``):
   with the corrections the authors' ``parse_data.m`` applies (:data:`ORDER_FIXES`).
 - ``initial_mode``: the mode logged in ``current_mode``'s second row (the order file's 0-based
   initial mode agrees with it after the corrections), named as in
-  :data:`drake_disamb.core.interfaces.MODES` by its position in the interface's cycle
+  :func:`drake_disamb.core.interfaces.interface_modes` by its position in the interface's cycle
   (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``,
   docs/facts.md section 6; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
   ``extra["initial_mode_id"]``.
@@ -70,19 +70,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import MODES
-from drake_disamb.core.layout import DIM_NAMES
+from drake_disamb.core.interfaces import interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
 __all__ = [
     "FAILED_TRIALS",
+    "LOG_INTERFACES",
     "MODE_IDS",
     "ORDER_FIXES",
     "ImportSummary",
     "import_authors",
     "load_trial_order",
-    "mode_name",
     "parse_trial_name",
     "read_trial",
     "read_trials",
@@ -122,7 +121,10 @@ MODE_IDS: dict[str, tuple[int, ...]] = {
     "joystick": (12, 13, 45, 6, 7),
     "head_array": (1, 2, 3, 4, 5, 6, 7),
 }
-"""The authors' mode ids per interface, in the order of :data:`MODES` (the cycle order)."""
+"""The authors' mode ids per interface, in the order of the interface's modes (the cycle order)."""
+
+LOG_INTERFACES: tuple[str, ...] = tuple(MODE_IDS)
+"""The interfaces of the authors' logs (the paper's study)."""
 
 _INTERFACES = {"J2": "joystick", "HA": "head_array", "j": "joystick", "h": "head_array"}
 _TASKS = {"RE": "reaching", "PO": "pouring", "r": "reaching", "p": "pouring"}
@@ -130,11 +132,6 @@ _PARADIGMS = {"on": "disambiguation", "wo": "manual"}
 _NAME = re.compile(r"^(H\d)PH([12])(RE|PO)(J2|HA)T(\d{1,2})\.mat$")
 _SWITCH_MATCH = 0.05
 """Largest gap (s) between a request's score row and the mode switch it made; wider is an error."""
-
-
-def mode_name(mode: tuple[int, ...]) -> str:
-    """Name of a control mode: its dimension names joined by ``_`` (``(0, 1)`` -> ``vx_vy``)."""
-    return "_".join(DIM_NAMES[d] for d in mode)
 
 
 def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
@@ -248,7 +245,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
             f"{path}: {len(requested)} requests but {len(scores)} rows of cmode_conf_disamb (one per request)"
         )
     ids = MODE_IDS[interface]
-    modes = MODES[interface]
+    modes = interface_modes(interface)
 
     def name_of(mode_id: float) -> str:
         if int(mode_id) not in ids:

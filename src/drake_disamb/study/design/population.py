@@ -144,7 +144,7 @@ class PopulationConfig:
     fixed: dict[str, Any] = field(default_factory=_default_fixed)
 
     def __post_init__(self) -> None:
-        names = {f.name for f in dataclasses.fields(UserConfig)} - {"seed", "rho1"}
+        names = set(UserConfig.flat_types()) - {"seed", "rho1"}
         for where, mapping in (("distributions", self.distributions), ("fixed", self.fixed)):
             for key in mapping:
                 if key not in names:

@@ -417,9 +417,9 @@ def _n_stages(task: str) -> list[int]:
 
 
 def _n_initial_modes(interface: str, initial_modes: str) -> int:
-    from drake_disamb.core.interfaces import MODES, arm_modes
+    from drake_disamb.core.interfaces import arm_modes, interface_modes
 
-    return len(MODES[interface] if initial_modes == "all" else arm_modes(interface))
+    return len(interface_modes(interface) if initial_modes == "all" else arm_modes(interface))
 
 
 def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None = None) -> list[TrialSpec]:

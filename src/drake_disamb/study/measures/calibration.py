@@ -71,6 +71,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
+from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.study.data.authors import LOG_INTERFACES
 from drake_disamb.study.data.folder import LoggedTrial
 from drake_disamb.study.measures.course import (
     CommandPath,
@@ -102,8 +104,6 @@ MIN_SETTLE = 0.1
 """A command sooner than this after a switch was held through it, not a settle (s)."""
 MIN_PAUSE = 0.5
 """Shortest run of zero command that counts as a pause (s)."""
-SPEEDS = {"joystick": (0.13, 0.4), "head_array": (0.1, 0.2)}
-"""Full-deflection linear (m/s) and angular (rad/s) speeds of the study's interfaces."""
 
 
 def _runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
@@ -176,19 +176,20 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     deflect: dict[str, list[float]] = {}
     cos_by_subject: dict[str, list[float]] = {}
     tail: dict[str, list[float]] = {}
-    bursts: dict[str, list[int]] = {"joystick": [], "head_array": []}
-    req_share: dict[str, list[float]] = {"joystick": [], "head_array": []}
+    kinds = LOG_INTERFACES
+    bursts: dict[str, list[int]] = {k: [] for k in kinds}
+    req_share: dict[str, list[float]] = {k: [] for k in kinds}
     req_share_subject: dict[str, list[float]] = {}
-    req_count: dict[str, list[float]] = {"joystick": [], "head_array": []}
+    req_count: dict[str, list[float]] = {k: [] for k in kinds}
     early, req_norm = [], []
     change_events: list[tuple[str, float, bool]] = []  # Disambiguation: (subject, time, a request?)
     accepted = rejected = 0
-    corrections: dict[str, list[int]] = {"joystick": [], "head_array": []}
+    corrections: dict[str, list[int]] = {k: [] for k in kinds}
     corrections_subject: dict[str, list[int]] = {}
     commanding_total = time_total = 0.0
-    commanding_by_interface = {"joystick": 0.0, "head_array": 0.0}
+    commanding_by_interface = dict.fromkeys(kinds, 0.0)
     # interface -> [confident s, not confident s, changes while confident, changes while not]
-    confident = {"joystick": np.zeros(4), "head_array": np.zeros(4)}
+    confident = {k: np.zeros(4) for k in kinds}
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
@@ -259,9 +260,9 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
                     pause.setdefault(s, []).append(t1 - t0)
                     pause_count[s] = pause_count.get(s, 0.0) + 1
             command_time[s] = command_time.get(s, 0.0) + cmd.sum() * dt
-        # Joystick: deflection and direction spread.
-        if r.interface == "joystick" and on.size:
-            lin, ang = SPEEDS["joystick"]
+        # A proportional interface (the joystick): deflection and direction spread.
+        if INTERFACES[r.interface].proportional and on.size:
+            lin, ang = INTERFACES[r.interface].default_speeds
             v = user_vel[:, on]
             size = np.maximum(np.linalg.norm(v[:3], axis=0) / lin, np.linalg.norm(v[3:], axis=0) / ang)
             deflect.setdefault(s, []).extend(np.clip(size, 0, None).tolist())
@@ -302,7 +303,10 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     all_cos = [c for cs in cos_by_subject.values() for c in cs]
     mean_cos = float(np.mean(all_cos)) if all_cos else float("nan")
     deflections = [d for ds in deflect.values() for d in ds]
-    ha = bursts["head_array"]
+    # A full round: as many presses as the cycle has modes (the switched, cycling kinds: the head array).
+    rounds = [
+        b >= len(INTERFACES[k].modes) for k, v in bursts.items() if not INTERFACES[k].proportional for b in v
+    ]
     return BehaviourEstimates(
         start_delay=fit_lognormal(start),
         press_interval=fit_lognormal(press),
@@ -319,7 +323,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         commanding_per_change={
             k: commanding_by_interface[k] / len(v) if v else math.nan for k, v in bursts.items()
         },
-        full_round_share=float(np.mean(np.asarray(ha) >= 7)) if ha else math.nan,
+        full_round_share=float(np.mean(rounds)) if rounds else math.nan,
         corrections_per_dwell={k: float(np.mean(v)) if v else math.nan for k, v in corrections.items()},
         corrections_per_dwell_by_subject={
             s: float(np.mean(v)) for s, v in sorted(corrections_subject.items())
@@ -348,7 +352,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         gripper_end=_per_condition(gripper_paths, summarize_gripper_end),
         starts_in_gripper={
             i: (float(np.mean(gripper_starts[i])), len(gripper_starts[i]))
-            for i in ("joystick", "head_array")
+            for i in INTERFACES
             if i in gripper_starts
         },
         command_path=_per_condition(command_paths, summarize_command_paths),
@@ -358,7 +362,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
 def _per_condition(rows: dict[tuple[str, str], list[Any]], summarize: Callable[[Any], Any]) -> dict[str, Any]:
     """``{interface: {task: summarize(rows[interface, task])}}`` over the conditions with rows."""
     out: dict[str, Any] = {}
-    for i in ("joystick", "head_array"):
+    for i in INTERFACES:
         tasks = {k: summarize(rows[i, k]) for k in ("reaching", "pouring") if (i, k) in rows}
         if tasks:
             out[i] = tasks

@@ -7,7 +7,7 @@ interface's modes on ``t``, ``u`` the blended command ``[vx, vy, vz, wx, wy, wz]
 
 - **Ending in the gripper mode** (letting go of the object), per interface and task: the share of
   trials whose mode at the end (the trace's ``mode`` at its last sample up to ``duration``) is the
-  gripper mode (the interface's last mode in :data:`drake_disamb.core.interfaces.MODES`: the
+  gripper mode (the interface's last mode, ``Interface.gripper_mode``: the
   logs' joystick id 7 and head-array id 7), and among those the median seconds from the last
   change into it (the last switch of the burst that reached it, to the trace's sample period:
   50 ms in the logs) to the end, and the median number of changes into it (from another mode; a
@@ -31,8 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_disamb.core.interfaces import MODES, gripper_mode
-from drake_disamb.study.data.authors import mode_name
+from drake_disamb.core.interfaces import INTERFACES, gripper_mode
 from drake_disamb.study.data.folder import LoggedTrial
 
 __all__ = [
@@ -133,7 +132,8 @@ def gripper_course(trial: LoggedTrial) -> tuple[bool, float, int]:
 def starts_in_gripper(trial: LoggedTrial) -> bool:
     """Whether the trial's ``initial_mode`` (a mode name) is its interface's gripper mode."""
     r = trial.record
-    return r.initial_mode == mode_name(MODES[r.interface][gripper_mode(r.interface)])
+    kind = INTERFACES[r.interface]
+    return r.initial_mode == kind.mode_name(kind.gripper_mode)
 
 
 def summarize_gripper_end(rows: Sequence[tuple[bool, float, int]]) -> GripperEnd:
@@ -170,7 +170,8 @@ def format_gripper(
         ),
         f"{'starts in gripper mode':<28} "
         + ", ".join(
-            f"{k.replace('_', ' ')} {share:.2f} of {n} (1/{len(MODES[k])} = {1 / len(MODES[k]):.2f} "
+            f"{k.replace('_', ' ')} {share:.2f} of {n} (1/{len(INTERFACES[k].modes)} = "
+            f"{1 / len(INTERFACES[k].modes):.2f} "
             "if uniform over all modes)"
             for k, (share, n) in starts.items()
         ),

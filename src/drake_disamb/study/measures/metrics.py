@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.study.data.records import TrialRecord
 
 __all__ = [
@@ -97,7 +98,7 @@ def clean_mode_switches(
     dropped; head-array switches are kept."""
     if len(times) != len(modes):
         raise ValueError(f"mode switches: {len(times)} times but {len(modes)} modes")
-    if interface != "joystick":
+    if not INTERFACES[interface].clean_repeated_switches:
         return [float(x) for x in times]
     kept = []
     for i, (t, m) in enumerate(zip(times, modes, strict=True)):

@@ -18,13 +18,25 @@ from typing import Any
 import numpy as np
 
 from drake_disamb.config.schema import PARADIGMS
+from drake_disamb.core.interfaces import INTERFACES, interfaces_in
 from drake_disamb.study.analysis.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
 from drake_disamb.study.measures.metrics import TrialMetrics
 
 __all__ = ["ablation_figure", "save_figure", "source_figures", "trace_figures"]
 
 PARADIGM_COLORS = {"manual": "#9e9e9e", "disambiguation": "#1f77b4", "automatic": "#2ca02c"}
-CONDITIONS = tuple((i, t) for i in ("joystick", "head_array") for t in ("reaching", "pouring"))
+TASKS = ("reaching", "pouring")
+
+
+def _conditions(trials: Sequence[TrialMetrics]) -> list[tuple[str, str]]:
+    """The (interface, task) groups of the figures: every registered interface with trials, each
+    with both tasks."""
+    return [(i, t) for i in _interfaces(trials) for t in TASKS]
+
+
+def _interfaces(trials: Sequence[TrialMetrics]) -> list[str]:
+    """The registered interfaces with trials, in the registry's order (all of them without trials)."""
+    return interfaces_in(m.record.interface for m in trials) or list(INTERFACES)
 
 
 def _plt() -> Any:
@@ -66,8 +78,8 @@ def _by_condition(
     trials: Sequence[TrialMetrics], paradigms: Sequence[str], width: float
 ) -> Iterator[tuple[float, str, list[TrialMetrics]]]:
     """(x, paradigm, its analysed trials: valid, not failed) for every condition of
-    :data:`CONDITIONS` (groups at x = 0, 1, ...) and every paradigm with trials in it."""
-    for gi, (interface, task) in enumerate(CONDITIONS):
+    :func:`_conditions` (groups at x = 0, 1, ...) and every paradigm with trials in it."""
+    for gi, (interface, task) in enumerate(_conditions(trials)):
         sel = select_trials(trials, interface, task)
         for pi, paradigm in enumerate(paradigms):
             ms = [m for m in sel if m.record.paradigm == paradigm]
@@ -75,10 +87,11 @@ def _by_condition(
                 yield _slot(gi, pi, paradigms, width), paradigm, ms
 
 
-def _condition_ticks(ax: Any) -> None:
+def _condition_ticks(ax: Any, trials: Sequence[TrialMetrics]) -> None:
     """Label the groups of :func:`_by_condition` on ``ax``'s x axis."""
-    ax.set_xticks(range(len(CONDITIONS)))
-    ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in CONDITIONS])
+    conditions = _conditions(trials)
+    ax.set_xticks(range(len(conditions)))
+    ax.set_xticklabels([f"{INTERFACE_NAMES[i]}\n{TASK_NAMES[t]}" for i, t in conditions])
 
 
 def _paradigm_handles(plt: Any, paradigms: Sequence[str], alpha: float) -> list[Any]:
@@ -100,7 +113,7 @@ def _box_panels(
     paradigms, width = _side_by_side(trials)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
     for ax, (kind, groups) in zip(
-        axes, (("interface", ("joystick", "head_array")), ("task", ("reaching", "pouring"))), strict=True
+        axes, (("interface", tuple(_interfaces(trials))), ("task", TASKS)), strict=True
     ):
         top = 0.0
         for gi, group in enumerate(groups):
@@ -164,7 +177,7 @@ def _stacked(trials: Sequence[TrialMetrics], source: str) -> Any:
         ax.bar(x, rq, width * 0.9, bottom=sw, color="#d62728", alpha=0.8, edgecolor="k")
         if au > 0:
             ax.bar(x, au, width * 0.9, bottom=sw + rq, color="white", hatch="//", edgecolor="k")
-    _condition_ticks(ax)
+    _condition_ticks(ax, trials)
     ax.set_ylabel("mean per trial (after the authors' cleaning)")
     ax.margins(y=0.12)
     handles = _paradigm_handles(plt, paradigms, 0.75)
@@ -183,9 +196,12 @@ def _stacked(trials: Sequence[TrialMetrics], source: str) -> Any:
 
 def _raster(trials: Sequence[TrialMetrics], source: str) -> Any:
     plt = _plt()
-    fig, axes = plt.subplots(2, 2, figsize=(12, 8), sharex=True)
-    for row, interface in enumerate(("joystick", "head_array")):
-        for col, task in enumerate(("reaching", "pouring")):
+    interfaces = _interfaces(trials)
+    fig, axes = plt.subplots(
+        len(interfaces), 2, figsize=(12, 4 * len(interfaces)), sharex=True, squeeze=False
+    )
+    for row, interface in enumerate(interfaces):
+        for col, task in enumerate(TASKS):
             ax = axes[row, col]
             sel = sorted(
                 select_trials(trials, interface, task),
@@ -215,7 +231,7 @@ def _raster(trials: Sequence[TrialMetrics], source: str) -> Any:
             ax.set_xlim(-0.04, 1.02)
             ax.invert_yaxis()
             ax.set_title(f"{INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}", fontsize=9)
-    for ax in axes[1]:
+    for ax in axes[-1]:
         ax.set_xlabel("time / trial duration")
     fig.suptitle(
         f"Button presses per trial ({source}): black | user mode switch, red dot request; "
@@ -244,7 +260,7 @@ def _alpha(trials: Sequence[TrialMetrics], source: str) -> Any:
         for name in ("cmeans", "cmins", "cmaxes", "cbars"):
             parts[name].set_color("k")
             parts[name].set_linewidth(0.8)
-    _condition_ticks(ax)
+    _condition_ticks(ax, trials)
     ax.set_ylabel("mean alpha per trial")
     handles = _paradigm_handles(plt, paradigms, 0.7)
     ax.legend(handles, [p.capitalize() for p in paradigms], fontsize=8)
@@ -365,13 +381,14 @@ def ablation_figure(effect: Sequence[dict[str, Any]]) -> Any:
             and (r["a"], r["b"]) == ("manual", "disambiguation")
         ]
         settings = list(dict.fromkeys(r["setting"] for r in rows))
-        for k, interface in enumerate(("joystick", "head_array")):
+        interfaces = interfaces_in(r["interface"] for r in rows)
+        for k, interface in enumerate(interfaces):
             ys = []
             for s in settings:
                 r = next((r for r in rows if r["setting"] == s and r["interface"] == interface), None)
                 ys.append((r["difference"], r["stars"]) if r else (math.nan, ""))
-            xs = np.arange(len(settings)) + (k - 0.5) * 0.38
-            ax.bar(xs, [y for y, _ in ys], 0.36, label=INTERFACE_NAMES[interface])
+            xs = np.arange(len(settings)) + (k - (len(interfaces) - 1) / 2) * 0.76 / len(interfaces)
+            ax.bar(xs, [y for y, _ in ys], 0.72 / len(interfaces), label=INTERFACE_NAMES[interface])
             for x, (y, st) in zip(xs, ys, strict=True):
                 if math.isfinite(y):
                     ax.text(x, y, st, ha="center", va="bottom" if y >= 0 else "top", fontsize=9)

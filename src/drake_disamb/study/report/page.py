@@ -44,6 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from drake_disamb.core.interfaces import interfaces_in
 from drake_disamb.study.analysis.findings import (
     COMPARED,
     PAPER_SKEWNESS,
@@ -268,7 +269,7 @@ def write_report(
             )
         )
         skew_rows = []
-        for interface in ("joystick", "head_array"):
+        for interface in interfaces_in(m.record.interface for m in mine):
             for task in ("reaching", "pouring"):
                 for paradigm in ("disambiguation", "automatic"):
                     sel = [m for m in select_trials(mine, interface, task) if m.record.paradigm == paradigm]
@@ -281,7 +282,7 @@ def write_report(
                             "paradigm": paradigm,
                             "requests": sum(len(m.normalized_request_times) for m in sel),
                             "skewness": request_time_skewness(sel),
-                            "paper": PAPER_SKEWNESS[(interface, task)]
+                            "paper": PAPER_SKEWNESS.get((interface, task))
                             if paradigm == "disambiguation"
                             else None,
                         }

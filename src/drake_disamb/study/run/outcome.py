@@ -28,13 +28,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import interface_modes
-from drake_disamb.core.layout import DIM_NAMES
+from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
 __all__ = [
     "TRACE_ARRAYS",
-    "mode_name",
     "record_from_result",
     "stage_onsets",
     "trace_arrays",
@@ -42,11 +40,6 @@ __all__ = [
 
 TRACE_ARRAYS: tuple[str, ...] = ("t", "belief", "u_h", "u", "alpha", "mode", "ee_pose", "stage")
 """Arrays of a trace file (module docstring)."""
-
-
-def mode_name(interface: str, mode: int) -> str:
-    """Name of mode index ``mode`` of ``interface``: its dimensions joined by ``_`` (``vx_vy``)."""
-    return "_".join(DIM_NAMES[d] for d in interface_modes(interface)[int(mode)])
 
 
 def trace_arrays(result: Any) -> dict[str, NDArray[np.float64]]:
@@ -150,7 +143,7 @@ def record_from_result(
         repetition=int(repetition),
         seed=seed,
         start_pose=start_pose,
-        initial_mode=mode_name(sc.interface, sc.initial_mode),
+        initial_mode=INTERFACES[sc.interface].mode_name(sc.initial_mode),
         intended_goals=[int(g) for g in result.intended_goals],
         reached_goals=[int(g) for g in result.reached_goals],
         success=bool(result.success),
@@ -163,7 +156,7 @@ def record_from_result(
         button_presses=len(switches) + int(result.requests),
         request_times=[float(t) for t in result.request_times],
         mode_switch_times=[float(e.time) for e in switches],
-        mode_switch_modes=[mode_name(sc.interface, e.to_mode) for e in switches],
+        mode_switch_modes=[INTERFACES[sc.interface].mode_name(e.to_mode) for e in switches],
         automatic_switch_times=automatic,
         mean_alpha=float(result.mean_alpha) if np.any(commanding) else None,
         assistance_onset=onsets[0] if onsets else None,

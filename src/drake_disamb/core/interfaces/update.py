@@ -1,55 +1,18 @@
-"""Control interfaces: control modes, raw-signal layouts and the interface update (pure numpy).
-
-Two interfaces of the study (paper Section "Study Methods"; docs/facts.md section 6):
-
-- **2-axis joystick** (``"joystick"``): continuous axes in ``[-1, 1]``, a mode button that cycles
-  through 5 control modes ``{vx, vy}, {vx, vz}, {wx, wz}, {wy}, gripper`` (or, with
-  ``InterfaceConfig.mode_selection = "direct"``, selects one directly: see below).
-- **Switch-based head array** (``"head_array"``): three switches; *back* cycles through 7 modes
-  ``vx, vy, vz, wx, wy, wz, gripper``; *left* / *right* drive the selected dimension in the
-  positive / negative direction at a fixed speed.
-
-Both have a separate disambiguation-request button. Control modes are tuples of dimension indices
-(0 = vx ... 5 = wz, :data:`GRIPPER_DIM` = 6 for the gripper); arm modes come first, the gripper
-mode last, and the disambiguation system's mode indices index that same list.
-
-Raw signals are one 4-vector per interface (so a simulated user, a recorded log or a live browser
-can drive it), see :data:`RAW_LAYOUTS`:
-
-- joystick: ``[axis_x, axis_y, mode_button, disambiguation_button]``; axes in ``[-1, 1]``
-  (clipped), buttons 0/1 (a level ``>= button_threshold`` counts as pressed). The k-th dimension
-  of the current mode is driven by the k-th axis (a one-dimensional mode and the gripper mode use
-  ``axis_x``).
-- head array: ``[left, right, back, disambiguation_button]``, every entry a 0/1 switch level.
-  ``left - right`` drives the selected dimension (both pressed cancel).
-
-**Mode selection** (:data:`MODE_SELECTIONS`, ``InterfaceConfig.mode_selection``). ``"cycle"`` (the
-default, and the head array's only one): a mode-button press selects the next mode. ``"direct"``
-(joystick only): the study's joystick selected a mode with one action (consecutive logged modes
-step forward, back, two or three places about equally, and some repeat the mode: docs/facts.md section 6),
-so here a press *with the stick deflected* (``|(axis_x, axis_y)| >=``
-:data:`DIRECT_SELECT_DEFLECTION`) selects the mode of the stick direction's sector, and a press with
-the stick centred cycles as before. The ``n`` modes have equal sectors of ``360 / n`` degrees,
-clockwise like a clock face from straight up (``+axis_y``): mode ``k``'s sector is centred on the
-compass bearing ``k * 360 / n`` (:func:`sector_mode`, :func:`sector_stick`). For the joystick's 5
-modes, 72 degrees each: ``{vx, vy}`` up (bearing 0), ``{vx, vz}`` up-right (72), ``{wx, wz}``
-down-right (144), ``{wy}`` down-left (216), gripper up-left (288). Every press is one logged
-``mode_switch`` (one press = one switch), also a press that selects the current mode (the mode is
-kept: the study's logs hold such repeats). While the mode button is held the stick selects and
-does not drive: the held raw signal's axes are 0 then.
-
-Non-finite raw entries never reach the arm: they are read as 0 (released / centred) and counted.
+"""The interface update: settings, state and one control period of any registered kind (numpy).
 
 The update (:func:`interface_update`) is what the Drake system runs every control period: it
-detects rising edges of the buttons (a held button counts once), cycles (or selects) the mode on a
-mode-button press, handles a disambiguation request (or an automatic trigger) by asking for the disambiguation
-system's choice ``request_latency`` after it (in the same update when that is 0), holds the
-sanitised raw signal, and returns the events it logged.
+sanitises the raw signal (the kind's :meth:`~drake_disamb.core.interfaces.base.Interface.sanitize`;
+non-finite entries never reach the arm: they are read as 0 and counted), reads the kind's mode
+event (a mode-button press, or what the kind uses) and changes or selects the mode, detects the
+request button's rising edge (a held button counts once), handles a disambiguation request (or an
+automatic trigger) by asking for the disambiguation system's choice ``request_latency`` after it
+(in the same update when that is 0), holds the sanitised raw signal, and returns the events it
+logged. The commands (:func:`command_from_raw`) are the kind's drives of the current mode's
+dimensions times their speeds.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 import numbers
 from collections.abc import Callable
@@ -59,47 +22,16 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from drake_disamb.core.interfaces.base import (
+    INTERFACES,
+    MODE_SELECTIONS,
+    RAW_SIZE,
+    REQUEST_BUTTON,
+    Interface,
+    check_kind,
+)
 from drake_disamb.core.layout import GRIPPER_DIM
 from drake_disamb.core.validation import check_real_fields, is_real
-
-InterfaceKind = Literal["joystick", "head_array"]
-INTERFACE_KINDS: tuple[str, ...] = ("joystick", "head_array")
-
-MODES: dict[str, tuple[tuple[int, ...], ...]] = {
-    "joystick": ((0, 1), (0, 2), (3, 5), (4,), (GRIPPER_DIM,)),
-    "head_array": ((0,), (1,), (2,), (3,), (4,), (5,), (GRIPPER_DIM,)),
-}
-"""Control modes per interface: arm modes first, the gripper mode last."""
-
-RAW_SIZE = 4
-"""Length of the raw signal vector of every interface."""
-
-RAW_LAYOUTS: dict[str, tuple[str, ...]] = {
-    "joystick": ("axis_x", "axis_y", "mode_button", "disambiguation_button"),
-    "head_array": ("left", "right", "back", "disambiguation_button"),
-}
-"""Meaning of each raw entry per interface."""
-
-MODE_BUTTON = 2
-"""Raw index of the mode-switch button (joystick ``mode_button``, head array ``back``)."""
-
-REQUEST_BUTTON = 3
-"""Raw index of the disambiguation-request button."""
-
-DEFAULT_SPEEDS: dict[str, tuple[float, float]] = {
-    "joystick": (0.13, 0.4),
-    "head_array": (0.1, 0.2),
-}
-"""Per-interface ``(max linear m/s, max angular rad/s)`` defaults, from the study logs
-(docs/facts.md section 6)."""
-
-MODE_SELECTIONS: tuple[str, ...] = ("cycle", "direct")
-"""How a mode-button press chooses the mode: the next one (``"cycle"``) or, on the joystick, the
-mode of the stick's sector when it is deflected (``"direct"``; centred: the next one)."""
-
-DIRECT_SELECT_DEFLECTION = 0.5
-"""Stick deflection (norm of ``(axis_x, axis_y)``, of full deflection 1) from which a mode-button
-press selects the sector's mode (``mode_selection = "direct"``); below it the press cycles."""
 
 EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch", "automatic_switch"]
 
@@ -108,38 +40,15 @@ _DUE_TOLERANCE = 1e-6
 started (update times are sums of control periods, off by rounding)."""
 
 
-def check_kind(kind: str) -> str:
-    """Return ``kind`` if it names an interface, else raise ``ValueError``."""
-    if kind not in INTERFACE_KINDS:
-        raise ValueError(f"interface kind: expected one of {INTERFACE_KINDS}, got {kind!r}")
-    return kind
-
-
-def interface_modes(kind: str) -> tuple[tuple[int, ...], ...]:
-    """All control modes of an interface (arm modes first, gripper mode last)."""
-    return MODES[check_kind(kind)]
-
-
-def arm_modes(kind: str) -> tuple[tuple[int, ...], ...]:
-    """The arm modes of an interface (every mode but the gripper mode)."""
-    return interface_modes(kind)[:-1]
-
-
-def gripper_mode(kind: str) -> int:
-    """The index of an interface's gripper mode (its last mode)."""
-    return len(interface_modes(kind)) - 1
-
-
 @dataclass(frozen=True)
 class InterfaceConfig:
     """Settings of one interface.
 
     Attributes:
-        kind: ``"joystick"`` or ``"head_array"``.
-        max_linear_speed: Speed (m/s) of a translational dimension at full deflection / switch on;
-            ``None`` takes the interface default (joystick 0.13, head array 0.1).
-        max_angular_speed: Same for rotational dimensions (rad/s); ``None``: joystick 0.4,
-            head array 0.2.
+        kind: A registered interface name (:data:`~drake_disamb.core.interfaces.base.INTERFACES`).
+        max_linear_speed: Speed (m/s) of a translational dimension at full drive; ``None`` takes
+            the kind's default (:attr:`~drake_disamb.core.interfaces.base.Interface.default_speeds`).
+        max_angular_speed: Same for rotational dimensions (rad/s).
         gripper_speed: Finger opening speed (m/s) at full deflection / switch on (positive opens).
         button_threshold: A button or switch level ``>=`` this counts as pressed.
         control_period: Period (s) of the interface update.
@@ -152,9 +61,12 @@ class InterfaceConfig:
         serve_requests: Whether a request press starts a disambiguation (default). False: presses
             are logged and counted but never switch the mode (the Automatic paradigm without its
             request button).
-        mode_selection: ``"cycle"`` (default): a mode-button press selects the next mode.
-            ``"direct"`` (joystick only): a press with the stick deflected selects the mode of the
-            stick's sector, a press with it centred cycles (see the module docstring).
+        mode_selection: ``"cycle"`` (default): a mode change steps through the cycle.
+            ``"direct"`` (a kind that offers it, the joystick): a press with the stick deflected
+            selects the mode of the stick's sector, a press with it centred cycles
+            (:mod:`drake_disamb.core.interfaces.joystick`).
+        variant: The kind's variant (its settings, e.g. the mode order); ``None`` (default): the
+            registered default of ``kind``.
     """
 
     kind: str = "joystick"
@@ -167,21 +79,29 @@ class InterfaceConfig:
     request_latency: float = 0.0
     serve_requests: bool = True
     mode_selection: str = "cycle"
+    variant: Interface | None = None
+    speed_tuple: tuple[float, ...] = field(init=False, default=(), compare=False, repr=False)
+    """:meth:`dim_speeds` as a tuple (set from the fields; the update reads it every tick)."""
 
     def __post_init__(self) -> None:
         check_kind(self.kind)
-        lin, ang = DEFAULT_SPEEDS[self.kind]
+        if self.variant is None:
+            object.__setattr__(self, "variant", INTERFACES[self.kind])
+        elif not (isinstance(self.variant, Interface) and self.variant.name == self.kind):
+            raise ValueError(f"InterfaceConfig.variant: expected a {self.kind} variant, got {self.variant!r}")
+        lin, ang = self.variant.default_speeds
         if self.max_linear_speed is None:
             object.__setattr__(self, "max_linear_speed", lin)
         if self.max_angular_speed is None:
             object.__setattr__(self, "max_angular_speed", ang)
         check_real_fields(self, ("max_linear_speed", "max_angular_speed", "gripper_speed", "control_period"))
+        object.__setattr__(self, "speed_tuple", tuple(self.dim_speeds().tolist()))
         if not (is_real(self.button_threshold) and 0.0 < self.button_threshold <= 1.0):
             raise ValueError(
                 "InterfaceConfig.button_threshold: expected a number in (0, 1], "
                 f"got {self.button_threshold!r}"
             )
-        n = len(MODES[self.kind])
+        n = len(self.variant.modes)
         if not (isinstance(self.initial_mode, numbers.Integral) and 0 <= self.initial_mode < n):
             raise ValueError(
                 f"InterfaceConfig.initial_mode: expected an integer in [0, {n - 1}] for {self.kind}, "
@@ -197,26 +117,26 @@ class InterfaceConfig:
                 f"InterfaceConfig.mode_selection: expected one of {MODE_SELECTIONS}, "
                 f"got {self.mode_selection!r}"
             )
-        if self.mode_selection == "direct" and self.kind != "joystick":
+        if self.mode_selection not in self.variant.mode_selections:
             raise ValueError(
-                f"InterfaceConfig.mode_selection: 'direct' needs a stick (the joystick); the {self.kind} "
-                f"only cycles, got {self.mode_selection!r}"
+                f"InterfaceConfig.mode_selection: the {self.kind} offers "
+                f"{', '.join(self.variant.mode_selections)}, got {self.mode_selection!r}"
             )
 
     @property
     def modes(self) -> tuple[tuple[int, ...], ...]:
         """All control modes (gripper mode last)."""
-        return MODES[self.kind]
+        return self.variant.modes
 
     @property
     def arm_modes(self) -> tuple[tuple[int, ...], ...]:
         """The arm modes (all but the gripper mode)."""
-        return MODES[self.kind][:-1]
+        return self.variant.mode_order
 
     @property
     def raw_layout(self) -> tuple[str, ...]:
         """Names of the raw entries."""
-        return RAW_LAYOUTS[self.kind]
+        return self.variant.raw_layout
 
     def dim_speeds(self) -> NDArray[np.float64]:
         """Speed of each dimension 0..6 at full deflection: 3 linear, 3 angular, gripper."""
@@ -249,7 +169,8 @@ class InterfaceState:
 
     Attributes:
         mode: Current mode index.
-        prev_mode_button: Mode-button level (0/1) seen at the last update.
+        prev_mode_button: What the kind's mode event remembered at the last update (the
+            mode-button level, 0/1, for the button kinds).
         prev_request_button: Request-button level (0/1) seen at the last update.
         mode_switch_count: Manual mode switches so far (mode-button presses).
         request_count: Disambiguation requests so far (request-button presses).
@@ -322,27 +243,27 @@ def initial_state(config: InterfaceConfig) -> InterfaceState:
 
 
 def sanitize_raw(raw: ArrayLike, config: InterfaceConfig) -> tuple[NDArray[np.float64], bool]:
-    """Clean a raw signal: non-finite entries -> 0, axes clipped to ``[-1, 1]``, buttons -> 0/1.
+    """Clean a raw signal: non-finite entries -> 0, then the kind's
+    :meth:`~drake_disamb.core.interfaces.base.Interface.sanitize` (the joystick clips its axes to
+    ``[-1, 1]``, switches and buttons become 0/1).
 
     Returns ``(clean, had_nonfinite)``. A raw signal of the wrong length is a ``ValueError``.
     """
+    clean, bad = _sanitized(raw, config)
+    return np.array(clean), bad
+
+
+def _sanitized(raw: ArrayLike, config: InterfaceConfig) -> tuple[list[float], bool]:
+    """:func:`sanitize_raw` as a list of Python floats (cheaper than numpy for four numbers)."""
     r = np.asarray(raw, dtype=float).reshape(-1)
     if r.shape != (RAW_SIZE,):
         raise ValueError(
-            f"raw ({config.kind} {list(RAW_LAYOUTS[config.kind])}): "
-            f"expected {RAW_SIZE} numbers, got {r.tolist()}"
+            f"raw ({config.kind} {list(config.raw_layout)}): expected {RAW_SIZE} numbers, got {r.tolist()}"
         )
-    # Four numbers: Python floats are cheaper than numpy calls here.
     values = r.tolist()
     finite = [math.isfinite(v) for v in values]
-    a, b, c, d = (v if ok else 0.0 for v, ok in zip(values, finite, strict=True))
-    threshold = config.button_threshold
-    if config.kind == "joystick":
-        axes = [min(max(a, -1.0), 1.0), min(max(b, -1.0), 1.0)]
-    else:
-        axes = [1.0 if a >= threshold else 0.0, 1.0 if b >= threshold else 0.0]
-    clean = np.array([*axes, 1.0 if c >= threshold else 0.0, 1.0 if d >= threshold else 0.0])
-    return clean, not all(finite)
+    values = [v if ok else 0.0 for v, ok in zip(values, finite, strict=True)]
+    return config.variant.sanitize(values, config.button_threshold), not all(finite)
 
 
 def command_from_raw(
@@ -350,65 +271,18 @@ def command_from_raw(
 ) -> tuple[NDArray[np.float64], float]:
     """The 6-D arm command and the gripper command of a sanitised raw signal in mode ``mode``.
 
-    Returns ``(u_h, gripper)``: ``u_h`` is ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s; zero in the
-    gripper mode), ``gripper`` the finger opening speed (m/s; nonzero only in the gripper mode).
+    Returns ``(u_h, gripper)``: ``u_h`` is ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, world frame;
+    zero in the gripper mode), ``gripper`` the finger opening speed (m/s; nonzero only in the
+    gripper mode).
     """
     r = np.asarray(clean_raw, dtype=float).tolist()
     dims = config.modes[mode]
-    if config.kind == "joystick":
-        drives = r[: len(dims)]
-    else:
-        drives = [r[0] - r[1]] * len(dims)
-    speeds = _dim_speeds(config)
+    drives = config.variant.drives(r, len(dims))
+    speeds = config.speed_tuple
     u7 = [0.0] * 7
     for dim, drive in zip(dims, drives, strict=True):
         u7[dim] = drive * speeds[dim]
     return np.array(u7[:6]), u7[GRIPPER_DIM]
-
-
-@functools.lru_cache(maxsize=64)
-def _dim_speeds(config: InterfaceConfig) -> tuple[float, ...]:
-    """``config.dim_speeds()`` as a tuple, once per (frozen) configuration."""
-    return tuple(config.dim_speeds().tolist())
-
-
-def next_mode(mode: int, n_modes: int) -> int:
-    """The mode a mode-button press selects: the next one, cycling."""
-    return (int(mode) + 1) % int(n_modes)
-
-
-def sector_mode(axis_x: float, axis_y: float, n_modes: int) -> int | None:
-    """The mode whose stick sector ``(axis_x, axis_y)`` points into, or ``None`` when the stick is
-    centred (deflection below :data:`DIRECT_SELECT_DEFLECTION`).
-
-    ``n_modes`` equal sectors, clockwise from straight up (``+axis_y``): mode ``k`` is centred on
-    the bearing ``k * 360 / n_modes`` degrees (a boundary goes to the next mode clockwise).
-    """
-    if math.hypot(axis_x, axis_y) < DIRECT_SELECT_DEFLECTION:
-        return None
-    bearing = math.atan2(axis_x, axis_y) % (2.0 * math.pi)  # clockwise from +axis_y
-    width = 2.0 * math.pi / int(n_modes)
-    return int(math.floor(bearing / width + 0.5)) % int(n_modes)
-
-
-def sector_stick(mode: int, n_modes: int) -> tuple[float, float]:
-    """The full-deflection stick ``(axis_x, axis_y)`` at the centre of mode ``mode``'s sector (the
-    inverse of :func:`sector_mode`)."""
-    bearing = 2.0 * math.pi * int(mode) / int(n_modes)
-    return math.sin(bearing), math.cos(bearing)
-
-
-def selected_mode(mode: int, clean_raw: ArrayLike, config: InterfaceConfig) -> int:
-    """The mode a mode-button press selects from ``mode`` with the sanitised raw signal
-    ``clean_raw``: the next one (``"cycle"``, or a centred stick), or the stick sector's mode
-    (``"direct"``, the stick deflected; possibly ``mode`` itself)."""
-    n = len(config.modes)
-    if config.mode_selection == "direct":
-        r = np.asarray(clean_raw, dtype=float)
-        chosen = sector_mode(float(r[0]), float(r[1]), n)
-        if chosen is not None:
-            return chosen
-    return next_mode(mode, n)
 
 
 def parse_disambiguation_mode(value: float | None, n_arm_modes: int) -> int | None:
@@ -454,9 +328,10 @@ def interface_update(
             starts a disambiguation like a request press does, with no press.
 
     Returns:
-        ``(new_state, events)``. A mode-button rising edge cycles the mode, or selects the stick
-        sector's mode with ``config.mode_selection == "direct"`` (:func:`selected_mode`), logged
-        as one ``mode_switch`` per press (also when a direct selection keeps the mode). A
+        ``(new_state, events)``. A mode event of the kind (a mode-button rising edge, or what the
+        kind uses: :meth:`~drake_disamb.core.interfaces.base.Interface.mode_event`) steps the mode
+        or selects one (:meth:`~drake_disamb.core.interfaces.base.Interface.select`), logged as
+        one ``mode_switch`` per event (also when a direct selection keeps the mode). A
         request-button rising edge logs ``disambiguation_request`` (at the press) and, with
         ``config.serve_requests``, starts a disambiguation; so does a new automatic trigger. A
         started disambiguation is served by the first update at least ``config.request_latency``
@@ -472,7 +347,8 @@ def interface_update(
         ``mode_switch_count``; requests count in ``request_count`` (the paper's "button presses" is
         their sum), served disambiguations in ``served_count``.
     """
-    clean, bad = sanitize_raw(raw, config)
+    variant = config.variant
+    values, bad = _sanitized(raw, config)
     events: list[InterfaceEvent] = []
     mode = int(state.mode)
     switches = state.mode_switch_count
@@ -482,19 +358,18 @@ def interface_update(
         if nonfinite == 0 and warn is not None:
             warn(
                 f"raw signal {np.asarray(raw, dtype=float).tolist()} has non-finite entries "
-                f"({config.kind} layout {list(RAW_LAYOUTS[config.kind])}); they are read as 0"
+                f"({config.kind} layout {list(config.raw_layout)}); they are read as 0"
             )
         nonfinite += 1
 
-    mode_level = clean[MODE_BUTTON]
-    if mode_level > 0.5 and state.prev_mode_button <= 0.5:
-        new = selected_mode(mode, clean, config)
+    step, memory = variant.mode_event(values, state.prev_mode_button)
+    if step:
+        new = variant.select(mode, step, values, config.mode_selection)
         events.append(InterfaceEvent(float(time), "mode_switch", mode, new))
         mode = new
         switches += 1
 
-    if config.mode_selection == "direct" and mode_level > 0.5:
-        clean[0] = clean[1] = 0.0  # a held mode button: the stick selects, it does not drive
+    clean = np.array(variant.held(values, memory, config.mode_selection))
     due, automatic = state.pending_due, state.pending_automatic
     request_level = clean[REQUEST_BUTTON]
     if request_level > 0.5 and state.prev_request_button <= 0.5:
@@ -525,7 +400,7 @@ def interface_update(
 
     new_state = InterfaceState(
         mode=mode,
-        prev_mode_button=float(mode_level),
+        prev_mode_button=float(memory),
         prev_request_button=float(request_level),
         mode_switch_count=switches,
         request_count=requests,

@@ -1,0 +1,76 @@
+"""Control interfaces: one module per kind, one registry, one update (pure numpy).
+
+:mod:`~drake_disamb.core.interfaces.base` defines the variant every kind derives
+(:class:`~drake_disamb.core.interfaces.base.Interface`) and the registry :data:`INTERFACES`;
+:mod:`~drake_disamb.core.interfaces.update` runs any kind's update. Every other module of this
+package is one kind, registered when the package is imported (so a new kind is one new module):
+:mod:`~drake_disamb.core.interfaces.joystick` and :mod:`~drake_disamb.core.interfaces.head_array`
+are the paper's study's two interfaces.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from drake_disamb.core.interfaces.base import (
+    INTERFACES,
+    LIVE_PULSES,
+    MODE_BUTTON,
+    MODE_SELECTIONS,
+    RAW_SIZE,
+    REQUEST_BUTTON,
+    Interface,
+    LiveControl,
+    LiveRole,
+    arm_modes,
+    check_kind,
+    gripper_mode,
+    interface_modes,
+    interfaces_in,
+    mode_name,
+    register,
+)
+from drake_disamb.core.interfaces.update import (
+    EventKind,
+    InterfaceConfig,
+    InterfaceEvent,
+    InterfaceState,
+    command_from_raw,
+    initial_state,
+    interface_update,
+    parse_disambiguation_mode,
+    sanitize_raw,
+)
+
+for _module in pkgutil.iter_modules(__path__):
+    if _module.name not in ("base", "update"):
+        importlib.import_module(f"{__name__}.{_module.name}")
+
+__all__ = [
+    "INTERFACES",
+    "LIVE_PULSES",
+    "MODE_BUTTON",
+    "MODE_SELECTIONS",
+    "RAW_SIZE",
+    "REQUEST_BUTTON",
+    "EventKind",
+    "Interface",
+    "InterfaceConfig",
+    "InterfaceEvent",
+    "InterfaceState",
+    "LiveControl",
+    "LiveRole",
+    "arm_modes",
+    "check_kind",
+    "command_from_raw",
+    "gripper_mode",
+    "initial_state",
+    "interface_modes",
+    "interfaces_in",
+    "interface_update",
+    "mode_name",
+    "parse_disambiguation_mode",
+    "register",
+    "sanitize_raw",
+]

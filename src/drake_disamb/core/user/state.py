@@ -1,0 +1,130 @@
+"""What the simulated user remembers between decisions: :class:`UserState` and its flat vector."""
+
+from __future__ import annotations
+
+import operator
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from drake_disamb.core.interfaces import RAW_SIZE
+
+__all__ = ["NOT_COUNTING", "UserState", "evolve"]
+
+NOT_COUNTING = -1.0
+"""``unhelped_since`` value meaning "the autonomy is currently helping" (times are >= 0)."""
+
+
+@dataclass(frozen=True)
+class UserState:
+    """What the simulated user remembers between ticks.
+
+    Attributes:
+        busy_until: No action before this time (s): reacting to its last press, settling into a new
+            mode, or pausing.
+        requested_at_start: Whether the start-of-trial request was made (or passed up).
+        unhelped_since: Time (s) since which the autonomy has not been helping, or
+            :data:`NOT_COUNTING`.
+        draws: Counter of random draws (keys the seeded generator).
+        presses: Buttons pressed so far (mode + request).
+        target_mode: The mode it is cycling toward, or -1.
+        progress_mode: The mode whose progress it is watching (rule 5), or -1.
+        progress_since: When the watch (re)started (s).
+        progress_best: The mode's remaining error then (tolerance units).
+        started: Whether the start delay was drawn.
+        start_until: No mode switch or command before this time (s): the start delay.
+        hold_until: A late release in progress: the raw signal is held until this time (s); 0 = none.
+        request_mode: The mode when its last request was made while it waits for the switch, or -1.
+        request_since: When that request was made (s).
+        judge: The mode a request chose is to be accepted or left at the next free decision.
+        overshot: It has pressed once too many toward the current target.
+        aim_mode: The mode whose stopping points it has judged (``aim_error``), or -1.
+        aim_0, aim_1: Its misjudgement of the goal along the mode's first and second dimension
+            (m or rad): it drives until the error along the dimension is this.
+        kept_mode: The mode a request chose and the user kept, while it keeps using it (the
+            assistance helps), or -1.
+        raw: The raw signal produced at the last tick (what the user is holding).
+    """
+
+    busy_until: float = 0.0
+    requested_at_start: bool = False
+    unhelped_since: float = NOT_COUNTING
+    draws: int = 0
+    presses: int = 0
+    target_mode: int = -1
+    progress_mode: int = -1
+    progress_since: float = 0.0
+    progress_best: float = 0.0
+    started: bool = False
+    start_until: float = 0.0
+    hold_until: float = 0.0
+    request_mode: int = -1
+    request_since: float = 0.0
+    judge: bool = False
+    overshot: bool = False
+    aim_mode: int = -1
+    aim_0: float = 0.0
+    aim_1: float = 0.0
+    kept_mode: int = -1
+    raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
+
+    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode", "kept_mode")
+    _BOOL = ("requested_at_start", "started", "judge", "overshot")
+    _FIELDS = (
+        "busy_until",
+        "requested_at_start",
+        "unhelped_since",
+        "draws",
+        "presses",
+        "target_mode",
+        "progress_mode",
+        "progress_since",
+        "progress_best",
+        "started",
+        "start_until",
+        "hold_until",
+        "request_mode",
+        "request_since",
+        "judge",
+        "overshot",
+        "aim_mode",
+        "aim_0",
+        "aim_1",
+        "kept_mode",
+    )
+    VECTOR_SIZE = 20 + RAW_SIZE
+
+    def to_vector(self) -> NDArray[np.float64]:
+        """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
+        progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
+        request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, raw (4)]``."""
+        head = map(float, _STATE_FIELDS(self))  # (one C-level read of the fields: a user decides every tick)
+        return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
+
+    @classmethod
+    def from_vector(cls, x: ArrayLike) -> UserState:
+        """Inverse of :meth:`to_vector`."""
+        v = np.asarray(x, dtype=float)
+        if v.shape != (cls.VECTOR_SIZE,):
+            raise ValueError(f"UserState vector: expected {cls.VECTOR_SIZE} numbers, got {v.shape}")
+        values: dict[str, object] = dict(zip(cls._FIELDS, v[: len(cls._FIELDS)].tolist(), strict=True))
+        for name in cls._INT:
+            values[name] = int(round(values[name]))
+        for name in cls._BOOL:
+            values[name] = values[name] > 0.5
+        return cls(**values, raw=v[len(cls._FIELDS) :].copy())
+
+
+_STATE_FIELDS = operator.attrgetter(*UserState._FIELDS)
+"""The fields of :meth:`UserState.to_vector`, in its order, as one tuple."""
+
+
+def evolve(state: UserState, **changes: object) -> UserState:
+    """``dataclasses.replace(state, **changes)`` without its per-call field inspection (the user
+    steps every control tick). ``UserState`` has no ``__post_init__`` and no slots, so a copy of
+    the instance dictionary with the changes is exactly what ``replace`` builds."""
+    new = object.__new__(UserState)
+    new.__dict__.update(state.__dict__)
+    new.__dict__.update(changes)
+    return new
