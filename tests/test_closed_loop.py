@@ -221,7 +221,7 @@ def test_baseline_inference_methods_build_and_run(method: str) -> None:
 
 def test_unknown_names_and_bad_scenarios() -> None:
     with pytest.raises(ValueError, match="interface"):
-        with_overrides(load_scenario("reaching"), interface="sip_and_puff")
+        with_overrides(load_scenario("reaching"), interface="chin_switch")
     with pytest.raises(ValueError, match="task"):
         load_scenario("knitting")
     s = load_scenario("reaching")

@@ -187,7 +187,7 @@ def test_overrides() -> None:
     assert with_overrides(s, goal=[1, 0]).user.goals == [1, 0]
     assert s.user.goals == [0, 0]  # the original is untouched
     with pytest.raises(ValueError, match="interface: expected one of"):
-        with_overrides(s, interface="sip_and_puff")
+        with_overrides(s, interface="chin_switch")
     with pytest.raises(ValueError, match="paradigm"):
         with_overrides(s, paradigm="telepathy")
     with pytest.raises(ValueError, match="goal: expected an index in"):
