@@ -344,7 +344,7 @@ def test_the_simulated_user_asks_only_in_the_disambiguation_paradigm() -> None:
         (
             "disambiguation.request_latency",
             -1.0,
-            r"scenario\.disambiguation\.request_latency: expected a finite number >= 0 \(s\), got -1\.0",
+            r"scenario\.disambiguation\.request_latency: expected a number of seconds in \[0, 60\], got -1\.0",  # noqa: E501
         ),
         (
             "disambiguation.request_latency",

@@ -582,11 +582,16 @@ def test_sigterm_stops_the_run_leaves_no_process_and_a_rerun_completes(
 
 @pytest.mark.slow
 def test_ctrl_c_to_the_process_group_prints_no_worker_traceback(tmp_path: Path) -> None:
-    protocol = write_yaml(tmp_path / "protocol.yaml", tiny_protocol_data())
+    data = tiny_protocol_data()
+    data["subjects"] = 8  # 32 trials: still running when the first record is written
+    protocol = write_yaml(tmp_path / "protocol.yaml", data)
     proc = _start_run(tmp_path / "int", protocol)
+    records = tmp_path / "int" / "trials.jsonl"
     try:
         wait_for_line(proc, "trials to run", timeout=180)
-        time.sleep(3.0)  # the workers are running trials
+        end = time.monotonic() + 180
+        while time.monotonic() < end and not (records.exists() and records.read_bytes().count(b"\n") >= 1):
+            time.sleep(0.05)  # the workers are running trials
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does
         _, err = proc.communicate(timeout=30)
     finally:
