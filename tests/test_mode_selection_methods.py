@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 from support import integrate_pose
@@ -13,8 +15,6 @@ from drake_disamb.core.disambiguation import (
     authors_r3_config,
     disambiguate,
     entropy_bits,
-    expected_entropy_mode,
-    expected_kl_mode,
     kl_bits,
     mico_config,
     select_disambiguating_mode,
@@ -26,7 +26,7 @@ IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 # Two goals mirrored in y about the end effector's x-z plane: moving along x, z or rotating
 # approaches (or leaves) both alike, so only vy can tell them apart.
 MIRRORED = np.array([[0.3, 0.15, 0.0], [0.3, -0.15, 0.0]])
-METHODS = {"entropy": expected_entropy_mode, "kl": expected_kl_mode}
+METHODS = {name: functools.partial(select_disambiguating_mode, name) for name in ("entropy", "kl")}
 
 
 def test_entropy_and_kl_by_hand() -> None:
@@ -94,7 +94,7 @@ def test_only_the_mode_that_tells_mirrored_goals_apart_scores(method: str) -> No
 def test_entropy_picks_the_minimum_expected_entropy() -> None:
     goals = np.array([[0.3, 0.1, 0.05], [0.25, -0.2, 0.1], [0.4, 0.0, -0.1]])
     belief = np.array([0.4, 0.35, 0.25])
-    res = expected_entropy_mode(belief, np.zeros(3), goals, HEAD_ARRAY_MODES)
+    res = METHODS["entropy"](belief, np.zeros(3), goals, HEAD_ARRAY_MODES)
     expected_entropy = res.features["entropy"].mean(axis=0)  # per 1-D mode
     assert res.mode == int(np.argmin(expected_entropy))
     np.testing.assert_allclose(res.mode_scores, entropy_bits(belief) - expected_entropy, atol=1e-12)
@@ -125,7 +125,7 @@ def test_a_mode_without_probed_dimensions_scores_zero(method: str) -> None:
 
 def test_joystick_mode_scores_the_mean_over_its_probes() -> None:
     goals = np.array([[0.3, 0.1, 0.05], [0.25, -0.2, 0.1]])
-    res = expected_kl_mode([0.6, 0.4], np.zeros(3), goals, [[0, 1], [0, 2], [3, 5], [4]])
+    res = METHODS["kl"]([0.6, 0.4], np.zeros(3), goals, [[0, 1], [0, 2], [3, 5], [4]])
     D = res.dimension_scores  # per dimension, mean of its two probes
     np.testing.assert_allclose(
         res.mode_scores, [(D[0] + D[1]) / 2, (D[0] + D[2]) / 2, (D[3] + D[5]) / 2, D[4]]

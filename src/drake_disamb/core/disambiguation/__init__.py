@@ -37,9 +37,8 @@ from drake_disamb.core.disambiguation.entropy import (
     EntropyResult,
     ExpectedEntropy,
     entropy_bits,
-    expected_entropy_mode,
 )
-from drake_disamb.core.disambiguation.kl import ExpectedKL, KLResult, expected_kl_mode, kl_bits
+from drake_disamb.core.disambiguation.kl import ExpectedKL, KLResult, kl_bits
 from drake_disamb.core.disambiguation.projection import Projection, forward_projection
 from drake_disamb.core.disambiguation.registry import (
     MODE_SELECTION_METHODS,
@@ -79,8 +78,6 @@ __all__ = [
     "belief_features",
     "disambiguate",
     "entropy_bits",
-    "expected_entropy_mode",
-    "expected_kl_mode",
     "forward_projection",
     "kl_bits",
     "make_request",

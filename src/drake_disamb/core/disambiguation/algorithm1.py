@@ -32,9 +32,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.disambiguation.config import DisambiguationConfig
 from drake_disamb.core.disambiguation.projection import forward_projection
-from drake_disamb.core.disambiguation.registry import MODE_SELECTION_METHODS, ModeSelectionMethod
-from drake_disamb.core.disambiguation.request import DisambiguationRequest, make_request
-from drake_disamb.core.disambiguation.selection import ProbeResult, select_mode
+from drake_disamb.core.disambiguation.registry import (
+    MODE_SELECTION_METHODS,
+    ModeSelectionMethod,
+    select_disambiguating_mode,
+)
+from drake_disamb.core.disambiguation.request import DisambiguationRequest
+from drake_disamb.core.disambiguation.selection import ProbeResult
 from drake_disamb.core.layout import DIM_NAMES
 
 FEATURE_NAMES: tuple[str, ...] = ("gamma", "omega", "lambda", "upsilon")
@@ -161,22 +165,7 @@ class Algorithm1(ModeSelectionMethod):
         )  # (2, n_k)
         D_k = D[0] + D[1]
         D_m = request.membership @ D_k
-        mode, best = select_mode(D_m, request.current_mode, cfg.tie_tolerance)
-        return Algorithm1Result(
-            mode=mode,
-            best_mode=best,
-            mode_scores=D_m,
-            modes=request.modes,
-            current_mode=request.current_mode,
-            tie_tolerance=cfg.tie_tolerance,
-            dimension=cfg.dimensions[int(np.argmax(D_k))],
-            dimensions=cfg.dimensions,
-            scores_plus=D[0],
-            scores_minus=D[1],
-            dimension_scores=D_k,
-            features=feats,
-            w=cfg.w,
-        )
+        return Algorithm1Result.chosen(request, D, D_k, D_m, feats, w=cfg.w)
 
 
 def disambiguate(
@@ -195,7 +184,8 @@ def disambiguate(
     The arguments and errors are those of
     :func:`~drake_disamb.core.disambiguation.request.make_request`.
     """
-    request = make_request(
+    return select_disambiguating_mode(
+        Algorithm1(),
         belief,
         position,
         goal_positions,
@@ -205,4 +195,3 @@ def disambiguate(
         goal_orientations=goal_orientations,
         current_mode=current_mode,
     )
-    return Algorithm1().select(request)

@@ -12,18 +12,16 @@ probes of Algorithm 1; :func:`~drake_disamb.core.disambiguation.selection.select
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.disambiguation.config import DisambiguationConfig
 from drake_disamb.core.disambiguation.projection import forward_projection
 from drake_disamb.core.disambiguation.registry import MODE_SELECTION_METHODS, ModeSelectionMethod
-from drake_disamb.core.disambiguation.request import DisambiguationRequest, make_request
-from drake_disamb.core.disambiguation.selection import ProbeResult, mean_over_probes, select_mode
+from drake_disamb.core.disambiguation.request import DisambiguationRequest
+from drake_disamb.core.disambiguation.selection import ProbeResult, mean_over_probes
 from drake_disamb.core.layout import DIM_NAMES
 
 _REALMIN = float(np.finfo(float).tiny)
@@ -72,48 +70,7 @@ class ExpectedKL(ModeSelectionMethod):
     label: ClassVar[str] = "the maximum expected KL divergence of the projected belief"
 
     def select(self, request: DisambiguationRequest) -> KLResult:
-        cfg = request.config
         proj = forward_projection(request)
         per_probe = kl_bits(proj.p_b, request.belief)  # (2, n_k)
         D_k, scores = mean_over_probes(per_probe, request)
-        mode, best = select_mode(scores, request.current_mode, cfg.tie_tolerance)
-        return KLResult(
-            mode=mode,
-            best_mode=best,
-            mode_scores=scores,
-            modes=request.modes,
-            current_mode=request.current_mode,
-            tie_tolerance=cfg.tie_tolerance,
-            dimension=cfg.dimensions[int(np.argmax(D_k))],
-            dimensions=cfg.dimensions,
-            scores_plus=per_probe[0],
-            scores_minus=per_probe[1],
-            dimension_scores=D_k,
-            features={"kl": per_probe},
-        )
-
-
-def expected_kl_mode(
-    belief: ArrayLike,
-    position: ArrayLike,
-    goal_positions: ArrayLike,
-    modes: Sequence[Sequence[int]],
-    config: DisambiguationConfig | None = None,
-    *,
-    orientation: ArrayLike | None = None,
-    goal_orientations: ArrayLike | None = None,
-    current_mode: int | None = None,
-) -> KLResult:
-    """Run :class:`ExpectedKL` on a request; the arguments and errors are those of
-    :func:`~drake_disamb.core.disambiguation.request.make_request`."""
-    request = make_request(
-        belief,
-        position,
-        goal_positions,
-        modes,
-        config,
-        orientation=orientation,
-        goal_orientations=goal_orientations,
-        current_mode=current_mode,
-    )
-    return ExpectedKL().select(request)
+        return KLResult.chosen(request, per_probe, D_k, scores, {"kl": per_probe})

@@ -166,6 +166,37 @@ class ProbeResult(DisambiguationResult):
     dimension_scores: NDArray[np.float64]
     features: dict[str, NDArray[np.float64]]
 
+    @classmethod
+    def chosen(
+        cls,
+        request: DisambiguationRequest,
+        per_probe: NDArray[np.float64],
+        dimension_scores: NDArray[np.float64],
+        mode_scores: NDArray[np.float64],
+        features: dict[str, NDArray[np.float64]],
+        **extra: Any,
+    ) -> ProbeResult:
+        """The result for ``request`` whose probes scored ``per_probe`` (``(2, n_k)``, row 0
+        ``+e_k``): the tie rule applied to ``mode_scores``, the best dimension the argmax of
+        ``dimension_scores``; ``extra`` are the subclass's own fields."""
+        cfg = request.config
+        mode, best = select_mode(mode_scores, request.current_mode, cfg.tie_tolerance)
+        return cls(
+            mode=mode,
+            best_mode=best,
+            mode_scores=mode_scores,
+            modes=request.modes,
+            current_mode=request.current_mode,
+            tie_tolerance=cfg.tie_tolerance,
+            dimension=cfg.dimensions[int(np.argmax(dimension_scores))],
+            dimensions=cfg.dimensions,
+            scores_plus=per_probe[0],
+            scores_minus=per_probe[1],
+            dimension_scores=dimension_scores,
+            features=features,
+            **extra,
+        )
+
     def details(self) -> dict[str, Any]:
         return {
             "dimension": self.dimension,
