@@ -169,8 +169,10 @@ def test_the_arm_on_the_wire_moves_as_the_simulated_station_does() -> None:
         p_wire, p_sim = wire.out("ee_pose"), sim.diagram.GetOutputPort("ee_pose").Eval(sim_ctx)
         assert np.linalg.norm(p_wire[:3] - p_sim[:3]) < 1e-3  # one period of latency: < 1 mm here
     # One command per status, never more: the driver's statuses, the station's ticks, the commands.
+    # Before the ticks, the driver published the start check's status and the one the loop's first
+    # tick found waiting (and discarded: it predates the loop).
     used = wire.counts()[0]
-    assert abs(len(wire.commands) - used) <= 1 and abs(wire.driver.statuses - used) <= 1
+    assert abs(len(wire.commands) - used) <= 1 and wire.driver.statuses - used == 2
     assert wire.out("fault")[0] == Fault.NONE
 
 
@@ -268,6 +270,39 @@ def test_a_burst_is_read_as_its_latest_status() -> None:
     used, dropped, missed = wire.counts()
     assert missed == 2 and dropped == 0
     assert len(wire.commands) <= used + 1
+
+
+def test_the_loops_first_tick_takes_a_fresh_status_and_counts_nothing_before_it_as_missed() -> None:
+    wire = Wire()
+    for _ in range(5):  # statuses published while the station is built, before the loop starts
+        wire.driver.step()
+    wire.simulator.AdvanceTo(0.0)
+    used, dropped, missed = wire.counts()
+    assert (used, dropped, missed) == (1, 0, 0)
+    latest = int(round(wire.driver.statuses * PERIOD * 1e6))  # the driver's utime: steps * period
+    assert wire.receiver().last_utime(wire.receiver().GetMyContextFromRoot(wire.ctx)) == latest
+    wire.simulator.AdvanceTo(0.1)
+    assert wire.counts()[2] == 0
+
+
+def test_prepare_loop_loads_the_kernels_freezes_the_heap_and_holds_blas_to_one_thread() -> None:
+    import ast
+    import subprocess
+    import sys
+
+    script = (
+        "import gc\n"
+        "from threadpoolctl import threadpool_info\n"
+        "from drake_disamb.station.lcm.loop import prepare_loop\n"
+        "prepare_loop()\n"
+        "from drake_disamb.core import warmup\n"
+        "blas = [i['num_threads'] for i in threadpool_info() if i['user_api'] == 'blas']\n"
+        "print(warmup._DONE, gc.get_freeze_count() > 0, blas)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    ready, frozen, blas = done.stdout.strip().split(" ", 2)
+    assert ready == "True" and frozen == "True" and set(ast.literal_eval(blas)) <= {1}, done.stdout
 
 
 def test_start_checks_name_what_is_wrong() -> None:

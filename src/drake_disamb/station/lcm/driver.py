@@ -36,6 +36,7 @@ from pydrake.systems.framework import (
 from drake_disamb.station.build import _build_plant_station, _SetPoints
 from drake_disamb.station.config import FINGER_MAX_OPENING, SceneObject, StationConfig
 from drake_disamb.station.geometry import StationGeometry
+from drake_disamb.station.lcm.loop import prepare_loop
 from drake_disamb.station.lcm.messages import make_status, read_command
 
 DEFAULT_STATUS_CHANNEL = "KINOVA_JACO_STATUS"
@@ -215,19 +216,21 @@ class SimulatedDriver:
 
     def run(self, stop: Callable[[], bool], duration: float | None = None) -> int:
         """Step at real time (one status every ``period`` of wall time) until ``stop()`` or
-        ``duration`` seconds of simulated time; returns the periods that started late."""
+        ``duration`` seconds of simulated time; returns the periods that started late. The steps
+        keep to a grid of ``period``; one that starts late is caught up over the next ones, with
+        never two statuses less than half a period apart (as even a stream as a real driver's)."""
+        prepare_loop()  # no kernel load, no full collection of the plant, BLAS on one thread
         late = 0
         next_tick = time.monotonic()
         while not stop() and (duration is None or self._steps * self.period < duration):
             self.step()
+            published = time.monotonic()
             next_tick += self.period
-            wait = next_tick - time.monotonic()
-            if wait > 0:
-                self.lcm.HandleSubscriptions(0)
-                time.sleep(wait)
-            else:
+            if next_tick <= published:
                 late += 1
-                next_tick = time.monotonic()
+            next_tick = max(next_tick, published + self.period / 2)
+            self.lcm.HandleSubscriptions(0)
+            time.sleep(max(0.0, next_tick - time.monotonic()))
         return late
 
     def joint_positions(self) -> np.ndarray:

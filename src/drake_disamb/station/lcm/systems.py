@@ -21,6 +21,7 @@ from pydrake.systems.framework import BasicVector, Context, DiscreteValues, Even
 from drake_disamb.station.config import ARM_JOINTS, EE_FRAME
 from drake_disamb.station.lcm.bus import CommandLink, StatusInbox
 from drake_disamb.station.lcm.faults import Fault
+from drake_disamb.station.lcm.loop import prepare_loop
 from drake_disamb.station.lcm.messages import StatusReading, make_command, read_status
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 
@@ -35,7 +36,9 @@ class JacoStatusReceiver(LeafSystem):
     fingers, is finite and has a ``utime`` after the last one used (others are dropped and counted
     on ``sanitized_input_count``); of several (a burst) the latest is used, and the ones skipped
     are counted as missed (LCM over UDP keeps only the latest message of a channel, so there they
-    show only as a gap in ``utime``). A status that puts a
+    show only as a gap in ``utime``). The loop's first tick discards what waits on the bus (it
+    was published before the loop started, while the station was being built) and waits for a
+    fresh status; the watchdog and the missed count start there. A status that puts a
     joint outside the model's limits latches :attr:`Fault.JOINT_LIMIT`; no usable status within
     ``status_timeout`` seconds (wall clock) of the last one latches :attr:`Fault.STATUS_TIMEOUT`.
     Once a fault is latched it no longer waits and its measurement holds still (velocities zero).
@@ -47,12 +50,14 @@ class JacoStatusReceiver(LeafSystem):
     - finger_state (4): finger slides (m) then speeds (m/s)
     - fault (1): the latched Fault code (0 while none)
     - status_count (3): statuses used, dropped, and missed (skipped between two used ones, by
-      their utime: a burst, or a tick that came late)
+      their utime: a burst, or a tick that came late; counted from the loop's first tick)
     - sanitized_input_count (1): ticks at which a status was dropped
     @endsystem
 
-    Discrete state: the four output groups, plus ``[utime of the status used (us)]``; all start
-    from the ``first`` status (the station's start check).
+    At initialisation, with ``real_time``, it readies the process for the loop
+    (:meth:`_before_the_loop`). Discrete state: the four output groups, plus ``[utime of the
+    status used (us)]`` and ``[1 once the loop has ticked]``; all start from the ``first`` status
+    (the station's start check).
     """
 
     def __init__(
@@ -64,6 +69,7 @@ class JacoStatusReceiver(LeafSystem):
         period: float,
         status_timeout: float,
         warn_interval: float = 1.0,
+        real_time: bool = True,
     ) -> None:
         super().__init__()
         self._inbox = inbox
@@ -75,12 +81,22 @@ class JacoStatusReceiver(LeafSystem):
         self._fault = self.DeclareDiscreteState([float(Fault.NONE)])
         self._counts = self.DeclareDiscreteState(np.zeros(3))
         self._utime = self.DeclareDiscreteState([float(first.utime)])
+        self._running = self.DeclareDiscreteState([0.0])  # 1 from the loop's first tick on
         self._sanitized = SanitizedInputCounter(self, warn_interval)
         self.DeclareStateOutputPort("arm_joint_state", self._arm)
         self.DeclareStateOutputPort("finger_state", self._finger)
         self.DeclareStateOutputPort("fault", self._fault)
         self.DeclareStateOutputPort("status_count", self._counts)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        if real_time:  # (not for a driver stepped in-process: nothing there is timed)
+            self.DeclareInitializationPublishEvent(self._before_the_loop)
+
+    def _before_the_loop(self, context: Context) -> EventStatus:
+        """At the simulator's initialisation, once the whole diagram is built:
+        :func:`~drake_disamb.station.lcm.loop.prepare_loop` (nothing in the loop's first ticks
+        loads a kernel or collects the built diagram; BLAS on one thread)."""
+        prepare_loop()
+        return EventStatus.Succeeded()
 
     def last_utime(self, context: Context) -> int:
         """The ``utime`` (us) of the status used last in ``context``."""
@@ -97,6 +113,11 @@ class JacoStatusReceiver(LeafSystem):
         last_utime = int(context.get_discrete_state(self._utime).get_value()[0])
         used, dropped, missed = context.get_discrete_state(self._counts).get_value()
         previous_utime = last_utime
+        running = bool(context.get_discrete_state(self._running).get_value()[0])
+        if not running:  # the loop's first tick: what waits on the bus predates it
+            self._inbox.poll(0.0)
+            self._inbox.take()
+            self._inbox.last_good = time.monotonic()  # the watchdog counts from the loop's start
         good: StatusReading | None = None
         good_at = 0.0
         fault = Fault.NONE
@@ -141,7 +162,9 @@ class JacoStatusReceiver(LeafSystem):
             )
             discrete_state.get_mutable_vector(self._utime).SetAtIndex(0, float(good.utime))
             used += 1
-            missed += max(0, round((good.utime - previous_utime) / self._period_us) - 1)
+            if running:  # (the statuses before the loop's first tick were not missed by it)
+                missed += max(0, round((good.utime - previous_utime) / self._period_us) - 1)
+            discrete_state.get_mutable_vector(self._running).SetAtIndex(0, 1.0)
         discrete_state.get_mutable_vector(self._counts).SetFromVector([used, dropped, missed])
         return EventStatus.Succeeded()
 
