@@ -349,3 +349,36 @@ def test_interface_mode_selection_is_an_ablation_switch() -> None:
     check_overrides({"interface_mode_selection": "direct"})
     with pytest.raises(ValueError, match=r"overrides interface_mode_selection='sector'"):
         check_overrides({"interface_mode_selection": "sector"})
+
+
+def test_interface_mode_order_is_a_scenario_option_per_interface() -> None:
+    from drake_disamb.config import load_scenario, resolve_scenario, scenario_from_dict, scenario_to_dict
+
+    plain = scenario_to_dict(load_scenario("reaching"))
+    plain["interface_mode_order"] = {
+        "head_array": [[2], [1], [0], [3], [4], [5]],
+        "joystick": [[0, 1], [0, 2], [3, 5], [4]],
+    }
+    config = resolve_scenario(scenario_from_dict(plain))
+    assert config.interface.modes[:3] == ((2,), (1,), (0,)) and config.interface.modes[-1] == (6,)
+    plain["interface"] = "sip_and_puff"  # a kind left out keeps its registered order
+    assert resolve_scenario(scenario_from_dict(plain)).interface.modes[:3] == ((0,), (1,), (2,))
+    for bad, message in (
+        (
+            {"head_array": [[0], [1]]},
+            r"interface_mode_order\.head_array: HeadArray\.mode_order: expected modes that cover",
+        ),
+        ({"wheel": [[0]]}, r"interface_mode_order: unknown key 'wheel' \(one of joystick, head_array"),
+        (
+            {"head_array": [[0], [0], [1], [2], [3], [4], [5]]},
+            r"interface_mode_order\.head_array: .*distinct modes",
+        ),
+        ({"head_array": "vx"}, r"interface_mode_order\.head_array: expected a list"),
+        (
+            {"head_array": [[0.5], [1], [2], [3], [4], [5]]},
+            r"interface_mode_order\.head_array\[0\]\[0\]: expected an integer",
+        ),
+    ):
+        plain["interface_mode_order"] = bad
+        with pytest.raises(ValueError, match=message):
+            scenario_from_dict(plain)

@@ -15,6 +15,7 @@ import pytest
 
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
 from drake_disamb.core.blending import blending_alpha
+from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.core.inference import DFTParams, dft_euler_step
 from drake_disamb.study.data.folder import LoggedTrial
 from drake_disamb.study.data.records import TrialRecord
@@ -342,9 +343,20 @@ def test_protocol_names_a_system() -> None:
     from drake_disamb.study.design.protocol import default_protocol_text, protocol_from_yaml
 
     text = default_protocol_text()
-    assert protocol_from_yaml(text + "\nsystem: mico\n").system == "mico"
+    assert "\nsystem: tnsre2020_study\n" in text and protocol_from_yaml(text).system == "tnsre2020_study"
+    assert protocol_from_yaml(text.replace("system: tnsre2020_study", "system: mico")).system == "mico"
     with pytest.raises(ValueError, match="protocol.system: expected one of mico, tnsre2020_study"):
-        protocol_from_yaml(text + "\nsystem: nope\n")
+        protocol_from_yaml(text.replace("system: tnsre2020_study", "system: nope"))
+    without = "\n".join(line for line in text.splitlines() if not line.startswith("system:"))
+    assert protocol_from_yaml(without).system == "tnsre2020_study"  # the default
+
+
+def test_the_preset_runs_the_head_array_in_the_studys_mode_order() -> None:
+    _, head = _preset_scenario("reaching", "tnsre2020_study")
+    assert head.interface.kind == "head_array"
+    assert head.interface.modes == ((0,), (1,), (2,), (5,), (3,), (4,), (6,))  # vx vy vz wz wx wy
+    _, mico = _preset_scenario("reaching", "mico")
+    assert mico.interface.modes == ((0,), (1,), (2,), (3,), (4,), (5,), (6,))  # ours, registered
 
 
 @needs_data
@@ -364,3 +376,21 @@ def test_study_preset_holds_the_identified_values() -> None:
             (lo - 1.0 / n, hi - 1.0 / n)
         )
     assert blending["assist_without_input"] is (ident.known_path.blend_share_idle > 0.9)
+    # The mode order: every mode the logs resolve is where the preset puts it (the rest is ours).
+    for kind, order in ident.to_json()["mode_order"].items():
+        ours = preset.get("interface_mode_order", {}).get(kind)
+        ours = [list(m) for m in ours] if ours is not None else None
+        for k, dims in enumerate(order):
+            if dims is not None:
+                expected = ours[k] if ours is not None else list(INTERFACES[kind].mode_order[k])
+                assert sorted(dims) == sorted(expected), (kind, k, dims, expected)
+
+
+@needs_data
+def test_the_protocols_request_latency_is_the_logged_range() -> None:
+    from drake_disamb.study.design.protocol import default_protocol
+
+    _, ident = _logs()
+    lo, hi = default_protocol().request_latency
+    got = ident.to_json()["request_time"]
+    assert lo == pytest.approx(got["min"], abs=0.01) and hi == pytest.approx(got["max"], abs=0.01)

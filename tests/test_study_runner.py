@@ -83,7 +83,8 @@ def reference(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
 
 def test_default_protocol_is_the_papers() -> None:
     protocol = P.default_protocol()
-    assert protocol.n_trials == 416 and protocol.request_latency == [2.0, 2.5]
+    assert protocol.n_trials == 416 and protocol.request_latency == [2.49, 3.38]  # the logged range
+    assert protocol.system == "tnsre2020_study"  # the system the study's people used
     data = yaml.safe_load(P.default_protocol_text())
     assert data["subjects"] == 8 and data["interfaces"] == ["joystick", "head_array"]
     assert {p["name"]: p["trials"] for p in data["paradigms"]} == {
@@ -92,7 +93,7 @@ def test_default_protocol_is_the_papers() -> None:
         "automatic": 5,
     }
     assert [len(t["start_poses"]) for t in data["tasks"]] == [3, 3]
-    assert data["request_latency"] == [2.0, 2.5] and data["disambiguation_method"] == "algorithm1"
+    assert data["request_latency"] == [2.49, 3.38] and data["disambiguation_method"] == "algorithm1"
     assert protocol.interface_mode_selection == "direct"  # the study's joystick: one press per change
     assert protocol.initial_modes == "all"  # the study drew the initial mode over every mode
 

@@ -17,7 +17,13 @@ Two scenarios are embedded as package data (``drake_disamb/tasks/reaching.yaml``
 ``pouring.yaml``); ``drake-disamb demo --dump-scenario`` prints any scenario fully written out.
 """
 
-from drake_disamb.config.resolve import TrialConfig, resolve_scenario, scene_objects, validate_scenario
+from drake_disamb.config.resolve import (
+    TrialConfig,
+    interface_variant,
+    resolve_scenario,
+    scene_objects,
+    validate_scenario,
+)
 from drake_disamb.config.schema import (
     INFERENCE_METHODS,
     INTERFACES,
@@ -85,6 +91,7 @@ __all__ = [
     "embedded_scenario_text",
     "load_scenario",
     "min_goal_separation",
+    "interface_variant",
     "resolve_scenario",
     "scenario_from_dict",
     "scenario_from_yaml",

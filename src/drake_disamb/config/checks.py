@@ -97,7 +97,7 @@ def check_data(schema: Any, data: Any, path: str, meta: dict[str, Any] | None = 
 
     Args:
         schema: A field type of the scenario schema (a dataclass, a Drake struct, ``list[...]``,
-            ``X | None``, ``float``, ``int``, ``bool`` or ``str``).
+            ``dict[str, ...]``, ``X | None``, ``float``, ``int``, ``bool`` or ``str``).
         data: Plain data (as parsed from YAML).
         path: Where ``data`` is, for messages (``"scenario"``, ``"scenario.goals[2]"``).
         meta: The field's check metadata (``required``, ``choices``, ``size``, ``max_items``).
@@ -111,6 +111,15 @@ def check_data(schema: Any, data: Any, path: str, meta: dict[str, Any] | None = 
         origin = typing.get_origin(schema)
     if origin is list:
         _check_list(typing.get_args(schema)[0], data, path, meta)
+    elif origin is dict:  # str keys (from meta's choices where given) to values of one type
+        if not isinstance(data, dict):
+            raise ValueError(f"{path}: expected a mapping, got {fmt(data)}")
+        value_type = typing.get_args(schema)[1]
+        for key, value in data.items():
+            if not isinstance(key, str) or ("choices" in meta and key not in meta["choices"]):
+                known = f" (one of {', '.join(meta['choices'])})" if "choices" in meta else ""
+                raise ValueError(f"{path}: unknown key {fmt(key)}{known}")
+            check_data(value_type, value, f"{path}.{key}")
     elif schema is float:
         if not is_real(data):
             raise ValueError(f"{path}: expected a finite number, got {fmt(data)}")

@@ -55,7 +55,7 @@ from drake_disamb.core.disambiguation import (
     preset,
 )
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
-from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS, InterfaceConfig
+from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS, Interface, InterfaceConfig
 from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import is_real
 
@@ -103,6 +103,26 @@ class TrialConfig:
     simulator: Any
     disambiguation_method: ModeSelectionMethod
     automatic: AutomaticConfig | None = None
+
+
+def interface_variant(s: Scenario, name: str = "scenario") -> Interface:
+    """The interface variant of a scenario's trials: the registered kind with the scenario's
+    ``interface_mode_order`` for it (its registered order where the scenario gives none). Every
+    entry is checked, not only the trial's kind's.
+
+    Raises:
+        ValueError: an entry that is not a valid mode order of its kind, naming it.
+    """
+    variants = {}
+    for kind, order in s.interface_mode_order.items():
+        path = f"{name}.interface_mode_order.{kind}"
+        if kind not in INTERFACES:
+            raise ValueError(f"{path}: unknown interface (registered: {', '.join(INTERFACES)})")
+        if not isinstance(order, list | tuple):
+            raise ValueError(f"{path}: expected a list of modes, got {fmt(order)}")
+        modes = tuple(tuple(m) if isinstance(m, list | tuple) else m for m in order)
+        variants[kind] = _named(path, lambda k=kind, m=modes: dataclasses.replace(INTERFACES[k], mode_order=m))
+    return variants.get(s.interface, INTERFACES[s.interface])
 
 
 def _named(path: str, make: Callable[[], T]) -> T:
@@ -211,9 +231,11 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
             f"{name}.interface_mode_selection: expected one of {', '.join(MODE_SELECTIONS)}, "
             f"got {fmt(selection)}"
         )
+    variant = interface_variant(s, name)
     interface = _named(
         f"{name}.initial_mode",
         lambda: InterfaceConfig(
+            variant=variant,
             kind=s.interface,
             control_period=s.control_period,
             initial_mode=s.initial_mode,

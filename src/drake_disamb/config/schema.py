@@ -357,6 +357,11 @@ class Scenario:
             interface offers. A kind that does not offer it (the head array, with no stick)
             cycles: the setting applies to the trials of the kinds that offer it only, so one
             setting serves a protocol with several interfaces.
+        interface_mode_order: Per interface kind, its arm modes (each a list of dimension indices,
+            0-2 translation, 3-5 rotation) in the order a mode change steps through them; the
+            gripper mode follows. A kind left out keeps its registered order
+            (:attr:`~drake_disamb.core.interfaces.Interface.mode_order`), so one setting serves the
+            trials of every interface (the ``tnsre2020_study`` preset sets the head array's).
         paradigm: ``"manual"`` (mode button only), ``"disambiguation"`` (plus the request
             button) or ``"automatic"`` (plus the system's own switches, :class:`AutomaticSpec`).
         inference, disambiguation, blending, autonomy, user: Component settings.
@@ -388,6 +393,9 @@ class Scenario:
     description: str = ""
     interface: str = field(default="head_array", metadata=_meta(choices=INTERFACES))
     interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
+    interface_mode_order: dict[str, list[list[int]]] = field(
+        default_factory=dict, metadata=_meta(choices=INTERFACES)
+    )
     paradigm: str = field(default="disambiguation", metadata=_meta(choices=PARADIGMS))
     inference: InferenceSpec = field(default_factory=InferenceSpec)
     disambiguation: DisambiguationSpec = field(default_factory=DisambiguationSpec)

@@ -18,9 +18,10 @@ How each field is made (times are seconds from the trial's ``start_time``):
   with the corrections the authors' ``parse_data.m`` applies (:data:`ORDER_FIXES`).
 - ``initial_mode``: the mode logged in ``current_mode``'s second row (the order file's 0-based
   initial mode agrees with it after the corrections), named as in
-  :func:`drake_disamb.core.interfaces.interface_modes` by its position in the interface's cycle
-  (joystick ids 12, 13, 45, 6, 7 -> ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``,
-  docs/facts.md section 6; head array 1..7 -> ``vx`` ... ``wz``, ``gripper``). The authors' id is kept in
+  :func:`study_modes` by its position in the study's cycle (joystick ids 12, 13, 45, 6, 7 ->
+  ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``, docs/facts.md section 6; head array 1..7 ->
+  ``vx``, ``vy``, ``vz``, ``wz``, ``wx``, ``wy``, ``gripper``: ``study identify`` reads ids 1-4 off
+  the request scores, and 5, 6 are our choice, as in the ``tnsre2020_study`` preset). The authors' id is kept in
   ``extra["initial_mode_id"]``.
 - ``request_times``: the rows of ``assistance_requested`` after the placeholder. Every request
   made one mode switch of its own (the disambiguation system's), logged in ``mode_switches`` at
@@ -61,6 +62,7 @@ Velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -70,7 +72,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import interface_modes, mode_name
+from drake_disamb.config.system_presets import system_preset
+from drake_disamb.core.interfaces import INTERFACES, interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
@@ -85,6 +88,7 @@ __all__ = [
     "parse_trial_name",
     "read_trial",
     "read_trials",
+    "study_modes",
 ]
 
 FAILED_TRIALS: frozenset[tuple[str, int, int]] = frozenset(
@@ -132,6 +136,16 @@ _PARADIGMS = {"on": "disambiguation", "wo": "manual"}
 _NAME = re.compile(r"^(H\d)PH([12])(RE|PO)(J2|HA)T(\d{1,2})\.mat$")
 _SWITCH_MATCH = 0.05
 """Largest gap (s) between a request's score row and the mode switch it made; wider is an error."""
+
+
+def study_modes(interface: str) -> tuple[tuple[int, ...], ...]:
+    """The modes of the study's ``interface`` in the order of its mode ids (:data:`MODE_IDS`):
+    the mode order of the ``tnsre2020_study`` preset (the study's head array steps vx, vy, vz,
+    wz, ...), else the interface's registered order; the gripper mode last."""
+    order = system_preset("tnsre2020_study").get("interface_mode_order", {}).get(interface)
+    if order is None:
+        return interface_modes(interface)
+    return dataclasses.replace(INTERFACES[interface], mode_order=tuple(map(tuple, order))).modes
 
 
 def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
@@ -245,7 +259,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
             f"{path}: {len(requested)} requests but {len(scores)} rows of cmode_conf_disamb (one per request)"
         )
     ids = MODE_IDS[interface]
-    modes = interface_modes(interface)
+    modes = study_modes(interface)
 
     def name_of(mode_id: float) -> str:
         if int(mode_id) not in ids:

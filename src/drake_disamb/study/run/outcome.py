@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.config import interface_variant
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
 __all__ = [
@@ -124,6 +124,7 @@ def record_from_result(
     paradigm = sc.paradigm
     method = None if paradigm == "manual" else getattr(sc.disambiguation, "method", "algorithm1")
     commanding = np.any(np.abs(trace["u_h"]) > 1e-9, axis=1)
+    variant = interface_variant(sc)  # the trial's mode order names its modes
     info: dict[str, Any] = {
         "stage_times": [_finite(t) for t in result.stage_times],
         "intended_goal_names": list(result.intended_goal_names),
@@ -143,7 +144,7 @@ def record_from_result(
         repetition=int(repetition),
         seed=seed,
         start_pose=start_pose,
-        initial_mode=INTERFACES[sc.interface].mode_name(sc.initial_mode),
+        initial_mode=variant.mode_name(sc.initial_mode),
         intended_goals=[int(g) for g in result.intended_goals],
         reached_goals=[int(g) for g in result.reached_goals],
         success=bool(result.success),
@@ -156,7 +157,7 @@ def record_from_result(
         button_presses=len(switches) + int(result.requests),
         request_times=[float(t) for t in result.request_times],
         mode_switch_times=[float(e.time) for e in switches],
-        mode_switch_modes=[INTERFACES[sc.interface].mode_name(e.to_mode) for e in switches],
+        mode_switch_modes=[variant.mode_name(e.to_mode) for e in switches],
         automatic_switch_times=automatic,
         mean_alpha=float(result.mean_alpha) if np.any(commanding) else None,
         assistance_onset=onsets[0] if onsets else None,
