@@ -121,7 +121,9 @@ def interface_variant(s: Scenario, name: str = "scenario") -> Interface:
         if not isinstance(order, list | tuple):
             raise ValueError(f"{path}: expected a list of modes, got {fmt(order)}")
         modes = tuple(tuple(m) if isinstance(m, list | tuple) else m for m in order)
-        variants[kind] = _named(path, lambda k=kind, m=modes: dataclasses.replace(INTERFACES[k], mode_order=m))
+        variants[kind] = _named(
+            path, lambda k=kind, m=modes: dataclasses.replace(INTERFACES[k], mode_order=m)
+        )
     return variants.get(s.interface, INTERFACES[s.interface])
 
 

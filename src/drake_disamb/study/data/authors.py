@@ -21,8 +21,8 @@ How each field is made (times are seconds from the trial's ``start_time``):
   :func:`study_modes` by its position in the study's cycle (joystick ids 12, 13, 45, 6, 7 ->
   ``vx_vy``, ``vx_vz``, ``wx_wz``, ``wy``, ``gripper``, docs/facts.md section 6; head array 1..7 ->
   ``vx``, ``vy``, ``vz``, ``wz``, ``wx``, ``wy``, ``gripper``: ``study identify`` reads ids 1-4 off
-  the request scores, and 5, 6 are our choice, as in the ``tnsre2020_study`` preset). The authors' id is kept in
-  ``extra["initial_mode_id"]``.
+  the request scores, and 5, 6 are our choice, as in the ``tnsre2020_study`` preset). The
+  authors' id is kept in ``extra["initial_mode_id"]``.
 - ``request_times``: the rows of ``assistance_requested`` after the placeholder. Every request
   made one mode switch of its own (the disambiguation system's), logged in ``mode_switches`` at
   the time of the request's row in ``cmode_conf_disamb`` (the scores computed for it): that
