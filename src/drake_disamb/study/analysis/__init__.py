@@ -1,1 +1,1 @@
-"""Analysis: the statistics and the paper's findings beside ours."""
+"""Analysis: the statistics, the paper's findings beside ours, the paradigm effect beside another folder's."""

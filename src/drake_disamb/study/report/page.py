@@ -17,7 +17,11 @@
 ``--compare OTHER_DIR`` adds ``compare.json``
 (:func:`drake_disamb.study.analysis.findings.compare_summaries`) and a section setting this folder's
 means beside the other's per interface, task and paradigm, with their ratio and whether it is within 50 %
-(the criterion for simulated versus human users).
+(the criterion for simulated versus human users), and ``paradigm_effect.json``
+(:func:`drake_disamb.study.analysis.effect.paradigm_effect`, keys in its module) with a table of the
+Manual -> Disambiguation effect on button presses and user mode switches per interface and per
+interface and task, here and there: the means, the relative change, the rank-sum p, the ratio of the
+relative changes and whether it is within a factor of 2.
 
 On an ablation folder (``DIR/ablation.json``, written by ``study ablate``), :func:`write_report`
 writes the combined report instead: for every setting, the paradigm effect on button presses
@@ -45,6 +49,7 @@ from pathlib import Path
 from typing import Any
 
 from drake_disamb.core.interfaces import interfaces_in
+from drake_disamb.study.analysis.effect import paradigm_effect
 from drake_disamb.study.analysis.findings import (
     COMPARED,
     PAPER_SKEWNESS,
@@ -57,6 +62,7 @@ from drake_disamb.study.analysis.stats import MIXED_METRICS, run_tests
 from drake_disamb.study.data.folder import StudyFolder, write_atomic
 from drake_disamb.study.data.records import RecordError, TrialRecord
 from drake_disamb.study.measures.metrics import request_time_skewness, summarize, trial_metrics
+from drake_disamb.study.report.effect_table import EFFECT_HEADERS, effect_cells
 from drake_disamb.study.report.figures import ablation_figure, save_figure, source_figures, trace_figures
 
 __all__ = ["ReportFiles", "compare_summaries", "load_study", "write_report"]
@@ -88,6 +94,8 @@ class ReportFiles:
     figures: list[Path]
     stats: Path
     summary: Path
+    paradigm_effect: Path | None = None
+    """``paradigm_effect.json`` (with ``compare`` only)."""
 
 
 # HTML
@@ -114,7 +122,7 @@ def _table(
         for c in columns:
             v = r.get(c)
             text = fmt(v, 3) if isinstance(v, float) else ("n/a" if v is None else str(v))
-            cls = f' class="{v}"' if c == "agree" and v in ("yes", "no") else ""
+            cls = f' class="{v}"' if c in ("agree", "check") and v in ("yes", "no") else ""
             if isinstance(v, bool):
                 cls = f' class="{"yes" if v else "no"}"'
             cells.append(f"<td{cls}>{html.escape(text)}</td>")
@@ -352,7 +360,31 @@ def write_report(
         for name in COMPARED:
             cols += [name, f"other_{name}", f"ratio_{name}", f"within_{name}"]
         sections.append(_table(rows, cols))
-    return _write_page(out, f"Study report: {folder.name}", sections, figures)
+        effect = _json_clean(paradigm_effect(records, other, tests))
+        _write_json(out / "paradigm_effect.json", effect)
+        sections.append("<h2>Paradigm effect: this folder beside the other</h2>")
+        sections.append(
+            '<p class="note">The Manual -&gt; Disambiguation effect on button presses and user mode '
+            "switches, per interface (both tasks) and per interface and task, here ("
+            + html.escape(", ".join(sorted({r.source for r in records})))
+            + ") and in the other folder ("
+            + html.escape(", ".join(sorted({r.source for r in other})))
+            + "): n (Manual/Disambiguation trials), the two means and the two-sided rank-sum p, "
+            "as the summary and the tests above compute them (analysed trials: failed ones left out, "
+            "after the authors' cleaning), the relative change (Dis - Man) / Man, the ratio of the "
+            "relative changes (here / there) and the check: same direction and within a factor of 2 "
+            "(ratio in [0.5, 2]). - : no test for the cell on that side (no analysed trials of a "
+            "paradigm); n/a: no ratio. The numbers are in paradigm_effect.json.</p>"
+        )
+        headers = ("source", "other source", *EFFECT_HEADERS)
+        cells = [
+            {"source": r["source"], "other source": r["other_source"], **effect_cells(r)} for r in effect
+        ]
+        sections.append(_table(cells, headers))
+    files = _write_page(out, f"Study report: {folder.name}", sections, figures)
+    if other is not None:
+        files.paradigm_effect = out / "paradigm_effect.json"
+    return files
 
 
 # ----------------------------------------------------------------------------------------------
