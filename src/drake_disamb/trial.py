@@ -57,6 +57,10 @@ class TrialResult:
         interrupted: The trial was stopped early by a stop request or ``KeyboardInterrupt``
             (:func:`run_trial`); the metrics and logs cover the trial up to ``time``.
         fault: Why a station on a wire stopped the trial (its latched fault), or ``""``.
+        end_reason: Why the trial ended: ``"done"`` (every stage), ``"time limit"``
+            (``scenario.duration``), ``"given up"`` (the experimenter's rule,
+            ``scenario.success.give_up_after``), ``"stopped"`` (a stop request) or
+            ``"station fault"``.
     """
 
     scenario: Scenario
@@ -84,6 +88,7 @@ class TrialResult:
     automatic_switches: int = 0
     automatic_switch_times: list[float] = field(default_factory=list)
     fault: str = ""
+    end_reason: str = ""
 
 
 def _log(
@@ -142,6 +147,23 @@ def run_trial(
     bar = SimulationProgress(sc.duration) if progress is True else (progress or None)
     stopped = [False]
     watch_fault = "fault" in handles.station.outputs
+    give_up = sc.success.give_up_after
+    intended = list(sc.user.goals)
+    # The experimenter's watch: [best goal error so far (tolerance units), since when, stage, next look].
+    watch = [np.inf, 0.0, -1, 0.0]
+    gave_up = [False]
+
+    def hopeless(t: float) -> bool:
+        if t < watch[3]:
+            return False
+        watch[3] = t + 0.5  # the experimenter looks every half second
+        stage = task.stage(task_context)
+        if stage >= len(intended):
+            return False
+        error = task.goal_error(task_context, intended[stage])
+        if stage != watch[2] or error < watch[0] - 1.0:
+            watch[0], watch[1], watch[2] = error, t, stage
+        return t - watch[1] >= give_up - 1e-9
 
     def monitor(context) -> EventStatus:
         if bar is not None:
@@ -154,9 +176,12 @@ def run_trial(
         # ``context`` is the simulator's own root context: its task subcontext is ``task_context``.
         if stop_at_success and task.is_done(task_context):
             return EventStatus.ReachedTermination(task, "task done")
+        if give_up is not None and hopeless(context.get_time()):
+            gave_up[0] = True
+            return EventStatus.ReachedTermination(task, "given up")
         return EventStatus.DidNothing()
 
-    if bar is not None or stop_requested is not None or stop_at_success or watch_fault:
+    if bar is not None or stop_requested is not None or stop_at_success or watch_fault or give_up is not None:
         simulator.set_monitor(monitor)
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
@@ -184,7 +209,18 @@ def run_trial(
     automatic_switches = [e.time for e in events if e.kind == "automatic_switch"]
     reached = task.reached_goals(task_context)
     done = task.is_done(task_context)
-    intended = list(sc.user.goals)
+    fault = handles.station_fault(root)
+    end_reason = (
+        "done"
+        if done
+        else "station fault"
+        if fault
+        else "stopped"
+        if stopped[0]
+        else "given up"
+        if gave_up[0]
+        else "time limit"
+    )
     success = done and reached == intended
     logs = {name: _log(handles, root, name) for name, _, _ in LOGGED_SIGNALS}
     _, uh = logs["u_h"]
@@ -217,5 +253,6 @@ def run_trial(
         interrupted=stopped[0],
         automatic_switches=len(automatic_switches),
         automatic_switch_times=automatic_switches,
-        fault=handles.station_fault(root),
+        fault=fault,
+        end_reason=end_reason,
     )

@@ -47,6 +47,12 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:  # RecordError is a ValueError
         print(f"drake-disamb study report: error: {err}", file=sys.stderr)
         return 2
+    ended: dict[str, int] = {}
+    for row in json.loads(files.summary.read_text(encoding="utf-8")):
+        for reason, n in row.get("end_reasons", {}).items():
+            ended[reason] = ended.get(reason, 0) + n
+    if ended:  # simulated trials: how they ended (people's records do not say)
+        print("trials ended: " + ", ".join(f"{reason} {n}" for reason, n in sorted(ended.items())))
     if files.paradigm_effect is not None:
         rows = json.loads(files.paradigm_effect.read_text(encoding="utf-8"))
         print(effect_text(rows, str(args.dir), str(args.compare)))

@@ -223,11 +223,16 @@ class SuccessSpec:
         orientation_tolerance: Angle (rad) of the rotation between the end-effector and goal
             orientations.
         hold_time: Time (s) the end effector must stay within both tolerances.
+        give_up_after: The experimenter's rule for a hopeless trial: it ends, as a failure, when
+            the end effector has come no closer to the intended goal of its stage, by one
+            ``position_tolerance`` or ``orientation_tolerance`` (their sum in tolerance units),
+            for this long (s); ``None`` (default): only the time limit ends it.
     """
 
     position_tolerance: float = 0.02
     orientation_tolerance: float = 0.15
     hold_time: float = 0.3
+    give_up_after: float | None = None
 
 
 @dataclass

@@ -232,6 +232,8 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     ):
         _check_positive(value, f"{name}.{path}")
     _check_positive(s.success.hold_time, f"{name}.success.hold_time", allow_zero=True)
+    if s.success.give_up_after is not None:
+        check_duration(s.success.give_up_after, f"{name}.success.give_up_after")
     if s.seed < 0:
         raise ValueError(f"{name}.seed: expected a non-negative integer, got {fmt(s.seed)}")
     if s.initial_mode < 0:

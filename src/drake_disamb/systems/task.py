@@ -175,6 +175,15 @@ class TaskManager(LeafSystem):
         x = context.get_discrete_state(self._state).get_value()
         return [float(v) for v in x[_HEADER + self._n_stages :]]
 
+    def goal_error(self, context: Context, goal: int) -> float:
+        """How far the end effector is from goal ``goal`` of the current stage, in tolerance
+        units (distance / position tolerance + angle / orientation tolerance); 0 once done."""
+        stage = self._stage_index(context)
+        if stage >= self._n_stages:
+            return 0.0
+        dist, angle = pose_errors(self._ee_pose.Eval(context), self._goal_sets[stage][goal : goal + 1])
+        return float(dist[0] / self._pos_tol + angle[0] / self._ori_tol)
+
     # -- update -------------------------------------------------------------------------------
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:

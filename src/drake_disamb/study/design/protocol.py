@@ -137,6 +137,9 @@ class Protocol:
             ``None`` = the same tick (no latency).
         counterbalance: ``rotation`` or ``none`` (module docstring).
         duration: Simulated-time limit (s) of every trial; ``None`` = the task's.
+        give_up_after: The experimenter's rule (``Scenario.success.give_up_after``): a trial in
+            which the arm has come no closer to the intended goal for this long (s) is ended as a
+            failure; ``None`` = only the time limit.
         interface_mode_selection: How the joystick's mode button selects a mode in every trial
             (``Scenario.interface_mode_selection``): ``cycle`` or ``direct`` (the stick's sector
             picks the mode: one press per change, as the study's joystick did). The head array
@@ -159,6 +162,7 @@ class Protocol:
     request_latency: list[float] | None = field(default=None, metadata=_meta(size=(2,)))
     counterbalance: str = field(default="rotation", metadata=_meta(choices=COUNTERBALANCE))
     duration: float | None = None
+    give_up_after: float | None = None
     interface_mode_selection: str = field(default="cycle", metadata=_meta(choices=MODE_SELECTIONS))
     initial_modes: str = field(default="all", metadata=_meta(choices=INITIAL_MODES))
     system: str = field(default="tnsre2020_study", metadata=_meta(choices=SYSTEM_PRESETS))
@@ -247,6 +251,8 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
             check_request_latency(value, f"{name}.request_latency[{k}]")
     if protocol.duration is not None:
         check_duration(protocol.duration, f"{name}.duration")
+    if protocol.give_up_after is not None:
+        check_duration(protocol.give_up_after, f"{name}.give_up_after")
     if protocol.n_trials > MAX_TRIALS:
         raise ValueError(
             f"{name}: {protocol.n_trials} trials (subjects x interfaces x tasks x paradigms' trials), "

@@ -211,8 +211,9 @@ def _sd(values: Iterable[float | None]) -> float | None:
 def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
     """One row per source, interface, task and paradigm (sorted): counts (``n_valid`` valid trials,
     ``n_analysed`` of them not failed) and means (analysed trials only) after the authors'
-    cleaning, the raw means (``*_raw``), the success rate (all trials whose success is known) and
-    the request-time skewness."""
+    cleaning, the raw means (``*_raw``), the success rate (all trials whose success is known), the
+    request-time skewness, and ``end_reasons``: how many trials ended how (``done``, ``time
+    limit``, ``given up``, ...: a simulated record's ``extra["end_reason"]``; empty for people)."""
     groups: dict[tuple[str, str, str, str], list[TrialMetrics]] = {}
     for r in records:
         groups.setdefault(group_key(r), []).append(trial_metrics(r))
@@ -236,6 +237,8 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
         row["sd_completion_time"] = _sd(m.completion_time for m in analysed)
         row["success_rate"] = float(np.mean(known)) if known else None
         row["n_success_known"] = len(known)
+        reasons = [m.record.extra.get("end_reason") for m in ms]
+        row["end_reasons"] = {k: reasons.count(k) for k in sorted({r for r in reasons if r})}
         row["request_time_skewness"] = request_time_skewness(analysed)
         row["mean_alpha"] = _mean(m.mean_alpha for m in analysed)
         row["sd_alpha"] = _sd(m.mean_alpha for m in analysed)

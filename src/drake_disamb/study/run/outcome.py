@@ -132,6 +132,7 @@ def record_from_result(
         "assistance_onsets": onsets,
         "disambiguation_switch_times": [float(t) for t in result.disambiguation_switch_times],
         "interrupted": bool(result.interrupted),
+        "end_reason": result.end_reason,
     }
     info.update(extra or {})
     return TrialRecord(

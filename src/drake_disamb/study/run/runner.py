@@ -203,6 +203,8 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
         plain["start_joint_positions"] = [round(float(q + d), 10) for q, d in zip(base, offsets, strict=True)]
     if protocol.get("duration") is not None:
         plain["duration"] = float(protocol["duration"])
+    if protocol.get("give_up_after") is not None:
+        plain.setdefault("success", {})["give_up_after"] = float(protocol["give_up_after"])
     if spec.paradigm != "manual":
         plain["disambiguation"]["method"] = protocol["disambiguation_method"]
     plain["disambiguation"]["request_latency"] = spec.request_latency or 0.0

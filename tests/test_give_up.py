@@ -1,0 +1,77 @@
+"""The experimenter's rule (``success.give_up_after``): a trial with no progress toward the intended
+goal for that long ends there as a failure, and every trial says how it ended."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from drake_disamb.config import load_scenario, scenario_from_dict, scenario_to_dict, with_overrides
+from drake_disamb.trial import run_trial
+
+
+def _stuck(give_up_after: float | None):  # noqa: ANN202
+    # From the left container to the low right platform the elbow reaches its limit and this
+    # user keeps pushing (tests/test_closed_loop.py): no progress from about 15 s on.
+    scenario = with_overrides(load_scenario("pouring"), interface="head_array", goal=[1, 0])
+    scenario.inference.goal_set = "stage"
+    scenario.success.give_up_after = give_up_after
+    return run_trial(dataclasses.replace(scenario, duration=60.0), progress=False)
+
+
+@pytest.mark.slow
+def test_a_stuck_trial_is_given_up_and_a_free_one_is_not() -> None:
+    stuck = _stuck(10.0)
+    assert stuck.end_reason == "given up" and not stuck.success
+    assert 20.0 < stuck.time < 40.0, stuck.time  # stuck from ~15 s, given up 10 s later
+    limit = _stuck(None)
+    assert limit.end_reason == "time limit" and limit.time == pytest.approx(60.0)
+    done = run_trial(load_scenario("reaching"), progress=False)
+    assert done.end_reason == "done" and done.success
+
+
+def test_give_up_after_is_checked() -> None:
+    plain = scenario_to_dict(load_scenario("reaching"))
+    for bad in (0.0, -1.0, 1e9):
+        plain["success"]["give_up_after"] = bad
+        with pytest.raises(
+            ValueError, match=r"scenario\.success\.give_up_after: expected a number of seconds"
+        ):
+            scenario_from_dict(plain)
+
+
+def test_the_protocol_gives_up_after_a_minute_and_records_say_how_trials_ended(tmp_path) -> None:  # noqa: ANN001
+    import json
+    import subprocess
+    import sys
+
+    from drake_disamb.study.design.protocol import default_protocol, default_protocol_text, protocol_from_yaml
+
+    assert default_protocol().give_up_after == 60.0
+    with pytest.raises(ValueError, match=r"protocol\.give_up_after: expected a number of seconds"):
+        protocol_from_yaml(default_protocol_text().replace("give_up_after: 60.0", "give_up_after: -5"))
+    out = tmp_path / "q"
+    run = [
+        sys.executable,
+        "-m",
+        "drake_disamb.cli",
+        "study",
+        "run",
+        "--quick",
+        "--subjects",
+        "1",
+        "--out",
+        str(out),
+    ]
+    assert subprocess.run(run, capture_output=True, text=True, timeout=900).returncode == 0
+    records = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
+    assert records and all(r["extra"]["end_reason"] in ("done", "given up", "time limit") for r in records)
+    assert all((r["extra"]["end_reason"] == "done") == r["done"] for r in records)
+    report = subprocess.run(
+        [sys.executable, "-m", "drake_disamb.cli", "study", "report", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert report.returncode == 0 and "trials ended: done" in report.stdout
