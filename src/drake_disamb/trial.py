@@ -210,17 +210,16 @@ def run_trial(
     reached = task.reached_goals(task_context)
     done = task.is_done(task_context)
     fault = handles.station_fault(root)
-    end_reason = (
-        "done"
-        if done
-        else "station fault"
-        if fault
-        else "stopped"
-        if stopped[0]
-        else "given up"
-        if gave_up[0]
-        else "time limit"
-    )
+    if done:
+        end_reason = "done"
+    elif fault:
+        end_reason = "station fault"
+    elif stopped[0]:
+        end_reason = "stopped"
+    elif gave_up[0]:
+        end_reason = "given up"
+    else:
+        end_reason = "time limit"
     success = done and reached == intended
     logs = {name: _log(handles, root, name) for name, _, _ in LOGGED_SIGNALS}
     _, uh = logs["u_h"]
