@@ -158,3 +158,16 @@ def test_commanded_path_integrates_the_blended_command_over_the_trial() -> None:
     del trial.trace["u"]  # a trace without the blended command counts in no path
     assert command_path(trial) is None
     assert estimate_behaviour([trial]).command_path == {}
+
+
+def test_switches_after_each_request_count_the_users_switches_until_the_next_request() -> None:
+    import dataclasses
+
+    trial = _trial("J7", "joystick", "reaching", 0, [(6.0, 1), (7.0, 2), (8.0, 0), (21.0, 1)], 30.0,
+                   paradigm="disambiguation")  # fmt: skip
+    record = dataclasses.replace(trial.record, request_times=[5.0, 20.0], requests=2, button_presses=6)
+    est = estimate_behaviour([LoggedTrial(record, trial.trace, request_switch_times=np.zeros(0))])
+    assert est.switches_after_request["joystick"] == (2.0, 2.0, 2)  # 3 after the first, 1 after the second
+    assert est.switches_after_request["head_array"][2] == 0
+    line = next(x for x in format_estimates(est).splitlines() if x.startswith("switches after a request"))
+    assert "joystick mean 2.00, median 2 (n=2)" in line

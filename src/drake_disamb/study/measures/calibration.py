@@ -35,7 +35,8 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   probability ``c / (1 + c)`` of correcting at once after a movement that ended short (``c``
   corrections per dwell, a geometric count).
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
-  the chosen mode) or a mode switch (cycled away).
+  the chosen mode) or a mode switch (cycled away); and how many user mode switches follow each
+  request (merged) before the next one or the end of the trial, per interface (mean and median).
 - **Changes while the belief is confident**: mode changes (a request, or the first switch of a
   burst of user switches) per minute while the belief's largest entry is above the system's
   ``rho1`` (``1.2 / n``, the blending's threshold: the autonomy assists) and while it is not, and
@@ -141,6 +142,9 @@ class BehaviourEstimates:
     request_decay: RequestDecayFit
     accept_share: float
     accept_n: int
+    switches_after_request: dict[str, tuple[float, float, int]]
+    """Per interface, the user mode switches after each request until the next request or the
+    end of the trial: mean, median and the number of requests (Disambiguation trials)."""
     tail: LogNormalFit
     commanding_share: float
     n_trials: int
@@ -184,6 +188,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     early, req_norm = [], []
     change_events: list[tuple[str, float, bool]] = []  # Disambiguation: (subject, time, a request?)
     accepted = rejected = 0
+    after_request: dict[str, list[int]] = {k: [] for k in kinds}  # user switches until the next request
     corrections: dict[str, list[int]] = {k: [] for k in kinds}
     corrections_subject: dict[str, list[int]] = {}
     commanding_total = time_total = 0.0
@@ -288,6 +293,11 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             if changes:
                 req_share[r.interface].append(len(merged) / changes)
                 req_share_subject.setdefault(s, []).append(len(merged) / changes)
+            edges = [*merged, math.inf]
+            after_request[r.interface].extend(
+                int(np.count_nonzero((user_switches > a) & (user_switches < b)))
+                for a, b in zip(edges[:-1], edges[1:], strict=True)
+            )
             early.append(float(bool(merged) and merged[0] < EARLY_REQUEST))
             req_norm.extend((np.asarray(merged) / r.duration).tolist())
             for x in trial.request_switch_times:
@@ -336,6 +346,10 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         request_decay=fit_request_decay(change_events),
         accept_share=accepted / (accepted + rejected) if accepted + rejected else math.nan,
         accept_n=int(accepted + rejected),
+        switches_after_request={
+            k: (float(np.mean(v)), float(np.median(v)), len(v)) if v else (math.nan, math.nan, 0)
+            for k, v in after_request.items()
+        },
         tail=fit_lognormal(tail),
         commanding_share=commanding_total / time_total if time_total else math.nan,
         n_trials=len(valid),
@@ -445,6 +459,12 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"normalised request time {est.request_time_mean:.2f}",
         f"{'request mode kept':<28} {est.accept_share:.2f} (n={est.accept_n}: next action a command, "
         "not a switch)",
+        f"{'switches after a request':<28} "
+        + ", ".join(
+            f"{k.replace('_', ' ')} mean {m:.2f}, median {med:.0f} (n={n})"
+            for k, (m, med, n) in est.switches_after_request.items()
+        )
+        + " (user switches until the next request or the end)",
         _fmt_fit("tail (last command -> end)", est.tail),
         f"{'commanding share':<28} {est.commanding_share:.2f} of trial time",
         "mode changes per minute      "
