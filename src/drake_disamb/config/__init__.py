@@ -20,6 +20,7 @@ Two scenarios are embedded as package data (``drake_disamb/tasks/reaching.yaml``
 from drake_disamb.config.resolve import (
     TrialConfig,
     interface_variant,
+    ordered_variant,
     resolve_scenario,
     scene_objects,
     validate_scenario,
@@ -92,6 +93,7 @@ __all__ = [
     "load_scenario",
     "min_goal_separation",
     "interface_variant",
+    "ordered_variant",
     "resolve_scenario",
     "scenario_from_dict",
     "scenario_from_yaml",

@@ -105,6 +105,22 @@ class TrialConfig:
     automatic: AutomaticConfig | None = None
 
 
+def ordered_variant(kind: str, order: object, path: str = "interface_mode_order") -> Interface:
+    """The registered interface ``kind`` with its arm modes in ``order`` (lists of dimension
+    indices, as in ``Scenario.interface_mode_order``).
+
+    Raises:
+        ValueError: an unknown kind, or an order that is not a valid mode order of the kind,
+            prefixed by ``path``.
+    """
+    if kind not in INTERFACES:
+        raise ValueError(f"{path}: unknown interface (registered: {', '.join(INTERFACES)})")
+    if not isinstance(order, list | tuple):
+        raise ValueError(f"{path}: expected a list of modes, got {fmt(order)}")
+    modes = tuple(tuple(m) if isinstance(m, list | tuple) else m for m in order)
+    return _named(path, lambda: dataclasses.replace(INTERFACES[kind], mode_order=modes))
+
+
 def interface_variant(s: Scenario, name: str = "scenario") -> Interface:
     """The interface variant of a scenario's trials: the registered kind with the scenario's
     ``interface_mode_order`` for it (its registered order where the scenario gives none). Every
@@ -113,17 +129,10 @@ def interface_variant(s: Scenario, name: str = "scenario") -> Interface:
     Raises:
         ValueError: an entry that is not a valid mode order of its kind, naming it.
     """
-    variants = {}
-    for kind, order in s.interface_mode_order.items():
-        path = f"{name}.interface_mode_order.{kind}"
-        if kind not in INTERFACES:
-            raise ValueError(f"{path}: unknown interface (registered: {', '.join(INTERFACES)})")
-        if not isinstance(order, list | tuple):
-            raise ValueError(f"{path}: expected a list of modes, got {fmt(order)}")
-        modes = tuple(tuple(m) if isinstance(m, list | tuple) else m for m in order)
-        variants[kind] = _named(
-            path, lambda k=kind, m=modes: dataclasses.replace(INTERFACES[k], mode_order=m)
-        )
+    variants = {
+        kind: ordered_variant(kind, order, f"{name}.interface_mode_order.{kind}")
+        for kind, order in s.interface_mode_order.items()
+    }
     return variants.get(s.interface, INTERFACES[s.interface])
 
 

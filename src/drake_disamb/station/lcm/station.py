@@ -32,7 +32,6 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import MatrixGain, Multiplexer
 from pydrake.systems.rendering import MultibodyPositionToGeometryPose
 
-from drake_disamb.core.warmup import warm_up
 from drake_disamb.paths import mico_directives
 from drake_disamb.station.build import Station, _add_objects, _make_control_plant
 from drake_disamb.station.config import (
@@ -135,7 +134,6 @@ def build_lcm_station(
     geometry = StationGeometry.from_plant(plant, scene_graph, arm)
     lower, upper = geometry.joint_limits()
 
-    warm_up()  # the kernels a tick uses, loaded now rather than in the loop's first ticks
     inbox = StatusInbox(lcm, settings.status_channel, pump)  # type: ignore[attr-defined]
     first = first_status(
         inbox,

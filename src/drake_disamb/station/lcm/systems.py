@@ -56,8 +56,7 @@ class JacoStatusReceiver(LeafSystem):
 
     At initialisation, with ``real_time``, it readies the process for the loop
     (:meth:`_before_the_loop`). Discrete state: the four output groups, plus ``[utime of the
-    status used (us)]`` and ``[1 once the loop has ticked]``; all start from the ``first`` status
-    (the station's start check).
+    status used (us)]``; all start from the ``first`` status (the station's start check).
     """
 
     def __init__(
@@ -81,7 +80,6 @@ class JacoStatusReceiver(LeafSystem):
         self._fault = self.DeclareDiscreteState([float(Fault.NONE)])
         self._counts = self.DeclareDiscreteState(np.zeros(3))
         self._utime = self.DeclareDiscreteState([float(first.utime)])
-        self._running = self.DeclareDiscreteState([0.0])  # 1 from the loop's first tick on
         self._sanitized = SanitizedInputCounter(self, warn_interval)
         self.DeclareStateOutputPort("arm_joint_state", self._arm)
         self.DeclareStateOutputPort("finger_state", self._finger)
@@ -113,7 +111,7 @@ class JacoStatusReceiver(LeafSystem):
         last_utime = int(context.get_discrete_state(self._utime).get_value()[0])
         used, dropped, missed = context.get_discrete_state(self._counts).get_value()
         previous_utime = last_utime
-        running = bool(context.get_discrete_state(self._running).get_value()[0])
+        running = used > 0  # a tick has used a status (the first either does or latches a fault)
         if not running:  # the loop's first tick: what waits on the bus predates it
             self._inbox.poll(0.0)
             self._inbox.take()
@@ -164,7 +162,6 @@ class JacoStatusReceiver(LeafSystem):
             used += 1
             if running:  # (the statuses before the loop's first tick were not missed by it)
                 missed += max(0, round((good.utime - previous_utime) / self._period_us) - 1)
-            discrete_state.get_mutable_vector(self._running).SetAtIndex(0, 1.0)
         discrete_state.get_mutable_vector(self._counts).SetFromVector([used, dropped, missed])
         return EventStatus.Succeeded()
 

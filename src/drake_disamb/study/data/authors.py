@@ -62,7 +62,7 @@ Velocities are in the paper's order ``[vx, vy, vz, wx, wy, wz]``.
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -72,8 +72,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from drake_disamb.config import ordered_variant
 from drake_disamb.config.system_presets import system_preset
-from drake_disamb.core.interfaces import INTERFACES, interface_modes, mode_name
+from drake_disamb.core.interfaces import interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
@@ -138,14 +139,16 @@ _SWITCH_MATCH = 0.05
 """Largest gap (s) between a request's score row and the mode switch it made; wider is an error."""
 
 
+@functools.cache
 def study_modes(interface: str) -> tuple[tuple[int, ...], ...]:
     """The modes of the study's ``interface`` in the order of its mode ids (:data:`MODE_IDS`):
     the mode order of the ``tnsre2020_study`` preset (the study's head array steps vx, vy, vz,
-    wz, ...), else the interface's registered order; the gripper mode last."""
+    wz, ...), else the interface's registered order; the gripper mode last. (Read once: every
+    trial file asks.)"""
     order = system_preset("tnsre2020_study").get("interface_mode_order", {}).get(interface)
     if order is None:
         return interface_modes(interface)
-    return dataclasses.replace(INTERFACES[interface], mode_order=tuple(map(tuple, order))).modes
+    return ordered_variant(interface, order, f"tnsre2020_study.interface_mode_order.{interface}").modes
 
 
 def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
