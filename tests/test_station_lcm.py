@@ -400,13 +400,16 @@ def test_two_processes_run_the_seeded_trial_as_the_simulation_does() -> None:
     try:
         wait_for_line(driver, "mico-driver:", timeout=60)
         scenario = load_scenario("reaching")
-        handles = build_shared_control_diagram(scenario, backend=Lcm(lcm_url=url))
+        # The watchdog's own tests hold it to its 30 ms (3 periods); this one compares the trials, and on
+        # a shared 2-core CI runner a process can lose the CPU for longer than that (seen: one fault).
+        handles = build_shared_control_diagram(scenario, backend=Lcm(lcm_url=url, status_timeout=0.25))
         wire = run_trial(handles, progress=False)
     finally:
         driver.terminate()
         driver.communicate(timeout=30)
     sim = run_trial(scenario, progress=False)
-    assert wire.fault == "" and wire.success and wire.reached_goals == sim.reached_goals
+    assert wire.fault == "", wire.fault
+    assert wire.success and wire.reached_goals == sim.reached_goals
     assert abs(wire.mode_switches - sim.mode_switches) <= 1 and abs(wire.requests - sim.requests) <= 1
     n = min(len(sim.logs["ee_pose"][1]), len(wire.logs["ee_pose"][1]))
     gap = np.linalg.norm(sim.logs["ee_pose"][1][:n, :3] - wire.logs["ee_pose"][1][:n, :3], axis=1)

@@ -80,15 +80,18 @@ def run(args: argparse.Namespace) -> int:
     driver = SimulatedDriver(
         lcm, status_channel=settings.status_channel, command_channel=settings.command_channel, meshcat=meshcat
     )
-    if not args.quiet:
-        print(
-            f"mico-driver: {settings.status_channel} at {1 / driver.period:g} Hz, obeying "
-            f"{settings.command_channel}, on {settings.lcm_url} (Ctrl-C stops)",
-            flush=True,
-        )
+
+    def announce() -> None:  # once ready: a controller started on this line finds status flowing
+        if not args.quiet:
+            print(
+                f"mico-driver: {settings.status_channel} at {1 / driver.period:g} Hz, obeying "
+                f"{settings.command_channel}, on {settings.lcm_url} (Ctrl-C stops)",
+                flush=True,
+            )
+
     with StopRequest() as stop:
         try:
-            late = driver.run(stop, args.duration)
+            late = driver.run(stop, args.duration, on_start=announce)
         except KeyboardInterrupt:
             late = -1
     if not args.quiet:

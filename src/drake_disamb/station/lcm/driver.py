@@ -214,12 +214,21 @@ class SimulatedDriver:
         """Stop publishing, as a driver that died would (the in-process tests' fault)."""
         self.alive = False
 
-    def run(self, stop: Callable[[], bool], duration: float | None = None) -> int:
+    def run(
+        self,
+        stop: Callable[[], bool],
+        duration: float | None = None,
+        on_start: Callable[[], None] | None = None,
+    ) -> int:
         """Step at real time (one status every ``period`` of wall time) until ``stop()`` or
         ``duration`` seconds of simulated time; returns the periods that started late. The steps
         keep to a grid of ``period``; one that starts late is caught up over the next ones, with
-        never two statuses less than half a period apart (as even a stream as a real driver's)."""
+        never two statuses less than half a period apart (as even a stream as a real driver's).
+        ``on_start`` is called once the process is ready, just before the first status (with no
+        numba cache, readying it compiles the kernels: several seconds)."""
         prepare_loop()  # no kernel load, no full collection of the plant, BLAS on one thread
+        if on_start is not None:
+            on_start()
         late = 0
         next_tick = time.monotonic()
         while not stop() and (duration is None or self._steps * self.period < duration):
