@@ -171,3 +171,26 @@ def test_switches_after_each_request_count_the_users_switches_until_the_next_req
     assert est.switches_after_request["head_array"][2] == 0
     line = next(x for x in format_estimates(est).splitlines() if x.startswith("switches after a request"))
     assert "joystick mean 2.00, median 2 (n=2)" in line
+
+
+def test_pauses_are_split_by_whether_the_assistance_moved_the_arm_and_the_uncommanded_motion_counted() -> None:
+    trial = _trial("J8", "joystick", "reaching", 0, [], 20.0, t_end=20.0 - DT)  # 400 samples, 0.05 s apart
+    t = trial.trace["t"]
+    u_h = np.zeros((t.size, 6))
+    for a, b in ((1.0, 5.0), (6.0, 10.0), (12.0, 15.0)):  # commanding 11 s, paused 5-6 s and 10-12 s
+        u_h[(t >= a - 1e-9) & (t < b - 1e-9), 0] = 0.05
+    assisting = (t >= 9.0 - 1e-9) & (t < 13.0 - 1e-9)  # alpha > 0 from 9 to 13 s
+    u = u_h.copy()
+    u[assisting & (u_h[:, 0] == 0), 1] = 0.02  # the assistance moves the arm while the user rests
+    trial.trace.update(u_h=u_h, u=u, alpha=np.where(assisting, 0.5, 0.0))
+    est = estimate_behaviour([trial])
+    # The 10-12 s pause began with alpha > 0 (2 s of commanding so), the 5-6 s one without (9 s).
+    assert est.carry_rate["S01"] == pytest.approx(1 / 2.0, rel=0.05)
+    assert est.carry_duration.median == pytest.approx(2.0, abs=0.06) and est.carry_duration.n == 1
+    assert est.unassisted_pause_rate["S01"] == pytest.approx(1 / 9.0, rel=0.05)
+    assert est.unassisted_pause_duration.median == pytest.approx(1.0, abs=0.06)
+    moved, moved_assisted, n = est.uncommanded_motion["joystick"]["reaching"]
+    assert n == 1 and moved == pytest.approx(2.0, abs=0.06) and moved_assisted == pytest.approx(2.0, abs=0.06)
+    text = format_estimates(est)
+    assert "carry rate                   per second of commanding while the assistance moves the arm: S01 0.5" in text
+    assert "joystick reaching 2.0 s (2.0 s with alpha > 0, median of 1)" in text

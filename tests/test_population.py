@@ -247,6 +247,44 @@ def test_a_late_release_carries_out_the_pause_it_was_decided_for() -> None:
     assert without_lag >= 10 and with_lag >= 0.6 * without_lag
 
 
+HELPED = np.array([0.9, 0.1])  # the belief on the user's goal (0): the autonomy assists it
+ELSEWHERE = np.array([0.1, 0.9])
+
+
+def test_with_its_mode_done_while_assisted_the_user_lets_the_autonomy_carry_the_arm() -> None:
+    # {wy} (mode 3 of the joystick) has nothing to do toward goal 0: a user who would change mode
+    # lets go instead while the belief is on its goal, watches carry_duration, and decides again.
+    cfg = dataclasses.replace(QUIET, carry_prob=1.0, carry_duration=1.5, decision_period=0.1)
+    s = step(UserState(), 0.0, 3, cfg, belief=HELPED)
+    assert s.carrying and not np.any(s.raw) and s.busy_until == pytest.approx(1.5) and s.presses == 0
+    assert s.carry_best > 1.0  # the goal's remaining error when the carry began
+    assert not np.any(step(s, 1.0, 3, cfg, belief=HELPED).raw)  # still watching
+    # The belief turns to the other goal: the carry ends at once and the user changes mode.
+    turned = step(s, 1.0, 3, cfg, belief=ELSEWHERE)
+    assert not turned.carrying and turned.presses == 1
+    # Unassisted, or with carry_prob 0, it changes mode at once, as before.
+    assert step(UserState(), 0.0, 3, cfg, belief=ELSEWHERE).presses == 1
+    assert step(UserState(), 0.0, 3, QUIET, belief=HELPED).presses == 1
+    # After a carry in which the arm came no closer (the pose here never changes), no second
+    # carry: the autonomy is not getting there, the user changes mode.
+    again = step(s, 1.6, 3, cfg, belief=HELPED)
+    assert not again.carrying and again.presses == 1
+    # ... but after one that brought the goal closer, another carry.
+    closer = EE.copy()
+    closer[0] += 0.1
+    more = user_step(s, 1.6, 3, closer, GOALS, 0, JOY, cfg, HELPED)
+    assert more.carrying and more.presses == 0 and more.busy_until == pytest.approx(3.1)
+
+
+def test_carry_prob_draws_and_is_validated() -> None:
+    cfg = dataclasses.replace(QUIET, carry_prob=0.5, carry_duration=1.5, pause_log_sd=0.5, decision_period=0.1)
+    carried = [step(UserState(), 0.0, 3, dataclasses.replace(cfg, seed=k), belief=HELPED).carrying for k in range(200)]
+    assert 0.35 < np.mean(carried) < 0.65
+    for field, value in (("carry_prob", 1.5), ("carry_duration", 0.0)):
+        with pytest.raises(ValueError, match=f"UserConfig.{field}"):
+            UserConfig(**{field: value})
+
+
 def test_a_pause_is_not_a_stall() -> None:
     # A stalled arm (the pose never changes) with long pauses: every pause restarts the stall watch,
     # which counts commanding time only.
@@ -472,6 +510,10 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
     assert d["request_instead_prob"].low == pytest.approx(min(p0), abs=0.01)
     assert d["request_instead_prob"].high == pytest.approx(max(p0), abs=0.01)
     assert d["request_decay_time"].median == pytest.approx(est.request_decay.tau, rel=0.05)
+    # letting the autonomy carry: the changes people forgo while helped, and the carries' watch
+    forgone = [1 - a / b for a, b in est.changes_per_minute_helped.values()]
+    assert d["carry_prob"].low <= min(forgone) + 0.05 and max(forgone) - 0.05 <= d["carry_prob"].high
+    assert d["carry_duration"].median == pytest.approx(est.carry_duration.median, rel=0.05)
 
 
 def test_the_request_decay_fit_recovers_known_parameters() -> None:

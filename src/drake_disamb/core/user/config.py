@@ -256,21 +256,29 @@ class RequestConfig:
 
 @dataclass(frozen=True)
 class PauseConfig:
-    """Pauses (fatigue, thinking).
+    """Pauses (fatigue, thinking), and letting the autonomy carry the arm.
 
     Attributes:
         pause_rate: Pauses per second of the time it would command (0 = none).
         pause_duration: Median pause (s).
-        pause_log_sd: Its log-sd.
+        pause_log_sd: Its log-sd (also that of a carry).
+        carry_prob: When the current mode has nothing left to do while the autonomy assists the
+            user's goal, the probability that the user lets go and lets the autonomy carry the arm
+            (the blending assists without input) instead of changing mode.
+        carry_duration: Median carry (s): the user watches that long, then decides again (a carry
+            ends at once when the assistance stops helping).
     """
 
     pause_rate: float = 0.0
     pause_duration: float = 1.0
     pause_log_sd: float = 0.0
+    carry_prob: float = 0.0
+    carry_duration: float = 1.6
 
     def __post_init__(self) -> None:
-        _check_real(self, ("pause_duration",))
+        _check_real(self, ("pause_duration", "carry_duration"))
         _check_real(self, ("pause_rate", "pause_log_sd"), allow_zero=True)
+        _check_probabilities(self, ("carry_prob",))
 
 
 _GROUPS: dict[str, type] = {

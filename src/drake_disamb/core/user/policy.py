@@ -95,6 +95,12 @@ values and where they come from):
   submovement, Meyer et al. 1988); else it moves on and comes back later.
 - *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``
   (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
+- *Letting the autonomy carry the arm*: when it wants another mode (its mode has nothing left to
+  do, has stalled, or a review prefers another) while the autonomy assists its goal (the blending
+  assists without input), it lets go with probability ``carry_prob`` instead of changing mode, and watches for a lognormal time (median
+  ``carry_duration``, log-sd ``pause_log_sd``); then it decides again (another carry only if the
+  last one brought the goal's remaining error down by ``stall_progress``). A carry ends at once
+  when the assistance stops helping (the belief turns to another goal, or falls flat).
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
   probability ``request_prob``; when a new mode is needed (its mode done, a stall, or a review that
   wants another) the user asks for disambiguation instead of cycling with probability
@@ -190,14 +196,16 @@ def user_step(
             start_until = time + lognormal(config.timing.start_delay, config.timing.start_delay_log_sd, rng)
         state = evolve(state, started=True, start_until=start_until, draws=draws)
 
+    assisted = belief is not None and helped(
+        belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
+    )
+    if state.carrying and time < state.busy_until - 1e-9 and not assisted:
+        state = evolve(state, busy_until=0.0)  # the assistance stopped helping: the carry ends
     if time < state.busy_until - 1e-9:
         return evolve(state, raw=np.zeros(RAW_SIZE))
     if time < state.hold_until - 1e-9:
         return state  # letting go late: the drive is held
     lag_done = state.hold_until > 0.0
-    assisted = belief is not None and helped(
-        belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
-    )
     new = decide(state, time, mode, err, interface, config, belief, assisted, reached)
     driving = interface.variant.is_driving
     if (

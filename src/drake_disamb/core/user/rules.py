@@ -11,6 +11,8 @@ The order, and what each rule does, is the policy of :mod:`drake_disamb.core.use
 - :func:`aim_rule` (judging where to stop): the error as the user sees it in its mode;
 - :func:`judge_request_rule`: keep the mode a request chose, or change away from it;
 - :func:`kept_mode_rule`: a kept (or, proportional interface, any) mode used while assisted;
+- :func:`carry_rule`: the mode done while assisted: let the autonomy carry the arm (as a stall
+  or a review that wants another mode does while assisted);
 - :func:`target_rule` (rule 4): change toward the target mode, or pick one when the mode is done;
 - :func:`stall_rule` (rule 5): leave a mode in which commanding stopped paying off;
 - :func:`review_rule`: is another mode clearly better now?
@@ -49,6 +51,7 @@ class Decision:
         target: The mode the user is changing toward, or -1.
         keep: A kept mode is carried by the assistance (:func:`kept_mode_rule`).
         use_requests: The user may ask for disambiguation instead of changing mode.
+        after_carry: The wait that just ended was a carry (:func:`carry_rule`).
     """
 
     def __init__(
@@ -85,6 +88,9 @@ class Decision:
         self.target = -1
         self.keep = False
         self.use_requests = belief is not None and config.requests.request_instead_prob > 0
+        self.after_carry = state.carrying  # the wait that just ended was a carry
+        if state.carrying:
+            self.state = evolve(state, carrying=False)
 
     def rng(self) -> np.random.Generator:
         """The next random draw's generator (advances the counter)."""
@@ -284,6 +290,42 @@ def kept_mode_rule(d: Decision) -> UserState | None:
     return None
 
 
+def carry_rule(d: Decision) -> UserState | None:
+    """Letting the autonomy carry the arm: the current mode has nothing left to do while the
+    autonomy assists the goal (:func:`_carry`)."""
+    if d.target >= 0 or d.remaining[d.mode] > 1.0:
+        return None
+    return _carry(d)
+
+
+def _carry(d: Decision) -> UserState | None:
+    """A change is wanted (the mode is done, stalled or a review prefers another) while the
+    autonomy assists the goal: with ``carry_prob`` the user lets go and watches for a lognormal
+    ``carry_duration`` instead. After a carry, another one only if it brought the goal's remaining
+    error down by ``stall_progress`` (else the autonomy is not getting there: the user changes
+    mode). ``None``: no carry, the change goes ahead."""
+    pauses = d.config.pauses
+    if pauses.carry_prob <= 0 or not d.assisted:
+        return None
+    left = float(np.max(d.arm_remaining))
+    best = d.state.carry_best
+    if d.after_carry and best >= 0 and left > best - d.config.mode_choice.stall_progress:
+        return None
+    if not (pauses.carry_prob >= 1.0 or d.rng().random() < pauses.carry_prob):
+        return None
+    g = d.rng() if pauses.pause_log_sd > 0 else None
+    wait = lognormal(pauses.carry_duration, pauses.pause_log_sd, g)
+    return evolve(
+        d.state,
+        raw=d.zero,
+        busy_until=d.time + max(wait, d.period),
+        draws=d.draws,
+        carrying=True,
+        carry_best=left,
+        progress_mode=-1,
+    )
+
+
 def target_rule(d: Decision) -> UserState | None:
     """Rule 4: on reaching the target (possibly one change too many, ``overshoot_prob``) settle;
     when the mode has nothing left to do, pick a target (or ask for disambiguation instead) and
@@ -327,6 +369,9 @@ def stall_rule(d: Decision) -> UserState | None:
     if state.progress_mode != mode or now_remaining <= state.progress_best - choice.stall_progress:
         d.state = evolve(state, progress_mode=mode, progress_since=d.time, progress_best=now_remaining)
     elif d.time - state.progress_since >= choice.stall_time - 1e-9:
+        carried = _carry(d)  # assisted: let the autonomy carry the arm rather than change
+        if carried is not None:
+            return carried
         others = d.arm_remaining.copy()
         if mode < others.size:
             others[mode] = -np.inf
@@ -351,6 +396,9 @@ def review_rule(d: Decision) -> UserState | None:
     if rate > 0 and not d.keep and d.rng().random() < -math.expm1(-rate * d.period):
         choice = d.choose()
         if choice != d.mode and d.arm_remaining[choice] > 1.0:
+            carried = _carry(d)
+            if carried is not None:
+                return carried
             if d.use_requests and d.request_chance(d.config.requests.request_instead_prob):
                 return d.request()  # a change is wanted: ask for it instead, as in rules 4 and 5
             return d.change(choice, overshot=False)
@@ -427,6 +475,7 @@ RULES: tuple[Callable[[Decision], UserState | None], ...] = (
     aim_rule,
     judge_request_rule,
     kept_mode_rule,
+    carry_rule,
     target_rule,
     stall_rule,
     review_rule,

@@ -44,6 +44,10 @@ class UserState:
             (m or rad): it drives until the error along the dimension is this.
         kept_mode: The mode a request chose and the user kept, while it keeps using it (the
             assistance helps), or -1.
+        carrying: The wait in progress (``busy_until``) is a carry: the user lets the autonomy
+            move the arm, and stops waiting as soon as the assistance stops helping.
+        carry_best: The goal's remaining error (tolerance units) when the carry in progress, or
+            the one just ended, began; -1 when none.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -67,10 +71,12 @@ class UserState:
     aim_0: float = 0.0
     aim_1: float = 0.0
     kept_mode: int = -1
+    carrying: bool = False
+    carry_best: float = -1.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
     _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode", "kept_mode")
-    _BOOL = ("requested_at_start", "started", "judge", "overshot")
+    _BOOL = ("requested_at_start", "started", "judge", "overshot", "carrying")
     _FIELDS = (
         "busy_until",
         "requested_at_start",
@@ -92,13 +98,16 @@ class UserState:
         "aim_0",
         "aim_1",
         "kept_mode",
+        "carrying",
+        "carry_best",
     )
-    VECTOR_SIZE = 20 + RAW_SIZE
+    VECTOR_SIZE = 22 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
-        request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, raw (4)]``."""
+        request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, carrying, carry_best,
+        raw (4)]``."""
         head = map(float, _STATE_FIELDS(self))  # (one C-level read of the fields: a user decides every tick)
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 

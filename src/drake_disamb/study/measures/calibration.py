@@ -14,7 +14,14 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   command, when no other switch or request comes first, and at least :data:`MIN_SETTLE` (a command
   sooner was held through the press: its share is reported as ``held_through_switch``).
 - **Pauses**: runs of zero command of at least :data:`MIN_PAUSE` seconds between the first and the
-  last command that hold no switch or request; the rate is per second of commanding.
+  last command that hold no switch or request; the rate is per second of commanding. Split by
+  what the arm did when the pause began: a *carry* began while the belief was confident and the
+  assistance moved the arm (``alpha > 0``: the study's system assists without input), an
+  *unassisted* pause while it did not; each one's rate per second of commanding in that state and
+  its durations (the user lets a confident autonomy carry the arm, or stops for other reasons).
+- **Movement without command**: per trial, the seconds in which the arm moved (a non-zero blended
+  command) while the user commanded nothing, and those of them with ``alpha > 0``, per interface
+  and task (median over trials).
 - **Deflection** (joystick): the command's size as a share of full deflection,
   ``max(|v| / 0.13, |w| / 0.4)`` (the study's speeds); **direction spread** (joystick): within each
   run of at least 10 non-zero samples in a 2-D mode, the angle of each sample to the run's mean
@@ -41,7 +48,10 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   burst of user switches) per minute while the belief's largest entry is above the system's
   ``rho1`` (``1.2 / n``, the blending's threshold: the autonomy assists) and while it is not, and
   the share of the trial time it is, per interface over both paradigms. People let a confident
-  autonomy carry them rather than change modes: how they use the assistance.
+  autonomy carry them rather than change modes: how they use the assistance. The same in the
+  reaching trials (one goal, known) with the belief's argmax the person's goal (the assistance
+  helps them) against below ``rho1``: the share of the changes people forgo while helped,
+  ``1 - rate helped / rate unsure``, is the population's ``carry_prob``.
 - **How a trial starts and ends, and how far the arm is driven**: ending and starting in the
   gripper mode, and the commanded path (:mod:`drake_disamb.study.measures.course`, which defines them).
 
@@ -124,6 +134,17 @@ class BehaviourEstimates:
     held_through_switch: float
     pause_duration: LogNormalFit
     pause_rate: dict[str, float]
+    unassisted_pause_duration: LogNormalFit
+    unassisted_pause_rate: dict[str, float]
+    """Per subject, pauses begun while the assistance did not move the arm, per second of
+    commanding while it did not."""
+    carry_duration: LogNormalFit
+    carry_rate: dict[str, float]
+    """Per subject, pauses begun while the assistance moved the arm (``alpha > 0``), per second of
+    commanding while it did."""
+    uncommanded_motion: dict[str, dict[str, tuple[float, float, int]]]
+    """Per interface and task: the median seconds per trial in which the arm moved while the user
+    commanded nothing, the same with ``alpha > 0``, and the number of trials."""
     deflection: LogNormalFit
     full_deflection_share: float
     direction_mean_cos: float
@@ -149,6 +170,9 @@ class BehaviourEstimates:
     commanding_share: float
     n_trials: int
     changes_per_minute: dict[str, tuple[float, float]]
+    changes_per_minute_helped: dict[str, tuple[float, float]]
+    """Per interface, reaching trials: mode changes per minute while the belief's argmax is the
+    person's goal above ``rho1`` (the assistance helps), and while the belief is below ``rho1``."""
     confident_share: dict[str, float]
     gripper_end: dict[str, dict[str, GripperEnd]]
     starts_in_gripper: dict[str, tuple[float, int]]
@@ -177,6 +201,11 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     pause: dict[str, list[float]] = {}
     pause_count: dict[str, float] = {}
     command_time: dict[str, float] = {}
+    # per state (True: the assistance moved the arm when the pause began): durations, counts, commanding s
+    split_pause: dict[bool, dict[str, list[float]]] = {True: {}, False: {}}
+    split_count: dict[bool, dict[str, float]] = {True: {}, False: {}}
+    split_time: dict[bool, dict[str, float]] = {True: {}, False: {}}
+    uncommanded: dict[tuple[str, str], list[tuple[float, float]]] = {}
     deflect: dict[str, list[float]] = {}
     cos_by_subject: dict[str, list[float]] = {}
     tail: dict[str, list[float]] = {}
@@ -195,6 +224,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     commanding_by_interface = dict.fromkeys(kinds, 0.0)
     # interface -> [confident s, not confident s, changes while confident, changes while not]
     confident = {k: np.zeros(4) for k in kinds}
+    helped = {k: np.zeros(4) for k in kinds}  # the same, reaching: helped (argmax the goal) / unsure
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
@@ -257,6 +287,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
                 else:
                     settle.setdefault(s, []).append(float(later_cmd[0] - x))
         # Pauses between the first and the last command, with no event inside.
+        carrying = _assisting(trial, cmd.size, dt)
         if on.size:
             inner = ~cmd[on[0] : on[-1] + 1]
             for a, b in _runs(inner):
@@ -264,7 +295,15 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
                 if t1 - t0 >= MIN_PAUSE and not np.any((events >= t0) & (events <= t1)):
                     pause.setdefault(s, []).append(t1 - t0)
                     pause_count[s] = pause_count.get(s, 0.0) + 1
+                    state = bool(carrying[on[0] + a])
+                    split_pause[state].setdefault(s, []).append(t1 - t0)
+                    split_count[state][s] = split_count[state].get(s, 0.0) + 1
             command_time[s] = command_time.get(s, 0.0) + cmd.sum() * dt
+            for state in (True, False):
+                split_time[state][s] = split_time[state].get(s, 0.0) + (cmd & (carrying == state)).sum() * dt
+        moved = _uncommanded_motion(trial, cmd, dt)
+        if moved is not None:
+            uncommanded.setdefault((r.interface, r.task), []).append(moved)
         # A proportional interface (the joystick): deflection and direction spread.
         if INTERFACES[r.interface].proportional and on.size:
             lin, ang = INTERFACES[r.interface].default_speeds
@@ -285,6 +324,8 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         merged = clean_requests(r.request_times)
         own_changes = _user_changes(r.mode_switch_times, cmd, dt)
         _count_confident_changes(trial, [*merged, *own_changes], confident[r.interface])
+        if r.task == "reaching" and len(r.intended_goals) == 1:
+            _count_confident_changes(trial, [*merged, *own_changes], helped[r.interface], r.intended_goals[0])
         if r.paradigm == "disambiguation":
             req_count[r.interface].append(len(merged))
             change_events.extend((s, x, True) for x in merged)
@@ -324,6 +365,25 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         held_through_switch=held / n_settle if n_settle else math.nan,
         pause_duration=fit_lognormal(pause),
         pause_rate={s: pause_count.get(s, 0.0) / command_time[s] for s in sorted(command_time)},
+        unassisted_pause_duration=fit_lognormal(split_pause[False]),
+        unassisted_pause_rate={
+            s: split_count[False].get(s, 0.0) / v for s, v in sorted(split_time[False].items()) if v > 0
+        },
+        carry_duration=fit_lognormal(split_pause[True]),
+        carry_rate={s: split_count[True].get(s, 0.0) / v for s, v in sorted(split_time[True].items()) if v > 0},
+        uncommanded_motion={
+            i: {
+                k: (
+                    float(np.median([m[0] for m in uncommanded[i, k]])),
+                    float(np.median([m[1] for m in uncommanded[i, k]])),
+                    len(uncommanded[i, k]),
+                )
+                for k in ("reaching", "pouring")
+                if (i, k) in uncommanded
+            }
+            for i in INTERFACES
+            if any((i, k) in uncommanded for k in ("reaching", "pouring"))
+        },
         deflection=fit_lognormal(deflect),
         full_deflection_share=float(np.mean(np.asarray(deflections) >= 0.99)) if deflections else math.nan,
         direction_mean_cos=mean_cos,
@@ -360,6 +420,13 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             )
             for k, v in confident.items()
         },
+        changes_per_minute_helped={
+            k: (
+                60.0 * v[2] / v[0] if v[0] > 0 else math.nan,
+                60.0 * v[3] / v[1] if v[1] > 0 else math.nan,
+            )
+            for k, v in helped.items()
+        },
         confident_share={
             k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
         },
@@ -383,6 +450,35 @@ def _per_condition(rows: dict[tuple[str, str], list[Any]], summarize: Callable[[
     return out
 
 
+def _assisting(trial: LoggedTrial, m: int, dt: float) -> NDArray[np.bool_]:
+    """Per user-command sample (``m`` of them, ``dt`` s apart), whether the assistance moved the
+    arm then (the blending's ``alpha > 0`` at that time in the trace; False where unknown)."""
+    t = np.asarray(trial.trace["t"], dtype=float)
+    alpha = np.asarray(trial.trace.get("alpha", ()), dtype=float).reshape(-1)
+    if t.size == 0 or alpha.size != t.size:
+        return np.zeros(m, dtype=bool)
+    i = np.clip(np.searchsorted(t, np.arange(m) * dt, side="right") - 1, 0, t.size - 1)
+    return alpha[i] > 0.0
+
+
+def _uncommanded_motion(trial: LoggedTrial, cmd: NDArray[np.bool_], dt: float) -> tuple[float, float] | None:
+    """The seconds of the trial in which the arm moved (non-zero blended command) while the user
+    commanded nothing (``cmd``: per user-command sample, ``dt`` s apart), and those with
+    ``alpha > 0``; ``None`` without a usable trace."""
+    if "u" not in trial.trace or "alpha" not in trial.trace:
+        return None
+    t = np.asarray(trial.trace["t"], dtype=float)
+    u = np.asarray(trial.trace["u"], dtype=float)
+    alpha = np.asarray(trial.trace["alpha"], dtype=float).reshape(-1)
+    if t.size < 2 or u.ndim != 2 or u.shape[0] != t.size or alpha.size != t.size or cmd.size == 0:
+        return None
+    duration = trial.record.duration
+    span = np.clip(np.append(t[1:], t[-1]), 0.0, duration) - np.clip(t, 0.0, duration)
+    idle = ~cmd[np.clip((t / dt).astype(int), 0, cmd.size - 1)]
+    moving = np.any(u[:, :6] != 0.0, axis=1) & idle
+    return float(span[moving].sum()), float(span[moving & (alpha > 0.0)].sum())
+
+
 def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: float) -> list[float]:
     """The times of the user's mode changes: the first switch of each burst of user switches (less
     than :data:`BURST_GAP` apart with no command between; ``cmd`` as in :func:`estimate_behaviour`)."""
@@ -395,21 +491,28 @@ def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: flo
     return starts
 
 
-def _count_confident_changes(trial: LoggedTrial, changes: Sequence[float], acc: NDArray[np.float64]) -> None:
+def _count_confident_changes(
+    trial: LoggedTrial, changes: Sequence[float], acc: NDArray[np.float64], goal: int | None = None
+) -> None:
     """Add the trial's confident / not-confident seconds and its mode ``changes`` (times: merged
-    requests and the user's own changes) to ``acc`` (module docstring)."""
+    requests and the user's own changes) to ``acc`` (module docstring). With ``goal``: confident
+    means the argmax is ``goal`` (above ``rho1``), and the time confident in another goal counts
+    in neither."""
     r = trial.record
     t = np.asarray(trial.trace["t"], dtype=float)
     belief = np.asarray(trial.trace["belief"], dtype=float)
     if t.size < 2 or belief.ndim != 2 or belief.shape[0] != t.size:
         return
-    sure = np.max(belief, axis=1) > RHO1_TIMES_N / belief.shape[1]
+    above = np.max(belief, axis=1) > RHO1_TIMES_N / belief.shape[1]
+    sure = above if goal is None else above & (np.argmax(belief, axis=1) == goal)
+    unsure = ~above
     span = np.clip(np.append(t[1:], t[-1]), 0.0, r.duration) - np.clip(t, 0.0, r.duration)
     acc[0] += float(span[sure].sum())
-    acc[1] += float(span[~sure].sum())
+    acc[1] += float(span[unsure].sum())
     for x in changes:
         i = int(np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 1))
-        acc[2 if sure[i] else 3] += 1
+        if sure[i] or unsure[i]:
+            acc[2 if sure[i] else 3] += 1
 
 
 def _fmt_fit(name: str, fit: LogNormalFit, unit: str = "s") -> str:
@@ -435,6 +538,19 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"{'command held through switch':<28} {est.held_through_switch:.2f} of switches a command follows",
         _fmt_fit(f"pause duration (>= {MIN_PAUSE} s)", est.pause_duration),
         f"{'pause rate':<28} per second of commanding: {rates}",
+        _fmt_fit("carry (pause, arm assisted)", est.carry_duration),
+        f"{'carry rate':<28} per second of commanding while the assistance moves the arm: "
+        + ", ".join(f"{s} {v:.3g}" for s, v in est.carry_rate.items()),
+        _fmt_fit("pause, arm not assisted", est.unassisted_pause_duration),
+        f"{'unassisted pause rate':<28} per second of commanding while it does not: "
+        + ", ".join(f"{s} {v:.3g}" for s, v in est.unassisted_pause_rate.items()),
+        "arm moving, no command       "
+        + "; ".join(
+            f"{i.replace('_', ' ')} {k} {m:.1f} s ({ma:.1f} s with alpha > 0, median of {n})"
+            for i, tasks in est.uncommanded_motion.items()
+            for k, (m, ma, n) in tasks.items()
+        )
+        + " per trial",
         _fmt_fit("joystick deflection", est.deflection, "of full"),
         f"{'full deflection share':<28} {est.full_deflection_share:.2f}",
         f"{'joystick direction':<28} mean cos {est.direction_mean_cos:.4f} -> von Mises kappa "
@@ -472,6 +588,13 @@ def format_estimates(est: BehaviourEstimates) -> str:
             f"{k.replace('_', ' ')} {v[0]:.1f} while the belief is confident, {v[1]:.1f} while not "
             f"(confident {est.confident_share[k]:.2f} of the time)"
             for k, v in est.changes_per_minute.items()
+        ),
+        "... in reaching, helped     "
+        + "; ".join(
+            f"{k.replace('_', ' ')} {v[0]:.1f} while the argmax is the goal, {v[1]:.1f} while unsure "
+            f"(forgone while helped: {1 - v[0] / v[1]:.2f})"
+            for k, v in est.changes_per_minute_helped.items()
+            if v[1] > 0 and math.isfinite(v[0])
         ),
         *format_gripper(est.gripper_end, est.starts_in_gripper),
         format_command_path(est.command_path),
