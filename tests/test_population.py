@@ -277,8 +277,13 @@ def test_with_its_mode_done_while_assisted_the_user_lets_the_autonomy_carry_the_
 
 
 def test_carry_prob_draws_and_is_validated() -> None:
-    cfg = dataclasses.replace(QUIET, carry_prob=0.5, carry_duration=1.5, pause_log_sd=0.5, decision_period=0.1)
-    carried = [step(UserState(), 0.0, 3, dataclasses.replace(cfg, seed=k), belief=HELPED).carrying for k in range(200)]
+    cfg = dataclasses.replace(
+        QUIET, carry_prob=0.5, carry_duration=1.5, pause_log_sd=0.5, decision_period=0.1
+    )
+    carried = [
+        step(UserState(), 0.0, 3, dataclasses.replace(cfg, seed=k), belief=HELPED).carrying
+        for k in range(200)
+    ]
     assert 0.35 < np.mean(carried) < 0.65
     for field, value in (("carry_prob", 1.5), ("carry_duration", 0.0)):
         with pytest.raises(ValueError, match=f"UserConfig.{field}"):
@@ -504,11 +509,16 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
     assert d["direction_kappa"].median == pytest.approx(est.direction_kappa, rel=0.05)
     rates = list(est.pause_rate.values())
     assert min(rates) <= d["pause_rate"].median <= max(rates)
-    assert d["accept_prob"].low < est.accept_share < d["accept_prob"].high
-    # requests instead of own changes: the fitted share at the start per subject, and its decay
+    # A kept mode whose dimensions are done is left at the next decision, which the logs' measure
+    # (the next action a command) counts as not kept: the simulated users keep more often than it
+    # shows (0.85-1.0 kept gave 0.68 measured on the study's system; people 0.77).
+    accept = d["accept_prob"]
+    assert est.accept_share < accept.low < accept.high <= 1.0
+    # requests instead of own changes: below the share people's changes are requests at the start
+    # (p0, per subject), which also counts the requests at the start and when unhelped (drawn at
+    # p0 itself, the simulated users' measured p0 was 0.55-0.85 against people's 0.45-0.64)
     p0 = list(est.request_decay.p0.values())
-    assert d["request_instead_prob"].low == pytest.approx(min(p0), abs=0.01)
-    assert d["request_instead_prob"].high == pytest.approx(max(p0), abs=0.01)
+    assert d["request_instead_prob"].low < min(p0) and d["request_instead_prob"].high < max(p0)
     assert d["request_decay_time"].median == pytest.approx(est.request_decay.tau, rel=0.05)
     # letting the autonomy carry: the changes people forgo while helped, and the carries' watch
     forgone = [1 - a / b for a, b in est.changes_per_minute_helped.values()]

@@ -97,10 +97,11 @@ values and where they come from):
   (per second), of lognormal duration (median ``pause_duration``, log-sd ``pause_log_sd``).
 - *Letting the autonomy carry the arm*: when it wants another mode (its mode has nothing left to
   do, has stalled, or a review prefers another) while the autonomy assists its goal (the blending
-  assists without input), it lets go with probability ``carry_prob`` instead of changing mode, and watches for a lognormal time (median
-  ``carry_duration``, log-sd ``pause_log_sd``); then it decides again (another carry only if the
-  last one brought the goal's remaining error down by ``stall_progress``). A carry ends at once
-  when the assistance stops helping (the belief turns to another goal, or falls flat).
+  assists without input), it lets go with probability ``carry_prob`` instead of changing mode,
+  and watches for a lognormal time (median ``carry_duration``, log-sd ``pause_log_sd``); then it
+  decides again (another carry only if the last one brought the goal's remaining error down by
+  ``stall_progress`` or by a quarter). A carry ends at once when the assistance stops helping
+  (the belief turns to another goal, or falls flat).
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
   probability ``request_prob``; when a new mode is needed (its mode done, a stall, or a review that
   wants another) the user asks for disambiguation instead of cycling with probability

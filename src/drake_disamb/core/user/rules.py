@@ -302,14 +302,16 @@ def _carry(d: Decision) -> UserState | None:
     """A change is wanted (the mode is done, stalled or a review prefers another) while the
     autonomy assists the goal: with ``carry_prob`` the user lets go and watches for a lognormal
     ``carry_duration`` instead. After a carry, another one only if it brought the goal's remaining
-    error down by ``stall_progress`` (else the autonomy is not getting there: the user changes
-    mode). ``None``: no carry, the change goes ahead."""
+    error down by ``stall_progress`` or by a quarter (the attractor slows as the arm closes in;
+    else the autonomy is not getting there: the user changes mode). ``None``: no carry, the change
+    goes ahead."""
     pauses = d.config.pauses
     if pauses.carry_prob <= 0 or not d.assisted:
         return None
     left = float(np.max(d.arm_remaining))
     best = d.state.carry_best
-    if d.after_carry and best >= 0 and left > best - d.config.mode_choice.stall_progress:
+    progress = min(d.config.mode_choice.stall_progress, 0.25 * best)
+    if d.after_carry and best >= 0 and left > best - progress:
         return None
     if not (pauses.carry_prob >= 1.0 or d.rng().random() < pauses.carry_prob):
         return None

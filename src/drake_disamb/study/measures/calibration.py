@@ -370,7 +370,9 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             s: split_count[False].get(s, 0.0) / v for s, v in sorted(split_time[False].items()) if v > 0
         },
         carry_duration=fit_lognormal(split_pause[True]),
-        carry_rate={s: split_count[True].get(s, 0.0) / v for s, v in sorted(split_time[True].items()) if v > 0},
+        carry_rate={
+            s: split_count[True].get(s, 0.0) / v for s, v in sorted(split_time[True].items()) if v > 0
+        },
         uncommanded_motion={
             i: {
                 k: (
