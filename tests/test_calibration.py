@@ -195,3 +195,23 @@ def test_pauses_split_by_whether_the_assistance_moved_the_arm_and_the_uncommande
     text = format_estimates(est)
     assert "while the assistance moves the arm: S01 0.5" in text
     assert "joystick reaching 2.0 s (2.0 s with alpha > 0, median of 1)" in text
+
+
+def test_changes_per_minute_while_the_assistance_helps_and_while_it_pulls_elsewhere() -> None:
+    # Reaching, goal 0 of 2 (rho1 = 0.6): helped 0-10 s, unsure 10-20 s, misled (argmax goal 1) 20-30 s.
+    changes = [(5.0, 1), (11.0, 2), (14.5, 0), (18.0, 1), (25.0, 2)]  # 3 s or more apart: 5 changes
+    trial = _trial("J9", "joystick", "reaching", 0, changes, 30.0, t_end=30.0 - DT)
+    t = trial.trace["t"]
+    belief = np.tile([0.5, 0.5], (t.size, 1))
+    belief[t < 10.0 - 1e-9] = [0.8, 0.2]
+    belief[t >= 20.0 - 1e-9] = [0.2, 0.8]
+    trial.trace["belief"] = belief
+    trial.trace["u_h"] = np.zeros((t.size, 6))  # no command: each switch is a change of its own
+    est = estimate_behaviour([trial])
+    helped, unsure = est.changes_per_minute_helped["joystick"]
+    misled, unsure_too = est.changes_per_minute_misled["joystick"]
+    assert helped == pytest.approx(6.0, rel=0.02) and misled == pytest.approx(6.0, rel=0.02)
+    assert unsure == pytest.approx(18.0, rel=0.02) and unsure_too == unsure
+    text = format_estimates(est)
+    assert "joystick 6.0 while the argmax is the goal, 18.0 while unsure (forgone while helped: 0.67)" in text
+    assert "joystick 6.0 while the argmax is another goal, 18.0 while unsure (forgone while misled" in text

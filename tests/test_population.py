@@ -276,6 +276,26 @@ def test_with_its_mode_done_while_assisted_the_user_lets_the_autonomy_carry_the_
     assert more.carrying and more.presses == 0 and more.busy_until == pytest.approx(3.1)
 
 
+def test_with_its_mode_done_while_the_arm_heads_elsewhere_the_user_counter_steers() -> None:
+    # The belief on the other goal: the autonomy pulls the arm there. A user who would change mode
+    # keeps pushing toward its goal in its mode instead (counter_prob), without a press.
+    cfg = dataclasses.replace(QUIET, counter_prob=1.0, carry_duration=1.5, decision_period=0.1)
+    s = step(UserState(), 0.0, 3, cfg, belief=ELSEWHERE)
+    assert s.presses == 0 and np.any(s.raw) and s.counter_until == pytest.approx(1.5)
+    s2 = step(s, 0.1, 3, cfg, belief=ELSEWHERE)
+    assert s2.presses == 0 and np.any(s2.raw)  # still pushing
+    # The pull stops (the belief falls flat): the push ends at once and the user changes mode.
+    flat = step(s, 0.1, 3, cfg, belief=np.array([0.5, 0.5]))
+    assert flat.presses == 1 and flat.counter_until == 0.0
+    # When the push's time is up, it decides again (here: pushes on, counter_prob 1) ...
+    assert step(s, 1.6, 3, cfg, belief=ELSEWHERE).counter_until == pytest.approx(3.1)
+    # ... and without counter_prob, or with the autonomy assisting its own goal, no push.
+    assert step(UserState(), 0.0, 3, QUIET, belief=ELSEWHERE).presses == 1
+    assert step(UserState(), 0.0, 3, cfg, belief=HELPED).presses == 1
+    with pytest.raises(ValueError, match="UserConfig.counter_prob"):
+        UserConfig(counter_prob=-0.1)
+
+
 def test_carry_prob_draws_and_is_validated() -> None:
     cfg = dataclasses.replace(
         QUIET, carry_prob=0.5, carry_duration=1.5, pause_log_sd=0.5, decision_period=0.1

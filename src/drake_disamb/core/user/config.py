@@ -267,6 +267,10 @@ class PauseConfig:
             (the blending assists without input) instead of changing mode.
         carry_duration: Median carry (s): the user watches that long, then decides again (a carry
             ends at once when the assistance stops helping).
+        counter_prob: When the user wants another mode while the autonomy assists *another* goal
+            (the arm heads for another object), the probability that it counter-steers instead:
+            it keeps pushing toward its goal in its mode for a lognormal ``carry_duration`` (the
+            push of a kept mode), then decides again.
     """
 
     pause_rate: float = 0.0
@@ -274,11 +278,12 @@ class PauseConfig:
     pause_log_sd: float = 0.0
     carry_prob: float = 0.0
     carry_duration: float = 1.6
+    counter_prob: float = 0.0
 
     def __post_init__(self) -> None:
         _check_real(self, ("pause_duration", "carry_duration"))
         _check_real(self, ("pause_rate", "pause_log_sd"), allow_zero=True)
-        _check_probabilities(self, ("carry_prob",))
+        _check_probabilities(self, ("carry_prob", "counter_prob"))
 
 
 _GROUPS: dict[str, type] = {

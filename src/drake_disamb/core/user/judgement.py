@@ -76,6 +76,16 @@ def helped(belief: ArrayLike, goal_index: int, rho1: float) -> bool:
     return g == goal_index and p[g] > rho1
 
 
+def misled(belief: ArrayLike, goal_index: int, rho1: float) -> bool:
+    """True when the autonomy assists toward another goal: the argmax is not the user's goal and
+    its probability is above ``rho1`` (the arm heads for another object)."""
+    p = np.asarray(belief, dtype=float)
+    if not all_finite(p):
+        return False
+    g = int(np.argmax(p))
+    return g != goal_index and p[g] > rho1
+
+
 def draw(config: UserConfig, counter: int) -> np.random.Generator:
     """The generator of the user's ``counter``-th random draw (keyed by its seed)."""
     return np.random.default_rng([int(config.seed), int(counter)])

@@ -102,6 +102,10 @@ values and where they come from):
   decides again (another carry only if the last one brought the goal's remaining error down by
   ``stall_progress`` or by a quarter). A carry ends at once when the assistance stops helping
   (the belief turns to another goal, or falls flat).
+- *Counter-steering*: when it wants another mode while the autonomy assists *another* goal (the
+  arm heads for another object), it keeps pushing toward its goal in its mode instead, with
+  probability ``counter_prob``, for a lognormal time (median ``carry_duration``), then decides
+  again; the push ends at once when the assistance no longer pulls elsewhere.
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
   probability ``request_prob``; when a new mode is needed (its mode done, a stall, or a review that
   wants another) the user asks for disambiguation instead of cycling with probability
@@ -124,7 +128,7 @@ from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.sampling import lognormal
 from drake_disamb.core.user.config import UserConfig
-from drake_disamb.core.user.judgement import draw, goal_error, goal_reached, helped
+from drake_disamb.core.user.judgement import draw, goal_error, goal_reached, helped, misled
 from drake_disamb.core.user.rules import decide
 from drake_disamb.core.user.state import NOT_COUNTING, UserState, evolve
 
@@ -197,9 +201,9 @@ def user_step(
             start_until = time + lognormal(config.timing.start_delay, config.timing.start_delay_log_sd, rng)
         state = evolve(state, started=True, start_until=start_until, draws=draws)
 
-    assisted = belief is not None and helped(
-        belief, goal_index, RHO1_TIMES_N / n if config.rho1 is None else config.rho1
-    )
+    rho1 = RHO1_TIMES_N / n if config.rho1 is None else config.rho1
+    assisted = belief is not None and helped(belief, goal_index, rho1)
+    elsewhere = belief is not None and not assisted and misled(belief, goal_index, rho1)
     if state.carrying and time < state.busy_until - 1e-9 and not assisted:
         state = evolve(state, busy_until=0.0)  # the assistance stopped helping: the carry ends
     if time < state.busy_until - 1e-9:
@@ -207,7 +211,7 @@ def user_step(
     if time < state.hold_until - 1e-9:
         return state  # letting go late: the drive is held
     lag_done = state.hold_until > 0.0
-    new = decide(state, time, mode, err, interface, config, belief, assisted, reached)
+    new = decide(state, time, mode, err, interface, config, belief, assisted, reached, elsewhere)
     driving = interface.variant.is_driving
     if (
         config.timing.release_lag > 0

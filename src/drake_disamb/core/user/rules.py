@@ -43,7 +43,8 @@ class Decision:
 
     Attributes:
         state: The user's state so far (rules replace it as they go).
-        time, mode, err, interface, config, belief, assisted, releasing: The decision's inputs
+        time, mode, err, interface, config, belief, assisted, releasing, misled: The decision's
+            inputs (``misled``: the autonomy assists another goal)
             (``err`` becomes the error as the user judges it, :func:`aim_rule`).
         draws: The random-draw counter so far.
         remaining, arm_remaining: Every mode's (the arm modes') remaining error, set by
@@ -65,8 +66,10 @@ class Decision:
         belief: ArrayLike | None,
         assisted: bool,
         releasing: bool,
+        misled: bool = False,
     ) -> None:
         self.state = state
+        self.misled = misled
         self.time = time
         self.mode = mode
         self.err = err
@@ -278,9 +281,14 @@ def judge_request_rule(d: Decision) -> UserState | None:
 def kept_mode_rule(d: Decision) -> UserState | None:
     """The kept mode: while the assistance helps, the arm approaches the goal in it whatever is left
     along the mode's own dimensions, so the user keeps using it until the whole goal's remaining
-    error stops falling (rule 5 watches it) or the assistance stops helping."""
+    error stops falling (rule 5 watches it) or the assistance stops helping. A counter-steer
+    (:func:`_counter`) pushes so while the assistance pulls elsewhere."""
     stay = d.config.mode_choice.stay_while_assisted and d.variant.proportional
-    d.keep = (d.state.kept_mode == d.mode or stay) and d.mode < d.n_modes - 1 and d.assisted
+    countering = d.misled and d.time < d.state.counter_until - 1e-9
+    if d.state.counter_until > 0.0 and not countering:
+        d.state = evolve(d.state, counter_until=0.0)
+    arm_mode = d.mode < d.n_modes - 1
+    d.keep = arm_mode and (((d.state.kept_mode == d.mode or stay) and d.assisted) or countering)
     if d.state.kept_mode >= 0 and not d.keep:
         d.state = evolve(d.state, kept_mode=-1)
     if d.keep:
@@ -292,10 +300,32 @@ def kept_mode_rule(d: Decision) -> UserState | None:
 
 def carry_rule(d: Decision) -> UserState | None:
     """Letting the autonomy carry the arm: the current mode has nothing left to do while the
-    autonomy assists the goal (:func:`_carry`)."""
+    autonomy assists the goal (:func:`_carry`), or counter-steering while it assists another
+    (:func:`_counter`)."""
     if d.target >= 0 or d.remaining[d.mode] > 1.0:
         return None
-    return _carry(d)
+    return _carry(d) or _counter(d)
+
+
+def _counter(d: Decision) -> UserState | None:
+    """A change is wanted while the autonomy assists another goal: with ``counter_prob`` the user
+    counter-steers instead, pushing toward its goal in its mode (as in a kept mode) for a
+    lognormal ``carry_duration``. Returns the push, or ``None``: the change goes ahead."""
+    pauses = d.config.pauses
+    if pauses.counter_prob <= 0 or not d.misled or d.mode >= d.n_modes - 1:
+        return None
+    if d.time < d.state.counter_until - 1e-9:
+        return None  # a counter-steer has stalled (rule 5): the change goes ahead
+    if not (pauses.counter_prob >= 1.0 or d.rng().random() < pauses.counter_prob):
+        return None
+    g = d.rng() if pauses.pause_log_sd > 0 else None
+    until = d.time + max(lognormal(pauses.carry_duration, pauses.pause_log_sd, g), d.period)
+    d.state = evolve(d.state, counter_until=until, draws=d.draws, progress_mode=-1)
+    d.keep = True
+    d.remaining = d.remaining.copy()
+    d.remaining[d.mode] = max(float(d.remaining[d.mode]), float(np.max(d.arm_remaining)))
+    d.arm_remaining = d.remaining[: d.n_modes - 1]
+    return command_rule(d)
 
 
 def _carry(d: Decision) -> UserState | None:
@@ -371,7 +401,7 @@ def stall_rule(d: Decision) -> UserState | None:
     if state.progress_mode != mode or now_remaining <= state.progress_best - choice.stall_progress:
         d.state = evolve(state, progress_mode=mode, progress_since=d.time, progress_best=now_remaining)
     elif d.time - state.progress_since >= choice.stall_time - 1e-9:
-        carried = _carry(d)  # assisted: let the autonomy carry the arm rather than change
+        carried = _carry(d) or _counter(d)  # let the autonomy carry the arm, or push against it
         if carried is not None:
             return carried
         others = d.arm_remaining.copy()
@@ -398,7 +428,7 @@ def review_rule(d: Decision) -> UserState | None:
     if rate > 0 and not d.keep and d.rng().random() < -math.expm1(-rate * d.period):
         choice = d.choose()
         if choice != d.mode and d.arm_remaining[choice] > 1.0:
-            carried = _carry(d)
+            carried = _carry(d) or _counter(d)
             if carried is not None:
                 return carried
             if d.use_requests and d.request_chance(d.config.requests.request_instead_prob):
@@ -496,12 +526,13 @@ def decide(
     belief: ArrayLike | None,
     assisted: bool,
     releasing: bool = False,
+    misled: bool = False,
 ) -> UserState:
     """Rules 3 to 6 (and rule 1 with a release) at a free decision (not reacting, not letting go
     late); ``assisted``: the autonomy assists the user's goal
     (:func:`~drake_disamb.core.user.judgement.helped`); ``releasing``: at the goal of a stage that
-    ends by letting go of the held object."""
-    d = Decision(state, time, mode, err, interface, config, belief, assisted, releasing)
+    ends by letting go of the held object; ``misled``: the autonomy assists another goal."""
+    d = Decision(state, time, mode, err, interface, config, belief, assisted, releasing, misled)
     for rule in RULES:
         out = rule(d)
         if out is not None:

@@ -48,6 +48,8 @@ class UserState:
             move the arm, and stops waiting as soon as the assistance stops helping.
         carry_best: The goal's remaining error (tolerance units) when the carry in progress, or
             the one just ended, began; -1 when none.
+        counter_until: It counter-steers (pushes toward its goal in its mode while the autonomy
+            assists another goal) until this time (s); 0 = not.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -73,6 +75,7 @@ class UserState:
     kept_mode: int = -1
     carrying: bool = False
     carry_best: float = -1.0
+    counter_until: float = 0.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
     _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode", "kept_mode")
@@ -100,14 +103,15 @@ class UserState:
         "kept_mode",
         "carrying",
         "carry_best",
+        "counter_until",
     )
-    VECTOR_SIZE = 22 + RAW_SIZE
+    VECTOR_SIZE = 23 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
         request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, carrying, carry_best,
-        raw (4)]``."""
+        counter_until, raw (4)]``."""
         head = map(float, _STATE_FIELDS(self))  # (one C-level read of the fields: a user decides every tick)
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 

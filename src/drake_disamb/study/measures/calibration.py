@@ -51,7 +51,8 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   autonomy carry them rather than change modes: how they use the assistance. The same in the
   reaching trials (one goal, known) with the belief's argmax the person's goal (the assistance
   helps them) against below ``rho1``: the share of the changes people forgo while helped,
-  ``1 - rate helped / rate unsure``, is the population's ``carry_prob``.
+  ``1 - rate helped / rate unsure``, is the population's ``carry_prob``; the same with the argmax
+  on another goal above ``rho1`` (the arm heads for another object): ``counter_prob``.
 - **How a trial starts and ends, and how far the arm is driven**: ending and starting in the
   gripper mode, and the commanded path (:mod:`drake_disamb.study.measures.course`, which defines them).
 
@@ -173,6 +174,8 @@ class BehaviourEstimates:
     changes_per_minute_helped: dict[str, tuple[float, float]]
     """Per interface, reaching trials: mode changes per minute while the belief's argmax is the
     person's goal above ``rho1`` (the assistance helps), and while the belief is below ``rho1``."""
+    changes_per_minute_misled: dict[str, tuple[float, float]]
+    """The same with the argmax on another goal above ``rho1`` (the assistance pulls elsewhere)."""
     confident_share: dict[str, float]
     gripper_end: dict[str, dict[str, GripperEnd]]
     starts_in_gripper: dict[str, tuple[float, int]]
@@ -225,6 +228,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     # interface -> [confident s, not confident s, changes while confident, changes while not]
     confident = {k: np.zeros(4) for k in kinds}
     helped = {k: np.zeros(4) for k in kinds}  # the same, reaching: helped (argmax the goal) / unsure
+    misled = {k: np.zeros(4) for k in kinds}  # ... and the argmax on another goal / unsure
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
@@ -325,7 +329,9 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         own_changes = _user_changes(r.mode_switch_times, cmd, dt)
         _count_confident_changes(trial, [*merged, *own_changes], confident[r.interface])
         if r.task == "reaching" and len(r.intended_goals) == 1:
-            _count_confident_changes(trial, [*merged, *own_changes], helped[r.interface], r.intended_goals[0])
+            goal, changes_at = r.intended_goals[0], [*merged, *own_changes]
+            _count_confident_changes(trial, changes_at, helped[r.interface], goal)
+            _count_confident_changes(trial, changes_at, misled[r.interface], goal, elsewhere=True)
         if r.paradigm == "disambiguation":
             req_count[r.interface].append(len(merged))
             change_events.extend((s, x, True) for x in merged)
@@ -422,13 +428,8 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             )
             for k, v in confident.items()
         },
-        changes_per_minute_helped={
-            k: (
-                60.0 * v[2] / v[0] if v[0] > 0 else math.nan,
-                60.0 * v[3] / v[1] if v[1] > 0 else math.nan,
-            )
-            for k, v in helped.items()
-        },
+        changes_per_minute_helped=_per_minute(helped),
+        changes_per_minute_misled=_per_minute(misled),
         confident_share={
             k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
         },
@@ -493,20 +494,36 @@ def _user_changes(switch_times: Sequence[float], cmd: NDArray[np.bool_], dt: flo
     return starts
 
 
+def _per_minute(acc: dict[str, NDArray[np.float64]]) -> dict[str, tuple[float, float]]:
+    """Per interface, changes per minute in the two states of ``acc`` (as :func:`_count_confident_changes`
+    fills it)."""
+    return {
+        k: (
+            60.0 * v[2] / v[0] if v[0] > 0 else math.nan,
+            60.0 * v[3] / v[1] if v[1] > 0 else math.nan,
+        )
+        for k, v in acc.items()
+    }
+
+
 def _count_confident_changes(
-    trial: LoggedTrial, changes: Sequence[float], acc: NDArray[np.float64], goal: int | None = None
+    trial: LoggedTrial,
+    changes: Sequence[float],
+    acc: NDArray[np.float64],
+    goal: int | None = None,
+    elsewhere: bool = False,
 ) -> None:
     """Add the trial's confident / not-confident seconds and its mode ``changes`` (times: merged
     requests and the user's own changes) to ``acc`` (module docstring). With ``goal``: confident
-    means the argmax is ``goal`` (above ``rho1``), and the time confident in another goal counts
-    in neither."""
+    means the argmax is ``goal`` (above ``rho1``; ``elsewhere``: another goal), and the time
+    confident in the other case counts in neither."""
     r = trial.record
     t = np.asarray(trial.trace["t"], dtype=float)
     belief = np.asarray(trial.trace["belief"], dtype=float)
     if t.size < 2 or belief.ndim != 2 or belief.shape[0] != t.size:
         return
     above = np.max(belief, axis=1) > RHO1_TIMES_N / belief.shape[1]
-    sure = above if goal is None else above & (np.argmax(belief, axis=1) == goal)
+    sure = above if goal is None else above & ((np.argmax(belief, axis=1) == goal) != elsewhere)
     unsure = ~above
     span = np.clip(np.append(t[1:], t[-1]), 0.0, r.duration) - np.clip(t, 0.0, r.duration)
     acc[0] += float(span[sure].sum())
@@ -596,6 +613,13 @@ def format_estimates(est: BehaviourEstimates) -> str:
             f"{k.replace('_', ' ')} {v[0]:.1f} while the argmax is the goal, {v[1]:.1f} while unsure "
             f"(forgone while helped: {1 - v[0] / v[1]:.2f})"
             for k, v in est.changes_per_minute_helped.items()
+            if v[1] > 0 and math.isfinite(v[0])
+        ),
+        "... in reaching, misled     "
+        + "; ".join(
+            f"{k.replace('_', ' ')} {v[0]:.1f} while the argmax is another goal, {v[1]:.1f} while unsure "
+            f"(forgone while misled: {1 - v[0] / v[1]:.2f})"
+            for k, v in est.changes_per_minute_misled.items()
             if v[1] > 0 and math.isfinite(v[0])
         ),
         *format_gripper(est.gripper_end, est.starts_in_gripper),
