@@ -292,10 +292,15 @@ def kept_mode_rule(d: Decision) -> UserState | None:
     if d.state.kept_mode >= 0 and not d.keep:
         d.state = evolve(d.state, kept_mode=-1)
     if d.keep:
-        d.remaining = d.remaining.copy()
-        d.remaining[d.mode] = max(float(d.remaining[d.mode]), float(np.max(d.arm_remaining)))
-        d.arm_remaining = d.remaining[: d.n_modes - 1]
+        _push_in_mode(d)
     return None
+
+
+def _push_in_mode(d: Decision) -> None:
+    """The current mode carries the whole goal's remaining error: the user pushes in it."""
+    d.remaining = d.remaining.copy()
+    d.remaining[d.mode] = max(float(d.remaining[d.mode]), float(np.max(d.arm_remaining)))
+    d.arm_remaining = d.remaining[: d.n_modes - 1]
 
 
 def carry_rule(d: Decision) -> UserState | None:
@@ -322,9 +327,7 @@ def _counter(d: Decision) -> UserState | None:
     until = d.time + max(lognormal(pauses.carry_duration, pauses.pause_log_sd, g), d.period)
     d.state = evolve(d.state, counter_until=until, draws=d.draws, progress_mode=-1)
     d.keep = True
-    d.remaining = d.remaining.copy()
-    d.remaining[d.mode] = max(float(d.remaining[d.mode]), float(np.max(d.arm_remaining)))
-    d.arm_remaining = d.remaining[: d.n_modes - 1]
+    _push_in_mode(d)
     return command_rule(d)
 
 

@@ -534,6 +534,16 @@ def _count_confident_changes(
             acc[2 if sure[i] else 3] += 1
 
 
+def _fmt_forgone(state: str, argmax: str, rates: dict[str, tuple[float, float]]) -> str:
+    """One line of changes per minute in ``state`` against while unsure, per interface."""
+    return f"... in reaching, {state:<11}" + "; ".join(
+        f"{k.replace('_', ' ')} {v[0]:.1f} while the argmax is {argmax}, {v[1]:.1f} while unsure "
+        f"(forgone while {state}: {1 - v[0] / v[1]:.2f})"
+        for k, v in rates.items()
+        if v[1] > 0 and math.isfinite(v[0])
+    )
+
+
 def _fmt_fit(name: str, fit: LogNormalFit, unit: str = "s") -> str:
     per = ", ".join(f"{s} {v:.3g}" for s, v in sorted(fit.subject_medians.items()))
     return (
@@ -608,20 +618,8 @@ def format_estimates(est: BehaviourEstimates) -> str:
             f"(confident {est.confident_share[k]:.2f} of the time)"
             for k, v in est.changes_per_minute.items()
         ),
-        "... in reaching, helped     "
-        + "; ".join(
-            f"{k.replace('_', ' ')} {v[0]:.1f} while the argmax is the goal, {v[1]:.1f} while unsure "
-            f"(forgone while helped: {1 - v[0] / v[1]:.2f})"
-            for k, v in est.changes_per_minute_helped.items()
-            if v[1] > 0 and math.isfinite(v[0])
-        ),
-        "... in reaching, misled     "
-        + "; ".join(
-            f"{k.replace('_', ' ')} {v[0]:.1f} while the argmax is another goal, {v[1]:.1f} while unsure "
-            f"(forgone while misled: {1 - v[0] / v[1]:.2f})"
-            for k, v in est.changes_per_minute_misled.items()
-            if v[1] > 0 and math.isfinite(v[0])
-        ),
+        _fmt_forgone("helped", "the goal", est.changes_per_minute_helped),
+        _fmt_forgone("misled", "another goal", est.changes_per_minute_misled),
         *format_gripper(est.gripper_end, est.starts_in_gripper),
         format_command_path(est.command_path),
     ]
