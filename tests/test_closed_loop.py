@@ -100,20 +100,10 @@ def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "stage") ->
         ("head_array", (0, 1), "stage"),
         # With one belief over the 4 goals (the paper's) the arm takes another way and arrives ...
         ("head_array", (1, 0), "task"),
-        # ... with a belief over each stage's 2 goals (the default) it does not:
-        pytest.param(
-            "head_array",
-            (1, 0),
-            "stage",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="direction-preserving IK (ik.py's contract): from the left container the path to the "
-                "low right platform drives the elbow (joint 3) onto its limit, where -z, +x and +y all "
-                "need it further; the IK stops there as it must, and the simulated user never backs "
-                "off (-x or -y) to route around. Needs a user that retreats when blocked, or "
-                "joint-limit-aware autonomy.",
-            ),
-        ),
+        # ... with a belief over each stage's 2 goals (the default) the elbow (joint 3) reaches
+        # its limit on the way, where -z, +x and +y all need it further (the IK stops there, as it
+        # must): the user backs off and routes around (UserConfig.backoff_after, backoff_time).
+        ("head_array", (1, 0), "stage"),
         ("head_array", (1, 1), "stage"),
     ],
     ids=[

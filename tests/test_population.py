@@ -717,3 +717,47 @@ def test_subjects_apply_to_a_scenario_and_survive_yaml() -> None:
         if paradigm == "manual":
             assert not user.requests.request_at_start and user.requests.request_instead_prob == 0
             assert user.requests.request_when_unhelped_for is None
+
+
+def _population_table() -> dict[str, str]:
+    """docs/population.md's parameter table: each backticked name of a row's first cell -> the
+    row's second cell (the value across subjects)."""
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "population.md").read_text()
+    rows: dict[str, str] = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.split("|")[1:-1]]
+        if len(cells) >= 3:
+            for name in re.findall(r"`([a-z_0-9]+)`", cells[0]):
+                rows.setdefault(name, cells[1])
+    return rows
+
+
+def _numbers(text: str) -> list[float]:
+    import re
+
+    return [float(x) for x in re.findall(r"-?\d+(?:\.\d+)?", text)]
+
+
+def test_the_population_page_gives_every_drawn_and_fixed_value() -> None:
+    """docs/population.md lists every distribution and fixed value with the numbers the code uses."""
+    rows, config = _population_table(), PopulationConfig()
+    for key, dist in config.distributions.items():
+        assert key in rows, f"docs/population.md has no row for {key}"
+        shown = _numbers(rows[key])
+        if isinstance(dist, Uniform):
+            wanted = [dist.low, dist.high]
+        else:  # the median, and the spread and the clip bounds where there are any
+            wanted = [dist.median] + [v for v in (dist.log_sd, dist.low) if v > 0]
+            wanted += [dist.high] if np.isfinite(dist.high) else []
+        for value in wanted:
+            assert any(abs(value - x) < 1e-9 for x in shown), f"{key}: {dist} but the page says {rows[key]!r}"
+    for key, value in config.fixed.items():
+        assert key in rows, f"docs/population.md has no row for the fixed {key}"
+        if isinstance(value, bool):
+            assert str(value) in rows[key], f"{key}: {value} but the page says {rows[key]!r}"
+        else:
+            assert any(abs(float(value) - x) < 1e-9 for x in _numbers(rows[key])), (
+                f"{key}: {value} but the page says {rows[key]!r}"
+            )

@@ -62,6 +62,10 @@ def test_config_validation() -> None:
         UserConfig(stall_time=0.0)
     with pytest.raises(ValueError, match="stall_progress"):
         UserConfig(stall_progress=float("nan"))
+    with pytest.raises(ValueError, match=r"UserConfig\.backoff_after: expected a finite number > 0, got 0"):
+        UserConfig(backoff_after=0.0)
+    with pytest.raises(ValueError, match=r"UserConfig\.backoff_time: expected a finite number >= 0"):
+        UserConfig(backoff_time=-1.0)
     with pytest.raises(
         ValueError, match=r"UserConfig\.correction_prob: expected a probability in \[0, 1\], got 1\.5"
     ):
@@ -83,6 +87,10 @@ def test_state_vector_round_trip() -> None:
         progress_mode=4,
         progress_since=0.75,
         progress_best=12.5,
+        blocked_best=40.0,
+        blocked_time=1.5,
+        backoff_mode=2,
+        backoff_until=3.25,
         raw=np.array([0.0, 0.0, 1.0, 0.0]),
     )
     back = UserState.from_vector(s.to_vector())
@@ -175,16 +183,64 @@ def test_progress_keeps_the_mode_and_stall_detection_can_be_disabled() -> None:
         return ee
 
     assert all(s.raw[0] == 1.0 for s in _drive_head_array(NO_REQUESTS, moving, 4.0))
-    off = UserConfig(request_at_start=False, request_when_unhelped_for=None, stall_time=None)
-    assert all(s.raw[0] == 1.0 for s in _drive_head_array(off, lambda t: EE, 4.0))
+    off = UserConfig(
+        request_at_start=False, request_when_unhelped_for=None, stall_time=None, backoff_time=0.0
+    )
+    assert all(s.raw[0] == 1.0 for s in _drive_head_array(off, lambda t: EE, 6.0))
 
 
-def test_a_stalled_user_with_nothing_else_to_do_keeps_trying() -> None:
+def test_a_stalled_user_with_nothing_else_to_do_keeps_trying_then_backs_off() -> None:
     ee = EE.copy()
     ee[2] = GOALS[0, 2]  # only the x error is left
-    states = _drive_head_array(NO_REQUESTS, lambda t: ee, 5.0)
-    assert all(s.raw[0] == 1.0 for s in states)
+    states = _drive_head_array(NO_REQUESTS, lambda t: ee, 6.5)
+    drive = np.array([s.raw[0] - s.raw[1] for s in states])  # right - left
+    choice = NO_REQUESTS.mode_choice
+    after, back = int(round(choice.backoff_after / 0.01)), int(round(choice.backoff_time / 0.01))
+    assert np.all(drive[: after - 1] == 1.0)  # keeps at it up to backoff_after of commanding
+    assert np.all(drive[after : after + back - 1] == -1.0)  # backs off for backoff_time
+    assert np.all(drive[after + back + 1 :] == 1.0)  # nothing else to do: tries again
     assert states[-1].presses == 0
+
+
+def _head_array_loop(config: UserConfig, ee: np.ndarray, until: float, mode: int = 0):
+    """A head-array user at a fixed pose whose back switch cycles the modes: (t, mode, raw) per 10 ms."""
+    s, rows = UserState(), []
+    for k in range(int(round(until / 0.01)) + 1):
+        t = k * 0.01
+        s = step(s, t, mode, interface=HEAD, config=config, ee=ee)
+        rows.append((t, mode, s.raw.copy()))
+        if s.raw[2] == 1.0:
+            mode = (mode + 1) % 7
+    return rows
+
+
+def test_a_blocked_user_backs_off_in_its_mode_then_routes_around() -> None:
+    # The arm moves in no mode (a joint limit): vx stalls (2 s), the user goes to vz and pushes
+    # -z; after backoff_after of commanding in all without progress it drives back (+z) for
+    # backoff_time, then changes to another mode (vx, the only other one with work left).
+    rows = _head_array_loop(NO_REQUESTS, EE, 9.0)
+    drives = [(t, m, r[0] - r[1]) for t, m, r in rows if r[0] - r[1] != 0.0]  # right - left
+    reverse = [(t, m) for t, m, v in drives if (m == 0 and v < 0) or (m == 2 and v > 0)]
+    assert reverse, "never backed off"
+    t0, m0 = reverse[0]
+    assert m0 == 2 and all(m == 2 for _, m in reverse)
+    commanding = sum(1 for t, _, _ in drives if t < t0) * 0.01
+    assert commanding == pytest.approx(NO_REQUESTS.mode_choice.backoff_after, abs=0.03)
+    assert reverse[-1][0] - t0 == pytest.approx(NO_REQUESTS.mode_choice.backoff_time, abs=0.03)
+    after = [(t, m, r) for t, m, r in rows if t > reverse[-1][0]]
+    assert after[0][2][2] == 1.0  # then it presses on toward another mode ...
+    assert any(m == 0 and r[0] == 1.0 for _, m, r in after)  # ... and drives +x in vx again
+
+
+def test_progress_restarts_the_back_off_watch() -> None:
+    def moving(t: float) -> np.ndarray:  # 1.2 cm/s along +x
+        ee = EE.copy()
+        ee[0] += 0.012 * t
+        return ee
+
+    states = _drive_head_array(NO_REQUESTS, moving, 8.0)
+    assert all(s.raw[0] == 1.0 and s.backoff_mode == -1 for s in states)
+    assert max(s.blocked_time for s in states) < 1.0
 
 
 def test_released_between_presses() -> None:

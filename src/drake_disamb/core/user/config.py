@@ -174,6 +174,11 @@ class ModeChoiceConfig:
             switches to another mode (the stall rule); ``None`` disables.
         stall_progress: The progress that counts, as a fall of the mode's remaining error in
             tolerance units (1 = one ``position_tolerance`` or ``orientation_tolerance``).
+        backoff_after: Backing off: after this long commanding (s, in any modes, across presses
+            and requests) without the goal's remaining error (summed over the arm modes) falling
+            by ``stall_progress``, the arm is blocked (a joint limit, the floor, the IK stopping)...
+        backoff_time: ... and the user drives back the way it came in its mode for this long
+            (s), then changes to another mode: it routes around. 0: it never backs off.
         mode_temperature: Softmax temperature of the mode choice, in usefulness units (0 = the best).
         press_cost: Usefulness a mode loses per press needed to reach it.
         overshoot_prob: Probability of one press too many on reaching the target mode by cycling
@@ -192,6 +197,8 @@ class ModeChoiceConfig:
 
     stall_time: float | None = 2.0
     stall_progress: float = 1.0
+    backoff_after: float = 4.0
+    backoff_time: float = 1.0
     mode_temperature: float = 0.0
     press_cost: float = 0.0
     overshoot_prob: float = 0.0
@@ -206,7 +213,10 @@ class ModeChoiceConfig:
             raise ValueError(
                 f"UserConfig.stall_progress: expected a finite number > 0, got {self.stall_progress!r}"
             )
-        _check_real(self, ("mode_temperature", "press_cost", "mode_review_rate"), allow_zero=True)
+        _check_real(self, ("backoff_after",))
+        _check_real(
+            self, ("backoff_time", "mode_temperature", "press_cost", "mode_review_rate"), allow_zero=True
+        )
         _check_probabilities(self, ("overshoot_prob", "wrong_press_prob"))
         _check_bools(self, ("stay_while_assisted",))
 

@@ -10,6 +10,8 @@ The order, and what each rule does, is the policy of :mod:`drake_disamb.core.use
 - :func:`start_delay_rule`: nothing but requests before the start delay ends;
 - :func:`aim_rule` (judging where to stop): the error as the user sees it in its mode;
 - :func:`judge_request_rule`: keep the mode a request chose, or change away from it;
+- :func:`backoff_rule` (rule 5, blocked): no progress in any mode for a while: back off the way
+  it came, then route around in another mode;
 - :func:`kept_mode_rule`: a kept (or, proportional interface, any) mode used while assisted;
 - :func:`carry_rule`: the mode done while assisted: let the autonomy carry the arm (as a stall
   or a review that wants another mode does while assisted);
@@ -424,6 +426,61 @@ def stall_rule(d: Decision) -> UserState | None:
     return None
 
 
+def backoff_rule(d: Decision) -> UserState | None:
+    """Backing off: after ``backoff_after`` seconds of commanding (in any modes, across presses
+    and requests) without the goal's remaining error (summed over the arm modes) falling by
+    ``stall_progress``, the arm is blocked (a joint limit, the floor, the IK stopping): the user
+    drives away from the goal in its mode for ``backoff_time``, then routes around: it changes to
+    the best other mode with something left to do (or goes on in this one when there is none).
+    A back-off ends early if the mode changes meanwhile."""
+    choice, state = d.config.mode_choice, d.state
+    if choice.backoff_time <= 0:
+        return None
+    if state.backoff_mode >= 0:
+        if d.mode != state.backoff_mode:
+            d.state = evolve(state, backoff_mode=-1, backoff_until=0.0)
+            return None
+        if d.time < state.backoff_until - 1e-9:
+            return _reverse(d)
+        d.state = evolve(state, backoff_mode=-1, backoff_until=0.0, progress_mode=-1)
+        others = d.arm_remaining.copy()
+        others[d.mode] = -np.inf
+        if np.max(others) > 1.0:
+            best = d.choose(exclude_current=True)
+            if others[best] > 1.0:
+                return d.change(best, overshot=False)
+        return None
+    left = float(np.sum(d.arm_remaining))
+    if state.blocked_time <= 0.0 or left < state.blocked_best - choice.stall_progress:
+        d.state = evolve(state, blocked_best=left, blocked_time=d.period)
+        return None
+    if not d.variant.is_driving(state.raw):
+        return None  # the watch counts commanding time only
+    blocked = state.blocked_time + d.period
+    if blocked < choice.backoff_after - 1e-9 or d.mode >= d.n_modes - 1 or d.arm_remaining[d.mode] <= 1.0:
+        d.state = evolve(state, blocked_time=blocked)
+        return None
+    d.state = evolve(
+        state,
+        blocked_time=0.0,
+        backoff_mode=d.mode,
+        backoff_until=d.time + choice.backoff_time,
+        progress_mode=-1,
+        kept_mode=-1,
+    )
+    return _reverse(d)
+
+
+def _reverse(d: Decision) -> UserState:
+    """The command of rule 6 with the mode's errors reversed: back the way it came."""
+    err = d.err.copy()
+    for dim in d.modes[d.mode]:
+        if dim != GRIPPER_DIM:
+            err[dim] = -err[dim]
+    d.err, d.keep = err, False
+    return command_rule(d)
+
+
 def review_rule(d: Decision) -> UserState | None:
     """Reviews (``mode_review_rate``): while the mode still helps, is another one better now?
     (People interleave modes.) Not while a kept mode carries the user with the assistance."""
@@ -509,6 +566,7 @@ RULES: tuple[Callable[[Decision], UserState | None], ...] = (
     start_delay_rule,
     aim_rule,
     judge_request_rule,
+    backoff_rule,
     kept_mode_rule,
     carry_rule,
     target_rule,

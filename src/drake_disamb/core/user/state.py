@@ -50,6 +50,11 @@ class UserState:
             the one just ended, began; -1 when none.
         counter_until: It counter-steers (pushes toward its goal in its mode while the autonomy
             assists another goal) until this time (s); 0 = not.
+        blocked_best: The goal's remaining error summed over the arm modes (tolerance units) when
+            the back-off watch began (it last fell by ``stall_progress``).
+        blocked_time: The time spent commanding since then (s); 0 = the watch is not running.
+        backoff_mode: The mode it backs off in (drives away from the goal), or -1.
+        backoff_until: ... until this time (s).
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -76,9 +81,22 @@ class UserState:
     carrying: bool = False
     carry_best: float = -1.0
     counter_until: float = 0.0
+    blocked_best: float = 0.0
+    blocked_time: float = 0.0
+    backoff_mode: int = -1
+    backoff_until: float = 0.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
-    _INT = ("draws", "presses", "target_mode", "progress_mode", "request_mode", "aim_mode", "kept_mode")
+    _INT = (
+        "draws",
+        "presses",
+        "target_mode",
+        "progress_mode",
+        "request_mode",
+        "aim_mode",
+        "kept_mode",
+        "backoff_mode",
+    )
     _BOOL = ("requested_at_start", "started", "judge", "overshot", "carrying")
     _FIELDS = (
         "busy_until",
@@ -104,14 +122,18 @@ class UserState:
         "carrying",
         "carry_best",
         "counter_until",
+        "blocked_best",
+        "blocked_time",
+        "backoff_mode",
+        "backoff_until",
     )
-    VECTOR_SIZE = 23 + RAW_SIZE
+    VECTOR_SIZE = 27 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
         request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, carrying, carry_best,
-        counter_until, raw (4)]``."""
+        counter_until, blocked_best, blocked_time, backoff_mode, backoff_until, raw (4)]``."""
         head = map(float, _STATE_FIELDS(self))  # (one C-level read of the fields: a user decides every tick)
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 

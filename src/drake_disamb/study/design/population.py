@@ -108,7 +108,9 @@ def _default_distributions() -> dict[str, Distribution]:
         # zero log-sd, kept among the draws so that the later draws stay as they were); first
         # request in the first 3 s in 0.42 of Disambiguation trials; the chosen mode kept 0.77
         # (the next action a command; a kept mode already done counts as left, so accept_prob is
-        # above it: 0.85-1.0 measured 0.68 on the simulated users).
+        # above it: 0.85-1.0 measured 0.68 on the simulated users). People's p0 counts the
+        # requests at the start and when unhelped too: U(0.45, 0.64) gave the simulated users a
+        # p0 of 0.55-0.85 (measured the same way), above people's: drawn lower.
         "request_instead_prob": Uniform(0.30, 0.45),
         "request_prob": Uniform(0.3, 0.55),
         "request_when_unhelped_for": LogNormal(8.0, 0.3),
@@ -139,6 +141,9 @@ def _default_fixed() -> dict[str, Any]:
         # With the joystick, any mode is used so while assisted: people's changes per minute while
         # the belief is confident 2.4, while not 7.9 (head array 5.9 and 11.0, Manual 7.1 and 8.9).
         "stay_while_assisted": True,
+        # Backing off when blocked (a joint limit, the floor): the logs have no pose to show it.
+        "backoff_after": 4.0,  # two stall windows of commanding without the goal's error falling
+        "backoff_time": 1.0,
     }
 
 
