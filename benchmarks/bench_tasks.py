@@ -1,7 +1,11 @@
 """Every goal of the study tasks with the simulated user: success, time, presses.
 
 Usage: ``python benchmarks/bench_tasks.py [--task reaching pouring] [--interface head_array
-joystick] [--paradigm disambiguation] [--set inference.agreement=cosine ...]``
+joystick] [--paradigm disambiguation] [--system mico] [--set inference.agreement=cosine ...]``
+
+``--system NAME`` runs a named system (``mico``, the scenarios' own settings, the default;
+``tnsre2020_study``, the system the study's people used, as the study protocol runs it), before
+any ``--set``.
 
 ``--set PATH=VALUE`` sets a scenario field by its dotted path (``inference.goal_set=stage``,
 ``blending.assist_without_input=false``; the value is read as YAML), so one command measures a
@@ -26,7 +30,14 @@ import time
 
 import yaml
 
-from drake_disamb.config import Scenario, load_scenario, validate_scenario, with_overrides
+from drake_disamb.config import (
+    Scenario,
+    load_scenario,
+    scenario_from_dict,
+    scenario_to_dict,
+    validate_scenario,
+)
+from drake_disamb.config.system_presets import SYSTEM_PRESETS, apply_system_preset
 from drake_disamb.trial import run_trial
 
 
@@ -62,11 +73,14 @@ def main() -> None:
     )
     parser.add_argument("--paradigm", default="disambiguation", help="disambiguation or manual")
     parser.add_argument(
+        "--system", default="mico", choices=SYSTEM_PRESETS, help="the named system to run (default: mico)"
+    )
+    parser.add_argument(
         "--set", nargs="*", default=[], metavar="PATH=VALUE", help="scenario fields to set (dotted paths)"
     )
     args = parser.parse_args()
-    if args.set:
-        print("settings: " + ", ".join(args.set))
+    if args.system != "mico" or args.set:
+        print("settings: " + ", ".join([f"system {args.system}", *args.set]))
 
     header = ("task", "interface", "goal", "ok", "stage times (s)", "switches", "requests", "alpha")
     print("{:<9} {:<11} {:<7} {:<4} {:<18} {:>8} {:>8} {:>6}".format(*header))
@@ -75,9 +89,10 @@ def main() -> None:
         for interface in args.interface:
             totals, successes, presses = [], 0, []
             for goals in goal_choices(task):
-                scenario = with_overrides(
-                    load_scenario(task), interface=interface, paradigm=args.paradigm, goal=goals
-                )
+                plain = apply_system_preset(scenario_to_dict(load_scenario(task)), args.system)
+                plain.update(interface=interface, paradigm=args.paradigm)
+                plain["user"]["goals"] = list(goals)
+                scenario = scenario_from_dict(plain, f"<{task} with system {args.system}>")
                 r = run_trial(with_settings(scenario, args.set), progress=False)
                 successes += r.success
                 presses.append(r.button_presses)

@@ -247,8 +247,8 @@ class InferenceSpec:
         agreement: Form of the DFT's agreement term (when ``dft.agreement`` is on), live and in
             the forward projection: ``"dot"`` the paper's ``u_h^rot . u_a^rot`` (rad^2/s^2, at
             most about 0.08 with the head array) or ``"cosine"`` the cosine of their angle (in
-            ``[-1, 1]``; the default, the ``mico`` preset's: with the dot product 2 of the 5
-            joystick reaching trials stall, README "Where we differ from the paper"). See
+            ``[-1, 1]``; the default, the ``mico`` preset's: with the dot product a joystick
+            reaching trial stalls, README "Where we differ from the paper"). See
             :attr:`drake_disamb.core.inference.DFTParams.agreement_measure`.
         goal_set: What the belief is over in a multi-step task: ``"stage"`` (the default) the
             current stage's goals, reset to the rest state when a stage completes, or ``"task"``
