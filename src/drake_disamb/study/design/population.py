@@ -128,6 +128,10 @@ def _default_distributions() -> dict[str, Distribution]:
         # long as the others (1.79 s): the carry's watch.
         "carry_prob": Uniform(0.65, 0.85),
         "carry_duration": LogNormal(1.6, 0.30),
+        # Counter-steering (drawn after the carry): in reaching people forgo 0.76 (joystick) and
+        # 0.30 (head array) of their changes per minute while the argmax is another goal, against
+        # while it is unsure: their range, one value per subject for both interfaces.
+        "counter_prob": Uniform(0.3, 0.75),
     }
 
 
