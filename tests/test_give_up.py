@@ -12,10 +12,11 @@ from drake_disamb.trial import run_trial
 
 
 def _stuck(give_up_after: float | None):  # noqa: ANN202
-    # From the left container to the low right platform the elbow reaches its limit and this
-    # user keeps pushing (tests/test_closed_loop.py): no progress from about 15 s on.
+    # From the left container to the low right platform the elbow reaches its limit, and a user
+    # that never backs off (backoff_time 0) keeps pushing: no progress from about 15 s on.
     scenario = with_overrides(load_scenario("pouring"), interface="head_array", goal=[1, 0])
     scenario.inference.goal_set = "stage"
+    scenario.user.config.backoff_time = 0.0
     scenario.success.give_up_after = give_up_after
     return run_trial(dataclasses.replace(scenario, duration=60.0), progress=False)
 
