@@ -409,15 +409,12 @@ def stall_rule(d: Decision) -> UserState | None:
         carried = _carry(d) or _counter(d)  # let the autonomy carry the arm, or push against it
         if carried is not None:
             return carried
-        others = d.arm_remaining.copy()
-        if mode < others.size:
-            others[mode] = -np.inf
-        if np.max(others) > 1.0:
+        if _others_left(d):
             if d.use_requests and d.request_chance(d.config.requests.request_instead_prob):
                 return d.request()
-            best = d.choose(exclude_current=True)
-            if others[best] > 1.0:
-                return d.change(best, overshot=False)
+            changed = _change_away(d)
+            if changed is not None:
+                return changed
         # Nothing else to do: the arm does not follow (the autonomy holds it at another goal,
         # or a limit): ask the system for help if it can, else keep at it and watch again.
         if d.use_requests:
@@ -443,13 +440,7 @@ def backoff_rule(d: Decision) -> UserState | None:
         if d.time < state.backoff_until - 1e-9:
             return _reverse(d)
         d.state = evolve(state, backoff_mode=-1, backoff_until=0.0, progress_mode=-1)
-        others = d.arm_remaining.copy()
-        others[d.mode] = -np.inf
-        if np.max(others) > 1.0:
-            best = d.choose(exclude_current=True)
-            if others[best] > 1.0:
-                return d.change(best, overshot=False)
-        return None
+        return _change_away(d) if _others_left(d) else None
     left = float(np.sum(d.arm_remaining))
     if state.blocked_time <= 0.0 or left < state.blocked_best - choice.stall_progress:
         d.state = evolve(state, blocked_best=left, blocked_time=d.period)
@@ -469,6 +460,22 @@ def backoff_rule(d: Decision) -> UserState | None:
         kept_mode=-1,
     )
     return _reverse(d)
+
+
+def _others_left(d: Decision) -> bool:
+    """Another arm mode than the current one has something left to do."""
+    others = d.arm_remaining.copy()
+    if d.mode < others.size:
+        others[d.mode] = -np.inf
+    return bool(np.max(others) > 1.0)
+
+
+def _change_away(d: Decision) -> UserState | None:
+    """Change toward the best other arm mode (the user's choice), if it has something left to do."""
+    best = d.choose(exclude_current=True)
+    if best != d.mode and d.arm_remaining[best] > 1.0:
+        return d.change(best, overshot=False)
+    return None
 
 
 def _reverse(d: Decision) -> UserState:
