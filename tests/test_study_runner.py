@@ -116,6 +116,21 @@ def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> Non
     assert resolve_scenario(build_scenario(spec, context)).interface.mode_selection == "cycle"
 
 
+def test_the_protocols_named_targets_end_the_reaches_only() -> None:
+    """The experimenter named the reaching target: the reach ends only at the subject's goal; the
+    pouring task's pour and place end at whatever goal they are done at."""
+    from drake_disamb.study.run.runner import StudyContext, build_scenario
+
+    protocol = P.default_protocol()
+    assert {t.task: t.target_stages for t in protocol.tasks} == {"reaching": ["reach"], "pouring": []}
+    context = StudyContext(protocol=P.protocol_to_dict(protocol))
+    seen = {}
+    for spec in P.expand_trials(protocol, 0)[:60]:
+        scenario = build_scenario(spec, context)
+        seen[spec.task] = [stage.ends_at_target for stage in scenario.stages]
+    assert seen == {"reaching": [True], "pouring": [False, False]}
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
@@ -138,6 +153,11 @@ def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> Non
         ({"request_latency": [2.5, 2.0]}, r"protocol\.request_latency"),
         ({"interface_mode_selection": "sector"}, r"protocol\.interface_mode_selection: .*'sector'"),
         ({"initial_modes": "gripper"}, r"protocol\.initial_modes: expected one of all, arm, got .gripper."),
+        (
+            {"tasks": [{"task": "pouring", "target_stages": ["reach"]}]},
+            r"protocol\.tasks\[0\]\.target_stages\[0\]: expected a stage of the pouring task \(pour, place\), "
+            r"got .reach.",
+        ),
     ],
 )
 def test_bad_protocol_names_the_field(change: dict, message: str) -> None:

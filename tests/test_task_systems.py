@@ -174,3 +174,33 @@ def test_a_stage_without_release_never_reads_the_opening() -> None:
 def test_release_openings_are_checked(releases: list, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         TaskManager([STAGE_A, STAGE_B], release_openings=releases)
+
+
+def test_a_named_target_ends_its_stage_only_there() -> None:
+    # Stage A names goal 1 (the experimenter's target); stage B ends at any goal.
+    tm = TaskManager([STAGE_A, STAGE_B], hold_times=0.1, targets=[1, None])
+    context = _fixed(tm, STAGE_A[0])  # resting at the other goal of stage A
+    _advance(tm, context, 1.0)
+    assert tm.stage(context) == 0 and tm.reached_goals(context) == [-1, -1]
+    tm.get_input_port(0).FixValue(context, STAGE_A[1])
+    _advance(tm, context, 1.2)
+    assert tm.stage(context) == 1 and tm.reached_goals(context)[0] == 1
+    assert tm.stage_end_times(context)[0] == pytest.approx(1.1, abs=0.011)
+    tm.get_input_port(0).FixValue(context, STAGE_B[1])  # not named: any goal of stage B
+    _advance(tm, context, 1.5)
+    assert tm.is_done(context) and tm.reached_goals(context) == [1, 1]
+
+
+@pytest.mark.parametrize(
+    "targets, message",
+    [
+        ([0], r"targets: expected one per stage \(2\)"),
+        ([2, None], r"targets\[0\]: expected None or a goal index in \[0, 1\], got 2"),
+        ([None, -1], r"targets\[1\]: expected None or a goal index in \[0, 1\], got -1"),
+        ([True, None], r"targets\[0\]: expected None or a goal index"),
+        ([0.5, None], r"targets\[0\]: expected None or a goal index"),
+    ],
+)
+def test_targets_are_checked(targets: list, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        TaskManager([STAGE_A, STAGE_B], targets=targets)

@@ -172,6 +172,10 @@ def build_shared_control_diagram(
             hold_times=[scenario.hold_time(k) for k in range(scenario.n_stages)],
             period=scenario.control_period,
             release_openings=[stage.release_opening for stage in scenario.stages],
+            targets=[
+                scenario.user.goals[k] if stage.ends_at_target else None
+                for k, stage in enumerate(scenario.stages)
+            ],
         )
     )
     task.set_name("task")

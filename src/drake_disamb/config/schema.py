@@ -207,11 +207,17 @@ class StageSpec:
             the gripper mode and opens it. ``None``: no release (the pose alone completes it).
             The object stays with the gripper in the simulation: what is checked is the opening
             at the goal, not where the object falls.
+        ends_at_target: The stage completes only at the user's intended goal
+            (``user.goals[stage]``), as when an experimenter named the target and ends the trial
+            there: an arm that passes or rests at another goal does not end it (a reach, where
+            nothing is done that cannot be undone). False (default): at any goal (a pour or a
+            release: what is done there is done, and a wrong goal is a failure).
     """
 
     name: str = "reach"
     hold_time: float | None = None
     release_opening: float | None = None
+    ends_at_target: bool = False
 
 
 @dataclass

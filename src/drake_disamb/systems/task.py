@@ -10,6 +10,8 @@ last stage the task is done (``done`` = 1) and the goal set stays that of the la
 
 The manager does not know the user's intent: it reports which goal was reached in each stage;
 whether that was the intended one is the trial's business (:func:`drake_disamb.trial.run_trial`).
+A stage may instead be given its target (``targets``, a scenario's ``StageSpec.ends_at_target``:
+the experimenter named it): then only that goal completes it.
 """
 
 from __future__ import annotations
@@ -64,7 +66,8 @@ class TaskManager(LeafSystem):
     held object let go at the goal; the hold goes on while it opens), checked every
     ``period`` seconds (a periodic discrete update; all outputs are state output ports, each a
     discrete group of its own written when the stage changes, so the manager has no direct
-    feedthrough). A NaN pose never counts as reached, nor does a NaN opening release.
+    feedthrough). A NaN pose never counts as reached, nor does a NaN opening release. With
+    ``targets[stage]`` a goal index, only that goal counts in the stage (``None``: any goal).
     """
 
     def __init__(
@@ -75,6 +78,7 @@ class TaskManager(LeafSystem):
         hold_times: float | Sequence[float] = 0.3,
         period: float = 0.01,
         release_openings: Sequence[float | None] | None = None,
+        targets: Sequence[int | None] | None = None,
     ) -> None:
         super().__init__()
         if len(stage_goal_poses) == 0:
@@ -122,6 +126,17 @@ class TaskManager(LeafSystem):
         for k, r in enumerate(releases):
             if r is not None and not (np.isfinite(r) and r > 0):
                 raise ValueError(f"release_openings[{k}]: expected None or a finite number > 0, got {r!r}")
+        stage_targets = [None] * n_stages if targets is None else list(targets)
+        if len(stage_targets) != n_stages:
+            raise ValueError(f"targets: expected one per stage ({n_stages}), got {stage_targets!r}")
+        for k, g in enumerate(stage_targets):
+            if g is not None and not (
+                isinstance(g, int | np.integer) and not isinstance(g, bool) and 0 <= g < self._n_goals
+            ):
+                raise ValueError(
+                    f"targets[{k}]: expected None or a goal index in [0, {self._n_goals - 1}], got {g!r}"
+                )
+        self._targets: list[int | None] = [None if g is None else int(g) for g in stage_targets]
         self._holds = holds
         self._releases: list[float | None] = [None if r is None else float(r) for r in releases]
         self._period = float(period)
@@ -199,6 +214,9 @@ class TaskManager(LeafSystem):
         inside = [
             i for i, (d, a) in enumerate(zip(dist, angle, strict=True)) if d <= pos_tol and a <= ori_tol
         ]
+        target = self._targets[stage]
+        if target is not None:
+            inside = [i for i in inside if i == target]  # a named target: no other goal ends the stage
         if not inside:
             if x[_CANDIDATE] == -1.0:  # far from every goal, as before: nothing to write
                 return DID_NOTHING

@@ -107,10 +107,15 @@ class TaskProtocol:
     Attributes:
         task: An embedded task (``reaching``, ``pouring``).
         start_poses: The poses a trial starts from (one drawn per trial, uniformly).
+        target_stages: Names of the task's stages whose target the experimenter names: they end
+            only at the subject's intended goal (``StageSpec.ends_at_target``), as the paper's
+            reaching trials went to "the specified reaching target" (Section V). The other
+            stages end at whatever goal the arm completes them at.
     """
 
     task: str = field(default="", metadata=_meta(required=True))
     start_poses: list[StartPoseSpec] = field(default_factory=lambda: [StartPoseSpec(name="default")])
+    target_stages: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -186,6 +191,12 @@ def _task_duration(task: str) -> float:
     return float(load_scenario(task).duration)
 
 
+def _stage_names(task: str) -> list[str]:
+    from drake_disamb.config import load_scenario
+
+    return [stage.name for stage in load_scenario(task).stages]
+
+
 MAX_TRIALS = 100_000
 """Most trials a protocol may have (every trial is expanded, and recorded, before the first runs)."""
 
@@ -222,6 +233,13 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
         pose_names = [p.name for p in t.start_poses]
         if len(set(pose_names)) != len(pose_names):
             raise ValueError(f"{name}.tasks[{i}].start_poses: a name is used twice: {pose_names}")
+        stages = _stage_names(t.task)
+        for k, stage in enumerate(t.target_stages):
+            if stage not in stages:
+                raise ValueError(
+                    f"{name}.tasks[{i}].target_stages[{k}]: expected a stage of the {t.task} task "
+                    f"({', '.join(stages)}), got {fmt(stage)}"
+                )
     _check_choices(f"{name}.paradigms", protocol.paradigms, PARADIGMS, "a paradigm", attr="name")
     for i, p in enumerate(protocol.paradigms):
         if not (isinstance(p.trials, int) and 1 <= p.trials <= 1000):

@@ -197,6 +197,9 @@ def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
     plain["interface_mode_selection"] = protocol.get("interface_mode_selection", "cycle")
     plain["user"]["goals"] = list(spec.goals)
     task = _task_protocol(context, spec.task)
+    for stage in plain.get("stages", []):
+        if stage.get("name", "reach") in task.get("target_stages", []):
+            stage["ends_at_target"] = True  # the experimenter named the target
     offsets = task["start_poses"][spec.start_pose].get("joint_offsets")
     if offsets is not None:
         base = plain.get("start_joint_positions") or [float(q) for q in MICO_HOME_Q]
