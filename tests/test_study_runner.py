@@ -155,8 +155,8 @@ def test_the_protocols_named_targets_end_the_reaches_only() -> None:
         ({"initial_modes": "gripper"}, r"protocol\.initial_modes: expected one of all, arm, got .gripper."),
         (
             {"tasks": [{"task": "pouring", "target_stages": ["reach"]}]},
-            r"protocol\.tasks\[0\]\.target_stages\[0\]: expected a stage of the pouring task \(pour, place\), "
-            r"got .reach.",
+            r"protocol\.tasks\[0\]\.target_stages\[0\]: expected a stage of the pouring task "
+            r"\(pour, place\), got .reach.",
         ),
     ],
 )
