@@ -91,6 +91,8 @@ def test_state_vector_round_trip() -> None:
         blocked_time=1.5,
         backoff_mode=2,
         backoff_until=3.25,
+        detour_mode=1,
+        detour_offset=-0.125,
         raw=np.array([0.0, 0.0, 1.0, 0.0]),
     )
     back = UserState.from_vector(s.to_vector())
@@ -230,6 +232,29 @@ def test_a_blocked_user_backs_off_in_its_mode_then_routes_around() -> None:
     after = [(t, m, r) for t, m, r in rows if t > reverse[-1][0]]
     assert after[0][2][2] == 1.0  # then it presses on toward another mode ...
     assert any(m == 0 and r[0] == 1.0 for _, m, r in after)  # ... and drives +x in vx again
+
+
+def test_a_blocked_user_with_a_detour_lifts_the_hand_over_the_obstacle() -> None:
+    # Only the x error is left and the arm does not move (the floor holds it): after the back-off
+    # in vx the user goes to vz and drives up (+z, away from its goal's height) instead of trying
+    # vx again; the lift stalls too (stall_time), and it goes back to vx, the hand kept lifted.
+    ee = EE.copy()
+    ee[2] = GOALS[0, 2]
+    lifting = dataclasses.replace(NO_REQUESTS, detour_lift=0.1)
+    rows = _head_array_loop(lifting, ee, 10.0)
+    drives = [(t, m, r[0] - r[1]) for t, m, r in rows if r[0] - r[1] != 0.0]  # right - left
+    back_x = [t for t, m, v in drives if m == 0 and v < 0]
+    assert back_x, "never backed off in vx"
+    later = [(t, m, v) for t, m, v in drives if t > back_x[-1]]
+    assert later[0][1] == 2 and later[0][2] > 0  # next it drives in vz, up
+    up = [t for t, m, v in later if m == 2]
+    assert all(v > 0 for t, m, v in later if m == 2)
+    assert up[-1] - up[0] == pytest.approx(lifting.mode_choice.stall_time, abs=0.05)
+    assert [m for t, m, v in later if t > up[-1]][0] == 0  # then vx again, over the obstacle
+    # Without the detour (the default) it tries vx again right after the back-off.
+    plain = [(t, m, r[0] - r[1]) for t, m, r in _head_array_loop(NO_REQUESTS, ee, 8.0) if r[0] != r[1]]
+    t_back = max(t for t, m, v in plain if m == 0 and v < 0)
+    assert all(m == 0 and v > 0 for t, m, v in plain if t > t_back)
 
 
 def test_progress_restarts_the_back_off_watch() -> None:

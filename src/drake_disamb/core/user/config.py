@@ -179,6 +179,11 @@ class ModeChoiceConfig:
             by ``stall_progress``, the arm is blocked (a joint limit, the floor, the IK stopping)...
         backoff_time: ... and the user drives back the way it came in its mode for this long
             (s), then changes to another mode: it routes around. 0: it never backs off.
+        detour_lift: Routing around over the obstacle (the floor, an object): after a back-off in
+            a mode that does not move the hand vertically, the user first lifts the end effector
+            by this much (m, world +z) and keeps it there until the blocked mode's dimensions are
+            done (then it comes down as any error); blocked again meanwhile, it drops the detour.
+            0: no detour.
         mode_temperature: Softmax temperature of the mode choice, in usefulness units (0 = the best).
         press_cost: Usefulness a mode loses per press needed to reach it.
         overshoot_prob: Probability of one press too many on reaching the target mode by cycling
@@ -199,6 +204,7 @@ class ModeChoiceConfig:
     stall_progress: float = 1.0
     backoff_after: float = 4.0
     backoff_time: float = 1.0
+    detour_lift: float = 0.0
     mode_temperature: float = 0.0
     press_cost: float = 0.0
     overshoot_prob: float = 0.0
@@ -215,7 +221,9 @@ class ModeChoiceConfig:
             )
         _check_real(self, ("backoff_after",))
         _check_real(
-            self, ("backoff_time", "mode_temperature", "press_cost", "mode_review_rate"), allow_zero=True
+            self,
+            ("backoff_time", "detour_lift", "mode_temperature", "press_cost", "mode_review_rate"),
+            allow_zero=True,
         )
         _check_probabilities(self, ("overshoot_prob", "wrong_press_prob"))
         _check_bools(self, ("stay_while_assisted",))

@@ -40,8 +40,10 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
    **Backing off**: after ``backoff_after`` seconds of commanding (in any modes, across presses
    and requests) without the goal's remaining error, summed over the arm modes, falling by
    ``stall_progress``, the arm is blocked: the user drives back the way it came in its mode for
-   ``backoff_time`` seconds, then changes to the best other mode with work left (it routes
-   around), or tries again in this one when there is none.
+   ``backoff_time`` seconds, then routes around: over the obstacle first (``detour_lift``: in a
+   mode that does not move the hand vertically, it lifts the end effector that much and keeps it
+   up until the blocked mode's dimensions are done), else by changing to the best other mode
+   with work left, or it tries again in this one when there is none.
 6. **Command**: otherwise it drives toward its goal along the current mode's dimensions.
    A proportional interface (the joystick): axis k for the mode's k-th dimension, proportional to
    the error (``error / approach_time`` as a share of the interface's full-deflection speed), at

@@ -11,7 +11,7 @@ The order, and what each rule does, is the policy of :mod:`drake_disamb.core.use
 - :func:`aim_rule` (judging where to stop): the error as the user sees it in its mode;
 - :func:`judge_request_rule`: keep the mode a request chose, or change away from it;
 - :func:`backoff_rule` (rule 5, blocked): no progress in any mode for a while: back off the way
-  it came, then route around in another mode;
+  it came, then route around: over the obstacle (a lift, :func:`_detour`) or in another mode;
 - :func:`kept_mode_rule`: a kept (or, proportional interface, any) mode used while assisted;
 - :func:`carry_rule`: the mode done while assisted: let the autonomy carry the arm (as a stall
   or a review that wants another mode does while assisted);
@@ -38,6 +38,9 @@ from drake_disamb.core.user.judgement import choose_mode, dim_tolerances, draw, 
 from drake_disamb.core.user.state import NOT_COUNTING, UserState, evolve
 
 __all__ = ["RULES", "Decision", "decide"]
+
+_Z = 2
+"""The world z position's index in the goal error (the dimension a detour lifts)."""
 
 
 class Decision:
@@ -96,6 +99,12 @@ class Decision:
         self.after_carry = state.carrying  # the wait that just ended was a carry
         if state.carrying:
             self.state = evolve(state, carrying=False)
+        if state.detour_mode >= 0:  # routing around over the obstacle (:func:`_detour`)
+            if mode_remaining(err, (self.modes[state.detour_mode],), config)[0] <= 1.0:
+                self.state = evolve(self.state, detour_mode=-1, detour_offset=0.0)  # past it
+            else:
+                self.err = err = err.copy()
+                err[_Z] -= state.detour_offset  # it keeps the hand lifted
 
     def rng(self) -> np.random.Generator:
         """The next random draw's generator (advances the counter)."""
@@ -440,6 +449,9 @@ def backoff_rule(d: Decision) -> UserState | None:
         if d.time < state.backoff_until - 1e-9:
             return _reverse(d)
         d.state = evolve(state, backoff_mode=-1, backoff_until=0.0, progress_mode=-1)
+        detour = _detour(d, state.backoff_mode)
+        if detour is not None:
+            return detour
         return _change_away(d) if _others_left(d) else None
     left = float(np.sum(d.arm_remaining))
     if state.blocked_time <= 0.0 or left < state.blocked_best - choice.stall_progress:
@@ -458,8 +470,24 @@ def backoff_rule(d: Decision) -> UserState | None:
         backoff_until=d.time + choice.backoff_time,
         progress_mode=-1,
         kept_mode=-1,
+        detour_mode=-1,  # blocked on a detour too: it drops it (and routes around by mode)
+        detour_offset=0.0,
     )
     return _reverse(d)
+
+
+def _detour(d: Decision, blocked: int) -> UserState | None:
+    """After a back-off in ``blocked``, a mode that does not move the hand vertically, route over
+    the obstacle (``detour_lift``): see the goal ``detour_lift`` higher until ``blocked`` is done
+    (:class:`Decision` applies it) and change to the mode that lifts. ``None``: no detour."""
+    lift = d.config.mode_choice.detour_lift
+    if lift <= 0 or d.state.detour_mode >= 0 or _Z in d.modes[blocked]:
+        return None
+    lifting = next((m for m, dims in enumerate(d.modes[:-1]) if _Z in dims), -1)
+    if lifting < 0:
+        return None
+    d.state = evolve(d.state, detour_mode=blocked, detour_offset=float(d.err[_Z]) - lift)
+    return d.change(lifting, overshot=False)
 
 
 def _others_left(d: Decision) -> bool:

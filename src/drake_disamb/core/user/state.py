@@ -55,6 +55,10 @@ class UserState:
         blocked_time: The time spent commanding since then (s); 0 = the watch is not running.
         backoff_mode: The mode it backs off in (drives away from the goal), or -1.
         backoff_until: ... until this time (s).
+        detour_mode: Routing around over the obstacle (``detour_lift``): the blocked mode, until
+            its dimensions are done, or -1.
+        detour_offset: Meanwhile the user sees the z error less this (m): it keeps the end
+            effector lifted.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -85,6 +89,8 @@ class UserState:
     blocked_time: float = 0.0
     backoff_mode: int = -1
     backoff_until: float = 0.0
+    detour_mode: int = -1
+    detour_offset: float = 0.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
     _INT = (
@@ -96,6 +102,7 @@ class UserState:
         "aim_mode",
         "kept_mode",
         "backoff_mode",
+        "detour_mode",
     )
     _BOOL = ("requested_at_start", "started", "judge", "overshot", "carrying")
     _FIELDS = (
@@ -126,14 +133,17 @@ class UserState:
         "blocked_time",
         "backoff_mode",
         "backoff_until",
+        "detour_mode",
+        "detour_offset",
     )
-    VECTOR_SIZE = 27 + RAW_SIZE
+    VECTOR_SIZE = 29 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
         request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, carrying, carry_best,
-        counter_until, blocked_best, blocked_time, backoff_mode, backoff_until, raw (4)]``."""
+        counter_until, blocked_best, blocked_time, backoff_mode, backoff_until, detour_mode,
+        detour_offset, raw (4)]``."""
         head = map(float, _STATE_FIELDS(self))  # (one C-level read of the fields: a user decides every tick)
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 

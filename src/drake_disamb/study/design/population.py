@@ -148,6 +148,8 @@ def _default_fixed() -> dict[str, Any]:
         # Backing off when blocked (a joint limit, the floor): the logs have no pose to show it.
         "backoff_after": 4.0,  # two stall windows of commanding without the goal's error falling
         "backoff_time": 1.0,
+        # Routing over the obstacle after a back-off: a hand's width up (our choice, no pose logged).
+        "detour_lift": 0.1,
     }
 
 
