@@ -4,6 +4,7 @@ goal for that long ends there as a failure, and every trial says how it ended.""
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import pytest
 
@@ -26,8 +27,12 @@ def test_a_stuck_trial_is_given_up_and_a_free_one_is_not() -> None:
     stuck = _stuck(10.0)
     assert stuck.end_reason == "given up" and not stuck.success
     assert 20.0 < stuck.time < 40.0, stuck.time  # stuck from ~15 s, given up 10 s later
+    assert stuck.progress_age == pytest.approx(10.0, abs=0.5)  # the watch looks every 0.5 s
     limit = _stuck(None)
     assert limit.end_reason == "time limit" and limit.time == pytest.approx(60.0)
+    assert math.isnan(limit.progress_age)  # no watch without the rule
+    watched = _stuck(50.0)  # the watch on, the rule too late to fire: it says the arm was stuck
+    assert watched.end_reason == "time limit" and 35.0 < watched.progress_age < 50.0, watched.progress_age
     done = run_trial(load_scenario("reaching"), progress=False)
     assert done.end_reason == "done" and done.success
 
@@ -69,6 +74,12 @@ def test_the_protocol_gives_up_after_a_minute_and_records_say_how_trials_ended(t
     records = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
     assert records and all(r["extra"]["end_reason"] in ("done", "given up", "time limit") for r in records)
     assert all((r["extra"]["end_reason"] == "done") == r["done"] for r in records)
+    # Every protocol trial has the experimenter's watch: how long before the end the arm last came
+    # closer to its goal (under a minute, else the trial was given up on).
+    ages = [r["extra"]["progress_age"] for r in records]
+    assert all(isinstance(a, float) and 0.0 <= a for a in ages), ages
+    watched = [a for r, a in zip(records, ages, strict=True) if r["extra"]["end_reason"] != "given up"]
+    assert all(a < 60.0 + 0.5 for a in watched), watched
     report = subprocess.run(
         [sys.executable, "-m", "drake_disamb.cli", "study", "report", str(out)],
         capture_output=True,

@@ -61,6 +61,11 @@ class TrialResult:
             (``scenario.duration``), ``"given up"`` (the experimenter's rule,
             ``scenario.success.give_up_after``), ``"stopped"`` (a stop request) or
             ``"station fault"``.
+        progress_age: With the experimenter's watch (``scenario.success.give_up_after``), the
+            seconds from the last time the arm came closer to the intended goal (by one position or
+            orientation tolerance, the watch's step) to the trial's end: under ``give_up_after``
+            for a trial that ran to its time limit still approaching its goal, not stuck. NaN
+            without the watch.
     """
 
     scenario: Scenario
@@ -89,6 +94,7 @@ class TrialResult:
     automatic_switch_times: list[float] = field(default_factory=list)
     fault: str = ""
     end_reason: str = ""
+    progress_age: float = float("nan")
 
 
 def _log(
@@ -254,4 +260,5 @@ def run_trial(
         automatic_switch_times=automatic_switches,
         fault=fault,
         end_reason=end_reason,
+        progress_age=float(t_end - watch[1]) if give_up is not None else float("nan"),
     )

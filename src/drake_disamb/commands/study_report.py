@@ -48,11 +48,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"drake-disamb study report: error: {err}", file=sys.stderr)
         return 2
     ended: dict[str, int] = {}
+    ages: list[float] = []
     for row in json.loads(files.summary.read_text(encoding="utf-8")):
         for reason, n in row.get("end_reasons", {}).items():
             ended[reason] = ended.get(reason, 0) + n
+        ages.extend(row.get("time_limit_progress_ages", []))
     if ended:  # simulated trials: how they ended (people's records do not say)
         print("trials ended: " + ", ".join(f"{reason} {n}" for reason, n in sorted(ended.items())))
+    if ages:
+        print(
+            f"trials at the time limit: {len(ages)} with the progress watch, their arm last came "
+            f"closer to the goal {min(ages):.1f} to {max(ages):.1f} s before the end (still "
+            "approaching; a stuck arm is given up on by the experimenter's rule)"
+        )
     if files.paradigm_effect is not None:
         rows = json.loads(files.paradigm_effect.read_text(encoding="utf-8"))
         print(effect_text(rows, str(args.dir), str(args.compare)))

@@ -212,8 +212,11 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
     """One row per source, interface, task and paradigm (sorted): counts (``n_valid`` valid trials,
     ``n_analysed`` of them not failed) and means (analysed trials only) after the authors'
     cleaning, the raw means (``*_raw``), the success rate (all trials whose success is known), the
-    request-time skewness, and ``end_reasons``: how many trials ended how (``done``, ``time
-    limit``, ``given up``, ...: a simulated record's ``extra["end_reason"]``; empty for people)."""
+    request-time skewness, ``end_reasons``: how many trials ended how (``done``, ``time
+    limit``, ``given up``, ...: a simulated record's ``extra["end_reason"]``; empty for people),
+    and ``time_limit_progress_ages``: for the trials that ran to the time limit, how long before
+    the end the arm last came closer to the intended goal (``extra["progress_age"]``, s; a trial
+    whose arm is stuck is ended earlier by the experimenter's rule, ``give_up_after``)."""
     groups: dict[tuple[str, str, str, str], list[TrialMetrics]] = {}
     for r in records:
         groups.setdefault(group_key(r), []).append(trial_metrics(r))
@@ -239,6 +242,12 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
         row["n_success_known"] = len(known)
         reasons = [m.record.extra.get("end_reason") for m in ms]
         row["end_reasons"] = {k: reasons.count(k) for k in sorted({r for r in reasons if r})}
+        row["time_limit_progress_ages"] = sorted(
+            float(m.record.extra["progress_age"])
+            for m in ms
+            if m.record.extra.get("end_reason") == "time limit"
+            and isinstance(m.record.extra.get("progress_age"), int | float)
+        )
         row["request_time_skewness"] = request_time_skewness(analysed)
         row["mean_alpha"] = _mean(m.mean_alpha for m in analysed)
         row["sd_alpha"] = _sd(m.mean_alpha for m in analysed)

@@ -133,6 +133,7 @@ def record_from_result(
         "disambiguation_switch_times": [float(t) for t in result.disambiguation_switch_times],
         "interrupted": bool(result.interrupted),
         "end_reason": result.end_reason,
+        "progress_age": _finite(result.progress_age),
     }
     info.update(extra or {})
     return TrialRecord(
