@@ -173,6 +173,40 @@ def test_switches_after_each_request_count_the_users_switches_until_the_next_req
     assert "joystick mean 2.00, median 2 (n=2)" in line
 
 
+def test_the_mode_each_request_chose_is_told_translation_or_rotation() -> None:
+    import dataclasses
+
+    from drake_disamb.study.measures.course import request_modes
+
+    # Joystick modes: 0 {vx, vy}, 1 {vx, vz}, 2 {wx, wz}, 3 {wy}. Requests switched to 1 at 3 s and to
+    # 2 at 12 s; the user switched to 0 at 8 s (not a request's).
+    trial = _trial("J8", "joystick", "reaching", 3, [(3.0, 1), (8.0, 0), (12.0, 2)], 20.0,
+                   paradigm="disambiguation")  # fmt: skip
+    record = dataclasses.replace(
+        trial.record, mode_switch_times=[8.0], mode_switch_modes=["vx_vy"], mode_switches=1,
+        request_times=[0.5, 9.5], requests=2, button_presses=3,
+    )  # fmt: skip
+    logged = LoggedTrial(record, trial.trace, request_switch_times=np.array([3.0, 12.0]))
+    assert request_modes(logged) == [True, False]
+    est = estimate_behaviour([logged])
+    assert est.request_translation["joystick"] == (0.5, 2)
+    assert est.request_translation["head_array"][1] == 0
+    line = next(x for x in format_estimates(est).splitlines() if x.startswith("request chose translation"))
+    assert "joystick 0.50 (n=2)" in line
+
+
+def test_the_study_systems_requests_chose_translation_modes() -> None:
+    # What the people's logs show of the system (the preset's agreement term follows it).
+    if not DATA.is_dir():
+        pytest.skip(f"the authors' human logs are not at {DATA} (../shared/data, never copied here)")
+    from drake_disamb.study.data.authors import read_trials
+
+    est = estimate_behaviour(read_trials(DATA))
+    for interface in ("joystick", "head_array"):
+        share, n = est.request_translation[interface]
+        assert n > 50 and share > 0.9, (interface, share, n)
+
+
 def test_pauses_split_by_whether_the_assistance_moved_the_arm_and_the_uncommanded_motion() -> None:
     trial = _trial("J8", "joystick", "reaching", 0, [], 20.0, t_end=20.0 - DT)  # 400 samples, 0.05 s apart
     t = trial.trace["t"]

@@ -331,7 +331,8 @@ def test_system_presets_load_and_resolve() -> None:
     dft = cfg.inference.params
     assert (dft.tau1, dft.tau2, dft.euler_equivalent_step) == (5.1, 5.1, 0.1)
     assert not (dft.proximity or dft.zero_command_excitation)
-    assert dft.agreement and dft.agreement_measure == "cosine"  # ours: the logs cannot show it
+    # the paper's dot product: the logs' requests chose translation modes, which the cosine does not give
+    assert dft.agreement and dft.agreement_measure == "dot"
     assert cfg.blending.assist_without_input and scenario.inference.goal_set == "task"
     _, cfg = _preset_scenario("pouring", "tnsre2020_study")
     assert cfg.rhos == pytest.approx((0.30, 0.35, 0.7))

@@ -104,16 +104,15 @@ def _default_distributions() -> dict[str, Distribution]:
         # Head-array changes of >= 7 presses (a full round, one per overshoot): 0.02 of changes.
         "overshoot_prob": Uniform(0.0, 0.04),
         # Requests: a mode change is a request with probability p0 * exp(-t / tau), fitted to the
-        # Disambiguation trials' changes: p0 0.45..0.64 per subject, tau 131 s (one for all: a
+        # Disambiguation trials' changes: p0 0.45..0.63 per subject, tau 131 s (one for all: a
         # zero log-sd, kept among the draws so that the later draws stay as they were); first
         # request in the first 3 s in 0.42 of Disambiguation trials; the chosen mode kept 0.77
         # (the next action a command; a kept mode already done counts as left, so accept_prob is
-        # above it: 0.85-1.0 measured 0.68 on the simulated users). People's p0 counts the
-        # requests at the start and when unhelped too: U(0.45, 0.64) gave the simulated users a
-        # p0 of 0.55-0.85 (measured the same way), above people's: drawn lower.
-        "request_instead_prob": Uniform(0.30, 0.45),
+        # above it: 0.85-1.0 measured 0.68 on the simulated users). A request is made at the
+        # start or instead of a change of the user's own (no timer: request_when_unhelped_for is
+        # fixed off), so p0 is people's own.
+        "request_instead_prob": Uniform(0.45, 0.64),
         "request_prob": Uniform(0.3, 0.55),
-        "request_when_unhelped_for": LogNormal(8.0, 0.3),
         "request_decay_time": LogNormal(131.0, 0.0),
         "accept_prob": Uniform(0.85, 1.0),
         # Literature (no pose in the logs): judging by eye where to stop, relative error 10-30 %.
@@ -141,6 +140,11 @@ def _default_fixed() -> dict[str, Any]:
         "settle_log_sd": 0.93,  # within: pooled log-sd of the settles
         "request_wait": 3.0,  # the system's 2-2.5 s latency; request -> switch 2.5-3.2 s in the logs
         "request_at_start": True,
+        # A request is one way to change mode: people's share of changes made by requests is one
+        # rate over the trial (p0 exp(-t / tau), fitted over every change, the start's included),
+        # and the model makes it so. A timer's request ("when unhelped for" a while) came on top
+        # of the changes, with the changes out of the chosen mode after it (docs/population.md).
+        "request_when_unhelped_for": None,
         "keep_assisted_mode": True,  # a kept request mode is used while the assistance helps
         # With the joystick, any mode is used so while assisted: people's changes per minute while
         # the belief is confident 2.4, while not 7.9 (head array 5.9 and 11.0, Manual 7.1 and 8.9).

@@ -93,6 +93,7 @@ from drake_disamb.study.measures.course import (
     format_command_path,
     format_gripper,
     gripper_course,
+    request_modes,
     starts_in_gripper,
     summarize_command_paths,
     summarize_gripper_end,
@@ -167,6 +168,9 @@ class BehaviourEstimates:
     switches_after_request: dict[str, tuple[float, float, int]]
     """Per interface, the user mode switches after each request until the next request or the
     end of the trial: mean, median and the number of requests (Disambiguation trials)."""
+    request_translation: dict[str, tuple[float, int]]
+    """Per interface, the share of the requests' mode switches that chose a translation mode, and
+    their number (:func:`~drake_disamb.study.measures.course.request_modes`)."""
     tail: LogNormalFit
     commanding_share: float
     n_trials: int
@@ -221,6 +225,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     change_events: list[tuple[str, float, bool]] = []  # Disambiguation: (subject, time, a request?)
     accepted = rejected = 0
     after_request: dict[str, list[int]] = {k: [] for k in kinds}  # user switches until the next request
+    chosen_translation: dict[str, list[bool]] = {k: [] for k in kinds}  # per request switch
     corrections: dict[str, list[int]] = {k: [] for k in kinds}
     corrections_subject: dict[str, list[int]] = {}
     commanding_total = time_total = 0.0
@@ -346,6 +351,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
                 for a, b in zip(edges[:-1], edges[1:], strict=True)
             )
             early.append(float(bool(merged) and merged[0] < EARLY_REQUEST))
+            chosen_translation[r.interface].extend(request_modes(trial))
             req_norm.extend((np.asarray(merged) / r.duration).tolist())
             for x in trial.request_switch_times:
                 later_cmd = times_cmd[times_cmd > x]
@@ -417,6 +423,9 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         switches_after_request={
             k: (float(np.mean(v)), float(np.median(v)), len(v)) if v else (math.nan, math.nan, 0)
             for k, v in after_request.items()
+        },
+        request_translation={
+            k: (float(np.mean(v)) if v else math.nan, len(v)) for k, v in chosen_translation.items()
         },
         tail=fit_lognormal(tail),
         commanding_share=commanding_total / time_total if time_total else math.nan,
@@ -610,6 +619,11 @@ def format_estimates(est: BehaviourEstimates) -> str:
             for k, (m, med, n) in est.switches_after_request.items()
         )
         + " (user switches until the next request or the end)",
+        f"{'request chose translation':<28} "
+        + ", ".join(
+            f"{k.replace('_', ' ')} {share:.2f} (n={n})" for k, (share, n) in est.request_translation.items()
+        )
+        + " (of the requests' mode switches: the system's choice)",
         _fmt_fit("tail (last command -> end)", est.tail),
         f"{'commanding share':<28} {est.commanding_share:.2f} of trial time",
         "mode changes per minute      "

@@ -21,6 +21,11 @@ interface's modes on ``t``, ``u`` the blended command ``[vx, vy, vz, wx, wy, wz]
   rotational path (rad, ``|u[3:]| dt``) and seconds with the arm commanded (``|u[:3]|`` above
   5 mm/s), and the median speed while it is. How far people actually drive the arm for a task, not
   only how they change modes.
+- **The mode a request chose** (:func:`request_modes`): per request that changed the mode, whether
+  the new mode is a translation mode (its dimensions all among vx, vy, vz). A check of the system
+  more than of its user: which modes the disambiguation picks on the task (the study's orders of
+  the interfaces' modes differ from the registered ones only among the rotation modes, so the
+  registered modes tell a translation mode by its index in either).
 """
 
 from __future__ import annotations
@@ -42,6 +47,7 @@ __all__ = [
     "format_command_path",
     "format_gripper",
     "gripper_course",
+    "request_modes",
     "starts_in_gripper",
     "summarize_command_paths",
     "summarize_gripper_end",
@@ -127,6 +133,24 @@ def gripper_course(trial: LoggedTrial) -> tuple[bool, float, int]:
         r.duration - float(t[entries[-1]]) if entries.size else math.nan,
         len(entries),
     )
+
+
+def request_modes(trial: LoggedTrial) -> list[bool]:
+    """Per request switch of the trial (``LoggedTrial.request_switch_times``), whether the mode it
+    switched to is a translation mode (the trace's ``mode`` just after the switch: the first sample
+    at least one and a half sample periods later, or the last)."""
+    t = np.asarray(trial.trace["t"], dtype=float)
+    if t.size == 0:
+        return []
+    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
+    modes = INTERFACES[trial.record.interface].modes
+    step = 1.5 * float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    out = []
+    for x in np.asarray(trial.request_switch_times, dtype=float):
+        i = min(int(np.searchsorted(t, x + step)), t.size - 1)
+        m = int(mode[i])
+        out.append(0 <= m < len(modes) and all(d < 3 for d in modes[m]))
+    return out
 
 
 def starts_in_gripper(trial: LoggedTrial) -> bool:
