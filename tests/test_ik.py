@@ -165,6 +165,55 @@ def test_near_a_singularity_the_arm_slows_along_the_command(sigma: float) -> Non
         assert sol.alpha < 0.05
 
 
+def _barrier_case(q5: float) -> tuple[np.ndarray, np.ndarray, VelocityIkSolver, object]:
+    """A Jacobian whose smallest singular value is ``|q[5]|`` (joint 5 alone, along the task's
+    last direction): a command along that direction drives the arm into the singularity at
+    ``q[5] = 0`` or out of it."""
+    J0, U, W = _jacobian([1.7, 1.4, 1.1, 0.3, 0.2, 1.0], seed=5)
+
+    def jac(q: np.ndarray) -> np.ndarray:
+        return U @ np.diag([1.7, 1.4, 1.1, 0.3, 0.2, abs(q[5])]) @ W.T
+
+    def sigma_at(q: np.ndarray) -> float:
+        return float(np.linalg.svd(jac(q), compute_uv=False)[-1])
+
+    q = Q_MID.copy()
+    q[5] = q5
+    limits = JointLimits(LIMITS.lower, LIMITS.upper, LIMITS.velocity, np.full(6, np.inf))
+    return jac(q), q, VelocityIkSolver(limits, DT), (U, W, sigma_at)
+
+
+def test_the_singular_barrier_stops_the_arm_at_it_and_lets_it_back_out() -> None:
+    barrier = IkParams().singular_barrier
+    J, q, solver, (U, W, sigma_at) = _barrier_case(0.012)
+    into = 0.1 * U[:, 5] * np.sign(W[5, 5])  # along +W[:, 5] in joint space: q[5] grows ...
+    # ... so command the sign that shrinks q[5] (drives it toward 0, the singularity)
+    deeper = into if (np.linalg.solve(J, into) @ np.eye(6)[5]) < 0 else -into
+    free = solver.solve(J, deeper, q, np.zeros(6))
+    held = solver.solve(J, deeper, q, np.zeros(6), sigma_at=sigma_at)
+    _assert_along(J, held.v, deeper, rel=1e-7)  # shortened along the command, never bent
+    assert sigma_at(q + DT * free.v) < barrier  # without the barrier the step crosses it
+    assert sigma_at(q + DT * held.v) >= barrier - 1e-9 and held.alpha > 0.0  # it ends at it
+    assert held.status == IkStatus.SINGULAR
+    # At the barrier: deeper is refused, the way back is not held back at all.
+    J, q, solver, (U, W, sigma_at) = _barrier_case(barrier)
+    refused = solver.solve(J, deeper, q, np.zeros(6), sigma_at=sigma_at)
+    assert np.allclose(refused.v, 0.0) and refused.status == IkStatus.STOPPED
+    back = solver.solve(J, -deeper, q, np.zeros(6), sigma_at=sigma_at)
+    np.testing.assert_allclose(back.v, solver.solve(J, -deeper, q, np.zeros(6)).v)
+    assert sigma_at(q + DT * back.v) > barrier and back.alpha > 0.0
+    # Far from the singularity (above singular_threshold) nothing is checked.
+    J, q, solver, (_, _, sigma_at) = _barrier_case(0.5)
+    calls = []
+    solver.solve(J, deeper, q, np.zeros(6), sigma_at=lambda x: calls.append(x) or sigma_at(x))
+    assert calls == []
+    # Without a barrier (0) the step is the free one.
+    J, q, _, (_, _, sigma_at) = _barrier_case(0.012)
+    limits = JointLimits(LIMITS.lower, LIMITS.upper, LIMITS.velocity, np.full(6, np.inf))
+    none = VelocityIkSolver(limits, DT, IkParams(singular_barrier=0.0))
+    np.testing.assert_allclose(none.solve(J, deeper, q, np.zeros(6), sigma_at=sigma_at).v, free.v)
+
+
 # ----------------------------------------------------------------------------------------------
 # A joint at its limit: the command stops (or slows), it is not carried on by the other joints.
 # ----------------------------------------------------------------------------------------------
@@ -334,6 +383,8 @@ def test_bad_limits(kwargs: dict, match: str) -> None:
         ({"nominal_gain": float("nan")}, "IkParams.nominal_gain"),
         ({"limited_alpha": 1.5}, "IkParams.limited_alpha"),
         ({"stopped_alpha": 0.99}, "IkParams.stopped_alpha"),
+        ({"singular_barrier": 0.05}, "IkParams.singular_barrier"),
+        ({"singular_barrier": -1e-3}, "IkParams.singular_barrier"),
     ],
 )
 def test_bad_params(kwargs: dict, match: str) -> None:

@@ -228,8 +228,11 @@ def test_drive_towards_singularity(home: Rig) -> None:
 def test_drive_into_joint_limit() -> None:
     """Command the Cartesian velocity that closes the elbow (joint 3) until it reaches its limit.
 
-    Joint 3 brakes onto its limit and the arm stops there, status saying so: the other joints do
-    not carry on in some other direction (the old IK did, 36 degrees off the command).
+    Joint 3 brakes toward its limit and the arm stops, status saying so: the other joints do not
+    carry on in some other direction (the old IK did, 36 degrees off the command). The arm is
+    near a singularity there too (the smallest singular value about 0.003 at the limit, 0.01 some
+    0.08 rad before it): it stops at the singular barrier (``IkParams.singular_barrier``), short of
+    the limit, or on it.
     """
     start = np.array(MICO_HOME_Q)
     start[2] = math.radians(109.0) + 0.2  # 0.2 rad above the lower limit of joint 3 (DH 109 deg)
@@ -246,7 +249,7 @@ def test_drive_into_joint_limit() -> None:
         x = rig.out("arm_joint_state")
         assert np.all(np.isfinite(x))
         assert np.all(x[:6] >= lo - 1e-3) and np.all(x[:6] <= hi + 1e-3), x[:6] - lo
-        if x[2] - lo[2] < 0.01:  # joint 3 sits at its lower limit
+        if x[2] - lo[2] < 0.1:  # joint 3 sits at (or at the singular barrier before) its lower limit
             at_limit.append(rig.status())
     assert np.linalg.norm(rig.out("ee_velocity")[:3]) < 0.005  # stopped there
     assert len(at_limit) >= 5, at_limit

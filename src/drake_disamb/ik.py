@@ -51,6 +51,12 @@ How a step is chosen
    inside the position and velocity bounds that is nearest to the previous velocity (weighted by
    the acceleration limits): the set point changes direction at once instead of curving through
    directions nobody commanded. Position and velocity limits always hold.
+4. **A singular barrier.** Below ``IkParams.singular_threshold``, with the smallest singular value
+   at the step's end known (``sigma_at``), a step that would take it below
+   ``IkParams.singular_barrier`` is shortened along the command to end at the barrier, and a step
+   deeper from the barrier is refused (``STOPPED``); a step that raises it is not held back. The
+   slowdown of step 1 alone lets a long push creep ever deeper, until every command that needs
+   the singular direction, the way back included, is slowed to nothing.
 
 Why not Drake's ``DoDifferentialInverseKinematics``
 ---------------------------------------------------
@@ -64,7 +70,8 @@ above needs behaviour that program does not have:
 - it **brakes** towards a joint's position limit at the acceleration limit; Drake's program only
   keeps the next step inside the limit, so a joint arrives at full speed and stops in one step,
   a jolt whose tracking transient moves the physical end effector off the command;
-- it **slows the joints near a singularity** (the speed factor above), not only the end effector;
+- it **slows the joints near a singularity** (the speed factor above), not only the end effector,
+  and keeps the arm out of the singularity's depth (the barrier);
 - it keeps the **direction when the acceleration bounds cannot be met** (a sudden turn while
   moving fast): Drake's program is then infeasible and returns no step at all;
 - it applies **task-space bounds** (the station's floor above the table) along the same line;
@@ -76,6 +83,7 @@ above needs behaviour that program does not have:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -129,6 +137,13 @@ class IkParams:
             pose has a smallest singular value of about 0.07, above the default.
         singular_speed_floor: Smallest fraction of the joint speed limits near a singularity, so
             that commands leading out of it still move the arm.
+        singular_barrier: Smallest singular value a step may bring the arm to (at most
+            ``singular_threshold``; 0 for none). A step that would lower ``sigma_min`` below it is
+            shortened along the command to end there, and refused once the arm is there: deep in a
+            singularity every command that needs the singular direction is slowed to nothing, the
+            way back included (a trap). Commands that raise ``sigma_min`` are never held back.
+            Needs the smallest singular value at the step's end (``VelocityIkSolver.solve``'s
+            ``sigma_at``); without it there is no barrier.
         null_threshold: Singular value at or below which a joint direction counts as the task's
             null space (same units): the command is never sent along it, and the posture pull
             acts only there. It bounds the end-effector speed the pull can cause
@@ -140,6 +155,7 @@ class IkParams:
 
     singular_threshold: float = 0.025
     singular_speed_floor: float = 0.1
+    singular_barrier: float = 0.01
     null_threshold: float = 1e-4
     nominal_gain: float = 0.5
     limited_alpha: float = 0.95
@@ -154,6 +170,12 @@ class IkParams:
             raise ValueError(
                 "IkParams.singular_speed_floor: expected a number in (0, 1], "
                 f"got {self.singular_speed_floor!r}"
+            )
+        b = self.singular_barrier
+        if not (isinstance(b, int | float) and not isinstance(b, bool) and 0 <= b <= self.singular_threshold):
+            raise ValueError(
+                "IkParams.singular_barrier: expected a number in [0, singular_threshold = "
+                f"{self.singular_threshold!r}], got {b!r}"
             )
         if not self.null_threshold <= 1e-2:
             raise ValueError(
@@ -281,8 +303,13 @@ class VelocityIkSolver:
         v_prev: NDArray[np.float64],
         task_rows: NDArray[np.float64] | None = None,
         task_lower: NDArray[np.float64] | None = None,
+        sigma_at: Callable[[NDArray[np.float64]], float] | None = None,
     ) -> IkSolution:
         """One step: ``J`` (m, n), ``V`` (m,), ``q`` and ``v_prev`` (n,), all finite (unchecked).
+
+        ``sigma_at``, optional, gives the smallest singular value of the Jacobian at a joint
+        position: near a singularity the step is checked against ``IkParams.singular_barrier`` at
+        its end (called at most twice per step, and only below ``singular_threshold``).
 
         ``task_rows`` (k, m) and ``task_lower`` (k,), optional, are workspace bounds on the
         end-effector twist: ``task_rows @ (J v) >= task_lower`` (e.g. a floor: row i gives the
@@ -308,11 +335,39 @@ class VelocityIkSolver:
             v = self._fit_pull(np.zeros(n), v_null, q, v_prev)
             return self._solution(J, d, scale, v, sigma_min, (), factor)
         t, limiting = self._speed_along(v_dir, q, v_prev, min(scale, t_cap), factor)
+        if sigma_at is not None and sigma_min < params.singular_threshold and t > 0.0:
+            t = self._barrier(t, v_dir, q, sigma_min, sigma_at)
         v = self._fit_pull(t * v_dir, v_null, q, v_prev)
         sol = self._solution(J, d, scale, v, sigma_min, limiting, factor)
         if t_cap < scale and sol.status != IkStatus.OK and t >= t_cap * (1 - 1e-9):
             return IkSolution(sol.v, IkStatus.WORKSPACE, sol.alpha, sol.error, sol.sigma_min, ())
         return sol
+
+    def _barrier(
+        self,
+        t: float,
+        v_dir: NDArray[np.float64],
+        q: NDArray[np.float64],
+        sigma_min: float,
+        sigma_at: Callable[[NDArray[np.float64]], float],
+    ) -> float:
+        """The speed ``t`` along ``v_dir`` shortened so that the step does not take the smallest
+        singular value below ``singular_barrier`` (``IkParams.singular_barrier``): a step that
+        raises it, or stays above the barrier, is kept; one that would cross it ends at it (to
+        first order, checked once more); one that goes deeper from the barrier or below it is
+        refused (``t = 0``)."""
+        barrier = self.params.singular_barrier
+        if barrier <= 0.0:
+            return t
+        after = float(sigma_at(q + (t * self.dt) * v_dir))
+        if after >= barrier or after >= sigma_min:
+            return t
+        if sigma_min <= barrier:
+            return 0.0
+        t *= (sigma_min - barrier) / (sigma_min - after)
+        if float(sigma_at(q + (t * self.dt) * v_dir)) < barrier:
+            return 0.0
+        return t
 
     def _speed_along(
         self,

@@ -225,7 +225,18 @@ class DifferentialIKIntegrator(LeafSystem):
                 rows[:, 3] = r[:, 1]
                 rows[:, 4] = -r[:, 0]
                 lower = -np.maximum(height[near], 0.0) / self._floor_time_constant
-        solution = self._ik.solve(J[[3, 4, 5, 0, 1, 2]], V, q, v_prev, rows, lower)  # paper order [v; w]
+
+        def sigma_at(q_next: NDArray[np.float64]) -> float:
+            # The Jacobian's smallest singular value at the step's end (the singular barrier).
+            q_full[self._q_idx] = q_next
+            plant.SetPositions(ctx, q_full)
+            J_next = plant.CalcJacobianSpatialVelocity(
+                ctx, JacobianWrtVariable.kV, self._frame_E, np.zeros(3), self._world, self._world
+            )[:, self._v_idx]
+            return float(np.linalg.svd(J_next, compute_uv=False)[-1])
+
+        # paper order [v; w]
+        solution = self._ik.solve(J[[3, 4, 5, 0, 1, 2]], V, q, v_prev, rows, lower, sigma_at)
         return solution.v, solution.status
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
