@@ -195,6 +195,22 @@ def test_the_mode_each_request_chose_is_told_translation_or_rotation() -> None:
     assert "joystick 0.50 (n=2)" in line
 
 
+def test_reversals_count_the_command_turning_back_within_a_dwell() -> None:
+    # One dwell (no switch): +x from 0.5 to 1.5 s, a tiny -x at 1.7 s (under a tenth of the
+    # largest: the stick's dead zone, not counted), then -x from 2.0 to 2.5 s: one reversal; a turn
+    # of 90 degrees (to +y) is not one.
+    trial = _trial("R1", "joystick", "reaching", 0, [], 4.0)
+    t, u = trial.trace["t"], trial.trace["u_h"]
+    u[np.isclose(t, 1.7), 0] = -0.001
+    u[(t > 2.0) & (t < 2.5), 0] = -0.05
+    u[(t > 2.5) & (t < 3.0), 1] = 0.05
+    est = estimate_behaviour([trial])
+    assert est.reversals_per_dwell["joystick"] == (1.0, 1)
+    assert est.reversals_per_dwell["head_array"][1] == 0
+    line = next(x for x in format_estimates(est).splitlines() if x.startswith("reversals per dwell"))
+    assert "joystick 1.00 (n=1)" in line
+
+
 def test_the_study_systems_requests_chose_translation_modes() -> None:
     # What the people's logs show of the system (the preset's agreement term follows it).
     if not DATA.is_dir():

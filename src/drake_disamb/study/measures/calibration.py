@@ -41,6 +41,11 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   longer gaps are pauses). Per interface and per subject (pooled over paradigms), and as the
   probability ``c / (1 + c)`` of correcting at once after a movement that ended short (``c``
   corrections per dwell, a geometric count).
+- **Reversals per dwell**: in the same dwells, how often the command turns back: consecutive
+  commanded samples (above a tenth of the dwell's largest command, so that the stick's passage
+  through its dead zone is not counted) whose directions point more than 90 degrees apart (a
+  negative dot product), per interface. An overshoot and its correction, a wrong direction put
+  right: what makes a commanded path longer than the way to the goal.
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
   the chosen mode) or a mode switch (cycled away); and how many user mode switches follow each
   request (merged) before the next one or the end of the trial, per interface (mean and median).
@@ -157,6 +162,8 @@ class BehaviourEstimates:
     full_round_share: float
     corrections_per_dwell: dict[str, float]
     corrections_per_dwell_by_subject: dict[str, float]
+    reversals_per_dwell: dict[str, tuple[float, int]]
+    """Per interface, the command's reversals per dwell (mean) and the number of dwells."""
     request_share: dict[str, float]
     request_share_by_subject: dict[str, float]
     early_request_share: float
@@ -186,6 +193,16 @@ class BehaviourEstimates:
     """Per interface, the share of trials starting in the gripper mode and the number of trials."""
     command_path: dict[str, dict[str, CommandPath]]
     """Per interface and task, the commanded path (:class:`CommandPath`)."""
+
+
+def _reversals(u: NDArray[np.float64]) -> int:
+    """The reversals of one dwell's ``(6, M)`` command (module docstring): consecutive samples
+    above a tenth of the largest whose dot product is negative."""
+    norms = np.linalg.norm(u, axis=0)
+    if norms.size == 0 or norms.max() == 0.0:
+        return 0
+    kept = u[:, norms > 0.1 * norms.max()]
+    return int(np.count_nonzero(np.einsum("ij,ij->j", kept[:, :-1], kept[:, 1:]) < 0.0))
 
 
 def _user_vel(trial: LoggedTrial) -> tuple[NDArray[np.float64], float]:
@@ -228,6 +245,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     chosen_translation: dict[str, list[bool]] = {k: [] for k in kinds}  # per request switch
     corrections: dict[str, list[int]] = {k: [] for k in kinds}
     corrections_subject: dict[str, list[int]] = {}
+    reversals: dict[str, list[int]] = {k: [] for k in kinds}
     commanding_total = time_total = 0.0
     commanding_by_interface = dict.fromkeys(kinds, 0.0)
     # interface -> [confident s, not confident s, changes while confident, changes while not]
@@ -285,6 +303,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
                 n = sum((g1 - g0) * dt < MIN_PAUSE for g0, g1 in gaps)
                 corrections[r.interface].append(n)
                 corrections_subject.setdefault(s, []).append(n)
+                reversals[r.interface].append(_reversals(user_vel[:, int(a / dt) : int(b / dt)]))
         # Settle: last switch of a change -> next command, nothing else first.
         for x in sw:
             later_cmd = times_cmd[times_cmd > x]
@@ -409,6 +428,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         },
         full_round_share=float(np.mean(rounds)) if rounds else math.nan,
         corrections_per_dwell={k: float(np.mean(v)) if v else math.nan for k, v in corrections.items()},
+        reversals_per_dwell={k: (float(np.mean(v)) if v else math.nan, len(v)) for k, v in reversals.items()},
         corrections_per_dwell_by_subject={
             s: float(np.mean(v)) for s, v in sorted(corrections_subject.items())
         },
@@ -601,6 +621,9 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"{'corrections per dwell':<28} joystick {est.corrections_per_dwell['joystick']:.2f}, head array "
         f"{est.corrections_per_dwell['head_array']:.2f}; per subject: {corr} (as a probability "
         f"c / (1 + c): {probs})",
+        f"{'reversals per dwell':<28} "
+        + ", ".join(f"{k.replace('_', ' ')} {m:.2f} (n={n})" for k, (m, n) in est.reversals_per_dwell.items())
+        + " (the command turning back within a mode dwell)",
         f"{'requests per trial':<28} joystick {est.requests_per_trial['joystick']:.2f}, head array "
         f"{est.requests_per_trial['head_array']:.2f} (Disambiguation trials, merged)",
         f"{'request share of changes':<28} joystick {est.request_share['joystick']:.2f}, head array "
