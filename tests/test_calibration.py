@@ -20,6 +20,11 @@ DT = 0.05
 """The hand-made traces' sample period (s): the logs' mode sampling."""
 
 
+def _line(est, name: str) -> str:
+    """The line of ``format_estimates(est)`` that starts with ``name``."""
+    return next(x for x in format_estimates(est).splitlines() if x.startswith(name))
+
+
 def _trial(
     trial_id: str,
     interface: str,
@@ -169,7 +174,7 @@ def test_switches_after_each_request_count_the_users_switches_until_the_next_req
     est = estimate_behaviour([LoggedTrial(record, trial.trace, request_switch_times=np.zeros(0))])
     assert est.switches_after_request["joystick"] == (2.0, 2.0, 2)  # 3 after the first, 1 after the second
     assert est.switches_after_request["head_array"][2] == 0
-    line = next(x for x in format_estimates(est).splitlines() if x.startswith("switches after a request"))
+    line = _line(est, "switches after a request")
     assert "joystick mean 2.00, median 2 (n=2)" in line
 
 
@@ -191,7 +196,7 @@ def test_the_mode_each_request_chose_is_told_translation_or_rotation() -> None:
     est = estimate_behaviour([logged])
     assert est.request_translation["joystick"] == (0.5, 2)
     assert est.request_translation["head_array"][1] == 0
-    line = next(x for x in format_estimates(est).splitlines() if x.startswith("request chose translation"))
+    line = _line(est, "request chose translation")
     assert "joystick 0.50 (n=2)" in line
 
 
@@ -207,7 +212,7 @@ def test_reversals_count_the_command_turning_back_within_a_dwell() -> None:
     est = estimate_behaviour([trial])
     assert est.reversals_per_dwell["joystick"] == (1.0, 1)
     assert est.reversals_per_dwell["head_array"][1] == 0
-    line = next(x for x in format_estimates(est).splitlines() if x.startswith("reversals per dwell"))
+    line = _line(est, "reversals per dwell")
     assert "joystick 1.00 (n=1)" in line
 
 

@@ -201,15 +201,26 @@ class DifferentialIKIntegrator(LeafSystem):
             discrete_state.get_mutable_vector(self._status).SetAtIndex(0, float(IkStatus.OK))
         return EventStatus.Succeeded()
 
-    def _solve(self, q: NDArray[np.float64], v_prev: NDArray[np.float64], V: NDArray[np.float64]):
-        """Joint velocities for the paper-order command V at q, and the status code."""
+    def _jacobian_at(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The arm's end-effector Jacobian (Drake's order ``[w; v]``) at ``q``; leaves the control
+        plant's context at ``q``."""
         plant, ctx = self._plant, self._context
         q_full = plant.GetPositions(ctx)
         q_full[self._q_idx] = q
         plant.SetPositions(ctx, q_full)
-        J = plant.CalcJacobianSpatialVelocity(
+        return plant.CalcJacobianSpatialVelocity(
             ctx, JacobianWrtVariable.kV, self._frame_E, np.zeros(3), self._world, self._world
         )[:, self._v_idx]
+
+    def _sigma_min_at(self, q: NDArray[np.float64]) -> float:
+        """The Jacobian's smallest singular value at ``q`` (the IK's singular barrier asks for it at
+        a step's end; the row order does not change it)."""
+        return float(np.linalg.svd(self._jacobian_at(q), compute_uv=False)[-1])
+
+    def _solve(self, q: NDArray[np.float64], v_prev: NDArray[np.float64], V: NDArray[np.float64]):
+        """Joint velocities for the paper-order command V at q, and the status code."""
+        J = self._jacobian_at(q)
+        ctx = self._context
         rows = lower = None
         if self._floor is not None:
             X_WE = self._frame_E.CalcPoseInWorld(ctx)
@@ -225,18 +236,8 @@ class DifferentialIKIntegrator(LeafSystem):
                 rows[:, 3] = r[:, 1]
                 rows[:, 4] = -r[:, 0]
                 lower = -np.maximum(height[near], 0.0) / self._floor_time_constant
-
-        def sigma_at(q_next: NDArray[np.float64]) -> float:
-            # The Jacobian's smallest singular value at the step's end (the singular barrier).
-            q_full[self._q_idx] = q_next
-            plant.SetPositions(ctx, q_full)
-            J_next = plant.CalcJacobianSpatialVelocity(
-                ctx, JacobianWrtVariable.kV, self._frame_E, np.zeros(3), self._world, self._world
-            )[:, self._v_idx]
-            return float(np.linalg.svd(J_next, compute_uv=False)[-1])
-
-        # paper order [v; w]
-        solution = self._ik.solve(J[[3, 4, 5, 0, 1, 2]], V, q, v_prev, rows, lower, sigma_at)
+        J_paper = J[[3, 4, 5, 0, 1, 2]]  # paper order [v; w]
+        solution = self._ik.solve(J_paper, V, q, v_prev, rows, lower, self._sigma_min_at)
         return solution.v, solution.status
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:

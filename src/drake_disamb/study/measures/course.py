@@ -35,6 +35,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from drake_disamb.core.interfaces import INTERFACES, gripper_mode
 from drake_disamb.study.data.folder import LoggedTrial
@@ -116,14 +117,19 @@ def summarize_command_paths(rows: Sequence[tuple[float, float, float]]) -> Comma
     )
 
 
+def _mode_trace(trial: LoggedTrial) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The trace's sample times ``t`` (s) and ``mode`` (indices into the interface's modes)."""
+    t = np.asarray(trial.trace["t"], dtype=float)
+    return t, np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
+
+
 def gripper_course(trial: LoggedTrial) -> tuple[bool, float, int]:
     """Whether the trial ends in the gripper mode, the seconds from its last change into the
     gripper mode to the end (NaN without one) and its number of changes into it (trace ``mode``:
     indices into the interface's modes, on ``t``)."""
     r = trial.record
     gripper = gripper_mode(r.interface)
-    t = np.asarray(trial.trace["t"], dtype=float)
-    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
+    t, mode = _mode_trace(trial)
     inside = t <= r.duration + 1e-9
     last = mode[inside][-1] if np.any(inside) else mode[0]
     changed = np.flatnonzero(np.diff(mode) != 0) + 1
@@ -139,10 +145,9 @@ def request_modes(trial: LoggedTrial) -> list[bool]:
     """Per request switch of the trial (``LoggedTrial.request_switch_times``), whether the mode it
     switched to is a translation mode (the trace's ``mode`` just after the switch: the first sample
     at least one and a half sample periods later, or the last)."""
-    t = np.asarray(trial.trace["t"], dtype=float)
+    t, mode = _mode_trace(trial)
     if t.size == 0:
         return []
-    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
     modes = INTERFACES[trial.record.interface].modes
     step = 1.5 * float(np.median(np.diff(t))) if t.size > 1 else 0.0
     out = []
