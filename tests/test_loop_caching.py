@@ -238,3 +238,38 @@ def test_full_loop_blends_and_projects_about_once_per_tick(monkeypatch: pytest.M
     result = run_trial(build_shared_control_diagram(scenario), progress=False, stop_at_success=False)
     ticks = round(result.time / scenario.control_period)
     assert counts["step"] <= 1.15 * ticks and counts["belief"] <= 1.15 * ticks, (counts, ticks)
+
+
+def test_belief_over_the_task_computes_its_drive_once_per_tick(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The pouring task with one belief over all its goals (``inference.goal_set: task``, the
+    study system's): the goal set is a fixed source whose output depends on nothing, so the belief's
+    drive and the autonomy's commands are computed once per tick (with Drake's ConstantVectorSource,
+    whose output depends on time, they were computed twice)."""
+    import dataclasses
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.systems import autonomy, inference
+    from drake_disamb.trial import run_trial
+
+    counts = {"drive": 0, "u_a": 0}
+
+    def counting(cls: type, name: str, key: str) -> None:
+        method = getattr(cls, name)
+
+        def counted(self, *args):  # type: ignore[no-untyped-def]
+            counts[key] += 1
+            return method(self, *args)
+
+        monkeypatch.setattr(cls, name, counted)
+
+    counting(inference.FieldTheoreticIntentInference, "_calc_drive", "drive")
+    counting(autonomy.PotentialFieldAutonomy, "_calc_u_a", "u_a")
+    scenario = load_scenario("pouring")
+    scenario = dataclasses.replace(
+        scenario, duration=3.0, inference=dataclasses.replace(scenario.inference, goal_set="task")
+    )
+    assert scenario.n_stages > 1
+    result = run_trial(build_shared_control_diagram(scenario), progress=False, stop_at_success=False)
+    ticks = round(result.time / scenario.control_period)
+    assert counts["drive"] <= 1.15 * ticks and counts["u_a"] <= 1.15 * ticks, (counts, ticks)

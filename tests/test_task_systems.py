@@ -10,7 +10,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from drake_disamb.config import load_scenario
 from drake_disamb.core.geometry import quat_from_rotvec, quat_multiply
-from drake_disamb.systems.task import TaskManager, pose_errors
+from drake_disamb.systems.task import FixedGoalSet, TaskManager, pose_errors
 
 STAGE_A = np.array([[0.3, -0.5, 0.1, 1, 0, 0, 0], [-0.3, -0.5, 0.1, 1, 0, 0, 0]], dtype=float)
 STAGE_B = np.array([[0.2, -0.2, 0.1, 0, 1, 0, 0], [-0.2, -0.2, 0.1, 0, 1, 0, 0]], dtype=float)
@@ -204,3 +204,33 @@ def test_a_named_target_ends_its_stage_only_there() -> None:
 def test_targets_are_checked(targets: list, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         TaskManager([STAGE_A, STAGE_B], targets=targets)
+
+
+def test_fixed_goal_set_publishes_its_goals_and_depends_on_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
+    goals = np.array([[0.3, -0.4, 0.1, 1.0, 0.0, 0.0, 0.0], [-0.2, -0.5, 0.2, 0.0, 1.0, 0.0, 0.0]])
+    calls = [0]
+    calc = FixedGoalSet._calc
+
+    def counted(*args):  # type: ignore[no-untyped-def]
+        calls[0] += 1
+        return calc(*args)
+
+    monkeypatch.setattr(FixedGoalSet, "_calc", counted)
+    source = FixedGoalSet(goals)
+    ctx = source.CreateDefaultContext()
+    port = source.GetOutputPort("goal_poses")
+    np.testing.assert_array_equal(port.Eval(ctx), goals.ravel())
+    ctx.SetTime(3.0)  # time is no prerequisite (Drake's ConstantVectorSource's output has it)
+    port.Eval(ctx)
+    assert calls[0] == 1
+    goals[0, 0] = 9.0  # the system holds a copy
+    assert port.Eval(ctx)[0] == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize(
+    ("poses", "message"),
+    [(np.zeros((0, 7)), r"shape \(n >= 1, 7\)"), (np.zeros(7), "shape"), ([[np.nan] * 7], "finite")],
+)
+def test_fixed_goal_set_rejects_bad_poses(poses: object, message: str) -> None:
+    with pytest.raises(ValueError, match=f"goal_poses: .*{message}"):
+        FixedGoalSet(poses)  # type: ignore[arg-type]

@@ -40,14 +40,14 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder, System
-from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, VectorLogSink, ZeroOrderHold
+from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
 from drake_disamb.systems.interfaces import make_interface
-from drake_disamb.systems.task import TaskManager
+from drake_disamb.systems.task import FixedGoalSet, TaskManager
 from drake_disamb.systems.user import SimulatedUser
 
 LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
@@ -218,8 +218,7 @@ def build_shared_control_diagram(
     ee_pose = sampler.get_output_port()
     goal_poses = task.GetOutputPort("goal_poses")
     if scenario.inference.goal_set == "task" and scenario.n_stages > 1:  # one belief over every goal
-        goal_source = builder.AddSystem(ConstantVectorSource(scenario.belief_goal_poses(0).ravel()))
-        goal_source.set_name("task_goal_poses")
+        goal_source = builder.AddNamedSystem("task_goal_poses", FixedGoalSet(scenario.belief_goal_poses(0)))
         goal_poses = goal_source.get_output_port()
     builder.Connect(ee_pose, task.GetInputPort("ee_pose"))
     builder.Connect(station.diagram.GetOutputPort("gripper_opening"), task.GetInputPort("gripper_opening"))

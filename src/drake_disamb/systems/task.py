@@ -255,3 +255,41 @@ class TaskManager(LeafSystem):
             "reached_goals": np.array(x[_HEADER : _HEADER + S]),
             "stage_end_times": np.array(x[_HEADER + S :]),
         }
+
+
+class FixedGoalSet(LeafSystem):
+    """Publishes one goal set that never changes: the whole task's goals, for a belief over every
+    goal of a multi-step task (a scenario's ``inference.goal_set: task``).
+
+    .. pydrake_system::
+
+        name: FixedGoalSet
+        output_ports:
+        - goal_poses
+
+    Output ports:
+        goal_poses (n * 7): the goal poses, each ``[x, y, z, qw, qx, qy, qz]`` (m, unit
+            quaternion), goal after goal.
+
+    The output depends on nothing (``nothing_ticket``). Drake's ``ConstantVectorSource`` would do
+    the same job, but its output depends on every source of its context, time included, so what
+    is computed from it (the belief's drive, the autonomy's commands) was computed again whenever
+    the time moved: twice per control tick.
+    """
+
+    def __init__(self, goal_poses: ArrayLike) -> None:
+        super().__init__()
+        poses = np.array(goal_poses, dtype=float)
+        if poses.ndim != 2 or poses.shape[1] != POSE_SIZE or poses.shape[0] < 1:
+            raise ValueError(f"goal_poses: expected shape (n >= 1, 7), got {poses.shape}")
+        if not np.all(np.isfinite(poses)):
+            raise ValueError(f"goal_poses: expected finite numbers, got {poses.tolist()!r}")
+        flat = poses.ravel()
+        flat.setflags(write=False)
+        self._value = flat
+        self.DeclareVectorOutputPort(
+            "goal_poses", flat.size, self._calc, prerequisites_of_calc={self.nothing_ticket()}
+        )
+
+    def _calc(self, context: Context, output) -> None:  # noqa: ANN001
+        output.SetFromVector(self._value)
