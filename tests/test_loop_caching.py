@@ -273,3 +273,32 @@ def test_belief_over_the_task_computes_its_drive_once_per_tick(monkeypatch: pyte
     result = run_trial(build_shared_control_diagram(scenario), progress=False, stop_at_success=False)
     ticks = round(result.time / scenario.control_period)
     assert counts["drive"] <= 1.15 * ticks and counts["u_a"] <= 1.15 * ticks, (counts, ticks)
+
+
+def test_station_at_rest_writes_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With no command the IK's update returns before building a set point (most ticks of a trial
+    are so) and the set point stays where it is; a command is still followed at once."""
+    from drake_disamb.station import build_station
+    from drake_disamb.station import systems as station_systems
+
+    writes = _counting(monkeypatch, station_systems, "_set_point")
+    station = build_station()
+    diagram = station.diagram
+    ctx = diagram.CreateDefaultContext()
+    command = diagram.GetInputPort("ee_velocity_command")
+    command.FixValue(ctx, np.zeros(6))
+    gripper = diagram.GetInputPort("gripper_command")
+    gripper.FixValue(ctx, [0.0])
+    simulator = Simulator(diagram, ctx)
+    simulator.Initialize()
+    opening = diagram.GetOutputPort("gripper_opening").Eval(ctx)[0]
+    simulator.AdvanceTo(1.0)  # 100 ticks
+    assert writes[0] <= 2, writes
+    assert diagram.GetOutputPort("gripper_opening").Eval(ctx)[0] == pytest.approx(opening, abs=1e-4)
+    before = diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
+    command.FixValue(ctx, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0])
+    gripper.FixValue(ctx, [0.02])
+    simulator.AdvanceTo(1.5)
+    assert writes[0] >= 50
+    assert diagram.GetOutputPort("ee_pose").Eval(ctx)[0] > before[0] + 0.01
+    assert diagram.GetOutputPort("gripper_opening").Eval(ctx)[0] > opening + 0.005

@@ -50,6 +50,10 @@ The :class:`~drake_disamb.ik.IkStatus` code of the last step is a second group o
 IK_Q_D = slice(0, 6)
 IK_V_D = slice(6, 12)
 
+_DID_NOTHING = EventStatus.DidNothing()
+"""Returned by an update that writes nothing (one instance, as ``drake_disamb.systems._status``'s:
+the station sits below the shared-control systems and does not import them)."""
+
 GripperIntegratorState = namedview("GripperIntegratorState", ["opening", "speed"])
 """Layout of :class:`GripperOpeningIntegrator`'s discrete state: desired opening (m) and its rate (m/s)."""
 
@@ -262,6 +266,14 @@ class DifferentialIKIntegrator(LeafSystem):
                 status = IkStatus.RESEEDED
         elif not V.any():
             v = np.zeros(6)
+            if (
+                valid  # (an invalid command's count is written to the state: not this path)
+                and not v_prev.any()
+                and context.get_discrete_state(self._status).GetAtIndex(0) == float(status)
+            ):
+                # At rest with no command (most ticks of a trial): the set point stays where it is
+                # (it is within the limits); the update returns before building and writing it.
+                return _DID_NOTHING
         else:
             v, status = self._solve(q, v_prev, V)
         # np.clip without its Python-level dispatch (the same values, NaN propagating alike).
@@ -336,8 +348,11 @@ class GripperOpeningIntegrator(LeafSystem):
         return EventStatus.Succeeded()
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        opening = float(GripperIntegratorState(context.get_discrete_state(self._state).get_value()).opening)
+        state = GripperIntegratorState(context.get_discrete_state(self._state).get_value())
         cmd = self._command_port.Eval(context)[0].item()
+        if cmd == 0.0 and state.speed == 0.0:
+            return _DID_NOTHING  # at rest and not commanded (most ticks): nothing changes
+        opening = float(state.opening)
         if not math.isfinite(cmd):
             cmd = 0.0
             self._sanitized.record(context, discrete_state, "non-finite gripper_command treated as zero")
