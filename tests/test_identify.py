@@ -143,6 +143,22 @@ def test_alpha_law_recovers_thresholds_rounding_and_requests() -> None:
     assert not alpha_matches(no_request, law).all()
 
 
+def test_request_timing_counts_the_belief_changes_in_the_windows() -> None:
+    from drake_disamb.study.measures.identify import request_timing
+
+    trial = _alpha_trial(5, 0.25, 0.30, 0, (2.0, 4.6))  # a random belief: it changes at every row
+    timing = request_timing([trial])
+    assert timing.n == 1 and timing.median == pytest.approx(2.6)
+    assert timing.belief_change_share == pytest.approx(1.0)
+    t = trial.trace["t"]
+    held = dict(trial.trace)
+    held["belief"] = trial.trace["belief"].copy()
+    inside = np.nonzero((t >= 2.0) & (t < 4.6))[0]
+    held["belief"][inside] = held["belief"][inside[0]]  # held from the press to the switch
+    timing = request_timing([LoggedTrial(trial.record, held, request_switch_times=np.array([4.6]))])
+    assert timing.belief_change_share == 0.0 and timing.belief_change_share_outside > 0.9
+
+
 def test_solve_positions_from_attractors_and_a_repeller() -> None:
     rng = np.random.default_rng(3)
     goals = np.array([[0.3, -0.5, 0.1], [-0.1, -0.6, 0.1], [0.1, -0.5, 0.4], [-0.3, -0.4, 0.2]])
@@ -377,6 +393,10 @@ def test_study_preset_holds_the_identified_values() -> None:
             (lo - 1.0 / n, hi - 1.0 / n)
         )
     assert blending["assist_without_input"] is (ident.known_path.blend_share_idle > 0.9)
+    # The loop paused while a request was computed: the belief held, alpha and the command 0.
+    held = ident.requests.belief_change_share < 0.01 and ident.requests.zero_share > 0.99
+    assert ident.requests.belief_change_share_outside > 0.3  # it updates elsewhere
+    assert preset["disambiguation"]["hold_while_computing"] is held
     # The mode order: every mode the logs resolve is where the preset puts it (the rest is ours).
     for kind, order in ident.to_json()["mode_order"].items():
         ours = preset.get("interface_mode_order", {}).get(kind)

@@ -299,3 +299,32 @@ def test_simulated_published_trial_agrees_with_the_euler_replay() -> None:
     agreement = np.mean(np.argmax(beliefs, axis=1) == np.argmax(reference, axis=1))
     assert agreement >= 0.99
     assert np.abs(beliefs - reference).max() < 0.01
+
+
+@pytest.mark.parametrize("kind", list(SYSTEMS))
+def test_hold_input_holds_the_belief_and_releasing_it_resumes(kind: str) -> None:
+    """``hold`` above 0.5 (the study's system while it computes a request): the belief stays where
+    it is whatever the command and the motion; below it, the method updates again; unconnected:
+    never held."""
+    n = 3
+    goals = np.array([[0.3, 0.0, 0.1], [-0.3, 0.0, 0.1], [0.0, 0.3, 0.1]])
+    u = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.0])  # toward goal 0
+    no_u_a = np.zeros((n, 6))
+    system = SYSTEMS[kind](n)
+    assert system.GetInputPort("hold").size() == 1
+    simulator = Simulator(system)
+    context = simulator.get_mutable_context()
+    fix_inputs(system, context, u, np.zeros(3), goals, no_u_a)
+    system.GetInputPort("hold").FixValue(context, [0.0])
+    simulator.Initialize()
+    fix_inputs(system, context, u, [0.02, 0.0, 0.0], goals, no_u_a)  # it moved toward goal 0
+    simulator.AdvanceTo(0.035)
+    moving = outputs(system, context)[0].copy()
+    assert moving[0] > moving[1] + 1e-9
+    system.GetInputPort("hold").FixValue(context, [1.0])
+    fix_inputs(system, context, -u, [-0.05, 0.0, 0.0], goals, no_u_a)  # now toward goal 1: held
+    simulator.AdvanceTo(0.5)
+    np.testing.assert_array_equal(outputs(system, context)[0], moving)
+    system.GetInputPort("hold").FixValue(context, [0.0])
+    simulator.AdvanceTo(0.6)
+    assert outputs(system, context)[0][1] > moving[1] + 1e-9

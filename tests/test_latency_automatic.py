@@ -248,12 +248,15 @@ class _Interface:
 
 def test_interface_system_switches_latency_after_the_press() -> None:
     d = _Interface(InterfaceConfig(kind="head_array", request_latency=0.04), choice=3.0)
+    assert d.out("disambiguation_pending") == 0
     d.tick(PRESS)  # t = 0
     for _ in range(3):
         d.tick(IDLE)  # 0.01 .. 0.03
         assert d.out("mode") == 0 and d.out("served_count") == 0 and d.out("request_count") == 1
+        assert d.out("disambiguation_pending") == 1  # being computed
     d.tick(IDLE)  # 0.04
     assert d.out("mode") == 3 and d.out("served_count") == 1
+    assert d.out("disambiguation_pending") == 0
     assert d.log() == [(0.0, "disambiguation_request"), (0.04, "disambiguation_switch")]
 
 
@@ -418,3 +421,37 @@ def test_request_latency_in_a_trial() -> None:
     assert r.request_times[0] == pytest.approx(0.01)
     assert r.disambiguation_switch_times[0] == pytest.approx(2.01)
     assert r.automatic_switches == 0 and r.automatic_switch_times == []
+
+
+@pytest.mark.parametrize("hold", [True, False])
+def test_hold_while_computing_pauses_the_loop_in_a_diagram(hold: bool) -> None:
+    """With ``disambiguation.hold_while_computing`` the belief is held and the arm is sent nothing
+    from the request press to its switch (the study's system); without it both go on."""
+    import dataclasses
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    s = load_scenario("reaching")
+    s = dataclasses.replace(
+        s,
+        paradigm="disambiguation",
+        duration=2.5,
+        disambiguation=dataclasses.replace(s.disambiguation, request_latency=1.0, hold_while_computing=hold),
+        blending=dataclasses.replace(s.blending, assist_without_input=True),
+    )
+    handles = build_shared_control_diagram(s)
+    result = run_trial(handles, progress=False, stop_at_success=False)
+    presses = [e.time for e in result.events if e.kind == "disambiguation_request"]
+    assert presses, "the simulated user asks at the start"
+    t, belief = result.logs["belief"]
+    _, u = result.logs["u"]
+    window = (t > presses[0] + 0.05) & (t < presses[0] + 0.95)
+    assert window.sum() > 50
+    still = np.ptp(belief[window], axis=0).max()
+    if hold:
+        assert still == 0.0
+        assert not np.any(u[window])
+    else:
+        assert still > 1e-6  # the belief relaxes (or follows the command) meanwhile

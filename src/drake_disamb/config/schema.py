@@ -290,6 +290,11 @@ class DisambiguationSpec:
         request_latency: Seconds (finite, >= 0) from a request press (or an automatic trigger) to
             the mode switch; the mode is the one chosen at the switch time. The paper's system took
             2 to 2.5 s; 0 (default) switches in the press's control tick.
+        hold_while_computing: While a disambiguation is being computed (the ``request_latency``
+            from the press to the switch) the system's loop is paused: the belief is held and the
+            arm is sent nothing (alpha 0). The study's system did so (its logs: the belief
+            unchanged, alpha and the blended command 0 while a request was computed). False
+            (default): the belief and the blending go on meanwhile.
         automatic: The Automatic paradigm's trigger (used only with ``paradigm: automatic``).
         upsilon_normalization: What ``p(t_c) - p(t_b)`` is divided by in the feature
             ``Upsilon``: ``"unit_probe"`` (the paper: the displacement of its unit-speed probe,
@@ -302,6 +307,7 @@ class DisambiguationSpec:
     preset: str = field(default="mico", metadata=_meta(choices=PRESETS))
     method: str = field(default="algorithm1", metadata=_meta(choices=MODE_SELECTION_METHODS))
     request_latency: float = 0.0
+    hold_while_computing: bool = False
     automatic: AutomaticSpec = field(default_factory=AutomaticSpec)
     upsilon_normalization: str | None = field(default=None, metadata=_meta(choices=UPSILON_NORMALIZATIONS))
 

@@ -42,6 +42,7 @@ class SharedControlBlender(LeafSystem):
         - u_h
         - belief
         - u_a
+        - hold
         output_ports:
         - u
         - alpha
@@ -53,6 +54,9 @@ class SharedControlBlender(LeafSystem):
         belief (n): probability of each goal.
         u_a (n * 6): per-goal autonomy commands, goal i in entries ``6 i .. 6 i + 5``, same order
             and frame as ``u_h``.
+        hold (1, optional): while above 0.5 the loop is paused: ``u`` is zero and ``alpha`` 0 (the
+            study's system sent the arm nothing while it computed a disambiguation request: the
+            interface's ``disambiguation_pending``). Unconnected: never paused.
 
     Output ports (``u``, ``alpha``, ``g_star``: direct feedthrough from the inputs only, no state):
         u (6): blended, speed-limited command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world
@@ -113,9 +117,11 @@ class SharedControlBlender(LeafSystem):
         self._u_h_port = self.DeclareVectorInputPort("u_h", 6)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_a_port = self.DeclareVectorInputPort("u_a", 6 * self.n_goals)
+        self._hold_port = self.DeclareVectorInputPort("hold", 1)
         # One blending step per change of the inputs, shared by the three outputs (a cache entry
         # that depends on the inputs alone, not on time or on any state).
-        inputs = {port.ticket() for port in (self._u_h_port, self._belief_port, self._u_a_port)}
+        ports = (self._u_h_port, self._belief_port, self._u_a_port, self._hold_port)
+        inputs = {port.ticket() for port in ports}
         self._memo: tuple[bytes, tuple] | None = None
         self._step = self.DeclareCacheEntry(
             "shared_control step (u, alpha, g_star)",
@@ -170,6 +176,11 @@ class SharedControlBlender(LeafSystem):
 
     def _calc_step(self, context: Context, value: AbstractValue) -> None:
         u_h, p, u_a = self._inputs(context)
+        if self._hold_port.HasValue(context) and self._hold_port.Eval(context)[0] > 0.5:
+            # Paused (the ``hold`` input): nothing reaches the arm. g_star stays the belief's argmax.
+            _, _, g_star, finite = self._compute(np.zeros(6), p, u_a)
+            value.set_value((np.zeros(6), np.zeros(1), np.array([float(g_star)]), finite and all_finite(u_h)))
+            return
         # The step is a pure function of the three inputs: a one-entry memo of the last one keeps
         # it from being recomputed when Drake invalidates inputs whose values did not change (the
         # belief and u_h are rewritten, unchanged, at ticks where any unrestricted update writes).

@@ -13,6 +13,10 @@ Input ports (vector-valued):
 - ``u_a`` (6 n): per-goal autonomy commands ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, W),
   flattened. Only evaluated by the DFT system with the agreement term on; may stay unconnected
   otherwise.
+- ``hold`` (1, optional): while it is above 0.5 the belief is held where it is (the DFT's time
+  derivative is zero, the discrete methods skip their step; a changed goal set still resets it):
+  the study's system did not update its belief while it computed a disambiguation request (the
+  interface's ``disambiguation_pending``). Unconnected: never held.
 
 Output ports (vector-valued, computed from state only: no direct feedthrough):
 
@@ -122,6 +126,7 @@ class _IntentInferenceBase(LeafSystem):
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
         self._u_a = self.DeclareVectorInputPort("u_a", 6 * self._n)
+        self._hold = self.DeclareVectorInputPort("hold", 1)
         self._belief_memo: tuple[bytes, NDArray[np.float64]] | None = None  # see _belief
 
     @property
@@ -161,6 +166,10 @@ class _IntentInferenceBase(LeafSystem):
             return False
         self._sanitized.record(context, discrete_state, message)
         return True
+
+    def _held(self, context: Context) -> bool:
+        """The ``hold`` input is connected and above 0.5: the belief is not updated."""
+        return self._hold.HasValue(context) and self._hold.Eval(context)[0] > 0.5
 
     def _position(self, context: Context) -> NDArray[np.float64]:
         return np.asarray(self._ee_pose.Eval(context), dtype=float)[:3]
@@ -207,6 +216,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         - ee_pose
         - goal_poses
         - u_a
+        - hold
         output_ports:
         - belief
         - g_star
@@ -215,8 +225,9 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     Ports are described in the module docstring: ``u_h`` (6; m/s, rad/s; ``[v; w]`` order),
     ``ee_pose`` (7; m, ``[x, y, z, qw, qx, qy, qz]``), ``goal_poses`` (7 n), ``u_a`` (6 n; only
-    evaluated with ``params.agreement``) in; ``belief`` (n), ``g_star`` (1, 0-based index),
-    ``p_star`` (1), ``sanitized_input_count`` (1; ticks with a non-finite ``u_h``) out.
+    evaluated with ``params.agreement``), ``hold`` (1; optional: above 0.5 the belief is held) in;
+    ``belief`` (n), ``g_star`` (1, 0-based index), ``p_star`` (1), ``sanitized_input_count`` (1;
+    ticks with a non-finite ``u_h``) out.
 
     State: continuous ``p`` (n) with time derivative
     :func:`~drake_disamb.core.inference.dft_mass_conserving_rhs` (the DFT right-hand side
@@ -274,11 +285,12 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # The drive (the part of the right-hand side that does not depend on p) changes only with
         # the inputs, which are held between control ticks: a cache entry computes it once per
         # change instead of at every integrator stage.
-        inputs = [self._u_h, self._ee_pose, self._goal_poses] + ([self._u_a] if params.agreement else [])
+        inputs = [self._u_h, self._ee_pose, self._goal_poses, self._hold]
+        inputs += [self._u_a] if params.agreement else []
         self._drive = self.DeclareCacheEntry(
-            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite, goal_poses",
+            "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite, goal_poses, held",
             ValueProducer(
-                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True, np.zeros(7 * self._n))),
+                allocate=lambda: AbstractValue.Make((np.zeros(self._n), True, np.zeros(7 * self._n), False)),
                 calc=self._calc_drive,
             ),
             prerequisites_of_calc={port.ticket() for port in inputs},
@@ -308,12 +320,15 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         finite = all_finite(u)
         command = u if finite else sanitize_command(u)
         drive = dft_drive(command, self._ee_pose.Eval(context)[:3], x_g, self._dft, u_a)
-        value.set_value((drive, finite, goal_poses))
+        value.set_value((drive, finite, goal_poses, self._held(context)))
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
+        drive, _, _, held = self._drive.Eval(context)
+        if held:  # the belief is held (the ``hold`` input)
+            derivatives.get_mutable_vector().SetFromVector(np.zeros(self._n))
+            return
         p = context.get_continuous_state_vector().CopyToVector()
-        dp = self._dft.mass_conserving_rhs(p, self._drive.Eval(context)[0])
-        derivatives.get_mutable_vector().SetFromVector(dp)
+        derivatives.get_mutable_vector().SetFromVector(self._dft.mass_conserving_rhs(p, drive))
 
     def _reset_update(self, context: Context, state: State) -> None:
         state.get_mutable_continuous_state().get_mutable_vector().SetFromVector(self._rest)
@@ -324,7 +339,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         if self._u_h.HasValue(context):
             # The drive of this tick's inputs (already computed by the integrator) holds the
             # verdict on u_h and the goal poses: the inputs are read and checked once per tick.
-            _, finite, goals = self._drive.Eval(context)
+            _, finite, goals, _ = self._drive.Eval(context)
             if not finite:
                 counted = self._count_sanitized(context, state.get_mutable_discrete_state())
         else:  # e.g. a system driven without a command
@@ -380,6 +395,8 @@ class _DiscreteInference(_IntentInferenceBase):
         if _goals_changed(goals, x[n + k :], self._tol):
             self._reset_update(context, discrete_state)
             return
+        if self._held(context):
+            return  # the belief (and the method's extra state) held where it is
         belief, extra = self._step(context, x[:n], x[n : n + k], self._goal_positions(goals))
         discrete_state.get_mutable_vector(self._state_index).SetFromVector(
             np.concatenate([normalize_belief(belief), extra, goals])
@@ -397,6 +414,7 @@ class RecursiveBayesIntentInference(_DiscreteInference):
         - ee_pose
         - goal_poses
         - u_a
+        - hold
         output_ports:
         - belief
         - g_star
@@ -450,6 +468,7 @@ class MemoryBasedIntentInference(_DiscreteInference):
         - ee_pose
         - goal_poses
         - u_a
+        - hold
         output_ports:
         - belief
         - g_star

@@ -30,8 +30,9 @@ dft_euler_step`, :func:`~drake_disamb.core.inference.dft_euler_rollout`,
   request's press to its mode switch. :func:`alpha_matches` says which rows the law reproduces
   (within :data:`ALPHA_TOLERANCE`) with :func:`~drake_disamb.core.blending.blending_alpha`.
 - **Request time** (:func:`request_timing`): from each press (``assistance_requested``) to the
-  mode switch the request made; and the share of rows in between with alpha and the blended
-  command 0.
+  mode switch the request made; the share of rows in between with alpha and the blended
+  command 0; and the share of them at which the belief changed (against the rest of the trials:
+  a belief that updates at 10 Hz changes at about every other 20 Hz row, also when idle).
 - **Mode map** (:func:`identify_mode_map`): which dimensions each score column of
   ``cmode_conf_disamb`` sums (the subset of ``cdim_conf_disamb`` columns whose sum it equals over
   every request), which mode id the system switched to when a column scored highest (the
@@ -404,7 +405,9 @@ def fit_alpha_law(trials: Sequence[LoggedTrial]) -> AlphaLaw:
 @dataclass(frozen=True)
 class RequestTiming:
     """Seconds from a request's press to its mode switch over ``n`` requests; ``zero_share`` of the
-    ``rows`` logged in between with alpha and the blended command 0."""
+    ``rows`` logged in between with alpha and the blended command 0; ``belief_change_share`` of
+    them at which the belief differs from the row before, and ``belief_change_share_outside`` the
+    same share over the other rows of the trials."""
 
     minimum: float
     median: float
@@ -412,11 +415,14 @@ class RequestTiming:
     n: int
     zero_share: float
     rows: int
+    belief_change_share: float = math.nan
+    belief_change_share_outside: float = math.nan
 
 
 def request_timing(trials: Sequence[LoggedTrial]) -> RequestTiming:
     """:class:`RequestTiming` of every request of ``trials``."""
     waits, zero, rows = [], 0, 0
+    changes = [0, 0, 0, 0]  # changed inside, rows inside (from the second), changed outside, rows outside
     for trial in trials:
         for press, switch in _request_windows(trial):
             waits.append(switch - press)
@@ -427,11 +433,28 @@ def request_timing(trials: Sequence[LoggedTrial]) -> RequestTiming:
         )
         zero += int(np.count_nonzero(still & inside))
         rows += int(np.count_nonzero(inside))
+        changed = update_rows(np.asarray(trial.trace["belief"], dtype=float))
+        within = inside.copy()
+        within[1:] &= inside[:-1]  # a change from a row inside the window to the next one
+        within[0] = False
+        outside = ~inside
+        outside[0] = False
+        changes[0] += int(np.count_nonzero(changed & within))
+        changes[1] += int(np.count_nonzero(within))
+        changes[2] += int(np.count_nonzero(changed & outside))
+        changes[3] += int(np.count_nonzero(outside))
     if not waits:
         raise ValueError("trials: no disambiguation requests")
     w = np.asarray(waits)
     return RequestTiming(
-        float(w.min()), float(np.median(w)), float(w.max()), len(w), zero / max(rows, 1), rows
+        float(w.min()),
+        float(np.median(w)),
+        float(w.max()),
+        len(w),
+        zero / max(rows, 1),
+        rows,
+        changes[0] / changes[1] if changes[1] else math.nan,
+        changes[2] / changes[3] if changes[3] else math.nan,
     )
 
 
@@ -796,6 +819,7 @@ class Identification:
                 "n": self.requests.n,
             },
             "request_zero_share": self.requests.zero_share,
+            "request_belief_change_share": self.requests.belief_change_share,
             "request_mode_is_argmax": _pooled_argmax(self.mode_maps),
             "mode_order": {
                 k: [None if d is None else list(d) for d in m.mode_order] for k, m in self.mode_maps.items()
@@ -930,7 +954,9 @@ def format_identification(ident: Identification) -> str:
         + ", ".join(f"{i} {t} {100 * v:.1f} % of {a.rows[(i, t)]}" for (i, t), v in a.match.items()),
         f"Request time (press to switch): min {r.minimum:.2f} s, median {r.median:.2f} s, "
         f"max {r.maximum:.2f} s ({r.n} requests); alpha and the blended command 0 on "
-        f"{100 * r.zero_share:.1f} % of the {r.rows} rows in between",
+        f"{100 * r.zero_share:.1f} % of the {r.rows} rows in between; the belief changed on "
+        f"{100 * r.belief_change_share:.1f} % of them (the other rows: "
+        f"{100 * r.belief_change_share_outside:.1f} %)",
     ]
     for name, m in ident.mode_maps.items():
         ids = MODE_IDS[name][:-1]
