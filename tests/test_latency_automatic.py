@@ -128,12 +128,12 @@ MOVE = [0.1, 0, 0, 0, 0, 0]
 STILL = [0.0] * 6
 
 
-def _trigger(sequence, config: AutomaticConfig = TRIGGER) -> list[float]:  # type: ignore[no-untyped-def]
+def _trigger(sequence, config: AutomaticConfig = TRIGGER, latency: float = 0.0) -> list[float]:  # type: ignore[no-untyped-def]
     """Fire times of the trigger over ``sequence`` = [(belief, u_h, mode), ...], one per tick."""
     state, fired = TriggerState(), []
     for k, (belief, u_h, mode) in enumerate(sequence):
         t = round(k * DT, 10)
-        state, f = automatic_trigger_update(state, belief, u_h, mode, t, DT, config)
+        state, f = automatic_trigger_update(state, belief, u_h, mode, t, DT, config, latency)
         if f:
             fired.append(t)
     return fired
@@ -143,6 +143,12 @@ def test_trigger_fires_after_the_dwell_then_at_most_once_per_interval() -> None:
     # Low confidence while commanding: dwell 0.05 s = 5 ticks (t = 0 .. 0.04), fires at 0.04; then
     # again 0.2 s later at the earliest.
     assert _trigger([(LOW, MOVE, 0)] * 50) == [0.04, 0.24, 0.44]
+
+
+def test_the_interval_counts_from_the_switch_when_the_system_takes_time() -> None:
+    # With a latency of 0.1 s the switch comes 0.1 s after the trigger; the next trigger
+    # min_interval (0.2 s) after the switch at the earliest.
+    assert _trigger([(LOW, MOVE, 0)] * 80, latency=0.1) == [0.04, 0.34, 0.64]
 
 
 def test_trigger_waits_while_confident_or_still_and_restarts_at_a_mode_change() -> None:
@@ -218,6 +224,23 @@ def test_automatic_trigger_system_validation() -> None:
         AutomaticTrigger(3, AutomaticConfig())
     with pytest.raises(ValueError, match="control_period"):
         AutomaticTrigger(3, TRIGGER, control_period=0.0)
+    with pytest.raises(ValueError, match="request_latency: expected a finite number >= 0, got -1"):
+        AutomaticTrigger(3, TRIGGER, request_latency=-1.0)
+
+
+def test_automatic_trigger_system_counts_the_interval_from_the_switch() -> None:
+    system = AutomaticTrigger(3, TRIGGER, control_period=DT, request_latency=0.1)
+    context = system.CreateDefaultContext()
+    system.GetInputPort("belief").FixValue(context, LOW)
+    system.GetInputPort("u_h").FixValue(context, MOVE)
+    system.GetInputPort("mode").FixValue(context, [0.0])
+    simulator = Simulator(system, context)
+    simulator.AdvanceTo(0.045)
+    assert system.get_trigger_count(context) == 1  # at 0.04; its switch at 0.14
+    simulator.AdvanceTo(0.335)
+    assert system.get_trigger_count(context) == 1  # not before 0.34 = 0.14 + min_interval
+    simulator.AdvanceTo(0.345)
+    assert system.get_trigger_count(context) == 2
 
 
 class _Interface:
@@ -409,7 +432,7 @@ def test_automatic_paradigm_trial_succeeds_with_automatic_switches() -> None:
     # The user's own presses only: the automatic switches are not among them.
     assert r.mode_switches == sum(e.kind == "mode_switch" for e in r.events)
     assert r.button_presses == r.mode_switches
-    assert np.all(np.diff(r.automatic_switch_times) >= 4.0 - 1e-9)  # min_interval
+    assert np.all(np.diff(r.automatic_switch_times) >= 4.0 - 1e-9)  # min_interval (no latency here)
 
 
 def test_request_latency_in_a_trial() -> None:

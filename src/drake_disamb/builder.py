@@ -277,7 +277,9 @@ def build_shared_control_diagram(
             builder.Connect(pending, inference.GetInputPort("hold"))
             builder.Connect(pending, blender.GetInputPort("hold"))
     if config.automatic is not None:
-        trigger = builder.AddSystem(AutomaticTrigger(n, config.automatic, scenario.control_period))
+        trigger = builder.AddSystem(
+            AutomaticTrigger(n, config.automatic, scenario.control_period, config.interface.request_latency)
+        )
         trigger.set_name("automatic_trigger")
         builder.Connect(inference.GetOutputPort("belief"), trigger.GetInputPort("belief"))
         builder.Connect(interface.GetOutputPort("u_h"), trigger.GetInputPort("u_h"))

@@ -5,8 +5,9 @@ the need for manual button presses altogether") without a design; this is ours. 
 when, **since the last mode change, the user has been commanding the arm for** ``dwell_time``
 **seconds (accumulated) while the belief's largest probability stayed below**
 ``confidence_threshold``, and **at least** ``min_interval`` **seconds have passed since the last
-trigger**. A fired trigger starts the same disambiguation a request press starts (the interface
-serves it ``request_latency`` later, :func:`drake_disamb.core.interfaces.interface_update`).
+automatic switch** (the last trigger plus the system's ``request_latency``). A fired trigger
+starts the same disambiguation a request press starts (the interface serves it
+``request_latency`` later, :func:`drake_disamb.core.interfaces.interface_update`).
 
 Why each part:
 
@@ -25,7 +26,10 @@ Why each part:
 - *At most once per* ``min_interval`` (4 s by default): after a switch the user needs a reaction
   time (about 0.5 to 1 s) and then about the projection's long horizon (``t_c`` = 2 s) of motion
   for the new mode to move the belief; and the paper's system needed 2 to 2.5 s to compute a mode.
-  A shorter interval would let the system switch modes faster than a person can use them.
+  A shorter interval would let the system switch modes faster than a person can use them. The
+  interval counts from the switch, not from the trigger: with a latency (the study's system took
+  2.5-3.4 s, and paused its loop meanwhile) an interval from the trigger would leave the user
+  about a second of control between two automatic switches.
 
 The trigger is pure numpy (:func:`automatic_trigger_update`); the Drake system
 :class:`drake_disamb.systems.disambiguation.AutomaticTrigger` holds its state.
@@ -59,7 +63,8 @@ class AutomaticConfig:
             writes it out), so the system steps in exactly while the user gets no assistance.
         dwell_time: Seconds (> 0) of the user's commanding, accumulated since the last mode change
             with ``max p`` below the threshold, before the trigger fires.
-        min_interval: Seconds (>= 0) from one trigger to the next at the earliest.
+        min_interval: Seconds (>= 0) from one automatic switch (a trigger plus the request
+            latency) to the next trigger at the earliest.
         request_button: Whether the request button keeps working in the Automatic paradigm
             (default true: the user can still ask, and a press is served as in the Disambiguation
             paradigm). False: presses are logged and counted as requests but switch nothing.
@@ -112,6 +117,7 @@ def automatic_trigger_update(
     time: float,
     period: float,
     config: AutomaticConfig,
+    latency: float = 0.0,
 ) -> tuple[TriggerState, bool]:
     """One control tick of the trigger: ``(new state, fired)``.
 
@@ -123,6 +129,8 @@ def automatic_trigger_update(
         time: The tick's time (s).
         period: The control period (s): what one commanding tick adds to the dwell.
         config: The trigger's settings; ``confidence_threshold`` must be written out (not None).
+        latency: Seconds (>= 0) from a trigger to its switch (the interface's ``request_latency``):
+            the next trigger comes ``min_interval`` after the switch at the earliest.
     """
     if config.confidence_threshold is None:
         raise ValueError(
@@ -137,7 +145,7 @@ def automatic_trigger_update(
     elif float(np.max(np.abs(u_h))) > COMMAND_THRESHOLD:
         dwell += period
     fired = dwell >= config.dwell_time - _TOLERANCE and time - state.last_trigger >= (
-        config.min_interval - _TOLERANCE
+        latency + config.min_interval - _TOLERANCE
     )
     if fired:
         return TriggerState(count=state.count + 1, dwell=0.0, mode=m, last_trigger=float(time)), True

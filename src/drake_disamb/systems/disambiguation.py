@@ -350,7 +350,8 @@ class AutomaticTrigger(LeafSystem):
         - automatic_request_count
 
     The rule and why are in :mod:`drake_disamb.core.automatic` (low confidence while the user
-    commands, for ``dwell_time`` since the last mode change, at most once per ``min_interval``).
+    commands, for ``dwell_time`` since the last mode change, ``min_interval`` after the last automatic
+    switch at the earliest: the last trigger plus ``request_latency``).
 
     Input ports:
         belief (n): the current belief over the ``n`` goals.
@@ -371,12 +372,19 @@ class AutomaticTrigger(LeafSystem):
         n_goals: Number of goals.
         config: The :class:`~drake_disamb.core.automatic.AutomaticConfig` (threshold written out).
         control_period: Period (s) of the update (the dwell grows by it per commanding tick).
+        request_latency: Seconds (>= 0) from a trigger to its switch (the interface's).
     """
 
     _NEVER = -1e9
     """The state's "no trigger yet" time: finite, so that an unchanged state compares equal."""
 
-    def __init__(self, n_goals: int, config: AutomaticConfig, control_period: float = 0.01) -> None:
+    def __init__(
+        self,
+        n_goals: int,
+        config: AutomaticConfig,
+        control_period: float = 0.01,
+        request_latency: float = 0.0,
+    ) -> None:
         super().__init__()
         if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
             raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
@@ -389,7 +397,10 @@ class AutomaticTrigger(LeafSystem):
             raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
         self.n_goals = int(n_goals)
         self.config = config
+        if not (np.isfinite(request_latency) and request_latency >= 0):
+            raise ValueError(f"request_latency: expected a finite number >= 0, got {request_latency!r}")
         self.control_period = float(control_period)
+        self.request_latency = float(request_latency)
         self._belief = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_h = self.DeclareVectorInputPort("u_h", 6)
         self._mode = self.DeclareVectorInputPort("mode", 1)
@@ -419,6 +430,7 @@ class AutomaticTrigger(LeafSystem):
             context.get_time(),
             self.control_period,
             self.config,
+            self.request_latency,
         )
         last_out = self._NEVER if not np.isfinite(after.last_trigger) else after.last_trigger
         discrete_state.get_mutable_vector(self._main).SetFromVector([after.dwell, after.mode, last_out])
