@@ -833,3 +833,18 @@ def test_the_rules_are_one_function_each_in_order() -> None:
     names = [rule.__name__ for rule in rules.RULES]
     assert names[0] == "release_rule" and names[-1] == "pause_rule" and len(set(names)) == len(names)
     assert names.index("request_rule") < names.index("target_rule") < names.index("stall_rule")
+
+
+def test_a_user_waits_while_the_system_is_busy_and_its_watches_start_again() -> None:
+    """While the system computes a disambiguation with its loop paused (``system_busy``) the
+    user lets go, whatever it was doing, and its stall and blocked watches start again after."""
+    state = UserState()
+    for k in range(30):  # driving +x in vx, watches running
+        state = step(state, k * 0.01, 0, interface=HEAD)
+    driving = HEAD.variant.is_driving
+    assert driving(state.raw) and state.progress_mode == 0 and state.blocked_time > 0
+    busy = user_step(state, 0.3, 0, EE, GOALS, 0, HEAD, NO_REQUESTS, None, False, True)
+    assert not busy.raw.any()
+    assert busy.progress_mode == -1 and busy.blocked_time == 0.0
+    again = step(busy, 0.31, 0, interface=HEAD)  # not busy: it drives again
+    assert driving(again.raw)

@@ -13,6 +13,9 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
    mode (pressing as in rule 4, then its settle) and opens the gripper until the stage ends.
 2. **Reacting**: after any button press it waits a reaction time with everything released (so
    presses are single rising edges and it sees the new mode before acting again).
+   While the system computes a disambiguation with its loop paused (``system_busy``: the arm does
+   not respond) it waits too, everything released, and its stall and blocked watches (rule 5)
+   start again after.
 3. **Request**: it presses the disambiguation button at the start of the trial
    (``request_at_start``) and whenever the autonomy has not been helping for
    ``request_when_unhelped_for`` seconds: "not helping" means the belief's argmax is not its goal,
@@ -153,6 +156,7 @@ def user_step(
     config: UserConfig,
     belief: ArrayLike | None = None,
     release: bool = False,
+    system_busy: bool = False,
 ) -> UserState:
     """One decision of the simulated user. Returns the new state; its ``raw`` is the output.
 
@@ -171,6 +175,10 @@ def user_step(
             release, :attr:`drake_disamb.config.StageSpec.release_opening`): at the goal the user
             changes to the gripper mode and opens the gripper, instead of letting go of the
             interface (rule 1).
+        system_busy: The system is computing a disambiguation and its loop is paused (the arm
+            does not respond: :attr:`drake_disamb.config.DisambiguationSpec.hold_while_computing`,
+            also after an automatic trigger the user did not ask for). The user sees the arm stop
+            and waits, everything released; its stall and blocked watches start again after.
     """
     goals = np.asarray(goal_poses, dtype=float).reshape(-1, 7)
     n = goals.shape[0]
@@ -190,6 +198,8 @@ def user_step(
         )
     if reached:  # at the goal, letting go of the object (rule 1 with a release): no late release
         state = evolve(state, hold_until=0.0)
+    if system_busy:
+        return evolve(state, raw=np.zeros(RAW_SIZE), hold_until=0.0, progress_mode=-1, blocked_time=0.0)
 
     # The "unhelped" timer runs whenever the belief is known, also while reacting.
     unhelped_since = NOT_COUNTING
