@@ -848,3 +848,23 @@ def test_a_user_waits_while_the_system_is_busy_and_its_watches_start_again() -> 
     assert busy.progress_mode == -1 and busy.blocked_time == 0.0
     again = step(busy, 0.31, 0, interface=HEAD)  # not busy: it drives again
     assert driving(again.raw)
+
+
+def test_waiting_for_the_system_is_not_being_unhelped() -> None:
+    """A user that asks when unhelped for 3 s, and a system that takes longer than that to answer:
+    after the answer the user drives (the timer starts again), it does not ask again at once."""
+    config = UserConfig()  # requests at the start and when unhelped for 3 s
+    uniform = np.full(2, 0.5)
+    state = user_step(UserState(), 0.0, 0, EE, GOALS, 0, HEAD, config, uniform)
+    assert state.raw[3] == 1.0  # the request at the start
+    t = 0.01
+    while t < 3.5:  # the system computes for 3.5 s
+        state = user_step(state, t, 0, EE, GOALS, 0, HEAD, config, uniform, False, True)
+        assert not state.raw.any()
+        t += 0.01
+    raws = []
+    for k in range(200):  # 2 s after the answer
+        state = user_step(state, 3.5 + 0.01 * k, 0, EE, GOALS, 0, HEAD, config, uniform)
+        raws.append(state.raw.copy())
+    assert not any(r[3] for r in raws)
+    assert any(HEAD.variant.is_driving(r) for r in raws)

@@ -14,8 +14,8 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
 2. **Reacting**: after any button press it waits a reaction time with everything released (so
    presses are single rising edges and it sees the new mode before acting again).
    While the system computes a disambiguation with its loop paused (``system_busy``: the arm does
-   not respond) it waits too, everything released, and its stall and blocked watches (rule 5)
-   start again after.
+   not respond) it waits too, everything released, and its stall and blocked watches (rule 5) and
+   its "unhelped" timer (rule 3) start again after.
 3. **Request**: it presses the disambiguation button at the start of the trial
    (``request_at_start``) and whenever the autonomy has not been helping for
    ``request_when_unhelped_for`` seconds: "not helping" means the belief's argmax is not its goal,
@@ -199,7 +199,16 @@ def user_step(
     if reached:  # at the goal, letting go of the object (rule 1 with a release): no late release
         state = evolve(state, hold_until=0.0)
     if system_busy:
-        return evolve(state, raw=np.zeros(RAW_SIZE), hold_until=0.0, progress_mode=-1, blocked_time=0.0)
+        # Waiting for the system's answer is not being unhelped: that timer starts again after too
+        # (else a user that asks when unhelped for less than the answer takes asks again at once).
+        return evolve(
+            state,
+            raw=np.zeros(RAW_SIZE),
+            hold_until=0.0,
+            progress_mode=-1,
+            blocked_time=0.0,
+            unhelped_since=NOT_COUNTING,
+        )
 
     # The "unhelped" timer runs whenever the belief is known, also while reacting.
     unhelped_since = NOT_COUNTING
