@@ -270,3 +270,18 @@ def test_changes_per_minute_while_the_assistance_helps_and_while_it_pulls_elsewh
     text = format_estimates(est)
     assert "joystick 6.0 while the argmax is the goal, 18.0 while unsure (forgone while helped: 0.67)" in text
     assert "joystick 6.0 while the argmax is another goal, 18.0 while unsure (forgone while misled" in text
+
+
+def test_confident_share_by_half_of_the_trial() -> None:
+    # 40 s of reaching, 2 goals (rho1 0.6): confident 0-10 s and 20-35 s: first half 10 of 20 s,
+    # second half 15 of 20 s.
+    trial = _trial("J8", "joystick", "reaching", 0, [], 40.0, t_end=40.0 - DT)
+    t = trial.trace["t"]
+    belief = np.tile([0.5, 0.5], (t.size, 1))
+    belief[t < 10.0 - 1e-9] = [0.8, 0.2]
+    belief[(t >= 20.0 - 1e-9) & (t < 35.0 - 1e-9)] = [0.3, 0.7]
+    trial.trace["belief"] = belief
+    est = estimate_behaviour([trial])
+    first, second = est.confident_by_half["joystick"]["reaching"]
+    assert first == pytest.approx(0.5, abs=0.01) and second == pytest.approx(0.75, abs=0.01)
+    assert "joystick reaching 0.50 / 0.75" in format_estimates(est)

@@ -49,6 +49,9 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
 - **Acceptance**: after a request's mode switch, whether the user's next action is a command (kept
   the chosen mode) or a mode switch (cycled away); and how many user mode switches follow each
   request (merged) before the next one or the end of the trial, per interface (mean and median).
+- **Confident by half of the trial**: per interface and task, the share of the first and of the
+  second half of the trials' time with the belief's largest entry above ``rho1`` (where in a
+  trial the assistance works).
 - **Changes while the belief is confident**: mode changes (a request, or the first switch of a
   burst of user switches) per minute while the belief's largest entry is above the system's
   ``rho1`` (``1.2 / n``, the blending's threshold: the autonomy assists) and while it is not, and
@@ -188,6 +191,9 @@ class BehaviourEstimates:
     changes_per_minute_misled: dict[str, tuple[float, float]]
     """The same with the argmax on another goal above ``rho1`` (the assistance pulls elsewhere)."""
     confident_share: dict[str, float]
+    confident_by_half: dict[str, dict[str, tuple[float, float]]]
+    """Per interface and task, the share of the first and of the second half of the trials' time
+    with the belief confident (its largest entry above ``rho1``)."""
     gripper_end: dict[str, dict[str, GripperEnd]]
     starts_in_gripper: dict[str, tuple[float, int]]
     """Per interface, the share of trials starting in the gripper mode and the number of trials."""
@@ -252,6 +258,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     confident = {k: np.zeros(4) for k in kinds}
     helped = {k: np.zeros(4) for k in kinds}  # the same, reaching: helped (argmax the goal) / unsure
     misled = {k: np.zeros(4) for k in kinds}  # ... and the argmax on another goal / unsure
+    halves: dict[tuple[str, str], NDArray[np.float64]] = {}  # [confident s, s] per half of the trial
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
@@ -352,6 +359,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         merged = clean_requests(r.request_times)
         own_changes = _user_changes(r.mode_switch_times, cmd, dt)
         _count_confident_changes(trial, [*merged, *own_changes], confident[r.interface])
+        _count_confident_halves(trial, halves.setdefault((r.interface, r.task), np.zeros(4)))
         if r.task == "reaching" and len(r.intended_goals) == 1:
             goal, changes_at = r.intended_goals[0], [*merged, *own_changes]
             _count_confident_changes(trial, changes_at, helped[r.interface], goal)
@@ -462,6 +470,13 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         confident_share={
             k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
         },
+        confident_by_half=_per_condition(
+            {k: [v] for k, v in halves.items()},
+            lambda rows: (
+                rows[0][0] / rows[0][1] if rows[0][1] > 0 else math.nan,
+                rows[0][2] / rows[0][3] if rows[0][3] > 0 else math.nan,
+            ),
+        ),
         gripper_end=_per_condition(gripper_paths, summarize_gripper_end),
         starts_in_gripper={
             i: (float(np.mean(gripper_starts[i])), len(gripper_starts[i]))
@@ -563,6 +578,23 @@ def _count_confident_changes(
             acc[2 if sure[i] else 3] += 1
 
 
+def _count_confident_halves(trial: LoggedTrial, acc: NDArray[np.float64]) -> None:
+    """Add the trial's seconds with the belief confident (above ``rho1``) and its seconds, in its
+    first and in its second half, to ``acc`` (``[confident, all]`` per half)."""
+    r = trial.record
+    t = np.asarray(trial.trace["t"], dtype=float)
+    belief = np.asarray(trial.trace["belief"], dtype=float)
+    if t.size < 2 or belief.ndim != 2 or belief.shape[0] != t.size or not r.duration > 0:
+        return
+    above = np.max(belief, axis=1) > RHO1_TIMES_N / belief.shape[1]
+    start = np.clip(t, 0.0, r.duration)
+    span = np.clip(np.append(t[1:], t[-1]), 0.0, r.duration) - start
+    second = start >= 0.5 * r.duration
+    for k, half in enumerate((~second, second)):
+        acc[2 * k] += float(span[half & above].sum())
+        acc[2 * k + 1] += float(span[half].sum())
+
+
 def _fmt_forgone(state: str, argmax: str, rates: dict[str, tuple[float, float]]) -> str:
     """One line of changes per minute in ``state`` against while unsure, per interface."""
     return f"... in reaching, {state:<11}" + "; ".join(
@@ -655,6 +687,13 @@ def format_estimates(est: BehaviourEstimates) -> str:
             f"(confident {est.confident_share[k]:.2f} of the time)"
             for k, v in est.changes_per_minute.items()
         ),
+        "confident by half of trial   "
+        + "; ".join(
+            f"{i.replace('_', ' ')} {task} {first:.2f} / {second:.2f}"
+            for i, tasks in est.confident_by_half.items()
+            for task, (first, second) in tasks.items()
+        )
+        + " (share of the first / second half with the belief above rho1)",
         _fmt_forgone("helped", "the goal", est.changes_per_minute_helped),
         _fmt_forgone("misled", "another goal", est.changes_per_minute_misled),
         *format_gripper(est.gripper_end, est.starts_in_gripper),
