@@ -209,6 +209,24 @@ def test_dft_projection_writes_only_when_the_belief_left_the_simplex() -> None:
             np.testing.assert_array_equal(out, p)
 
 
+def _count_methods(monkeypatch: pytest.MonkeyPatch, **methods: tuple[type, str]) -> dict[str, int]:
+    """Wrap each ``(class, method name)`` of ``methods`` to count its calls under its key."""
+    counts = dict.fromkeys(methods, 0)
+
+    def wrap(key: str, cls: type, name: str) -> None:
+        method = getattr(cls, name)
+
+        def counted(self, *args):  # type: ignore[no-untyped-def]
+            counts[key] += 1
+            return method(self, *args)
+
+        monkeypatch.setattr(cls, name, counted)
+
+    for key, (cls, name) in methods.items():
+        wrap(key, cls, name)
+    return counts
+
+
 def test_full_loop_blends_and_projects_about_once_per_tick(monkeypatch: pytest.MonkeyPatch) -> None:
     """In the whole reaching diagram (station, loggers and all), a tick at which no state changes
     but the arm's and the belief's must not recompute the blending step or the belief. Twice per
@@ -221,19 +239,11 @@ def test_full_loop_blends_and_projects_about_once_per_tick(monkeypatch: pytest.M
     from drake_disamb.systems import blending, inference
     from drake_disamb.trial import run_trial
 
-    counts = {"step": 0, "belief": 0}
-
-    def counting(cls: type, name: str, key: str) -> None:
-        method = getattr(cls, name)
-
-        def counted(self, *args):  # type: ignore[no-untyped-def]
-            counts[key] += 1
-            return method(self, *args)
-
-        monkeypatch.setattr(cls, name, counted)
-
-    counting(blending.SharedControlBlender, "_calc_step", "step")
-    counting(inference.FieldTheoreticIntentInference, "_calc_belief", "belief")
+    counts = _count_methods(
+        monkeypatch,
+        step=(blending.SharedControlBlender, "_calc_step"),
+        belief=(inference.FieldTheoreticIntentInference, "_calc_belief"),
+    )
     scenario = dataclasses.replace(load_scenario("reaching"), duration=3.0)
     result = run_trial(build_shared_control_diagram(scenario), progress=False, stop_at_success=False)
     ticks = round(result.time / scenario.control_period)
@@ -252,19 +262,11 @@ def test_belief_over_the_task_computes_its_drive_once_per_tick(monkeypatch: pyte
     from drake_disamb.systems import autonomy, inference
     from drake_disamb.trial import run_trial
 
-    counts = {"drive": 0, "u_a": 0}
-
-    def counting(cls: type, name: str, key: str) -> None:
-        method = getattr(cls, name)
-
-        def counted(self, *args):  # type: ignore[no-untyped-def]
-            counts[key] += 1
-            return method(self, *args)
-
-        monkeypatch.setattr(cls, name, counted)
-
-    counting(inference.FieldTheoreticIntentInference, "_calc_drive", "drive")
-    counting(autonomy.PotentialFieldAutonomy, "_calc_u_a", "u_a")
+    counts = _count_methods(
+        monkeypatch,
+        drive=(inference.FieldTheoreticIntentInference, "_calc_drive"),
+        u_a=(autonomy.PotentialFieldAutonomy, "_calc_u_a"),
+    )
     scenario = load_scenario("pouring")
     scenario = dataclasses.replace(
         scenario, duration=3.0, inference=dataclasses.replace(scenario.inference, goal_set="task")

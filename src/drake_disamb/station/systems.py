@@ -39,6 +39,7 @@ from drake_disamb.joint_limits import JointLimits
 from drake_disamb.station.config import ARM_JOINTS, ARM_MODEL_NAME, EE_FRAME, SceneObject, StationConfig
 from drake_disamb.station.geometry import StationGeometry
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
+from drake_disamb.system_helpers.status import DID_NOTHING
 
 IkIntegratorState = namedview(
     "IkIntegratorState", [f"{j}_q_d" for j in ARM_JOINTS] + [f"{j}_v_d" for j in ARM_JOINTS]
@@ -49,10 +50,6 @@ output: the set point ``q_d`` (rad, fields ``mico_joint_1_q_d`` ...) and its vel
 The :class:`~drake_disamb.ik.IkStatus` code of the last step is a second group of its own."""
 IK_Q_D = slice(0, 6)
 IK_V_D = slice(6, 12)
-
-_DID_NOTHING = EventStatus.DidNothing()
-"""Returned by an update that writes nothing (one instance, as ``drake_disamb.systems._status``'s:
-the station sits below the shared-control systems and does not import them)."""
 
 GripperIntegratorState = namedview("GripperIntegratorState", ["opening", "speed"])
 """Layout of :class:`GripperOpeningIntegrator`'s discrete state: desired opening (m) and its rate (m/s)."""
@@ -273,7 +270,7 @@ class DifferentialIKIntegrator(LeafSystem):
             ):
                 # At rest with no command (most ticks of a trial): the set point stays where it is
                 # (it is within the limits); the update returns before building and writing it.
-                return _DID_NOTHING
+                return DID_NOTHING
         else:
             v, status = self._solve(q, v_prev, V)
         # np.clip without its Python-level dispatch (the same values, NaN propagating alike).
@@ -351,7 +348,7 @@ class GripperOpeningIntegrator(LeafSystem):
         state = GripperIntegratorState(context.get_discrete_state(self._state).get_value())
         cmd = self._command_port.Eval(context)[0].item()
         if cmd == 0.0 and state.speed == 0.0:
-            return _DID_NOTHING  # at rest and not commanded (most ticks): nothing changes
+            return DID_NOTHING  # at rest and not commanded (most ticks): nothing changes
         opening = float(state.opening)
         if not math.isfinite(cmd):
             cmd = 0.0

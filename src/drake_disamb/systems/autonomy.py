@@ -15,7 +15,7 @@ from pydrake.systems.framework import (
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
 from drake_disamb.core.validation import is_real
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
-from drake_disamb.systems._status import DID_NOTHING
+from drake_disamb.system_helpers.status import DID_NOTHING
 
 __all__ = ["PotentialFieldAutonomy"]
 

@@ -19,7 +19,7 @@ from pydrake.systems.framework import (
 from drake_disamb.core.blending import BlendingConfig, shared_control
 from drake_disamb.core.validation import all_finite, is_real
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
-from drake_disamb.systems._status import DID_NOTHING
+from drake_disamb.system_helpers.status import DID_NOTHING, flag_set
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 
@@ -176,11 +176,6 @@ class SharedControlBlender(LeafSystem):
 
     def _calc_step(self, context: Context, value: AbstractValue) -> None:
         u_h, p, u_a = self._inputs(context)
-        if self._hold_port.HasValue(context) and self._hold_port.Eval(context)[0] > 0.5:
-            # Paused (the ``hold`` input): nothing reaches the arm. g_star stays the belief's argmax.
-            _, _, g_star, finite = self._compute(np.zeros(6), p, u_a)
-            value.set_value((np.zeros(6), np.zeros(1), np.array([float(g_star)]), finite and all_finite(u_h)))
-            return
         # The step is a pure function of the three inputs: a one-entry memo of the last one keeps
         # it from being recomputed when Drake invalidates inputs whose values did not change (the
         # belief and u_h are rewritten, unchanged, at ticks where any unrestricted update writes).
@@ -189,7 +184,11 @@ class SharedControlBlender(LeafSystem):
         if memo is None or memo[0] != key:
             u, alpha, g_star, finite = self._compute(u_h, p, u_a)
             memo = self._memo = (key, (u, np.array([alpha]), np.array([float(g_star)]), finite))
-        value.set_value(memo[1])
+        step = memo[1]
+        if flag_set(self._hold_port, context):
+            # Paused (the ``hold`` input): nothing reaches the arm; g_star stays the belief's argmax.
+            step = (np.zeros(6), np.zeros(1), step[2], step[3])
+        value.set_value(step)
 
     def _calc_u(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._step.Eval(context)[0])

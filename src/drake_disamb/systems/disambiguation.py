@@ -31,7 +31,7 @@ from drake_disamb.core.disambiguation import (
 )
 from drake_disamb.core.layout import POSE_SIZE
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
-from drake_disamb.systems._status import DID_NOTHING
+from drake_disamb.system_helpers.status import DID_NOTHING
 
 __all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
 

@@ -75,7 +75,7 @@ from drake_disamb.core.inference import (
 )
 from drake_disamb.core.validation import all_finite
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
-from drake_disamb.systems._status import DID_NOTHING
+from drake_disamb.system_helpers.status import DID_NOTHING, flag_set
 
 SIMPLEX_TOLERANCE = 1e-12
 """Largest ``|sum(p) - 1|``, and largest ``-min(p)``, the DFT system's periodic projection leaves
@@ -168,8 +168,8 @@ class _IntentInferenceBase(LeafSystem):
         return True
 
     def _held(self, context: Context) -> bool:
-        """The ``hold`` input is connected and above 0.5: the belief is not updated."""
-        return self._hold.HasValue(context) and self._hold.Eval(context)[0] > 0.5
+        """The ``hold`` input is set: the belief is not updated."""
+        return flag_set(self._hold, context)
 
     def _position(self, context: Context) -> NDArray[np.float64]:
         return np.asarray(self._ee_pose.Eval(context), dtype=float)[:3]

@@ -23,7 +23,7 @@ from drake_disamb.core.interfaces import (
     initial_state,
     interface_update,
 )
-from drake_disamb.systems._status import DID_NOTHING
+from drake_disamb.system_helpers.status import DID_NOTHING
 
 __all__ = ["EventLog", "InterfaceEvent", "InterfaceSystem", "make_interface"]
 

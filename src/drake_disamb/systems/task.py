@@ -24,7 +24,7 @@ from pydrake.systems.framework import Context, DiscreteValues, EventStatus, Leaf
 
 from drake_disamb.core.geometry import pose_errors
 from drake_disamb.core.layout import POSE_SIZE
-from drake_disamb.systems._status import DID_NOTHING
+from drake_disamb.system_helpers.status import DID_NOTHING
 
 # Discrete state layout: [stage, candidate goal, hold start time, reached[S], stage end times[S]].
 _STAGE, _CANDIDATE, _HOLD_START, _HEADER = 0, 1, 2, 3

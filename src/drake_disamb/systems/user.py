@@ -12,6 +12,7 @@ from pydrake.systems.framework import Context, DiscreteValues, EventStatus, Leaf
 from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.user import UserConfig, UserState, user_step
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
+from drake_disamb.system_helpers.status import flag_set
 
 __all__ = ["SimulatedUser", "UserConfig"]
 
@@ -180,7 +181,7 @@ class SimulatedUser(LeafSystem):
                 self.config,
                 belief,
                 self.releases[int(stage)],
-                self._busy_port.HasValue(context) and float(self._busy_port.Eval(context)[0]) > 0.5,
+                flag_set(self._busy_port, context),
             )
         else:
             message = (

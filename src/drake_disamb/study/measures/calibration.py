@@ -258,7 +258,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     confident = {k: np.zeros(4) for k in kinds}
     helped = {k: np.zeros(4) for k in kinds}  # the same, reaching: helped (argmax the goal) / unsure
     misled = {k: np.zeros(4) for k in kinds}  # ... and the argmax on another goal / unsure
-    halves: dict[tuple[str, str], NDArray[np.float64]] = {}  # [confident s, s] per half of the trial
+    halves: dict[tuple[str, str], list[NDArray[np.float64]]] = {}  # per trial: [confident s, s] per half
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
@@ -359,7 +359,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         merged = clean_requests(r.request_times)
         own_changes = _user_changes(r.mode_switch_times, cmd, dt)
         _count_confident_changes(trial, [*merged, *own_changes], confident[r.interface])
-        _count_confident_halves(trial, halves.setdefault((r.interface, r.task), np.zeros(4)))
+        halves.setdefault((r.interface, r.task), []).append(_confident_halves(trial))
         if r.task == "reaching" and len(r.intended_goals) == 1:
             goal, changes_at = r.intended_goals[0], [*merged, *own_changes]
             _count_confident_changes(trial, changes_at, helped[r.interface], goal)
@@ -470,13 +470,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         confident_share={
             k: v[0] / (v[0] + v[1]) if v[0] + v[1] > 0 else math.nan for k, v in confident.items()
         },
-        confident_by_half=_per_condition(
-            {k: [v] for k, v in halves.items()},
-            lambda rows: (
-                rows[0][0] / rows[0][1] if rows[0][1] > 0 else math.nan,
-                rows[0][2] / rows[0][3] if rows[0][3] > 0 else math.nan,
-            ),
-        ),
+        confident_by_half=_per_condition(halves, _half_shares),
         gripper_end=_per_condition(gripper_paths, summarize_gripper_end),
         starts_in_gripper={
             i: (float(np.mean(gripper_starts[i])), len(gripper_starts[i]))
@@ -578,21 +572,29 @@ def _count_confident_changes(
             acc[2 if sure[i] else 3] += 1
 
 
-def _count_confident_halves(trial: LoggedTrial, acc: NDArray[np.float64]) -> None:
-    """Add the trial's seconds with the belief confident (above ``rho1``) and its seconds, in its
-    first and in its second half, to ``acc`` (``[confident, all]`` per half)."""
+def _confident_halves(trial: LoggedTrial) -> NDArray[np.float64]:
+    """The trial's seconds with the belief confident (above ``rho1``) and its seconds, in its first
+    and in its second half: ``[confident, all, confident, all]`` (zeros for an unusable trace)."""
     r = trial.record
     t = np.asarray(trial.trace["t"], dtype=float)
     belief = np.asarray(trial.trace["belief"], dtype=float)
+    out = np.zeros(4)
     if t.size < 2 or belief.ndim != 2 or belief.shape[0] != t.size or not r.duration > 0:
-        return
+        return out
     above = np.max(belief, axis=1) > RHO1_TIMES_N / belief.shape[1]
     start = np.clip(t, 0.0, r.duration)
     span = np.clip(np.append(t[1:], t[-1]), 0.0, r.duration) - start
     second = start >= 0.5 * r.duration
     for k, half in enumerate((~second, second)):
-        acc[2 * k] += float(span[half & above].sum())
-        acc[2 * k + 1] += float(span[half].sum())
+        out[2 * k : 2 * k + 2] = span[half & above].sum(), span[half].sum()
+    return out
+
+
+def _half_shares(rows: Sequence[NDArray[np.float64]]) -> tuple[float, float]:
+    """The confident share of the first and of the second half over the trials' ``rows``
+    (:func:`_confident_halves`)."""
+    c1, n1, c2, n2 = np.sum(rows, axis=0)
+    return (c1 / n1 if n1 > 0 else math.nan, c2 / n2 if n2 > 0 else math.nan)
 
 
 def _fmt_forgone(state: str, argmax: str, rates: dict[str, tuple[float, float]]) -> str:
