@@ -650,6 +650,41 @@ def test_a_kept_request_mode_is_used_while_the_assistance_helps(interface: Inter
     assert plain.raw[2] == 1.0
 
 
+@pytest.mark.parametrize("interface", [HEAD, JOY])
+def test_a_push_in_a_kept_mode_holds_its_direction_while_the_arm_crosses_the_goal(
+    interface: InterfaceConfig,
+) -> None:
+    # x is done 5 mm short (z is left) in the kept mode 0 while assisted: the push goes toward +x.
+    # The assistance then carries the arm 5 mm past the goal along x, still within tolerance: the
+    # push keeps its direction (it does not turn back at every crossing). Once x is out of
+    # tolerance the user drives back as usual and the push is over; the next one aims anew.
+    cfg = dataclasses.replace(NO_REQUESTS, keep_assisted_mode=True)
+    helping = np.array([0.9, 0.1])
+    ee = EE.copy()
+    ee[0] = GOALS[0, 0] - 0.005
+    s = step(
+        UserState(kept_mode=0, requested_at_start=True),
+        1.0,
+        0,
+        interface=interface,
+        config=cfg,
+        ee=ee,
+        belief=helping,
+    )
+    assert s.raw[0] > 0.0 and (s.push_mode, s.push_axis, s.push_sign) == (0, 0, 1.0)
+    assert UserState.from_vector(s.to_vector()) == s
+    ee[0] = GOALS[0, 0] + 0.005  # past the goal, within tolerance
+    s = step(s, 1.1, 0, interface=interface, config=cfg, ee=ee, belief=helping)
+    assert s.raw[0] > 0.0 and s.push_sign == 1.0  # still toward +x
+    ee[0] = GOALS[0, 0] + 0.05  # out of tolerance: back toward the goal, the push over
+    s = step(s, 1.2, 0, interface=interface, config=cfg, ee=ee, belief=helping)
+    back = s.raw[0] < 0.0 if interface is JOY else s.raw[1] == 1.0
+    assert back and s.push_mode == -1
+    ee[0] = GOALS[0, 0] + 0.005  # done again: a new push, toward the goal now (-x)
+    s = step(s, 1.3, 0, interface=interface, config=cfg, ee=ee, belief=helping)
+    assert s.push_sign == -1.0 and (s.raw[0] < 0.0 if interface is JOY else s.raw[1] == 1.0)
+
+
 def test_with_stay_while_assisted_a_joystick_user_keeps_any_mode_while_the_assistance_helps() -> None:
     # As above, but mode 0 was the user's own choice (no request): with stay_while_assisted the
     # joystick user keeps it while the autonomy assists the goal (win-stay: a small push blended

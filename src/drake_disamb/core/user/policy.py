@@ -118,13 +118,14 @@ values and where they come from):
   again; the push ends at once when the assistance no longer pulls elsewhere.
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
   probability ``request_prob``; when a new mode is needed (its mode done, a stall, or a review that
-  wants another) the user asks for disambiguation instead of cycling with probability
-  ``request_instead_prob``; both scaled by ``exp(-t / request_decay_time)`` (requests concentrate
-  early). After a request it waits up to
+  wants another) the user asks for disambiguation instead
+  of cycling with probability ``request_instead_prob``; both scaled by
+  ``exp(-t / request_decay_time)`` (requests concentrate early). After a request it waits up to
   ``request_wait`` seconds for the mode to change, then keeps the mode the system chose with
   probability ``accept_prob`` or cycles away from it to a mode of its own choice. With
   ``keep_assisted_mode`` it keeps using a kept mode while the autonomy assists its goal, also once
-  the mode's own dimensions are done (pushing toward the goal in it), until the whole goal's
+  the mode's own dimensions are done (pushing toward the goal in it, along the dimension and in
+  the direction the push began with, for as long as the push lasts), until the whole goal's
   remaining error stops falling (rule 5) or the assistance stops. With ``stay_while_assisted`` a
   joystick user uses any arm mode so (win-stay while assisted).
 """

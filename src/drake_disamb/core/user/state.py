@@ -59,6 +59,10 @@ class UserState:
             its dimensions are done, or -1.
         detour_offset: Meanwhile the user sees the z error less this (m): it keeps the end
             effector lifted.
+        push_mode: Pushing in a kept mode whose own dimensions are done (rule 6 while the
+            assistance carries the arm): the mode, or -1 when not pushing.
+        push_axis: ... the mode's dimension it pushes along (its index in the mode).
+        push_sign: ... and the direction (+1 or -1), held for the whole push.
         raw: The raw signal produced at the last tick (what the user is holding).
     """
 
@@ -91,6 +95,9 @@ class UserState:
     backoff_until: float = 0.0
     detour_mode: int = -1
     detour_offset: float = 0.0
+    push_mode: int = -1
+    push_axis: int = -1
+    push_sign: float = 0.0
     raw: NDArray[np.float64] = field(default_factory=lambda: np.zeros(RAW_SIZE), compare=False)
 
     _INT = (
@@ -103,6 +110,8 @@ class UserState:
         "kept_mode",
         "backoff_mode",
         "detour_mode",
+        "push_mode",
+        "push_axis",
     )
     _BOOL = ("requested_at_start", "started", "judge", "overshot", "carrying")
     _FIELDS = (
@@ -135,15 +144,18 @@ class UserState:
         "backoff_until",
         "detour_mode",
         "detour_offset",
+        "push_mode",
+        "push_axis",
+        "push_sign",
     )
-    VECTOR_SIZE = 29 + RAW_SIZE
+    VECTOR_SIZE = 32 + RAW_SIZE
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat ``[busy_until, requested_at_start, unhelped_since, draws, presses, target_mode,
         progress_mode, progress_since, progress_best, started, start_until, hold_until, request_mode,
         request_since, judge, overshot, aim_mode, aim_0, aim_1, kept_mode, carrying, carry_best,
         counter_until, blocked_best, blocked_time, backoff_mode, backoff_until, detour_mode,
-        detour_offset, raw (4)]``."""
+        detour_offset, push_mode, push_axis, push_sign, raw (4)]``."""
         head = map(float, _STATE_FIELDS(self))  # (one C-level read of the fields: a user decides every tick)
         return np.array([*head, *np.asarray(self.raw, dtype=float).tolist()], dtype=float)
 
