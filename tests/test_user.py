@@ -11,6 +11,7 @@ from support import integrate_pose
 
 from drake_disamb.core.geometry import quat_from_rotvec
 from drake_disamb.core.interfaces import (
+    REQUEST_BUTTON,
     InterfaceConfig,
     command_from_raw,
     initial_state,
@@ -232,6 +233,20 @@ def test_a_blocked_user_backs_off_in_its_mode_then_routes_around() -> None:
     after = [(t, m, r) for t, m, r in rows if t > reverse[-1][0]]
     assert after[0][2][2] == 1.0  # then it presses on toward another mode ...
     assert any(m == 0 and r[0] == 1.0 for _, m, r in after)  # ... and drives +x in vx again
+
+
+def test_a_blocked_user_that_can_ask_may_ask_instead_of_routing_around() -> None:
+    # A back-off in vx has just ended: routing around is a change of the user's own, so with a
+    # belief and request_instead_prob 1 it asks for disambiguation instead; with 0 (or no belief)
+    # it changes mode as before.
+    backed = UserState(requested_at_start=True, backoff_mode=0, backoff_until=1.0)
+    flat = np.array([0.5, 0.5])
+    ask = dataclasses.replace(NO_REQUESTS, request_instead_prob=1.0)
+    s = step(backed, 1.0, 0, interface=HEAD, config=ask, belief=flat)
+    assert s.raw[REQUEST_BUTTON] == 1.0 and s.raw[2] == 0.0 and s.backoff_mode == -1 and s.request_mode == 0
+    for config, belief in ((NO_REQUESTS, flat), (ask, None)):
+        s = step(backed, 1.0, 0, interface=HEAD, config=config, belief=belief)
+        assert s.raw[2] == 1.0 and s.raw[REQUEST_BUTTON] == 0.0 and s.target_mode == 2
 
 
 def test_a_blocked_user_with_a_detour_lifts_the_hand_over_the_obstacle() -> None:

@@ -46,7 +46,9 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
    ``backoff_time`` seconds, then routes around: over the obstacle first (``detour_lift``: in a
    mode that does not move the hand vertically, it lifts the end effector that much and keeps it
    up until the blocked mode's dimensions are done), else by changing to the best other mode
-   with work left, or it tries again in this one when there is none.
+   with work left, or it tries again in this one when there is none. A user who can ask for
+   disambiguation may ask instead of routing around (``request_instead_prob``, as for any change
+   of its own).
 6. **Command**: otherwise it drives toward its goal along the current mode's dimensions.
    A proportional interface (the joystick): axis k for the mode's k-th dimension, proportional to
    the error (``error / approach_time`` as a share of the interface's full-deflection speed), at
@@ -117,8 +119,8 @@ values and where they come from):
   probability ``counter_prob``, for a lognormal time (median ``carry_duration``), then decides
   again; the push ends at once when the assistance no longer pulls elsewhere.
 - *Requests*: a request the policy calls for (at the start, when unhelped) is made with
-  probability ``request_prob``; when a new mode is needed (its mode done, a stall, or a review that
-  wants another) the user asks for disambiguation instead
+  probability ``request_prob``; when a new mode is needed (its mode done, a stall, a review that
+  wants another, or routing around after a back-off) the user asks for disambiguation instead
   of cycling with probability ``request_instead_prob``; both scaled by
   ``exp(-t / request_decay_time)`` (requests concentrate early). After a request it waits up to
   ``request_wait`` seconds for the mode to change, then keeps the mode the system chose with

@@ -437,7 +437,8 @@ def backoff_rule(d: Decision) -> UserState | None:
     and requests) without the goal's remaining error (summed over the arm modes) falling by
     ``stall_progress``, the arm is blocked (a joint limit, the floor, the IK stopping): the user
     drives away from the goal in its mode for ``backoff_time``, then routes around: it changes to
-    the best other mode with something left to do (or goes on in this one when there is none).
+    the best other mode with something left to do (or goes on in this one when there is none), or,
+    as for any change of its own, asks for disambiguation instead (``request_instead_prob``).
     A back-off ends early if the mode changes meanwhile."""
     choice, state = d.config.mode_choice, d.state
     if choice.backoff_time <= 0:
@@ -449,6 +450,8 @@ def backoff_rule(d: Decision) -> UserState | None:
         if d.time < state.backoff_until - 1e-9:
             return _reverse(d)
         d.state = evolve(state, backoff_mode=-1, backoff_until=0.0, progress_mode=-1)
+        if d.use_requests and d.request_chance(d.config.requests.request_instead_prob):
+            return d.request()  # routing around is a change of its own: it may ask for it instead
         detour = _detour(d, state.backoff_mode)
         if detour is not None:
             return detour
