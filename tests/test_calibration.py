@@ -216,6 +216,23 @@ def test_reversals_count_the_command_turning_back_within_a_dwell() -> None:
     assert "joystick 1.00 (n=1)" in line
 
 
+def test_the_correction_probability_counts_stops_of_a_tenth_to_half_a_second_per_interface() -> None:
+    # One joystick dwell: commands 0.5-1.5 s, a stop of 0.05 s (a stick through its centre: not
+    # counted), commands to 2.0 s, a stop of 0.3 s (a correction), commands to 3.0 s, a pause of
+    # 0.6 s (not a correction), commands to 4.0 s: c = 1, p = 0.5. A head-array dwell with none.
+    joy = _trial("C1", "joystick", "reaching", 0, [], 5.0)
+    t, u = joy.trace["t"], joy.trace["u_h"]
+    for a, b in ((1.55, 2.0), (2.3, 3.0), (3.6, 4.0)):
+        u[(t > a - 1e-9) & (t < b), 0] = 0.05
+    head = _trial("C2", "head_array", "reaching", 0, [], 3.0)
+    est = estimate_behaviour([joy, head])
+    assert est.correction_prob_by_interface == {"joystick": {"S01": 0.5}, "head_array": {"S01": 0.0}}
+    assert est.corrections_per_dwell["joystick"] == 2.0  # the pooled count keeps every stop under 0.5 s
+    assert _line(est, "correction probability").startswith(
+        "correction probability       joystick S01 0.50; head array S01 0.00"
+    )
+
+
 def test_the_study_systems_requests_chose_translation_modes() -> None:
     # What the people's logs show of the system (the preset's agreement term follows it).
     if not DATA.is_dir():

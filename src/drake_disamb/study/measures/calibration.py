@@ -40,7 +40,10 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   :data:`MIN_PAUSE` between commands (a stop and a new, corrective submovement in the same mode;
   longer gaps are pauses). Per interface and per subject (pooled over paradigms), and as the
   probability ``c / (1 + c)`` of correcting at once after a movement that ended short (``c``
-  corrections per dwell, a geometric count).
+  corrections per dwell, a geometric count). Per interface and subject, the same probability
+  from the stops of at least :data:`MIN_STOP` (shorter ones are mostly a stick passing through
+  its centre): the estimate of ``correction_prob`` (head array) and ``stick_correction_prob``
+  (joystick).
 - **Reversals per dwell**: in the same dwells, how often the command turns back: consecutive
   commanded samples (above a tenth of the dwell's largest command, so that the stick's passage
   through its dead zone is not counted) whose directions point more than 90 degrees apart (a
@@ -125,6 +128,9 @@ MIN_SETTLE = 0.1
 """A command sooner than this after a switch was held through it, not a settle (s)."""
 MIN_PAUSE = 0.5
 """Shortest run of zero command that counts as a pause (s)."""
+MIN_STOP = 0.1
+"""Shortest run of zero command that counts as a corrective stop for the per-interface estimate
+(s): a stick passing through its centre gives shorter ones."""
 
 
 def _runs(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
@@ -165,6 +171,9 @@ class BehaviourEstimates:
     full_round_share: float
     corrections_per_dwell: dict[str, float]
     corrections_per_dwell_by_subject: dict[str, float]
+    correction_prob_by_interface: dict[str, dict[str, float]]
+    """Per interface, per subject: ``c / (1 + c)`` of the stops of :data:`MIN_STOP` to
+    :data:`MIN_PAUSE` s per dwell."""
     reversals_per_dwell: dict[str, tuple[float, int]]
     """Per interface, the command's reversals per dwell (mean) and the number of dwells."""
     request_share: dict[str, float]
@@ -251,6 +260,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     chosen_translation: dict[str, list[bool]] = {k: [] for k in kinds}  # per request switch
     corrections: dict[str, list[int]] = {k: [] for k in kinds}
     corrections_subject: dict[str, list[int]] = {}
+    stops: dict[str, dict[str, list[int]]] = {k: {} for k in kinds}  # interface -> subject -> per dwell
     reversals: dict[str, list[int]] = {k: [] for k in kinds}
     commanding_total = time_total = 0.0
     commanding_by_interface = dict.fromkeys(kinds, 0.0)
@@ -310,6 +320,8 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
                 n = sum((g1 - g0) * dt < MIN_PAUSE for g0, g1 in gaps)
                 corrections[r.interface].append(n)
                 corrections_subject.setdefault(s, []).append(n)
+                n_stops = sum(MIN_STOP <= (g1 - g0) * dt < MIN_PAUSE for g0, g1 in gaps)
+                stops[r.interface].setdefault(s, []).append(n_stops)
                 reversals[r.interface].append(_reversals(user_vel[:, int(a / dt) : int(b / dt)]))
         # Settle: last switch of a change -> next command, nothing else first.
         for x in sw:
@@ -439,6 +451,10 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         reversals_per_dwell={k: (float(np.mean(v)) if v else math.nan, len(v)) for k, v in reversals.items()},
         corrections_per_dwell_by_subject={
             s: float(np.mean(v)) for s, v in sorted(corrections_subject.items())
+        },
+        correction_prob_by_interface={
+            k: {s: float(np.mean(v) / (1.0 + np.mean(v))) for s, v in sorted(by.items())}
+            for k, by in stops.items()
         },
         request_share={k: float(np.mean(v)) if v else math.nan for k, v in req_share.items()},
         request_share_by_subject={s: float(np.mean(v)) for s, v in sorted(req_share_subject.items())},
@@ -655,6 +671,12 @@ def format_estimates(est: BehaviourEstimates) -> str:
         f"{'corrections per dwell':<28} joystick {est.corrections_per_dwell['joystick']:.2f}, head array "
         f"{est.corrections_per_dwell['head_array']:.2f}; per subject: {corr} (as a probability "
         f"c / (1 + c): {probs})",
+        f"{'correction probability':<28} "
+        + "; ".join(
+            f"{k.replace('_', ' ')} " + ", ".join(f"{s} {v:.2f}" for s, v in by.items())
+            for k, by in est.correction_prob_by_interface.items()
+        )
+        + f" (stops of {MIN_STOP:g} to {MIN_PAUSE:g} s per dwell c, as c / (1 + c), per subject)",
         f"{'reversals per dwell':<28} "
         + ", ".join(f"{k.replace('_', ' ')} {m:.2f} (n={n})" for k, (m, n) in est.reversals_per_dwell.items())
         + " (the command turning back within a mode dwell)",
