@@ -643,6 +643,26 @@ def test_a_user_that_sees_the_shortfall_corrects_it_in_the_same_mode() -> None:
     assert 5 < sum(corrected) < 35
 
 
+def test_a_stick_user_corrects_with_its_own_probability() -> None:
+    # As above with the joystick (mode 0 = {vx, vy}, x looks done 4 cm short, vz left): with
+    # stick_correction_prob set, the joystick user corrects with it, whatever correction_prob
+    # (the head array's) is; unset, correction_prob serves both.
+    ee = EE.copy()
+    ee[0] = GOALS[0, 0] - 0.04
+    judged = UserState(aim_mode=0, aim_0=0.04)
+    stick = dataclasses.replace(AIMING, correction_prob=0.0, stick_correction_prob=1.0)
+    s = step(judged, 1.0, 0, interface=JOY, config=stick, ee=ee)
+    assert s.raw[0] > 0.0 and s.raw[2] == 0.0 and s.aim_mode == 0  # corrects in place
+    s = step(judged, 1.0, 0, interface=HEAD, config=stick, ee=ee)
+    assert s.raw[2] == 1.0  # the head array's probability is 0: it moves on
+    moves_on = dataclasses.replace(AIMING, correction_prob=1.0, stick_correction_prob=0.0)
+    assert step(judged, 1.0, 0, interface=JOY, config=moves_on, ee=ee).raw[2] == 1.0
+    both = dataclasses.replace(AIMING, correction_prob=1.0)
+    assert step(judged, 1.0, 0, interface=JOY, config=both, ee=ee).raw[0] > 0.0
+    with pytest.raises(ValueError, match=r"UserConfig\.stick_correction_prob: expected a probability"):
+        UserConfig(stick_correction_prob=-0.1)
+
+
 @pytest.mark.parametrize("interface", [HEAD, JOY])
 def test_a_kept_request_mode_is_used_while_the_assistance_helps(interface: InterfaceConfig) -> None:
     # The request chose mode 0 (x first) and the user kept it, but x is done (z is left): while the

@@ -146,6 +146,10 @@ class CommandConfig:
             short of the goal (the aim reached, the mode not done), the user corrects it at once
             in the same mode (a corrective submovement, aimed anew) rather than moving on to
             another mode and coming back later (0 = it always moves on while others are left).
+        stick_correction_prob: The same with a proportional interface (the joystick), or
+            ``None`` for ``correction_prob`` with every interface. People nudge a stick in place
+            far more often than they re-press a switch (``study calibrate``, corrections per
+            dwell: joystick 0.95, head array 0.15).
     """
 
     approach_time: float = 0.5
@@ -155,6 +159,7 @@ class CommandConfig:
     deflection_log_sd: float = 0.0
     aim_error: float = 0.0
     correction_prob: float = 0.0
+    stick_correction_prob: float | None = None
 
     def __post_init__(self) -> None:
         _check_real(self, ("approach_time",))
@@ -163,6 +168,8 @@ class CommandConfig:
             raise ValueError(f"UserConfig.min_axis: expected a number in (0, 1], got {self.min_axis!r}")
         _check_optional_positive(self, ("direction_kappa",))
         _check_probabilities(self, ("correction_prob",))
+        if self.stick_correction_prob is not None:
+            _check_probabilities(self, ("stick_correction_prob",))
 
 
 @dataclass(frozen=True)

@@ -102,7 +102,8 @@ values and where they come from):
   carries it).
 - *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
   its dimensions and stops short by a half-normal share (scale ``aim_error``) of the distance it
-  sees; the mode then looks done. With probability ``correction_prob`` (or when nothing else is
+  sees; the mode then looks done. With probability ``correction_prob`` (``stick_correction_prob``
+  with a proportional interface, when set; or when nothing else is
   left) it sees the shortfall and corrects it at once in the same mode, aiming anew (a corrective
   submovement, Meyer et al. 1988); else it moves on and comes back later.
 - *Pauses*: at a decision where it would command, it starts a pause with rate ``pause_rate``

@@ -261,6 +261,8 @@ def aim_rule(d: Decision) -> UserState | None:
             # submovement, with probability correction_prob, or when nothing else is left).
             others = np.delete(remaining[: n_modes - 1], mode)
             p = config.command.correction_prob
+            if d.variant.proportional and config.command.stick_correction_prob is not None:
+                p = config.command.stick_correction_prob
             if others.size == 0 or float(np.max(others)) <= 1.0 or (p > 0 and d.rng().random() < p):
                 d.state = _aim(d.state, mode, d.err, modes, config, d.rng())
                 seen = _seen_error(d.state, d.err, modes[mode])

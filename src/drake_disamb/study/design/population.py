@@ -117,9 +117,10 @@ def _default_distributions() -> dict[str, Distribution]:
         "accept_prob": Uniform(0.85, 1.0),
         # Literature (no pose in the logs): judging by eye where to stop, relative error 10-30 %.
         "aim_error": LogNormal(0.2, 0.3, high=0.4),
-        # A movement that ended short is corrected at once in the same mode: short stops between
-        # commands per dwell c -> c / (1 + c) per subject 0.12..0.39 (pooled over paradigms).
-        "correction_prob": Uniform(0.1, 0.4),
+        # A movement that ended short is corrected at once in the same mode: short stops (0.1 to
+        # 0.5 s) between commands per dwell c -> c / (1 + c) per subject, head array 0.05..0.23
+        # (the joystick's own below; pooled over both interfaces it was 0.12..0.39).
+        "correction_prob": Uniform(0.05, 0.23),
         # Letting the autonomy carry the arm (drawn last, so that the draws above stay as they
         # were): in reaching, people forgo 0.81 (joystick) and 0.69 (head array) of their mode
         # changes per minute while the belief's argmax is their goal, against while it is unsure;
@@ -131,6 +132,9 @@ def _default_distributions() -> dict[str, Distribution]:
         # 0.30 (head array) of their changes per minute while the argmax is another goal, against
         # while it is unsure: their range, one value per subject for both interfaces.
         "counter_prob": Uniform(0.3, 0.75),
+        # The joystick's corrections (drawn last): its short stops per dwell per subject give
+        # c / (1 + c) 0.23..0.55 (a stick is nudged in place far more than a switch is re-pressed).
+        "stick_correction_prob": Uniform(0.23, 0.55),
     }
 
 
