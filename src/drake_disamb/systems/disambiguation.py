@@ -30,6 +30,7 @@ from drake_disamb.core.disambiguation import (
     validate_modes,
 )
 from drake_disamb.core.layout import POSE_SIZE
+from drake_disamb.core.validation import is_real
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.system_helpers.status import DID_NOTHING
 
@@ -393,12 +394,12 @@ class AutomaticTrigger(LeafSystem):
                 "config: expected an AutomaticConfig with its confidence_threshold written out, "
                 f"got {config!r}"
             )
-        if not (np.isfinite(control_period) and control_period > 0):
+        if not (is_real(control_period) and control_period > 0):
             raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
+        if not (is_real(request_latency) and request_latency >= 0):
+            raise ValueError(f"request_latency: expected a finite number >= 0, got {request_latency!r}")
         self.n_goals = int(n_goals)
         self.config = config
-        if not (np.isfinite(request_latency) and request_latency >= 0):
-            raise ValueError(f"request_latency: expected a finite number >= 0, got {request_latency!r}")
         self.control_period = float(control_period)
         self.request_latency = float(request_latency)
         self._belief = self.DeclareVectorInputPort("belief", self.n_goals)

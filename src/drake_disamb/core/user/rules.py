@@ -691,12 +691,8 @@ def _push(
         if state.push_mode >= 0:
             d.state = evolve(state, push_mode=-1, push_axis=-1, push_sign=0.0)
         return -1, 0.0
-    if (
-        state.push_mode == d.mode
-        and 0 <= state.push_axis < len(dims)
-        and dims[state.push_axis] != GRIPPER_DIM
-    ):
-        return state.push_axis, state.push_sign
+    if state.push_mode == d.mode and 0 <= state.push_axis < len(dims):
+        return state.push_axis, state.push_sign  # (the axis _pushed chose in this mode: an arm one)
     sign = 1.0 if err[dims[k]] >= 0.0 else -1.0
     d.state = evolve(state, push_mode=d.mode, push_axis=k, push_sign=sign)
     return k, sign

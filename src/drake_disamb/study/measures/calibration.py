@@ -316,12 +316,11 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             seg = cmd[int(a / dt) : int(b / dt)]
             if seg.any():
                 inside = np.flatnonzero(seg)
-                gaps = _runs(~seg[inside[0] : inside[-1] + 1])
-                n = sum((g1 - g0) * dt < MIN_PAUSE for g0, g1 in gaps)
+                gaps = [(g1 - g0) * dt for g0, g1 in _runs(~seg[inside[0] : inside[-1] + 1])]
+                n = sum(g < MIN_PAUSE for g in gaps)
                 corrections[r.interface].append(n)
                 corrections_subject.setdefault(s, []).append(n)
-                n_stops = sum(MIN_STOP <= (g1 - g0) * dt < MIN_PAUSE for g0, g1 in gaps)
-                stops[r.interface].setdefault(s, []).append(n_stops)
+                stops[r.interface].setdefault(s, []).append(sum(MIN_STOP <= g < MIN_PAUSE for g in gaps))
                 reversals[r.interface].append(_reversals(user_vel[:, int(a / dt) : int(b / dt)]))
         # Settle: last switch of a change -> next command, nothing else first.
         for x in sw:
