@@ -25,6 +25,7 @@ from drake_disamb.core.geometry import (
     quat_from_rotvec_unchecked,
     quat_multiply_unchecked,
 )
+from drake_disamb.study.data.records import TrialRecord
 
 REPO = Path(__file__).resolve().parents[1]
 SRC = REPO / "src"
@@ -123,3 +124,44 @@ def integrate_pose(
     new_quat = quat_multiply_unchecked(quat_from_rotvec_unchecked(t[..., 3:6] * dt), q)
     w, x, y, z = new_quat[..., 0:1], new_quat[..., 1:2], new_quat[..., 2:3], new_quat[..., 3:4]
     return new_position, new_quat / np.sqrt(w * w + x * x + y * y + z * z)
+
+
+MODES = ("vx_vy", "vx_vz", "wx_wz", "wy")
+"""The joystick's arm modes, as records name them (:func:`study_trial` cycles through them)."""
+
+
+def study_trial(
+    n: int, interface: str, task: str, paradigm: str, presses: int, requests: int = 0
+) -> TrialRecord:
+    """A trial with ``presses`` button presses (``requests`` of them requests), 3 s apart: the
+    authors' cleaning keeps every one."""
+    switches = presses - requests
+    return TrialRecord(
+        trial_id=f"t{n:03d}",
+        subject=f"S{n % 3 + 1:02d}",
+        interface=interface,
+        task=task,
+        paradigm=paradigm,
+        disambiguation_method="algorithm1" if paradigm == "disambiguation" else None,
+        repetition=n % 3,
+        seed=n,
+        start_pose=0,
+        initial_mode=None,
+        intended_goals=[1] if task == "reaching" else [0, 1],
+        reached_goals=[1] if task == "reaching" else [0, 1],
+        success=True,
+        done=True,
+        duration=200.0,
+        completion_time=200.0,
+        mode_switches=switches,
+        requests=requests,
+        automatic_switches=0,
+        button_presses=presses,
+        request_times=[60.0 + 7.0 * (n % 5) + 4.0 * i for i in range(requests)],
+        mode_switch_times=[3.0 * i for i in range(switches)],
+        mode_switch_modes=[MODES[i % len(MODES)] for i in range(switches)],
+        automatic_switch_times=[],
+        mean_alpha=0.2,
+        assistance_onset=None,
+        wall_time=1.0,
+    )

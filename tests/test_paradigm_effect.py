@@ -11,49 +11,14 @@ from pathlib import Path
 
 import pytest
 from scipy.stats import mannwhitneyu
+from support import study_trial as trial
 
 from drake_disamb.cli import main
 from drake_disamb.study.analysis.effect import paradigm_effect
-from drake_disamb.study.data.records import TrialRecord, append_record
+from drake_disamb.study.data.records import append_record
 from drake_disamb.study.report.page import load_study
 
-MODES = ("vx_vy", "vx_vz", "wx_wz", "wy")
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2020_human_study"
-
-
-def trial(n: int, interface: str, task: str, paradigm: str, presses: int, requests: int = 0) -> TrialRecord:
-    """A trial with ``presses`` button presses (``requests`` of them requests), 3 s apart: the
-    authors' cleaning keeps every one."""
-    switches = presses - requests
-    return TrialRecord(
-        trial_id=f"t{n:03d}",
-        subject=f"S{n % 3 + 1:02d}",
-        interface=interface,
-        task=task,
-        paradigm=paradigm,
-        disambiguation_method="algorithm1" if paradigm == "disambiguation" else None,
-        repetition=n % 3,
-        seed=n,
-        start_pose=0,
-        initial_mode=None,
-        intended_goals=[1] if task == "reaching" else [0, 1],
-        reached_goals=[1] if task == "reaching" else [0, 1],
-        success=True,
-        done=True,
-        duration=200.0,
-        completion_time=200.0,
-        mode_switches=switches,
-        requests=requests,
-        automatic_switches=0,
-        button_presses=presses,
-        request_times=[60.0 + 7.0 * (n % 5) + 4.0 * i for i in range(requests)],
-        mode_switch_times=[3.0 * i for i in range(switches)],
-        mode_switch_modes=[MODES[i % len(MODES)] for i in range(switches)],
-        automatic_switch_times=[],
-        mean_alpha=0.2,
-        assistance_onset=None,
-        wall_time=1.0,
-    )
 
 
 def write(folder: Path, cells: dict[tuple[str, str], tuple[list[int], list[int]]]) -> Path:

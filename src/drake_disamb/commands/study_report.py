@@ -11,8 +11,9 @@ HELP = "Analyse a study folder as the paper did: metrics, tests, figures and an 
 EPILOG = """\
 Reads DIR/trials.jsonl and DIR/traces/ (simulated, human or the authors' records, or a mix) and
 writes only DIR/report/: index.html (self-contained), summary.json, stats.json and the figures as
-PNG. With --compare also compare.json (the means side by side) and paradigm_effect.json (the
-Manual -> Disambiguation effect here and there), whose table is printed. On an ablation folder
+PNG. With --compare also compare.json (the means side by side), paradigm_effect.json (the
+Manual -> Disambiguation effect here and there) and per_goal.json (the means per intended goal of
+the reaching task, here and there), whose tables are printed. On an ablation folder
 (DIR/ablation.json) it writes the combined ablation report.
 
 examples (from the repository root):
@@ -39,6 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import json
 
+    from drake_disamb.study.analysis.per_goal import per_goal_text
     from drake_disamb.study.report.effect_table import effect_text
     from drake_disamb.study.report.page import write_report
 
@@ -64,5 +66,9 @@ def run(args: argparse.Namespace) -> int:
     if files.paradigm_effect is not None:
         rows = json.loads(files.paradigm_effect.read_text(encoding="utf-8"))
         print(effect_text(rows, str(args.dir), str(args.compare)))
+    if files.per_goal is not None:
+        rows = json.loads(files.per_goal.read_text(encoding="utf-8"))
+        if rows:
+            print(per_goal_text(rows, str(args.dir), str(args.compare)))
     print(f"wrote {files.index} ({len(files.figures)} figures, {files.stats.name}, {files.summary.name})")
     return 0

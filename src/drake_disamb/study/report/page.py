@@ -21,7 +21,9 @@ means beside the other's per interface, task and paradigm, with their ratio and 
 (:func:`drake_disamb.study.analysis.effect.paradigm_effect`, keys in its module) with a table of the
 Manual -> Disambiguation effect on button presses and user mode switches per interface and per
 interface and task, here and there: the means, the relative change, the rank-sum p, the ratio of the
-relative changes and whether it is within a factor of 2.
+relative changes and whether it is within a factor of 2, and ``per_goal.json``
+(:func:`drake_disamb.study.analysis.per_goal.per_goal`) with a table of the same means per intended
+goal of the single-stage tasks, here and there: a cell's mean mixes the goals its trials drew.
 
 On an ablation folder (``DIR/ablation.json``, written by ``study ablate``), :func:`write_report`
 writes the combined report instead: for every setting, the paradigm effect on button presses
@@ -58,6 +60,8 @@ from drake_disamb.study.analysis.findings import (
     fmt,
     select_trials,
 )
+from drake_disamb.study.analysis.per_goal import SIDE_KEYS as GOAL_SIDE_KEYS
+from drake_disamb.study.analysis.per_goal import per_goal
 from drake_disamb.study.analysis.stats import MIXED_METRICS, run_tests
 from drake_disamb.study.data.folder import StudyFolder, write_atomic
 from drake_disamb.study.data.records import RecordError, TrialRecord
@@ -96,6 +100,8 @@ class ReportFiles:
     summary: Path
     paradigm_effect: Path | None = None
     """``paradigm_effect.json`` (with ``compare`` only)."""
+    per_goal: Path | None = None
+    """``per_goal.json`` (with ``compare`` only)."""
 
 
 # HTML
@@ -381,9 +387,23 @@ def write_report(
             {"source": r["source"], "other source": r["other_source"], **effect_cells(r)} for r in effect
         ]
         sections.append(_table(cells, headers))
+        goals = _json_clean(per_goal(records, other))
+        _write_json(out / "per_goal.json", goals)
+        sections.append("<h2>Per intended goal: this folder beside the other</h2>")
+        sections.append(
+            '<p class="note">The tasks whose records name one intended goal (reaching), per interface, '
+            "paradigm and goal (0-based): trials, failed trials, and the means over the analysed ones "
+            "(user mode switches, requests, completion time in s), here and in the other folder. A "
+            "condition's mean above mixes the goals its trials drew. The numbers are in "
+            "per_goal.json.</p>"
+        )
+        goal_cols = ["interface", "task", "paradigm", "goal"]
+        goal_cols += [f"{p}{k}" for p in ("", "other_") for k in GOAL_SIDE_KEYS]
+        sections.append(_table(goals, goal_cols))
     files = _write_page(out, f"Study report: {folder.name}", sections, figures)
     if other is not None:
         files.paradigm_effect = out / "paradigm_effect.json"
+        files.per_goal = out / "per_goal.json"
     return files
 
 
