@@ -266,6 +266,8 @@ def test_logs_known_path_blend_law_and_belief_replay() -> None:
     assert kp.solved_share > 0.95
     assert np.linalg.norm(np.subtract(kp.start, (0.399, -0.201, 0.276))) < 0.01
     assert kp.blend_share > 0.85 and kp.blend_share_idle > 0.9
+    # The rotational commands sit at one speed (a saturation), 0.7 rad/s, nearly always.
+    assert kp.rotation_speed == pytest.approx(0.7, abs=0.005) and kp.rotation_share > 0.9
     assert min(kp.best.correlation) > 0.9
     assert kp.best.argmax_agreement > 0.75
     # The proximity term does not replay it (the study's system has none, at any radius tried).

@@ -642,7 +642,8 @@ class BeliefReplay:
 class KnownPath:
     """What the known-path trial shows (module docstring): the solved path's start and end (m),
     the share of samples solved to under 1e-4 m/s rms and the worst rms, the attractor speed
-    (m/s), the largest distance to the nearest goal at which a repeller is felt (m); the blend
+    (m/s), the largest distance to the nearest goal at which a repeller is felt (m), the median
+    norm of the rotational commands (rad/s) and the share of the goal samples within 1 % of it; the blend
     law's share of rows with ``alpha > 0`` (within 1e-3) and with the user commanding; the best
     DFT gain's replay, the same with the proximity term added (radii :data:`PROXIMITY_RADII`),
     and another setting's."""
@@ -655,6 +656,8 @@ class KnownPath:
     worst_rms: float
     attractor_speed: float
     repeller_radius: float | None
+    rotation_speed: float
+    rotation_share: float
     blend_share: float
     blend_rows: int
     blend_share_idle: float
@@ -720,6 +723,11 @@ def identify_known_path(
     x, rms, repel, speed = solve_positions(u_a[..., :3], goals)
     dist = np.min(np.linalg.norm(x[:, None] - goals, axis=-1), axis=1)
     felt = np.linalg.norm(repel, axis=1) > _REPELLER_FLOOR
+    # The rotational commands (no orientation was logged, so their law cannot be solved for): their
+    # norm over every goal's samples, and how many sit at it (a saturation).
+    w_norm = np.linalg.norm(u_a[..., 3:], axis=-1).ravel()
+    rotation_speed = float(np.median(w_norm))
+    rotation_share = float(np.mean(np.abs(w_norm - rotation_speed) <= 0.01 * rotation_speed))
     # The blend law on the trial's rows with alpha > 0.
     t = np.asarray(trial.trace["t"], dtype=float)
     alpha = np.asarray(trial.trace["alpha"], dtype=float)
@@ -763,6 +771,8 @@ def identify_known_path(
         worst_rms=float(np.max(rms)),
         attractor_speed=speed,
         repeller_radius=float(np.max(dist[felt])) if np.any(felt) else None,
+        rotation_speed=rotation_speed,
+        rotation_share=rotation_share,
         blend_share=float(np.mean(ok[commanding])) if np.any(commanding) else math.nan,
         blend_rows=int(np.count_nonzero(commanding)),
         blend_share_idle=float(np.mean(ok[~commanding])) if np.any(~commanding) else math.nan,
@@ -843,6 +853,8 @@ class Identification:
                 "solved_share": kp.solved_share,
                 "attractor_speed": kp.attractor_speed,
                 "repeller_radius": kp.repeller_radius,
+                "rotation_speed": kp.rotation_speed,
+                "rotation_share": kp.rotation_share,
                 "blend_share": kp.blend_share,
                 "blend_share_without_command": kp.blend_share_idle,
                 "lambda": kp.best.lam,
@@ -991,6 +1003,9 @@ def format_identification(ident: Identification) -> str:
             if kp.repeller_radius is None
             else f"; a repeller felt up to {kp.repeller_radius:.3f} m from the nearest goal"
         ),
+        f"  rotational commands: norm {kp.rotation_speed:.3f} rad/s (the median), within 1 % of it on "
+        f"{100 * kp.rotation_share:.1f} % of all goals' samples (a saturation; no orientation "
+        "was logged to solve for their law)",
         "  blend law (1 - alpha) u_h + alpha u_a(argmax p), rows with alpha > 0: "
         f"{100 * kp.blend_share:.1f} % of {kp.blend_rows} with a user command, "
         f"{100 * kp.blend_share_idle:.1f} % of {kp.blend_rows_idle} without, within 1e-3",
