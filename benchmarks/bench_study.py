@@ -4,6 +4,7 @@ Usage::
 
     python benchmarks/bench_study.py [--quick] [--subjects N] [--workers N] [--protocol FILE] [--out DIR]
     python benchmarks/bench_study.py --compare-workers [--quick | --subjects N]
+    python benchmarks/bench_study.py --out DIR --only task=reaching [--only interface=joystick ...]
 
 The first form runs the protocol (default: the paper's full protocol, 416 trials; ``--quick`` the
 ``study run --quick`` subset; ``--subjects N`` the first N subjects) into ``--out`` (default: a
@@ -19,6 +20,12 @@ protocol, the full protocol in under 15 minutes.
 equal (apart from ``wall_time``) and prints the speed-up in trials per minute (target at least
 1.8x). Both runs pay the workers' start once, so a small protocol understates the speed-up: use
 at least ``--subjects 2``.
+
+``--only FIELD=V1,V2`` (``interface``, ``task`` or ``paradigm``; repeatable) runs only the
+protocol's trials of those conditions, each with the seed and draws it has in the whole protocol:
+the records equal the whole run's for those trials, so a change to one condition can be measured in
+minutes and compared trial by trial. The folder's ``study.yaml`` describes the whole protocol;
+``study run`` on it resumes the rest.
 
 A protocol that needs scenario fields this build lacks (the Automatic paradigm, the request
 latency) is run without them, and the script says so.
@@ -54,11 +61,36 @@ def protocol_of(args: argparse.Namespace) -> P.Protocol:
     return protocol
 
 
-def run_once(protocol: P.Protocol, out: Path, workers: int, seed: int) -> dict:
-    """Run the protocol into ``out`` (which must be new); the figures of the run."""
+ONLY_FIELDS = ("interface", "task", "paradigm")
+"""The trial fields ``--only`` selects on."""
+
+
+def parse_only(items: list[str]) -> dict[str, set[str]]:
+    """``--only FIELD=V1,V2`` options as ``{field: values}`` (a bad one exits with a message)."""
+    only: dict[str, set[str]] = {}
+    for item in items:
+        field, _, values = item.partition("=")
+        if field not in ONLY_FIELDS or not values:
+            sys.exit(
+                f"--only: expected FIELD=V1[,V2...] with FIELD one of {', '.join(ONLY_FIELDS)}, got {item!r}"
+            )
+        only.setdefault(field, set()).update(v for v in values.split(",") if v)
+    return only
+
+
+def run_once(
+    protocol: P.Protocol, out: Path, workers: int, seed: int, only: dict[str, set[str]] | None = None
+) -> dict:
+    """Run the protocol (or its ``only`` conditions) into ``out`` (which must be new); the figures."""
     plan = plan_study(out, protocol, seed)
     if plan.finished:
         sys.exit(f"{out} already holds {len(plan.finished)} records: give a new --out")
+    if only:
+        plan.pending = [s for s in plan.pending if all(getattr(s, f) in v for f, v in only.items())]
+        if not plan.pending:
+            sys.exit(f"--only: no trial of the protocol matches {only}")
+        chosen = "; ".join(f"{f} {', '.join(sorted(v))}" for f, v in only.items())
+        print(f"only {chosen}: {len(plan.pending)} trials", flush=True)
     with HostMeter() as host:
         start = time.perf_counter()
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
@@ -109,7 +141,17 @@ def main() -> None:
         "--out", type=Path, default=None, help="keep the study here (default: a temporary folder)"
     )
     parser.add_argument("--compare-workers", action="store_true", help="1 vs 2 workers on the same trials")
+    parser.add_argument(
+        "--only",
+        action="append",
+        default=[],
+        metavar="FIELD=V1,V2",
+        help="run only these conditions (interface, task or paradigm; repeatable)",
+    )
     args = parser.parse_args()
+    only = parse_only(args.only)
+    if only and args.compare_workers:
+        sys.exit("--only: not with --compare-workers")
 
     protocol = protocol_of(args)
     print(host_summary(), flush=True)
@@ -118,7 +160,7 @@ def main() -> None:
     base = args.out if args.out is not None else tmp
     try:
         if not args.compare_workers:
-            figures = run_once(protocol, base, args.workers or default_workers(), args.seed)
+            figures = run_once(protocol, base, args.workers or default_workers(), args.seed, only)
             report(figures)
             return
         runs = []
