@@ -125,6 +125,29 @@ def test_start_delay_holds_every_command() -> None:
     assert first == pytest.approx(1.0)
 
 
+def test_start_delay_max_cuts_the_long_draws() -> None:
+    starts = {}
+    for bound in (None, 3.0):
+        starts[bound] = []
+        for seed in range(30):
+            cfg = dataclasses.replace(
+                QUIET, start_delay=2.0, start_delay_log_sd=0.8, start_delay_max=bound, decision_period=0.1
+            )
+            cfg = dataclasses.replace(cfg, seed=seed)
+            s = step(UserState(), 0.0, 1, cfg)
+            starts[bound].append(s.start_until)
+    free, cut = np.array(starts[None]), np.array(starts[3.0])
+    assert free.max() > 3.5  # the lognormal alone draws past the bound ...
+    assert cut.max() == pytest.approx(3.0)  # ... which cuts those draws to it
+    np.testing.assert_array_equal(cut[free <= 3.0], free[free <= 3.0])  # and leaves the others
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf")])
+def test_start_delay_max_must_be_positive(bad: float) -> None:
+    with pytest.raises(ValueError, match="start_delay_max"):
+        dataclasses.replace(QUIET, start_delay_max=bad)
+
+
 def test_settle_prob_skips_some_settles() -> None:
     waits = 0
     for seed in range(100):
@@ -499,6 +522,8 @@ def test_behaviour_estimates_are_human_scale(human_trials) -> None:
 
     est = estimate_behaviour(human_trials)
     assert 2.0 < est.start_delay.median < 15.0
+    # the logs' longest start is 20.0 s (119 trials); a lognormal of their spread reaches 100 s
+    assert est.start_delay.median < est.start_delay.maximum < 30.0
     assert 0.2 < est.press_interval.median < 1.0
     assert 1.0 < est.settle.median < 4.0
     assert 0.1 < est.held_through_switch < 0.6
@@ -523,6 +548,7 @@ def test_population_defaults_follow_the_estimates(human_trials) -> None:
     fixed = PopulationConfig().fixed
     assert d["reaction_time"].median == pytest.approx(est.press_interval.median, rel=0.05)
     assert d["start_delay"].median == pytest.approx(est.start_delay.median, rel=0.05)
+    assert fixed["start_delay_max"] == pytest.approx(est.start_delay.maximum, rel=0.05)  # 20.0 s
     assert d["pause_duration"].median == pytest.approx(est.pause_duration.median, rel=0.05)
     settle = d["settle_time"].median + d["reaction_time"].median
     assert settle == pytest.approx(est.settle.median, rel=0.05)

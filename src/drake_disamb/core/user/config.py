@@ -88,6 +88,8 @@ class TimingConfig:
             the user commands right after its reaction wait).
         start_delay: Median time (s) before the first mode switch or command of the trial.
         start_delay_log_sd: Its log-sd.
+        start_delay_max: The longest start delay (s): a longer draw is cut to it; ``None`` = no bound
+            but the lognormal's own (2 sd).
         release_lag: Mean (s) of the exponential delay with which a drive is released.
     """
 
@@ -100,6 +102,7 @@ class TimingConfig:
     settle_prob: float = 1.0
     start_delay: float = 0.0
     start_delay_log_sd: float = 0.0
+    start_delay_max: float | None = None
     release_lag: float = 0.0
 
     def __post_init__(self) -> None:
@@ -122,7 +125,7 @@ class TimingConfig:
             ),
             allow_zero=True,
         )
-        _check_optional_positive(self, ("decision_period",))
+        _check_optional_positive(self, ("decision_period", "start_delay_max"))
         _check_probabilities(self, ("settle_prob",))
 
 

@@ -79,7 +79,8 @@ values and where they come from):
   ``reaction_log_sd``; after a mode change is finished (the target reached, or the mode a request
   chose) the user waits a further lognormal ``settle_time`` (with probability ``settle_prob``)
   before commanding; at the start of the
-  trial it does nothing but an optional request for a lognormal ``start_delay``.
+  trial it does nothing but an optional request for a lognormal ``start_delay``, at most
+  ``start_delay_max``.
 - *Command noise*: the joystick's stick vector (``[axis_x, axis_y]``, the intended deflection of
   rule 6) gets a direction drawn from a von Mises-Fisher distribution of concentration
   ``direction_kappa`` about the intended one and a magnitude scaled by a lognormal factor of
@@ -228,7 +229,10 @@ def user_step(
         if config.timing.start_delay > 0:
             rng = draw(config, draws) if config.timing.start_delay_log_sd > 0 else None
             draws += rng is not None
-            start_until = time + lognormal(config.timing.start_delay, config.timing.start_delay_log_sd, rng)
+            delay = lognormal(config.timing.start_delay, config.timing.start_delay_log_sd, rng)
+            if config.timing.start_delay_max is not None:
+                delay = min(delay, config.timing.start_delay_max)
+            start_until = time + delay
         state = evolve(state, started=True, start_until=start_until, draws=draws)
 
     rho1 = RHO1_TIMES_N / n if config.rho1 is None else config.rho1

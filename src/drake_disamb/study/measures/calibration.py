@@ -625,7 +625,8 @@ def _fmt_forgone(state: str, argmax: str, rates: dict[str, tuple[float, float]])
 def _fmt_fit(name: str, fit: LogNormalFit, unit: str = "s") -> str:
     per = ", ".join(f"{s} {v:.3g}" for s, v in sorted(fit.subject_medians.items()))
     return (
-        f"{name:<28} median {fit.median:.3g} {unit}, log-sd {fit.log_sd:.2f} (n={fit.n}); "
+        f"{name:<28} median {fit.median:.3g} {unit}, log-sd {fit.log_sd:.2f}, "
+        f"max {fit.maximum:.3g} {unit} (n={fit.n}); "
         f"per subject: {per}; between-subject log-sd {fit.subject_log_sd:.2f}"
     )
 

@@ -18,12 +18,14 @@ from numpy.typing import NDArray
 @dataclass(frozen=True)
 class LogNormalFit:
     """A positive quantity summarised as a lognormal: ``median`` and ``log_sd``, from ``n`` values,
-    with the between-subject log-sd of the per-subject medians (``subject_log_sd``)."""
+    with the between-subject log-sd of the per-subject medians (``subject_log_sd``) and the
+    largest value (``maximum``: a lognormal's upper tail may be heavier than the samples')."""
 
     median: float
     log_sd: float
     n: int
     subject_medians: dict[str, float]
+    maximum: float = float("nan")
 
     @property
     def subject_log_sd(self) -> float:
@@ -42,6 +44,7 @@ def fit_lognormal(values_by_subject: dict[str, list[float]]) -> LogNormalFit:
         log_sd=float(np.std(logs, ddof=1)) if len(logs) > 1 else 0.0,
         n=len(pooled),
         subject_medians={s: float(np.median(vs)) for s, vs in values_by_subject.items() if vs},
+        maximum=float(np.max(pooled)),
     )
 
 
