@@ -7,8 +7,11 @@ import dataclasses
 import math
 
 import pytest
+from support import study_trial
 
 from drake_disamb.config import load_scenario, scenario_from_dict, scenario_to_dict, with_overrides
+from drake_disamb.study.measures.metrics import summarize
+from drake_disamb.study.run.outcome import ik_held_share, trace_arrays
 from drake_disamb.trial import run_trial
 
 
@@ -26,6 +29,10 @@ def _stuck(give_up_after: float | None):  # noqa: ANN202
 def test_a_stuck_trial_is_given_up_and_a_free_one_is_not() -> None:
     stuck = _stuck(10.0)
     assert stuck.end_reason == "given up" and not stuck.success
+    # ... held by the IK: the elbow on its limit, every command of the no-progress window STOPPED
+    trace = trace_arrays(stuck)
+    assert ik_held_share(trace, window=10.0) == pytest.approx(1.0)
+    assert 0.2 < ik_held_share(trace) < 0.8  # the whole trial: free before ~15 s
     assert 20.0 < stuck.time < 40.0, stuck.time  # stuck from ~15 s, given up 10 s later
     assert stuck.progress_age == pytest.approx(10.0, abs=0.5)  # the watch looks every 0.5 s
     limit = _stuck(None)
@@ -87,3 +94,12 @@ def test_the_protocol_gives_up_after_a_minute_and_records_say_how_trials_ended(t
         timeout=900,
     )
     assert report.returncode == 0 and "trials ended: done" in report.stdout
+
+
+def test_the_summary_lists_how_much_the_ik_held_each_failed_trial() -> None:
+    records = []
+    for n, (success, held) in enumerate([(True, 0.9), (False, 0.7), (False, 0.1), (False, None)]):
+        r = study_trial(n, "joystick", "reaching", "manual", presses=2)
+        records.append(dataclasses.replace(r, success=success, extra={**r.extra, "ik_held": held}))
+    (row,) = summarize(records)
+    assert row["failed_ik_held"] == [0.1, 0.7]  # failed trials only, those that logged it

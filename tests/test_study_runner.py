@@ -26,9 +26,10 @@ import yaml
 from scipy.stats import mannwhitneyu
 from support import SRC, cli_process, interrupt, wait_for_line
 
+from drake_disamb.ik import IkStatus
 from drake_disamb.study.data.records import read_records
 from drake_disamb.study.design import protocol as P
-from drake_disamb.study.run.outcome import TRACE_ARRAYS, stage_onsets
+from drake_disamb.study.run.outcome import TRACE_ARRAYS, ik_held_share, stage_onsets
 from drake_disamb.study.run.runner import plan_study, records_by_id, run_study
 
 
@@ -232,6 +233,22 @@ def test_assistance_onset_on_a_hand_made_trace() -> None:
     assert stage_onsets(trace2, [0, 1], [2, 2]) == [None, 2.5]
 
 
+def test_ik_held_share_counts_the_commanding_samples_the_ik_held_in_the_last_window() -> None:
+    t = np.arange(10.0)
+    u_h = np.zeros((10, 6))
+    u_h[[1, 6, 7, 8], 0] = 0.1  # commanding at t = 1, 6, 7, 8
+    status = np.zeros(10)
+    status[1] = IkStatus.STOPPED  # outside the window
+    status[6] = IkStatus.SINGULAR
+    status[7] = IkStatus.LIMITED  # slowed by a joint limit: not held
+    status[9] = IkStatus.STOPPED  # not commanding: the arm is still anyway
+    trace = {"t": t, "u_h": u_h, "ik_status": status}
+    assert ik_held_share(trace, window=4.0) == pytest.approx(1 / 3)
+    assert ik_held_share(trace, window=100.0) == pytest.approx(2 / 4)
+    assert ik_held_share({"t": t, "u_h": u_h}) is None  # not logged (a station on a wire)
+    assert ik_held_share({**trace, "u_h": np.zeros((10, 6))}) is None  # no commanding
+
+
 # -- running ----------------------------------------------------------------------------------------
 
 
@@ -242,14 +259,19 @@ def test_two_workers_give_the_records_of_one(reference: tuple[Path, dict], tmp_p
     for trial_id in ref:
         a = np.load(ref_dir / "traces" / f"{trial_id}.npz")
         b = np.load(tmp_path / "traces" / f"{trial_id}.npz")
-        assert set(a.files) == set(TRACE_ARRAYS)
-        for name in TRACE_ARRAYS:
+        assert set(a.files) == {*TRACE_ARRAYS, "ik_status"}  # the in-process station logs its IK
+        for name in a.files:
             np.testing.assert_array_equal(a[name], b[name])
     record = next(iter(ref.values()))
     T = len(a["t"])
     assert a["belief"].shape == (T, 5) and a["u_h"].shape == (T, 6) and a["ee_pose"].shape == (T, 7)
-    assert a["alpha"].shape == a["mode"].shape == (T,)
+    assert a["alpha"].shape == a["mode"].shape == a["ik_status"].shape == (T,)
+    assert set(np.unique(a["ik_status"])) <= {float(s) for s in IkStatus}
     assert record["source"] == "simulated" and record["extra"]["start_pose_name"]
+    for trial_id, r in ref.items():  # a share where the user commanded (these trials are short)
+        commanded = np.any(np.load(ref_dir / "traces" / f"{trial_id}.npz")["u_h"] != 0)
+        held = r["extra"]["ik_held"]
+        assert (held is None) if not commanded else (0.0 <= held <= 1.0)
 
 
 def test_dask_local_cluster_gives_the_records_of_a_local_run(
@@ -472,7 +494,7 @@ def test_demo_live_record_appends_a_human_record(tmp_path: Path) -> None:
         assert r.source == "human" and r.subject == "P01" and r.wall_time == 0.0 and r.seed is None
         assert r.extra["interrupted"] is True and r.done is False and r.duration > 0.5
         trace = np.load(rec / "traces" / f"{r.trial_id}.npz")
-        assert set(trace.files) == set(TRACE_ARRAYS) and len(trace["t"]) > 10
+        assert set(trace.files) == {*TRACE_ARRAYS, "ik_status"} and len(trace["t"]) > 10
 
 
 def test_demo_record_needs_live_and_a_subject(tmp_path: Path) -> None:

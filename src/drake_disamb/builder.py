@@ -62,6 +62,10 @@ LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
 )
 """``(log name, subsystem, output port)`` of every VectorLogSink the builder adds."""
 
+OPTIONAL_LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (("ik_status", "station", "ik_status"),)
+"""Logged too when the station has the port: the in-process simulation's ``ik_status`` (an
+:class:`~drake_disamb.ik.IkStatus` code per control step; a station on a wire has none)."""
+
 
 @dataclass
 class SharedControlDiagram:
@@ -78,7 +82,8 @@ class SharedControlDiagram:
             ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation and
             automatic paradigms), ``automatic_trigger`` (automatic paradigm only), ``task``,
             ``ee_pose_sampler``, ``diff_ik`` (the station's), ``visualizer`` (with Meshcat only).
-        loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS`).
+        loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS` and
+            :data:`OPTIONAL_LOGGED_SIGNALS`).
         modes: The interface's control modes (dimension lists; gripper mode last).
         meshcat: The Meshcat instance, or ``None``.
     """
@@ -309,7 +314,8 @@ def build_shared_control_diagram(
         systems["visualizer"] = vis
 
     loggers: dict[str, VectorLogSink] = {}
-    for name, sys_name, port in LOGGED_SIGNALS:
+    optional = [s for s in OPTIONAL_LOGGED_SIGNALS if s[1] != "station" or s[2] in station.outputs]
+    for name, sys_name, port in (*LOGGED_SIGNALS, *optional):
         system = station.diagram if sys_name == "station" else systems[sys_name]
         source = system.GetOutputPort(port)
         logger = LogVectorOutput(source, builder, scenario.control_period)

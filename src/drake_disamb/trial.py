@@ -18,7 +18,7 @@ from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import EventStatus
 
-from drake_disamb.builder import LOGGED_SIGNALS, SharedControlDiagram, build_shared_control_diagram
+from drake_disamb.builder import SharedControlDiagram, build_shared_control_diagram
 from drake_disamb.config import Scenario
 from drake_disamb.progress import SimulationProgress
 from drake_disamb.systems.task import TaskManager
@@ -227,7 +227,7 @@ def run_trial(
     else:
         end_reason = "time limit"
     success = done and reached == intended
-    logs = {name: _log(handles, root, name) for name, _, _ in LOGGED_SIGNALS}
+    logs = {name: _log(handles, root, name) for name in handles.loggers}
     _, uh = logs["u_h"]
     _, alpha = logs["alpha"]
     commanding = np.any(np.abs(uh) > 1e-9, axis=1)

@@ -39,6 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import json
+    import statistics
 
     from drake_disamb.study.analysis.per_goal import per_goal_text
     from drake_disamb.study.report.effect_table import effect_text
@@ -51,10 +52,12 @@ def run(args: argparse.Namespace) -> int:
         return 2
     ended: dict[str, int] = {}
     ages: list[float] = []
+    held: list[float] = []
     for row in json.loads(files.summary.read_text(encoding="utf-8")):
         for reason, n in row.get("end_reasons", {}).items():
             ended[reason] = ended.get(reason, 0) + n
         ages.extend(row.get("time_limit_progress_ages", []))
+        held.extend(row.get("failed_ik_held", []))
     if ended:  # simulated trials: how they ended (people's records do not say)
         print("trials ended: " + ", ".join(f"{reason} {n}" for reason, n in sorted(ended.items())))
     if ages:
@@ -62,6 +65,12 @@ def run(args: argparse.Namespace) -> int:
             f"trials at the time limit: {len(ages)} with the progress watch, their arm last came "
             f"closer to the goal {min(ages):.1f} to {max(ages):.1f} s before the end (still "
             "approaching; a stuck arm is given up on by the experimenter's rule)"
+        )
+    if held:
+        print(
+            f"failed trials held by the IK: {sum(h >= 0.5 for h in held)} of {len(held)} had the arm "
+            "stopped or slowed at a singularity (ik_status STOPPED or SINGULAR) on at least half of "
+            f"their last minute of commanding (median share {statistics.median(held):.2f})"
         )
     if files.paradigm_effect is not None:
         rows = json.loads(files.paradigm_effect.read_text(encoding="utf-8"))

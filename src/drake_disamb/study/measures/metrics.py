@@ -216,7 +216,10 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
     limit``, ``given up``, ...: a simulated record's ``extra["end_reason"]``; empty for people),
     and ``time_limit_progress_ages``: for the trials that ran to the time limit, how long before
     the end the arm last came closer to the intended goal (``extra["progress_age"]``, s; a trial
-    whose arm is stuck is ended earlier by the experimenter's rule, ``give_up_after``)."""
+    whose arm is stuck is ended earlier by the experimenter's rule, ``give_up_after``), and
+    ``failed_ik_held``: for the failed trials that logged it, the share of their last minute of
+    commanding at which the IK held the arm (``extra["ik_held"]``, sorted;
+    :func:`~drake_disamb.study.run.outcome.ik_held_share`)."""
     groups: dict[tuple[str, str, str, str], list[TrialMetrics]] = {}
     for r in records:
         groups.setdefault(group_key(r), []).append(trial_metrics(r))
@@ -247,6 +250,11 @@ def summarize(records: Sequence[TrialRecord]) -> list[dict[str, Any]]:
             for m in ms
             if m.record.extra.get("end_reason") == "time limit"
             and isinstance(m.record.extra.get("progress_age"), int | float)
+        )
+        row["failed_ik_held"] = sorted(
+            float(m.record.extra["ik_held"])
+            for m in ms
+            if m.success is False and isinstance(m.record.extra.get("ik_held"), int | float)
         )
         row["request_time_skewness"] = request_time_skewness(analysed)
         row["mean_alpha"] = _mean(m.mean_alpha for m in analysed)

@@ -9,7 +9,13 @@ Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,
 (T, n_goals); ``u_h`` and ``u`` (T, 6): spatial velocities in the paper's order
 ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, world frame W); ``alpha`` (T,); ``mode`` (T,) mode
 index; ``ee_pose`` (T, 7) ``[x, y, z, qw, qx, qy, qz]`` of the end effector in W; ``stage`` (T,)
-the task's stage index.
+the task's stage index; with the in-process simulation also ``ik_status`` (T,), the station's
+:class:`~drake_disamb.ik.IkStatus` code.
+
+**Held by the IK** (:func:`ik_held_share`, the record's ``extra["ik_held"]``): of the samples in
+the trial's last :data:`IK_HELD_WINDOW` seconds where the user commands, the share at which the
+IK stopped the arm or slowed it at a singularity (``STOPPED`` or ``SINGULAR``): an arm the user
+keeps pushing into a singularity or a limit, the usual way a simulated trial gets stuck.
 
 **Assistance onset** (:func:`stage_onsets`, by :func:`drake_disamb.study.data.records.assistance_onset`):
 the blender assists only while the user commands
@@ -29,17 +35,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.config import interface_variant
+from drake_disamb.ik import IkStatus
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
 __all__ = [
+    "IK_HELD_WINDOW",
     "TRACE_ARRAYS",
+    "ik_held_share",
     "record_from_result",
     "stage_onsets",
     "trace_arrays",
 ]
 
 TRACE_ARRAYS: tuple[str, ...] = ("t", "belief", "u_h", "u", "alpha", "mode", "ee_pose", "stage")
-"""Arrays of a trace file (module docstring)."""
+"""Arrays of a trace file (module docstring); ``ik_status`` is added when the trial logged it."""
+
+IK_HELD_WINDOW = 60.0
+"""Seconds at the end of a trial over which :func:`ik_held_share` looks (the experimenter's
+``give_up_after`` of the paper's protocol: the window that ends a stuck trial)."""
+
+_HELD = (int(IkStatus.STOPPED), int(IkStatus.SINGULAR))
 
 
 def trace_arrays(result: Any) -> dict[str, NDArray[np.float64]]:
@@ -56,11 +71,28 @@ def trace_arrays(result: Any) -> dict[str, NDArray[np.float64]]:
         "ee_pose": np.asarray(logs["ee_pose"][1], dtype=float),
         "stage": np.asarray(logs["stage"][1], dtype=float)[:, 0],
     }
+    if "ik_status" in logs:
+        out["ik_status"] = np.asarray(logs["ik_status"][1], dtype=float)[:, 0]
     n = len(out["t"])
     for name, arr in out.items():
         if len(arr) != n:  # the loggers share one period: a mismatch is a wiring error
             raise RuntimeError(f"trace: {name} has {len(arr)} samples, t has {n}")
     return out
+
+
+def ik_held_share(trace: dict[str, NDArray[np.float64]], window: float = IK_HELD_WINDOW) -> float | None:
+    """Of the samples in the trace's last ``window`` seconds where the user commands (``u_h`` not
+    zero), the share whose ``ik_status`` is ``STOPPED`` or ``SINGULAR``; ``None`` without an
+    ``ik_status`` array or without commanding samples there."""
+    status = trace.get("ik_status")
+    if status is None or len(status) == 0:
+        return None
+    t = np.asarray(trace["t"], dtype=float)
+    commanding = np.any(np.abs(np.asarray(trace["u_h"], dtype=float)) > 1e-9, axis=1)
+    recent = commanding & (t >= t[-1] - window)
+    if not np.any(recent):
+        return None
+    return float(np.mean(np.isin(np.rint(status[recent]).astype(int), _HELD)))
 
 
 def _intended_index(n_belief: int, stage_sizes: list[int], stage: int, goal: int) -> int:
@@ -134,6 +166,7 @@ def record_from_result(
         "interrupted": bool(result.interrupted),
         "end_reason": result.end_reason,
         "progress_age": _finite(result.progress_age),
+        "ik_held": ik_held_share(trace),
     }
     info.update(extra or {})
     return TrialRecord(
