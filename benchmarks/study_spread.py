@@ -29,7 +29,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from drake_disamb.study.analysis.effect import paradigm_effect
+from drake_disamb.study.analysis.effect import FACTOR, paradigm_effect
 from drake_disamb.study.analysis.findings import compare_summaries
 from drake_disamb.study.data.records import RecordError, TrialRecord
 from drake_disamb.study.measures.metrics import summarize
@@ -73,7 +73,8 @@ def success(records: list[TrialRecord]) -> tuple[dict[str, float], int, int]:
         if trials:
             rates[paradigm] = sum(bool(r.success) for r in trials) / len(trials)
     failed = [r for r in records if r.paradigm in PARADIGMS and r.success is False]
-    return rates, sum(r.task == "pouring" for r in failed), len(failed)
+    multi_step = sum(len(r.intended_goals or []) > 1 for r in failed)  # a goal per stage
+    return rates, multi_step, len(failed)
 
 
 def effects(records: list[TrialRecord], people: list[TrialRecord]) -> dict[tuple[str, str], dict]:
@@ -120,7 +121,8 @@ def main() -> int:
         changes = [r["relative_change"] for r in rows if r["relative_change"] is not None]
         passed = sum(bool(r["check"]) for r in rows)
         span = f"{100 * min(changes):+.0f} % to {100 * max(changes):+.0f} %" if changes else "-"
-        print(f"  {key[0]} {key[1].replace('_', ' ')}: {span}; within a factor of 2: {passed} of {len(rows)}")
+        name = f"{key[0]} {key[1].replace('_', ' ')}"
+        print(f"  {name}: {span}; within a factor of {FACTOR:g}: {passed} of {len(rows)}")
     return 0
 
 

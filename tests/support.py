@@ -5,13 +5,17 @@ a pose moved by a twist)."""
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import importlib.util
+import io
 import os
 import select
 import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
@@ -89,6 +93,29 @@ def screenshot_script() -> ModuleType:
     module = importlib.util.module_from_spec(spec)  # type: ignore[arg-type]
     spec.loader.exec_module(module)  # type: ignore[union-attr]
     return module
+
+
+def report_compared(here: Path, there: Path) -> str:
+    """``drake-disamb study report HERE --compare THERE --no-mixed-model`` in this process (it must
+    succeed); its standard output."""
+    from drake_disamb.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["study", "report", str(here), "--compare", str(there), "--no-mixed-model"]) == 0
+    return out.getvalue()
+
+
+@contextlib.contextmanager
+def benchmark_module(name: str) -> Iterator[ModuleType]:
+    """``benchmarks/<name>.py`` imported as a module, with ``benchmarks/`` on ``sys.path`` meanwhile
+    (the scripts import their neighbour ``_host``)."""
+    path = str(REPO / "benchmarks")
+    sys.path.insert(0, path)
+    try:
+        yield importlib.import_module(name)
+    finally:
+        sys.path.remove(path)
 
 
 def normalized_quaternions_unchecked(q: NDArray[np.float64]) -> NDArray[np.float64]:

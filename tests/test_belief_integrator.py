@@ -2,26 +2,21 @@
 
 from __future__ import annotations
 
-import importlib
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from support import benchmark_module
 
 from drake_disamb.core.trial_files import load_trials
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
 
 
 @pytest.fixture(scope="module")
 def bench():  # noqa: ANN201 (the benchmark module)
-    sys.path.insert(0, str(BENCHMARKS))  # the script imports its neighbour _host
-    try:
-        yield importlib.import_module("bench_belief_integrator")
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+    with benchmark_module("bench_belief_integrator") as module:
+        yield module
 
 
 @pytest.fixture(scope="module")

@@ -3,24 +3,18 @@ and draws they have in the whole protocol (the trials themselves are not run her
 
 from __future__ import annotations
 
-import importlib
-import sys
 from pathlib import Path
 
 import pytest
+from support import benchmark_module
 
 from drake_disamb.study.design import protocol as P
-
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 @pytest.fixture(scope="module")
 def bench():  # noqa: ANN201 (the benchmark module)
-    sys.path.insert(0, str(BENCHMARKS))  # the script imports its neighbour _host
-    try:
-        yield importlib.import_module("bench_study")
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+    with benchmark_module("bench_study") as module:
+        yield module
 
 
 def test_only_parses_fields_and_values(bench) -> None:  # noqa: ANN001

@@ -4,13 +4,12 @@ logs compared with themselves (skipped where ../shared/data is absent)."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from pathlib import Path
 
 import pytest
 from scipy.stats import mannwhitneyu
+from support import report_compared
 from support import study_trial as trial
 
 from drake_disamb.cli import main
@@ -58,10 +57,7 @@ THERE = {
 def compared(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     root = tmp_path_factory.mktemp("effect")
     here, there = write(root / "here", HERE), write(root / "there", THERE)
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        assert main(["study", "report", str(here), "--compare", str(there), "--no-mixed-model"]) == 0
-    return here, out.getvalue()
+    return here, report_compared(here, there)
 
 
 def rows_of(folder: Path) -> dict[tuple[str, str, str], dict]:

@@ -3,15 +3,12 @@ table in index.html and on stdout), on small synthetic folders whose answer is k
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from pathlib import Path
 
 import pytest
-from support import study_trial
+from support import report_compared, study_trial
 
-from drake_disamb.cli import main
 from drake_disamb.study.analysis.per_goal import per_goal
 from drake_disamb.study.data.records import append_record
 
@@ -40,10 +37,7 @@ THERE = [("joystick", "manual", 0, 6), ("joystick", "manual", 3, 1), ("joystick"
 def compared(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     root = tmp_path_factory.mktemp("per_goal")
     here, there = _folder(root / "here", HERE), _folder(root / "there", THERE)
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        assert main(["study", "report", str(here), "--compare", str(there), "--no-mixed-model"]) == 0
-    return here, out.getvalue()
+    return here, report_compared(here, there)
 
 
 def _rows(folder: Path) -> dict[tuple[str, str, int], dict]:
@@ -88,3 +82,14 @@ def test_the_table_is_printed_and_on_the_page(compared: tuple[Path, str]) -> Non
 def test_without_single_goal_tasks_there_are_no_rows(tmp_path: Path) -> None:
     a = [study_trial(0, "joystick", "pouring", "manual", 3)]
     assert per_goal(a, a) == []
+
+
+def test_grouped_table_aligns_labels_left_numbers_right_in_groups() -> None:
+    from drake_disamb.study.analysis.text_table import grouped_table, number
+
+    body = [["x", number(1.5), number(None)], ["long", "10.25", "2"]]
+    lines = grouped_table(["name", "a", "b"], body, (1, 2))
+    assert lines == ["name |     a  b", "x    |  1.50  -", "long | 10.25  2"]
+    assert number(float("nan")) == "-" and number(2.0, 1) == "2.0"
+    with pytest.raises(ValueError, match="groups"):
+        grouped_table(["a", "b"], [], (1, 2))

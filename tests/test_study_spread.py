@@ -3,25 +3,19 @@ whose answer is known."""
 
 from __future__ import annotations
 
-import importlib
 import sys
 from pathlib import Path
 
 import pytest
-from support import study_trial
+from support import benchmark_module, study_trial
 
 from drake_disamb.study.data.records import append_record
-
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 @pytest.fixture(scope="module")
 def spread():  # noqa: ANN201 (the benchmark module)
-    sys.path.insert(0, str(BENCHMARKS))
-    try:
-        yield importlib.import_module("study_spread")
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+    with benchmark_module("study_spread") as module:
+        yield module
 
 
 def _folder(path: Path, manual: list[int], disamb: list[int], fail_pouring: bool = False) -> Path:

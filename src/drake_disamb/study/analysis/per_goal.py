@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from drake_disamb.study.analysis.text_table import grouped_table, number
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.metrics import TrialMetrics, trial_metrics
 
@@ -83,10 +84,6 @@ def per_goal(records: Sequence[TrialRecord], other: Sequence[TrialRecord]) -> li
     return rows
 
 
-def _num(v: float | None, digits: int) -> str:
-    return "-" if v is None else f"{v:.{digits}f}"
-
-
 def per_goal_text(rows: Sequence[dict[str, Any]], here: str, there: str) -> str:
     """``rows`` as the compact table ``study report --compare`` prints (``here`` / ``there`` name
     the folders): per goal, trials (failed), switches, requests and completion time on each side."""
@@ -98,21 +95,13 @@ def per_goal_text(rows: Sequence[dict[str, Any]], here: str, there: str) -> str:
         for p in ("", "other_"):
             line += [
                 f"{r[p + 'trials']} ({r[p + 'failed']})",
-                _num(r[p + "mode_switches"], 2),
-                _num(r[p + "requests"], 2),
-                _num(r[p + "completion_time"], 1),
+                number(r[p + "mode_switches"], 2),
+                number(r[p + "requests"], 2),
+                number(r[p + "completion_time"], 1),
             ]
         body.append(line)
-    width = [max(len(x) for x in col) for col in zip(header, *body, strict=True)]
-
-    def fmt(values: Sequence[str]) -> str:
-        parts = [
-            v.ljust(w) if i < 4 else v.rjust(w) for i, (v, w) in enumerate(zip(values, width, strict=True))
-        ]
-        return " | ".join("  ".join(g) for g in (parts[:4], parts[4:8], parts[8:]))
-
     title = [
         "Per intended goal (single-stage tasks): trials (failed), then means over the analysed trials",
         f"left: {here}; right: {there}",
     ]
-    return "\n".join([*title, fmt(header), *(fmt(b) for b in body)])
+    return "\n".join([*title, *grouped_table(header, body, (4, 4, 4))])

@@ -11,10 +11,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from drake_disamb.study.analysis.effect import FACTOR
+from drake_disamb.study.analysis.text_table import MISSING, grouped_table, number
 
 __all__ = ["EFFECT_HEADERS", "TEXT_COLUMNS", "effect_cells", "effect_text"]
 
-MISSING = "-"
 EFFECT_HEADERS = (
     "metric",
     "interface",
@@ -38,10 +38,6 @@ TEXT_COLUMNS = tuple(h for h in EFFECT_HEADERS if h not in ("n", "other n"))
 """The columns of the text table (:func:`effect_text`)."""
 
 
-def _num(v: float | None, digits: int = 2) -> str:
-    return MISSING if v is None or not math.isfinite(v) else f"{v:.{digits}f}"
-
-
 def _change(v: float | None) -> str:
     return MISSING if v is None or not math.isfinite(v) else f"{100 * v:+.0f}%"
 
@@ -60,11 +56,11 @@ def effect_cells(row: dict[str, Any]) -> dict[str, str]:
     for prefix in ("", "other "):
         key = prefix.replace(" ", "_")
         cells[f"{prefix}n"] = f"{row[f'{key}n_manual']}/{row[f'{key}n_disambiguation']}"
-        cells[f"{prefix}Manual"] = _num(row[f"{key}mean_manual"])
-        cells[f"{prefix}Disambiguation"] = _num(row[f"{key}mean_disambiguation"])
+        cells[f"{prefix}Manual"] = number(row[f"{key}mean_manual"])
+        cells[f"{prefix}Disambiguation"] = number(row[f"{key}mean_disambiguation"])
         cells[f"{prefix}change"] = _change(row[f"{key}relative_change"])
         cells[f"{prefix}p"] = _p(row[f"{key}p_value"])
-    cells["ratio of changes"] = _num(row["ratio"])
+    cells["ratio of changes"] = number(row["ratio"])
     cells["check"] = "n/a" if row["check"] is None else ("yes" if row["check"] else "no")
     return cells
 
@@ -79,19 +75,11 @@ def effect_text(rows: Sequence[dict[str, Any]], here: str, there: str) -> str:
         header.insert(0, "sources")
         for r, b in zip(rows, body, strict=True):
             b.insert(0, f"{r['source']}/{r['other_source']}")
-    width = [max(len(x) for x in col) for col in zip(header, *body, strict=True)]
     n_label = len(header) - 10  # the label columns, then two sides of 4 and ratio, check
-
-    def line(values: Sequence[str]) -> str:
-        pairs = enumerate(zip(values, width, strict=True))
-        parts = [v.ljust(w) if i < n_label else v.rjust(w) for i, (v, w) in pairs]
-        groups = [parts[:n_label], parts[n_label : n_label + 4], parts[n_label + 4 : -2], parts[-2:]]
-        return " | ".join("  ".join(g) for g in groups)
-
     lo, hi = 1 / FACTOR, FACTOR
     title = [
         "Paradigm effect Manual -> Disambiguation: means, change = (Dis - Man) / Man, two-sided rank-sum p",
         f"left: {here}; right: {there}; ratio = left change / right change; "
         f"check: same direction and within a factor of {FACTOR:g} (ratio in [{lo:g}, {hi:g}])",
     ]
-    return "\n".join([*title, line(header), *(line(b) for b in body)])
+    return "\n".join([*title, *grouped_table(header, body, (n_label, 4, 4, 2))])
