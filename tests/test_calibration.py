@@ -107,12 +107,11 @@ def _check(est) -> None:  # noqa: ANN001
     assert math.isnan(joy["reaching"].time_to_end) and math.isnan(joy["reaching"].entries)
     assert (head["reaching"].share, head["reaching"].n) == (0.0, 1) and "pouring" not in head
     assert est.starts_in_gripper == {"joystick": (0.25, 4), "head_array": (1.0, 1)}
-    lines = format_estimates(est).splitlines()
-    assert lines[-3] == (
+    assert _line(est, "ends in gripper mode") == (
         "ends in gripper mode         joystick reaching 0.00 of 1, pouring 0.67 of 3 (median 4.0 s from "
         "the change to the end, 1.5 changes into it); head array reaching 0.00 of 1"
     )
-    assert lines[-2] == (
+    assert _line(est, "starts in gripper mode") == (
         "starts in gripper mode       joystick 0.25 of 4 (1/5 = 0.20 if uniform over all modes), "
         "head array 1.00 of 1 (1/7 = 0.14 if uniform over all modes)"
     )

@@ -938,3 +938,31 @@ def test_waiting_for_the_system_is_not_being_unhelped() -> None:
         raws.append(state.raw.copy())
     assert not any(r[3] for r in raws)
     assert any(HEAD.variant.is_driving(r) for r in raws)
+
+
+def test_while_unsure_a_user_translates_first_with_unsure_rotation_weight() -> None:
+    # The head array in vx, done; z 0.05 m off (6 tolerances) and the gripper turned 0.5 rad about
+    # z (10 tolerances): the oracle's next mode is wz. With unsure_rotation_weight 0 and the belief
+    # unsure (or on the other goal) it is vz; with the assistance helping, wz again (it rotates
+    # then); with nothing left to translate, wz whatever the belief.
+    ee = np.array([*GOALS[0, :2], GOALS[0, 2] + 0.05, *quat_from_rotvec(np.array([0.0, 0.0, 0.5]))])
+    flat, elsewhere, helping = np.array([0.5, 0.5]), np.array([0.1, 0.9]), np.array([0.9, 0.1])
+    first = dataclasses.replace(NO_REQUESTS, unsure_rotation_weight=0.0)
+    wz, vz = 5, 2
+
+    def target(config: UserConfig, belief: np.ndarray | None, at: np.ndarray = ee) -> int:
+        s = step(
+            UserState(requested_at_start=True), 0.0, 0, interface=HEAD, config=config, ee=at, belief=belief
+        )
+        return s.target_mode
+
+    assert target(NO_REQUESTS, flat) == wz and target(NO_REQUESTS, None) == wz
+    assert target(first, flat) == vz and target(first, elsewhere) == vz and target(first, None) == vz
+    assert target(first, helping) == wz
+    level = ee.copy()
+    level[2] = GOALS[0, 2]
+    assert target(first, flat, level) == wz
+    with pytest.raises(
+        ValueError, match=r"UserConfig.unsure_rotation_weight: expected a number in \[0, 1\], got 1.5"
+    ):
+        UserConfig(unsure_rotation_weight=1.5)

@@ -208,6 +208,14 @@ class ModeChoiceConfig:
             command, which carries the arm home. Not with a switched interface (the head array),
             whose full-speed switches along a done dimension drive the arm away from the goal
             (there only a kept request mode is used so, with ``keep_assisted_mode``).
+        unsure_rotation_weight: While the autonomy does not assist the user's goal (the belief
+            unsure, or on another goal), the weight of a rotation mode's remaining error in the
+            mode choice while a translation mode still has work left, in [0, 1]: people translate
+            first and leave the rotation for later (``study calibrate``, commanding by belief:
+            while unsure, head array 0.15 of the time translating and 0.008 rotating, joystick
+            0.15 and 0.027), when the assistance, once it helps, rotates the gripper for them.
+            1: no difference (rotation modes weigh as their error), the default and the study
+            population's (0 was tried and not kept: docs/population.md).
     """
 
     stall_time: float | None = 2.0
@@ -221,6 +229,7 @@ class ModeChoiceConfig:
     mode_review_rate: float = 0.0
     wrong_press_prob: float = 0.0
     stay_while_assisted: bool = False
+    unsure_rotation_weight: float = 1.0
 
     def __post_init__(self) -> None:
         if self.stall_time is not None and not (is_real(self.stall_time) and self.stall_time > 0):
@@ -236,6 +245,9 @@ class ModeChoiceConfig:
             allow_zero=True,
         )
         _check_probabilities(self, ("overshoot_prob", "wrong_press_prob"))
+        w = self.unsure_rotation_weight
+        if not (is_real(w) and 0 <= w <= 1):
+            raise ValueError(f"UserConfig.unsure_rotation_weight: expected a number in [0, 1], got {w!r}")
         _check_bools(self, ("stay_while_assisted",))
 
 

@@ -100,7 +100,9 @@ values and where they come from):
   press, made with the stick centred, cycles on either interface. With ``mode_review_rate`` it also
   reviews its mode while it still helps (the same choice, the current mode in it at no press cost)
   and leaves it for a clearly better one, as people interleave modes (not while a kept mode, below,
-  carries it).
+  carries it). With ``unsure_rotation_weight`` below 1, while the autonomy does not
+  assist its goal and a translation is left, a rotation mode's remaining error counts that much
+  in the choice (translating first).
 - *Judging where to stop*: on entering an arm mode the user judges by eye where to stop along
   its dimensions and stops short by a half-normal share (scale ``aim_error``) of the distance it
   sees; the mode then looks done. With probability ``correction_prob`` (``stick_correction_prob``

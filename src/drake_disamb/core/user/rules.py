@@ -24,6 +24,7 @@ The order, and what each rule does, is the policy of :mod:`drake_disamb.core.use
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 
@@ -177,7 +178,7 @@ class Decision:
         g = self.rng() if self.config.mode_choice.mode_temperature > 0 else None
         exclude = g is not None if exclude_current is None else exclude_current
         return choose_mode(
-            self.arm_remaining,
+            self._weighed_remaining(),
             self.mode,
             self.n_modes,
             self.config,
@@ -186,6 +187,27 @@ class Decision:
             direct=self.direct,
             back=self.variant.steps_back,
         )
+
+    def _weighed_remaining(self) -> NDArray[np.float64]:
+        """The arm modes' remaining errors as the mode choice weighs them: while the autonomy does
+        not assist the goal and a translation mode has work left, a rotation mode's times
+        ``unsure_rotation_weight`` (the user translates first)."""
+        weight = self.config.mode_choice.unsure_rotation_weight
+        remaining = self.arm_remaining
+        if weight >= 1.0 or self.assisted:
+            return remaining
+        rotation = _rotation_modes(self.modes)[: remaining.size]
+        if not np.any(remaining[~rotation] > 1.0):
+            return remaining  # nothing left to translate: the rotations are what is left
+        return np.where(rotation, weight * remaining, remaining)
+
+
+@functools.lru_cache(maxsize=16)
+def _rotation_modes(modes: tuple[tuple[int, ...], ...]) -> NDArray[np.bool_]:
+    """Per mode, whether all its dimensions are rotations (wx, wy, wz: dims 3 to 5) (read-only)."""
+    out = np.array([bool(dims) and all(3 <= d <= 5 for d in dims) for dims in modes])
+    out.setflags(write=False)
+    return out
 
 
 def release_rule(d: Decision) -> UserState | None:

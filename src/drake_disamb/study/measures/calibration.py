@@ -66,6 +66,10 @@ measures behaviour only, never the Manual-versus-Disambiguation outcome the stud
   on another goal above ``rho1`` (the arm heads for another object): ``counter_prob``.
 - **How a trial starts and ends, and how far the arm is driven**: ending and starting in the
   gripper mode, and the commanded path (:mod:`drake_disamb.study.measures.course`, which defines them).
+- **What the user commands by the belief's state, and rotation dwells**: in reaching, the shares
+  of the time the assistance helps and of the time it cannot in which the user commands a
+  translation or a rotation only; the user's changes into a rotation mode commanded in, and for
+  how long (:mod:`drake_disamb.study.measures.commanding`, which defines them).
 
 The trials measured are the analysed ones (:func:`~drake_disamb.study.measures.metrics.is_analysed`: valid,
 not failed) of the paradigms people did (Manual and Disambiguation). The same function measures
@@ -97,6 +101,16 @@ from drake_disamb.core.blending import RHO1_TIMES_N
 from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.study.data.authors import LOG_INTERFACES
 from drake_disamb.study.data.folder import LoggedTrial
+from drake_disamb.study.measures.commanding import (
+    CommandingByBelief,
+    RotationDwells,
+    commanding_by_belief,
+    format_commanding,
+    rotation_dwells,
+    summarize_commanding,
+    summarize_rotation_dwells,
+    user_command,
+)
 from drake_disamb.study.measures.course import (
     CommandPath,
     GripperEnd,
@@ -208,6 +222,10 @@ class BehaviourEstimates:
     """Per interface, the share of trials starting in the gripper mode and the number of trials."""
     command_path: dict[str, dict[str, CommandPath]]
     """Per interface and task, the commanded path (:class:`CommandPath`)."""
+    commanding_by_belief: dict[str, CommandingByBelief]
+    """Per interface, reaching: what the user commands while the belief helps and while it is unsure."""
+    rotation_dwells: dict[str, RotationDwells]
+    """Per interface: the user's changes into a rotation mode, commanded in or not, and how long."""
 
 
 def _reversals(u: NDArray[np.float64]) -> int:
@@ -220,11 +238,7 @@ def _reversals(u: NDArray[np.float64]) -> int:
     return int(np.count_nonzero(np.einsum("ij,ij->j", kept[:, :-1], kept[:, 1:]) < 0.0))
 
 
-def _user_vel(trial: LoggedTrial) -> tuple[NDArray[np.float64], float]:
-    """The ``(6, M)`` user command ``[vx, vy, vz, wx, wy, wz]`` and the seconds per sample
-    (``total_time / M``: the log has no times)."""
-    u = np.asarray(trial.trace["u_h"], dtype=float).T
-    return u, trial.record.duration / max(u.shape[1], 1)
+_user_vel = user_command
 
 
 def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
@@ -272,6 +286,8 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     gripper_paths: dict[tuple[str, str], list[tuple[bool, float, int]]] = {}
     gripper_starts: dict[str, list[bool]] = {}
     command_paths: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
+    by_belief: dict[str, list[NDArray[np.float64]]] = {}
+    rotations: dict[str, list[list[float]]] = {}
     for trial in valid:
         r = trial.record
         s = r.subject
@@ -280,6 +296,11 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
         if path is not None:
             command_paths.setdefault((r.interface, r.task), []).append(path)
         gripper_starts.setdefault(r.interface, []).append(starts_in_gripper(trial))
+        rotations.setdefault(r.interface, []).append(rotation_dwells(trial))
+        if r.task == "reaching":
+            row = commanding_by_belief(trial)
+            if row is not None:
+                by_belief.setdefault(r.interface, []).append(row)
         user_vel, dt = _user_vel(trial)
         cmd = np.any(user_vel != 0.0, axis=0)
         on = np.flatnonzero(cmd)
@@ -493,6 +514,8 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             if i in gripper_starts
         },
         command_path=_per_condition(command_paths, summarize_command_paths),
+        commanding_by_belief={i: summarize_commanding(by_belief[i]) for i in INTERFACES if i in by_belief},
+        rotation_dwells={i: summarize_rotation_dwells(rotations[i]) for i in INTERFACES if i in rotations},
     )
 
 
@@ -722,6 +745,7 @@ def format_estimates(est: BehaviourEstimates) -> str:
         _fmt_forgone("misled", "another goal", est.changes_per_minute_misled),
         *format_gripper(est.gripper_end, est.starts_in_gripper),
         format_command_path(est.command_path),
+        *format_commanding(est.commanding_by_belief, est.rotation_dwells),
     ]
     return "\n".join(lines)
 
