@@ -103,3 +103,13 @@ def test_people_translate_first_while_the_assistance_cannot_help() -> None:
     # head-array rotations are tapped: commanded in a minority of the changes into them, briefly
     head = est.rotation_dwells["head_array"]
     assert head.commanded < 0.5 and head.seconds < 1.0
+
+
+def test_mode_kinds() -> None:
+    from drake_disamb.core.interfaces import INTERFACES
+    from drake_disamb.core.layout import is_rotation_mode, is_translation_mode
+
+    joystick = INTERFACES["joystick"].modes  # {vx, vy} {vx, vz} {wx, wz} {wy} {gripper}
+    assert [is_translation_mode(m) for m in joystick] == [True, True, False, False, False]
+    assert [is_rotation_mode(m) for m in joystick] == [False, False, True, True, False]
+    assert not is_translation_mode(()) and not is_rotation_mode(()) and not is_rotation_mode((2, 3))

@@ -13,6 +13,17 @@ GRIPPER_DIM: int = 6
 DIM_NAMES: tuple[str, ...] = ("vx", "vy", "vz", "wx", "wy", "wz", "gripper")
 """Human-readable names of the dimension indices 0..6."""
 
+
+def is_translation_mode(dims: tuple[int, ...]) -> bool:
+    """Whether a control mode's dimensions are all translations (vx, vy, vz: 0 to 2)."""
+    return bool(dims) and all(0 <= d <= 2 for d in dims)
+
+
+def is_rotation_mode(dims: tuple[int, ...]) -> bool:
+    """Whether a control mode's dimensions are all rotations (wx, wy, wz: 3 to 5)."""
+    return bool(dims) and all(3 <= d <= 5 for d in dims)
+
+
 POSE_SIZE: int = 7
 """Length of a pose on a vector port: ``[x, y, z, qw, qx, qy, qz]``."""
 

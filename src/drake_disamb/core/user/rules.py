@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
-from drake_disamb.core.layout import GRIPPER_DIM
+from drake_disamb.core.layout import GRIPPER_DIM, is_rotation_mode
 from drake_disamb.core.sampling import lognormal, sample_von_mises_fisher
 from drake_disamb.core.user.config import UserConfig
 from drake_disamb.core.user.judgement import choose_mode, dim_tolerances, draw, mode_remaining
@@ -204,8 +204,9 @@ class Decision:
 
 @functools.lru_cache(maxsize=16)
 def _rotation_modes(modes: tuple[tuple[int, ...], ...]) -> NDArray[np.bool_]:
-    """Per mode, whether all its dimensions are rotations (wx, wy, wz: dims 3 to 5) (read-only)."""
-    out = np.array([bool(dims) and all(3 <= d <= 5 for d in dims) for dims in modes])
+    """Per mode, whether it is a rotation mode (:func:`~drake_disamb.core.layout.is_rotation_mode`)
+    (read-only)."""
+    out = np.array([is_rotation_mode(dims) for dims in modes])
     out.setflags(write=False)
     return out
 

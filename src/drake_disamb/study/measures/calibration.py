@@ -238,9 +238,6 @@ def _reversals(u: NDArray[np.float64]) -> int:
     return int(np.count_nonzero(np.einsum("ij,ij->j", kept[:, :-1], kept[:, 1:]) < 0.0))
 
 
-_user_vel = user_command
-
-
 def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
     """The behaviour estimates of the valid trials (module docstring), from
     :func:`drake_disamb.study.data.authors.read_trials`."""
@@ -301,7 +298,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
             row = commanding_by_belief(trial)
             if row is not None:
                 by_belief.setdefault(r.interface, []).append(row)
-        user_vel, dt = _user_vel(trial)
+        user_vel, dt = user_command(trial)
         cmd = np.any(user_vel != 0.0, axis=0)
         on = np.flatnonzero(cmd)
         times_cmd = on * dt

@@ -31,8 +31,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.core.layout import is_rotation_mode
 from drake_disamb.study.data.folder import LoggedTrial
+from drake_disamb.study.measures.course import mode_after
 
 __all__ = [
     "CommandingByBelief",
@@ -84,7 +85,7 @@ def commanding_by_belief(trial: LoggedTrial) -> NDArray[np.float64] | None:
     helped, rotation unsure]`` (module docstring), or ``None`` unless it has one intended goal and
     a usable belief and command."""
     r = trial.record
-    belief = np.asarray(trial.trace.get("belief", np.zeros((0, 0))), dtype=float)
+    belief = np.asarray(trial.trace["belief"], dtype=float)
     t = np.asarray(trial.trace["t"], dtype=float)
     if len(r.intended_goals) != 1 or belief.ndim != 2 or belief.shape[0] != t.size or t.size == 0:
         return None
@@ -134,23 +135,16 @@ def rotation_dwells(trial: LoggedTrial) -> list[float]:
     """The seconds commanded in each of the trial's user changes into a rotation mode (module
     docstring; 0 for one passed through)."""
     r = trial.record
-    modes = INTERFACES[r.interface].modes
-    t = np.asarray(trial.trace["t"], dtype=float)
-    mode = np.rint(np.asarray(trial.trace["mode"], dtype=float)).astype(int)
-    if t.size == 0:
-        return []
+    own = sorted(x for x in r.mode_switch_times if x > 0)
     u, dt = user_command(trial)
     commanding = np.any(u != 0.0, axis=0)
-    own = sorted(x for x in r.mode_switch_times if x > 0)
     ends = np.sort(np.asarray([*own, *trial.request_switch_times.tolist(), *r.request_times, r.duration]))
-    step = 1.5 * float(np.median(np.diff(t))) if t.size > 1 else 0.0
     out = []
-    for x in own:
-        m = int(mode[min(int(np.searchsorted(t, x + step)), t.size - 1)])
-        if not (0 <= m < len(modes) and all(3 <= d <= 5 for d in modes[m])):
+    for x, dims in zip(own, mode_after(trial, own), strict=False):  # (no trace: no modes after)
+        if dims is None or not is_rotation_mode(dims):
             continue
         later = ends[ends > x + 1e-6]
-        end = float(later[0]) if later.size else r.duration
+        end = float(later[0]) if later.size else r.duration  # (a switch at or after the end)
         out.append(float(commanding[int(x / dt) + 1 : int(end / dt)].sum() * dt))
     return out
 

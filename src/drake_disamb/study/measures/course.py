@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.interfaces import INTERFACES, gripper_mode
+from drake_disamb.core.layout import is_translation_mode
 from drake_disamb.study.data.folder import LoggedTrial
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     "format_command_path",
     "format_gripper",
     "gripper_course",
+    "mode_after",
     "request_modes",
     "starts_in_gripper",
     "summarize_command_paths",
@@ -141,21 +143,27 @@ def gripper_course(trial: LoggedTrial) -> tuple[bool, float, int]:
     )
 
 
-def request_modes(trial: LoggedTrial) -> list[bool]:
-    """Per request switch of the trial (``LoggedTrial.request_switch_times``), whether the mode it
-    switched to is a translation mode (the trace's ``mode`` just after the switch: the first sample
-    at least one and a half sample periods later, or the last)."""
+def mode_after(trial: LoggedTrial, times: Sequence[float]) -> list[tuple[int, ...] | None]:
+    """The dimensions of the mode in force just after each switch at ``times`` (the trace's
+    ``mode`` at the first sample at least one and a half sample periods later, or the last; ``None``
+    for an index that is none of the interface's modes)."""
     t, mode = _mode_trace(trial)
     if t.size == 0:
         return []
     modes = INTERFACES[trial.record.interface].modes
     step = 1.5 * float(np.median(np.diff(t))) if t.size > 1 else 0.0
-    out = []
-    for x in np.asarray(trial.request_switch_times, dtype=float):
-        i = min(int(np.searchsorted(t, x + step)), t.size - 1)
-        m = int(mode[i])
-        out.append(0 <= m < len(modes) and all(d < 3 for d in modes[m]))
+    out: list[tuple[int, ...] | None] = []
+    for x in times:
+        m = int(mode[min(int(np.searchsorted(t, float(x) + step)), t.size - 1)])
+        out.append(tuple(modes[m]) if 0 <= m < len(modes) else None)
     return out
+
+
+def request_modes(trial: LoggedTrial) -> list[bool]:
+    """Per request switch of the trial (``LoggedTrial.request_switch_times``), whether the mode it
+    switched to (:func:`mode_after`) is a translation mode."""
+    after = mode_after(trial, np.asarray(trial.request_switch_times, dtype=float).tolist())
+    return [dims is not None and is_translation_mode(dims) for dims in after]
 
 
 def starts_in_gripper(trial: LoggedTrial) -> bool:
