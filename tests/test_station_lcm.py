@@ -39,6 +39,30 @@ def test_actuator_angles_map_to_the_dh_angles_as_kinova_defines_them() -> None:
     np.testing.assert_allclose(mapping.dh_from_actuator(wrapped, theta_home), theta_home, atol=1e-9)
 
 
+def test_at_the_start_each_joint_takes_its_equivalent_inside_the_limits() -> None:
+    """The arm at home (where `mico-driver` starts) read with the pouring task's start posture as
+    the reference: joint 5's nearest equivalent, -7.41 rad, is outside its limits; -1.13 is inside."""
+    from drake_disamb.config import load_scenario
+
+    lower, upper = build_station(StationConfig()).geometry.joint_limits()
+    pouring = np.array(load_scenario("pouring").start_joint_positions)
+    q = mapping.actuator_from_dh(MICO_HOME_Q)
+    assert mapping.dh_from_actuator(q, pouring)[4] == pytest.approx(MICO_HOME_Q[4] - 2 * math.pi)
+    np.testing.assert_allclose(mapping.dh_from_actuator(q, pouring, (lower, upper)), MICO_HOME_Q, atol=1e-12)
+    # Joint 1 (limits +-2 pi) at 1 rad has two equivalents inside: the one nearest the reference.
+    theta = np.array(MICO_HOME_Q)
+    theta[0] = 1.0
+    reference = theta.copy()
+    reference[0] = -6.0
+    assert mapping.dh_from_actuator(mapping.actuator_from_dh(theta), reference, (lower, upper))[0] == (
+        pytest.approx(1.0 - 2 * math.pi)
+    )
+    # Joint 2 (limits [-0.75, 3.89] rad) at 4.5 rad has none inside: the nearest, for the refusal.
+    theta[1] = 4.5
+    got = mapping.dh_from_actuator(mapping.actuator_from_dh(theta), MICO_HOME_Q, (lower, upper))
+    assert got[1] == pytest.approx(4.5 - 2 * math.pi)
+
+
 def test_finger_units_map_to_the_slides() -> None:
     np.testing.assert_allclose(mapping.finger_slide([0.0, mapping.FINGER_CLOSED]), [0.06, 0.0])
     np.testing.assert_allclose(mapping.finger_units(mapping.finger_slide([12.5, 80.0])), [12.5, 80.0])
@@ -346,6 +370,23 @@ def test_the_station_starts_where_the_arm_is() -> None:
     assert np.linalg.norm(start_ee_pose(station)[:3] - home[:3]) > 0.01  # not the model's home
 
 
+def test_the_pouring_task_starts_on_the_wire_with_the_arm_at_home() -> None:
+    """Every task runs against a driver whose arm is anywhere inside its limits (`mico-driver`
+    starts at home, far from the pouring task's start posture)."""
+    import dataclasses
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    driver = SimulatedDriver(DrakeLcm("memq://"), StationConfig())  # at home, as mico-driver
+    scenario = dataclasses.replace(load_scenario("pouring"), duration=0.5)
+    handles = build_shared_control_diagram(scenario, backend=InProcessLcm(lcm_url="memq://", driver=driver))
+    np.testing.assert_allclose(handles.station.config.home_q, MICO_HOME_Q, atol=1e-9)
+    result = run_trial(handles, progress=False)
+    assert result.fault == "" and result.time == pytest.approx(0.5)
+
+
 def test_the_seeded_trial_on_the_wire_matches_the_simulated_one() -> None:
     from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.config import load_scenario
@@ -457,6 +498,36 @@ def test_killing_the_driver_mid_trial_stops_the_arm_and_the_demo(tmp_path) -> No
     zero_at = next(t for t, c in seen if t >= killed and not np.any(c))
     assert zero_at - killed <= 3 * PERIOD + 0.02
     assert all(not np.any(c) for t, c in seen if t >= zero_at)
+
+
+@pytest.mark.slow
+def test_the_pouring_task_runs_over_two_processes(tmp_path) -> None:  # noqa: ANN001
+    """`mico-driver` starts at home, far from the pouring task's start posture: the controller
+    starts from the arm's posture and runs its trial (2 s here: no success yet, no fault)."""
+    import json
+
+    from support import cli_process, wait_for_line
+
+    url = multicast_url(7685)
+    driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    demo = None
+    try:
+        wait_for_line(driver, "mico-driver:", timeout=60)
+        demo = cli_process(
+            "demo", "--station", "lcm", "--lcm-url", url, "--task", "pouring", "--duration", "2",
+            "--no-meshcat", "--quiet", "--out", str(tmp_path),
+        )  # fmt: skip
+        out, err = demo.communicate(timeout=180)
+    finally:
+        driver.terminate()
+        driver.communicate(timeout=30)
+        if demo is not None:
+            demo.kill()
+    assert demo.returncode == 1, err  # the trial ran to its time limit without success
+    assert "running the trial" in out and "station fault" not in err
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["task"] == "pouring" and "station_fault" not in metrics
+    assert metrics["time"] == pytest.approx(2.0)
 
 
 def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:

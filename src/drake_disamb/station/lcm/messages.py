@@ -45,14 +45,19 @@ def _vector(values: object, size: int, name: str) -> tuple[NDArray[np.float64] |
 
 
 def read_status(
-    data: bytes, last_utime: int | None, reference: NDArray[np.float64]
+    data: bytes,
+    last_utime: int | None,
+    reference: NDArray[np.float64],
+    limits: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[StatusReading | None, str]:
     """Decode and check one status; the reading, or ``None`` and why it was dropped.
 
     A status is dropped when it does not decode, has not 6 joints and 2 fingers, holds a NaN or an
     infinity, or its ``utime`` is not after ``last_utime`` (gone back or repeated). Joint angles
-    are mapped to the DH angles nearest ``reference`` (6, rad); the joint limits are the caller's
-    check (an angle outside them stops the arm rather than dropping the message).
+    are mapped to the DH angles nearest ``reference`` (6, rad), with ``limits`` (lower, upper;
+    rad) the nearest among those inside them (:func:`~drake_disamb.station.lcm.mapping.dh_from_actuator`);
+    the joint limits are the caller's check (an angle outside them stops the arm rather than
+    dropping the message).
     """
     try:
         msg = lcmt_jaco_status.decode(data)
@@ -80,7 +85,7 @@ def read_status(
     return (
         StatusReading(
             utime=int(msg.utime),
-            q=mapping.dh_from_actuator(parts["joint_position"], reference),
+            q=mapping.dh_from_actuator(parts["joint_position"], reference, limits),
             v=mapping.dh_velocity(parts["joint_velocity"]),
             finger_q=mapping.finger_slide(parts["finger_position"]),
             finger_v=mapping.finger_slide_rate(parts["finger_velocity"]),
