@@ -296,6 +296,66 @@ def test_a_burst_is_read_as_its_latest_status() -> None:
     assert len(wire.commands) <= used + 1
 
 
+ELSEWHERE = tuple(np.array(MICO_HOME_Q) + [0.4, -0.3, 0.2, 0.0, 0.3, 0.0])
+"""Another arm's posture, inside the limits."""
+
+
+def _second_source(kind: str, start: int, published: list[int]):  # noqa: ANN202
+    """A pump extra: from its ``start``-th call on, a second source publishes one status per tick
+    (the ticks at which it did are appended to ``published``):
+
+    - ``driver``: a second simulated driver, its arm elsewhere, its clock started later (its
+      ``utime`` goes back against the first one's);
+    - ``interleaved``: another arm's posture, each ``utime`` 5 ms after the first driver's;
+    - ``ahead``: the first arm's own posture, on a clock 100 s ahead;
+    - ``instead``: the second driver, and the first one's statuses no longer reach the station
+      (over UDP, one message per channel is kept: the second driver's can hide the first one's).
+    """
+    calls = [0]
+    other: list[SimulatedDriver] = []
+
+    def extra(wire: Wire) -> None:
+        calls[0] += 1
+        if kind in ("driver", "instead") and not other:
+            other.append(SimulatedDriver(wire.lcm, StationConfig(home_q=ELSEWHERE)))
+        if calls[0] < start:
+            return
+        published.append(calls[0])
+        utime = wire.driver.statuses * 10_000
+        if kind in ("driver", "instead"):
+            if kind == "instead":
+                wire.driver.kill()
+            other[0].step()
+        elif kind == "interleaved":
+            wire.lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=utime + 5_000, q=np.array(ELSEWHERE)))
+        else:
+            q = wire.driver.joint_positions()
+            wire.lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=utime + 100_000_000, q=q))
+
+    return extra
+
+
+@pytest.mark.parametrize("kind", ["driver", "interleaved", "ahead", "instead"])
+def test_a_second_source_on_the_status_channel_stops_the_arm_within_a_few_periods(kind: str) -> None:
+    published: list[int] = []
+    wire = Wire(extra=_second_source(kind, 30, published))
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    ticks = 0
+    while wire.out("fault")[0] == Fault.NONE and ticks < 100:
+        ticks += 1
+        wire.simulator.AdvanceTo(ticks * PERIOD)
+    assert wire.out("fault")[0] == Fault.TWO_SOURCES
+    assert "two sources on the status channel" in Fault.TWO_SOURCES.reason
+    assert published and len(published) <= 4  # latched within 4 of the second source's statuses
+    wire.lcm.HandleSubscriptions(0)
+    moving_until = max(k for k, (_, c) in enumerate(wire.commands) if np.any(c))
+    for _ in range(20):
+        wire.simulator.AdvanceTo(wire.ctx.get_time() + PERIOD)
+    wire.lcm.HandleSubscriptions(0)
+    assert all(not np.any(c) for _, c in wire.commands[moving_until + 1 :])
+    assert len(wire.commands) > moving_until + 20  # zero, every tick from the fault on
+
+
 def test_the_loops_first_tick_takes_a_fresh_status_and_counts_nothing_before_it_as_missed() -> None:
     wire = Wire()
     for _ in range(5):  # statuses published while the station is built, before the loop starts
@@ -528,6 +588,66 @@ def test_the_pouring_task_runs_over_two_processes(tmp_path) -> None:  # noqa: AN
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["task"] == "pouring" and "station_fault" not in metrics
     assert metrics["time"] == pytest.approx(2.0)
+
+
+def _demo_against_a_driver(url: str, out: str):  # noqa: ANN202
+    """`mico-driver`, then `demo --station lcm --task pouring` (a trial of about 30 s) against it,
+    running its trial: the two processes."""
+    from support import cli_process, wait_for_line
+
+    driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    wait_for_line(driver, "mico-driver:", timeout=60)
+    demo = cli_process(
+        "demo", "--station", "lcm", "--lcm-url", url, "--task", "pouring", "--duration", "60",
+        "--no-meshcat", "--quiet", "--out", out,
+    )  # fmt: skip
+    try:
+        wait_for_line(demo, "running the trial", timeout=120)
+    except BaseException:
+        driver.kill()
+        raise
+    return driver, demo
+
+
+@pytest.mark.slow
+def test_a_second_driver_on_the_bus_stops_the_controller_within_a_second(tmp_path) -> None:  # noqa: ANN001
+    import json
+
+    from drake import lcmt_jaco_status
+    from support import cli_process
+
+    url = multicast_url(7687)
+    tap = DrakeLcm(url)
+    statuses: list[tuple[float, int]] = []
+    commands: list[float] = []
+    tap.Subscribe(
+        DEFAULT_STATUS_CHANNEL,
+        lambda data: statuses.append((time.monotonic(), lcmt_jaco_status.decode(data).utime)),
+    )
+    tap.Subscribe(DEFAULT_COMMAND_CHANNEL, lambda data: commands.append(time.monotonic()))
+    driver, demo = _demo_against_a_driver(url, str(tmp_path))
+    second = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    try:
+        end = time.monotonic() + 60
+        while demo.poll() is None and time.monotonic() < end:
+            tap.HandleSubscriptions(10)
+        _, err = demo.communicate(timeout=60)
+    finally:
+        for proc in (driver, demo, second):
+            proc.kill()
+    assert demo.returncode == 3, err
+    # The second driver's first status: the first whose utime goes back (its clock started later).
+    latest = statuses[0][1]
+    second_at = None
+    for t, utime in statuses:
+        if utime < latest:
+            second_at = t
+            break
+        latest = utime
+    assert second_at is not None, f"the second driver's statuses never reached the bus: {err}"
+    assert commands[-1] - second_at <= 1.0  # the controller's last command (a zero) within a second
+    assert "station fault" in err and "two sources on the status channel" in err
+    assert "two drivers" in json.loads((tmp_path / "metrics.json").read_text())["station_fault"]
 
 
 def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:

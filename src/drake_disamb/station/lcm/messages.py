@@ -44,6 +44,15 @@ def _vector(values: object, size: int, name: str) -> tuple[NDArray[np.float64] |
     return arr, ""
 
 
+def out_of_order(utime: int, last_utime: int | None) -> str:
+    """Why a status of ``utime`` (us) cannot follow one of ``last_utime`` (its ``utime`` went back
+    or repeated), or ``""`` when it can (always after no status, ``last_utime`` ``None``)."""
+    if last_utime is None or utime > last_utime:
+        return ""
+    word = "repeated" if utime == last_utime else "went back"
+    return f"utime {word}: {utime} after {last_utime}"
+
+
 def read_status(
     data: bytes,
     last_utime: int | None,
@@ -79,9 +88,9 @@ def read_status(
         if arr is None:
             return None, why
         parts[name] = arr
-    if last_utime is not None and msg.utime <= last_utime:
-        word = "repeated" if msg.utime == last_utime else "went back"
-        return None, f"utime {word}: {msg.utime} after {last_utime}"
+    why = out_of_order(msg.utime, last_utime)
+    if why:
+        return None, why
     return (
         StatusReading(
             utime=int(msg.utime),
