@@ -356,6 +356,49 @@ def test_a_second_source_on_the_status_channel_stops_the_arm_within_a_few_period
     assert len(wire.commands) > moving_until + 20  # zero, every tick from the fault on
 
 
+@pytest.mark.parametrize("where", ["between_ticks", "in_a_poll"])
+def test_a_controller_that_missed_its_periods_past_the_status_timeout_latches_a_fault(where: str) -> None:
+    """Paused (SIGSTOP) or starved for longer than the status timeout: what it then receives is
+    stale and the watchdog could not trip meanwhile; it says so, and stops the arm."""
+    from pydrake.systems.analysis import InitializeParams
+
+    from drake_disamb.station.lcm.bus import StatusInbox
+    from drake_disamb.station.lcm.systems import JacoStatusReceiver
+
+    lcm = DrakeLcm("memq://")
+    utime = [10_000]
+    pause = [0.0]
+
+    def driver() -> None:  # publishes the next status at every poll, as a driver keeping time would
+        time.sleep(pause[0])
+        pause[0] = 0.0
+        utime[0] += 10_000
+        lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=utime[0]))
+
+    first, _ = read_status(_status(utime=utime[0]), None, np.array(MICO_HOME_Q))
+    lower, upper = build_station(StationConfig()).geometry.joint_limits()
+    inbox = StatusInbox(lcm, DEFAULT_STATUS_CHANNEL, driver)
+    receiver = JacoStatusReceiver(inbox, first, lower, upper, PERIOD, 0.03, real_time=True)
+    simulator = Simulator(receiver)
+    simulator.Initialize(InitializeParams(suppress_initialization_events=True))  # (no prepare_loop)
+    ctx = simulator.get_mutable_context()
+    simulator.AdvanceTo(0.2)
+    assert receiver.fault(ctx) == Fault.NONE
+    if where == "between_ticks":
+        time.sleep(0.1)
+    else:
+        pause[0] = 0.1
+    with pytest.warns(
+        RuntimeWarning,
+        match=r"the controller missed its periods: the bus went unwatched for 0\.\d{3} s \(paused or "
+        r"starved\), longer than the status timeout \(0\.03 s\)",
+    ):
+        simulator.AdvanceTo(0.3)
+    assert receiver.fault(ctx) == Fault.CONTROLLER_STALLED
+    assert not np.any(receiver.GetOutputPort("arm_joint_state").Eval(ctx)[6:])
+    assert "missed its periods" in Fault.CONTROLLER_STALLED.reason
+
+
 def test_the_loops_first_tick_takes_a_fresh_status_and_counts_nothing_before_it_as_missed() -> None:
     wire = Wire()
     for _ in range(5):  # statuses published while the station is built, before the loop starts
@@ -648,6 +691,32 @@ def test_a_second_driver_on_the_bus_stops_the_controller_within_a_second(tmp_pat
     assert commands[-1] - second_at <= 1.0  # the controller's last command (a zero) within a second
     assert "station fault" in err and "two sources on the status channel" in err
     assert "two drivers" in json.loads((tmp_path / "metrics.json").read_text())["station_fault"]
+
+
+@pytest.mark.slow
+def test_a_paused_controller_latches_a_fault_and_says_so(tmp_path) -> None:  # noqa: ANN001
+    """SIGSTOP for 0.5 s (longer than the 30 ms status timeout), then SIGCONT: the controller does
+    not resume on what it finds on the bus."""
+    import json
+    import re
+    import signal
+
+    url = multicast_url(7689)
+    driver, demo = _demo_against_a_driver(url, str(tmp_path))
+    try:
+        time.sleep(2.0)
+        demo.send_signal(signal.SIGSTOP)
+        time.sleep(0.5)
+        demo.send_signal(signal.SIGCONT)
+        _, err = demo.communicate(timeout=60)
+    finally:
+        driver.kill()
+        demo.kill()
+    assert demo.returncode == 3, err
+    gap = re.search(r"the controller missed its periods: the bus went unwatched for (\d+\.\d+) s", err)
+    assert gap is not None and 0.45 <= float(gap.group(1)) <= 1.5, err
+    assert "station fault" in err
+    assert "missed its periods" in json.loads((tmp_path / "metrics.json").read_text())["station_fault"]
 
 
 def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:

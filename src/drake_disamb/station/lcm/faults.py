@@ -18,6 +18,9 @@ class Fault(enum.IntEnum):
     """Statuses out of sequence, several within a second (a ``utime`` that goes back or repeats, a
     posture that jumps further than an arm moves): a second driver publishes on the status
     channel, and every driver on the bus obeys the commands."""
+    CONTROLLER_STALLED = 4
+    """The controller did not watch the bus for longer than the status timeout (its process was
+    paused or starved): the watchdog was blind for longer than it allows."""
 
     @property
     def reason(self) -> str:
@@ -31,6 +34,10 @@ _REASONS = {
     Fault.JOINT_LIMIT: "an arm status put a joint outside the model's limits: the arm was commanded to stop",
     Fault.TWO_SOURCES: (
         "arm statuses from two sources on the status channel (two drivers publishing on one bus?): "
+        "the arm was commanded to stop"
+    ),
+    Fault.CONTROLLER_STALLED: (
+        "the controller missed its periods for longer than the status timeout (paused or starved): "
         "the arm was commanded to stop"
     ),
 }

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,7 +72,10 @@ class JacoStatusReceiver(LeafSystem):
       back or repeated, or a posture that jumped) within :data:`STRAY_WINDOW`, or the watchdog's
       timeout with only such statuses since the last one used: one is a stray (a garbled or
       replayed message, dropped), a stream of them is a second driver on the channel (over UDP
-      its statuses can also hide the first driver's: one message per channel is kept).
+      its statuses can also hide the first driver's: one message per channel is kept);
+    - :attr:`Fault.CONTROLLER_STALLED` (with ``real_time``): the bus went unwatched for longer
+      than ``status_timeout`` (the process was paused or starved: what it then receives is stale,
+      and the watchdog could not have tripped meanwhile); a warning names the gap.
 
     Once a fault is latched it no longer waits and its measurement holds still (velocities zero).
 
@@ -108,6 +112,7 @@ class JacoStatusReceiver(LeafSystem):
         self._inbox = inbox
         self._lower, self._upper = np.asarray(lower, float), np.asarray(upper, float)
         self._timeout = float(status_timeout)
+        self._real_time = bool(real_time)
         self._period_us = period * 1e6
         self._arm = self.DeclareDiscreteState(np.concatenate([first.q, first.v]))
         self._finger = self.DeclareDiscreteState(np.concatenate([first.finger_q, first.finger_v]))
@@ -159,7 +164,17 @@ class JacoStatusReceiver(LeafSystem):
         stray_times = context.get_discrete_state(self._strays).get_value().copy()
         while True:
             now = time.monotonic()
-            self._inbox.poll(min(max(self._inbox.last_good + self._timeout - now, 0.0), 0.002))
+            unwatched = self._inbox.poll(min(max(self._inbox.last_good + self._timeout - now, 0.0), 0.002))
+            if self._real_time and unwatched > self._timeout:  # what it took is stale: not used
+                fault = Fault.CONTROLLER_STALLED
+                warnings.warn(
+                    f"{self.get_name() or type(self).__name__} at t = {context.get_time():.3f} s: the "
+                    f"controller missed its periods: the bus went unwatched for {unwatched:.3f} s (paused "
+                    f"or starved), longer than the status timeout ({self._timeout:g} s)",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                break
             for data, received in self._inbox.take():
                 last_q = arm[:6] if good is None else good.q
                 reading, why = read_status(data, None, last_q)
