@@ -39,6 +39,30 @@ def test_actuator_angles_map_to_the_dh_angles_as_kinova_defines_them() -> None:
     np.testing.assert_allclose(mapping.dh_from_actuator(wrapped, theta_home), theta_home, atol=1e-9)
 
 
+def test_at_the_start_each_joint_takes_its_equivalent_inside_the_limits() -> None:
+    """The arm at home (where `mico-driver` starts) read with the pouring task's start posture as
+    the reference: joint 5's nearest equivalent, -7.41 rad, is outside its limits; -1.13 is inside."""
+    from drake_disamb.config import load_scenario
+
+    lower, upper = build_station(StationConfig()).geometry.joint_limits()
+    pouring = np.array(load_scenario("pouring").start_joint_positions)
+    q = mapping.actuator_from_dh(MICO_HOME_Q)
+    assert mapping.dh_from_actuator(q, pouring)[4] == pytest.approx(MICO_HOME_Q[4] - 2 * math.pi)
+    np.testing.assert_allclose(mapping.dh_from_actuator(q, pouring, (lower, upper)), MICO_HOME_Q, atol=1e-12)
+    # Joint 1 (limits +-2 pi) at 1 rad has two equivalents inside: the one nearest the reference.
+    theta = np.array(MICO_HOME_Q)
+    theta[0] = 1.0
+    reference = theta.copy()
+    reference[0] = -6.0
+    assert mapping.dh_from_actuator(mapping.actuator_from_dh(theta), reference, (lower, upper))[0] == (
+        pytest.approx(1.0 - 2 * math.pi)
+    )
+    # Joint 2 (limits [-0.75, 3.89] rad) at 4.5 rad has none inside: the nearest, for the refusal.
+    theta[1] = 4.5
+    got = mapping.dh_from_actuator(mapping.actuator_from_dh(theta), MICO_HOME_Q, (lower, upper))
+    assert got[1] == pytest.approx(4.5 - 2 * math.pi)
+
+
 def test_finger_units_map_to_the_slides() -> None:
     np.testing.assert_allclose(mapping.finger_slide([0.0, mapping.FINGER_CLOSED]), [0.06, 0.0])
     np.testing.assert_allclose(mapping.finger_units(mapping.finger_slide([12.5, 80.0])), [12.5, 80.0])
@@ -272,6 +296,109 @@ def test_a_burst_is_read_as_its_latest_status() -> None:
     assert len(wire.commands) <= used + 1
 
 
+ELSEWHERE = tuple(np.array(MICO_HOME_Q) + [0.4, -0.3, 0.2, 0.0, 0.3, 0.0])
+"""Another arm's posture, inside the limits."""
+
+
+def _second_source(kind: str, start: int, published: list[int]):  # noqa: ANN202
+    """A pump extra: from its ``start``-th call on, a second source publishes one status per tick
+    (the ticks at which it did are appended to ``published``):
+
+    - ``driver``: a second simulated driver, its arm elsewhere, its clock started later (its
+      ``utime`` goes back against the first one's);
+    - ``interleaved``: another arm's posture, each ``utime`` 5 ms after the first driver's;
+    - ``ahead``: the first arm's own posture, on a clock 100 s ahead;
+    - ``instead``: the second driver, and the first one's statuses no longer reach the station
+      (over UDP, one message per channel is kept: the second driver's can hide the first one's).
+    """
+    calls = [0]
+    other: list[SimulatedDriver] = []
+
+    def extra(wire: Wire) -> None:
+        calls[0] += 1
+        if kind in ("driver", "instead") and not other:
+            other.append(SimulatedDriver(wire.lcm, StationConfig(home_q=ELSEWHERE)))
+        if calls[0] < start:
+            return
+        published.append(calls[0])
+        utime = wire.driver.statuses * 10_000
+        if kind in ("driver", "instead"):
+            if kind == "instead":
+                wire.driver.kill()
+            other[0].step()
+        elif kind == "interleaved":
+            wire.lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=utime + 5_000, q=np.array(ELSEWHERE)))
+        else:
+            q = wire.driver.joint_positions()
+            wire.lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=utime + 100_000_000, q=q))
+
+    return extra
+
+
+@pytest.mark.parametrize("kind", ["driver", "interleaved", "ahead", "instead"])
+def test_a_second_source_on_the_status_channel_stops_the_arm_within_a_few_periods(kind: str) -> None:
+    published: list[int] = []
+    wire = Wire(extra=_second_source(kind, 30, published))
+    wire.command([0.05, 0, 0, 0, 0, 0])
+    ticks = 0
+    while wire.out("fault")[0] == Fault.NONE and ticks < 100:
+        ticks += 1
+        wire.simulator.AdvanceTo(ticks * PERIOD)
+    assert wire.out("fault")[0] == Fault.TWO_SOURCES
+    assert "two sources on the status channel" in Fault.TWO_SOURCES.reason
+    assert published and len(published) <= 4  # latched within 4 of the second source's statuses
+    wire.lcm.HandleSubscriptions(0)
+    moving_until = max(k for k, (_, c) in enumerate(wire.commands) if np.any(c))
+    for _ in range(20):
+        wire.simulator.AdvanceTo(wire.ctx.get_time() + PERIOD)
+    wire.lcm.HandleSubscriptions(0)
+    assert all(not np.any(c) for _, c in wire.commands[moving_until + 1 :])
+    assert len(wire.commands) > moving_until + 20  # zero, every tick from the fault on
+
+
+@pytest.mark.parametrize("where", ["between_ticks", "in_a_poll"])
+def test_a_controller_that_missed_its_periods_past_the_status_timeout_latches_a_fault(where: str) -> None:
+    """Paused (SIGSTOP) or starved for longer than the status timeout: what it then receives is
+    stale and the watchdog could not trip meanwhile; it says so, and stops the arm."""
+    from pydrake.systems.analysis import InitializeParams
+
+    from drake_disamb.station.lcm.bus import StatusInbox
+    from drake_disamb.station.lcm.systems import JacoStatusReceiver
+
+    lcm = DrakeLcm("memq://")
+    utime = [10_000]
+    pause = [0.0]
+
+    def driver() -> None:  # publishes the next status at every poll, as a driver keeping time would
+        time.sleep(pause[0])
+        pause[0] = 0.0
+        utime[0] += 10_000
+        lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=utime[0]))
+
+    first, _ = read_status(_status(utime=utime[0]), None, np.array(MICO_HOME_Q))
+    lower, upper = build_station(StationConfig()).geometry.joint_limits()
+    inbox = StatusInbox(lcm, DEFAULT_STATUS_CHANNEL, driver)
+    receiver = JacoStatusReceiver(inbox, first, lower, upper, PERIOD, 0.03, real_time=True)
+    simulator = Simulator(receiver)
+    simulator.Initialize(InitializeParams(suppress_initialization_events=True))  # (no prepare_loop)
+    ctx = simulator.get_mutable_context()
+    simulator.AdvanceTo(0.2)
+    assert receiver.fault(ctx) == Fault.NONE
+    if where == "between_ticks":
+        time.sleep(0.1)
+    else:
+        pause[0] = 0.1
+    with pytest.warns(
+        RuntimeWarning,
+        match=r"the controller missed its periods: the bus went unwatched for 0\.\d{3} s \(paused or "
+        r"starved\), longer than the status timeout \(0\.03 s\)",
+    ):
+        simulator.AdvanceTo(0.3)
+    assert receiver.fault(ctx) == Fault.CONTROLLER_STALLED
+    assert not np.any(receiver.GetOutputPort("arm_joint_state").Eval(ctx)[6:])
+    assert "missed its periods" in Fault.CONTROLLER_STALLED.reason
+
+
 def test_the_loops_first_tick_takes_a_fresh_status_and_counts_nothing_before_it_as_missed() -> None:
     wire = Wire()
     for _ in range(5):  # statuses published while the station is built, before the loop starts
@@ -344,6 +471,23 @@ def test_the_station_starts_where_the_arm_is() -> None:
     reference = build_station(StationConfig()).diagram
     home = reference.GetOutputPort("ee_pose").Eval(reference.CreateDefaultContext())
     assert np.linalg.norm(start_ee_pose(station)[:3] - home[:3]) > 0.01  # not the model's home
+
+
+def test_the_pouring_task_starts_on_the_wire_with_the_arm_at_home() -> None:
+    """Every task runs against a driver whose arm is anywhere inside its limits (`mico-driver`
+    starts at home, far from the pouring task's start posture)."""
+    import dataclasses
+
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+    from drake_disamb.trial import run_trial
+
+    driver = SimulatedDriver(DrakeLcm("memq://"), StationConfig())  # at home, as mico-driver
+    scenario = dataclasses.replace(load_scenario("pouring"), duration=0.5)
+    handles = build_shared_control_diagram(scenario, backend=InProcessLcm(lcm_url="memq://", driver=driver))
+    np.testing.assert_allclose(handles.station.config.home_q, MICO_HOME_Q, atol=1e-9)
+    result = run_trial(handles, progress=False)
+    assert result.fault == "" and result.time == pytest.approx(0.5)
 
 
 def test_the_seeded_trial_on_the_wire_matches_the_simulated_one() -> None:
@@ -457,6 +601,122 @@ def test_killing_the_driver_mid_trial_stops_the_arm_and_the_demo(tmp_path) -> No
     zero_at = next(t for t, c in seen if t >= killed and not np.any(c))
     assert zero_at - killed <= 3 * PERIOD + 0.02
     assert all(not np.any(c) for t, c in seen if t >= zero_at)
+
+
+@pytest.mark.slow
+def test_the_pouring_task_runs_over_two_processes(tmp_path) -> None:  # noqa: ANN001
+    """`mico-driver` starts at home, far from the pouring task's start posture: the controller
+    starts from the arm's posture and runs its trial (2 s here: no success yet, no fault)."""
+    import json
+
+    from support import cli_process, wait_for_line
+
+    url = multicast_url(7685)
+    driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    demo = None
+    try:
+        wait_for_line(driver, "mico-driver:", timeout=60)
+        demo = cli_process(
+            "demo", "--station", "lcm", "--lcm-url", url, "--task", "pouring", "--duration", "2",
+            "--no-meshcat", "--quiet", "--out", str(tmp_path),
+        )  # fmt: skip
+        out, err = demo.communicate(timeout=180)
+    finally:
+        driver.terminate()
+        driver.communicate(timeout=30)
+        if demo is not None:
+            demo.kill()
+    assert demo.returncode == 1, err  # the trial ran to its time limit without success
+    assert "running the trial" in out and "station fault" not in err
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["task"] == "pouring" and "station_fault" not in metrics
+    assert metrics["time"] == pytest.approx(2.0)
+
+
+def _demo_against_a_driver(url: str, out: str):  # noqa: ANN202
+    """`mico-driver`, then `demo --station lcm --task pouring` (a trial of about 30 s) against it,
+    running its trial: the two processes."""
+    from support import cli_process, wait_for_line
+
+    driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    wait_for_line(driver, "mico-driver:", timeout=60)
+    demo = cli_process(
+        "demo", "--station", "lcm", "--lcm-url", url, "--task", "pouring", "--duration", "60",
+        "--no-meshcat", "--quiet", "--out", out,
+    )  # fmt: skip
+    try:
+        wait_for_line(demo, "running the trial", timeout=120)
+    except BaseException:
+        driver.kill()
+        raise
+    return driver, demo
+
+
+@pytest.mark.slow
+def test_a_second_driver_on_the_bus_stops_the_controller_within_a_second(tmp_path) -> None:  # noqa: ANN001
+    import json
+
+    from drake import lcmt_jaco_status
+    from support import cli_process
+
+    url = multicast_url(7687)
+    tap = DrakeLcm(url)
+    statuses: list[tuple[float, int]] = []
+    commands: list[float] = []
+    tap.Subscribe(
+        DEFAULT_STATUS_CHANNEL,
+        lambda data: statuses.append((time.monotonic(), lcmt_jaco_status.decode(data).utime)),
+    )
+    tap.Subscribe(DEFAULT_COMMAND_CHANNEL, lambda data: commands.append(time.monotonic()))
+    driver, demo = _demo_against_a_driver(url, str(tmp_path))
+    second = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
+    try:
+        end = time.monotonic() + 60
+        while demo.poll() is None and time.monotonic() < end:
+            tap.HandleSubscriptions(10)
+        _, err = demo.communicate(timeout=60)
+    finally:
+        for proc in (driver, demo, second):
+            proc.kill()
+    assert demo.returncode == 3, err
+    # The second driver's first status: the first whose utime goes back (its clock started later).
+    latest = statuses[0][1]
+    second_at = None
+    for t, utime in statuses:
+        if utime < latest:
+            second_at = t
+            break
+        latest = utime
+    assert second_at is not None, f"the second driver's statuses never reached the bus: {err}"
+    assert commands[-1] - second_at <= 1.0  # the controller's last command (a zero) within a second
+    assert "station fault" in err and "two sources on the status channel" in err
+    assert "two drivers" in json.loads((tmp_path / "metrics.json").read_text())["station_fault"]
+
+
+@pytest.mark.slow
+def test_a_paused_controller_latches_a_fault_and_says_so(tmp_path) -> None:  # noqa: ANN001
+    """SIGSTOP for 0.5 s (longer than the 30 ms status timeout), then SIGCONT: the controller does
+    not resume on what it finds on the bus."""
+    import json
+    import re
+    import signal
+
+    url = multicast_url(7689)
+    driver, demo = _demo_against_a_driver(url, str(tmp_path))
+    try:
+        time.sleep(2.0)
+        demo.send_signal(signal.SIGSTOP)
+        time.sleep(0.5)
+        demo.send_signal(signal.SIGCONT)
+        _, err = demo.communicate(timeout=60)
+    finally:
+        driver.kill()
+        demo.kill()
+    assert demo.returncode == 3, err
+    gap = re.search(r"the controller missed its periods: the bus went unwatched for (\d+\.\d+) s", err)
+    assert gap is not None and 0.45 <= float(gap.group(1)) <= 1.5, err
+    assert "station fault" in err
+    assert "missed its periods" in json.loads((tmp_path / "metrics.json").read_text())["station_fault"]
 
 
 def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:

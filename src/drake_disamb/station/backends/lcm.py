@@ -25,7 +25,8 @@ class Lcm:
         status_channel, command_channel: The driver's channels (Drake's Kinova Gen2 driver's by
             default).
         status_timeout: The watchdog (s, wall clock): no fresh, valid status for this long latches
-            a fault and commands zero. 0.03 s is 3 status periods at 100 Hz.
+            a fault and commands zero, and so does a controller that left the bus unwatched for
+            this long (its process paused or starved). 0.03 s is 3 status periods at 100 Hz.
         start_timeout: How long (s) the start waits for the first status.
         zero_command_repeats: Zero commands sent on exit, Ctrl-C, SIGTERM or an exception.
         finger_speed_limit: Largest finger slide speed sent (m/s).

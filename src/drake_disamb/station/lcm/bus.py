@@ -25,9 +25,14 @@ Pump = Callable[[], None]
 class StatusInbox:
     """Subscribes to the status channel and buffers ``(message bytes, receipt time)``.
 
+    A message's receipt time is when a poll handed it over: what arrived while the process was
+    not polling (paused, or busy elsewhere) is stamped when it is finally handled, so
+    :meth:`poll` also says how long the bus went unwatched.
+
     Attributes:
         last_good: ``time.monotonic()`` of the receipt of the last status the receiver used (the
             watchdog counts from it); set when the first status is taken.
+        last_look: ``time.monotonic()`` at the end of the last poll.
     """
 
     def __init__(self, lcm: DrakeLcm, channel: str, pump: Pump | None = None) -> None:
@@ -35,20 +40,31 @@ class StatusInbox:
         self._pump = pump
         self._pending: list[tuple[bytes, float]] = []
         self.channel = channel
-        self.last_good = time.monotonic()
+        self.last_good = self.last_look = time.monotonic()
         lcm.Subscribe(channel, self._on_message)
 
     def _on_message(self, data: bytes) -> None:
         self._pending.append((bytes(data), time.monotonic()))
 
-    def poll(self, timeout: float) -> None:
+    def poll(self, timeout: float) -> float:
         """Receive what arrives within ``timeout`` seconds, then everything already queued (LCM
-        hands over one message per call: a backlog is drained, never left to overflow)."""
+        hands over one message per call: a backlog is drained, never left to overflow).
+
+        Returns:
+            The longest time (s, wall clock) the bus went unwatched up to this poll's end: since
+            the end of the previous poll, or within this one beyond ``timeout`` (the in-process
+            driver's step counts too).
+        """
+        start = time.monotonic()
         if self._pump is not None:
             self._pump()
         if self._lcm.HandleSubscriptions(max(0, int(timeout * 1000))) > 0:
             while self._lcm.HandleSubscriptions(0) > 0:
                 pass
+        end = time.monotonic()
+        unwatched = max(start - self.last_look, end - start - timeout)
+        self.last_look = end
+        return unwatched
 
     def take(self) -> list[tuple[bytes, float]]:
         """Every message received since the last take, oldest first."""

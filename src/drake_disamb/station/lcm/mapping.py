@@ -11,7 +11,8 @@ actuator angles (kinova-ros, ``kinova_driver/src/kinova_arm_kinematics.cpp``, ``
 i.e. ``theta = sign * q + offset`` per joint, and for velocities ``theta_dot = sign * q_dot``
 (:data:`JOINT_SIGNS`, :data:`JOINT_OFFSETS`). An actuator angle is defined modulo 2 pi (the SDK
 reports [0, 360) degrees): :func:`dh_from_actuator` picks, per joint, the equivalent angle nearest
-a reference (the previous measurement, or the model's home at the start).
+a reference: the previous measurement, or at the start the task's start posture among the
+equivalents inside the model's joint limits (a joint whose limits span more than 2 pi has several).
 
 Fingers: Drake's Jaco messages carry a finger's position in Kinova SDK finger units x pi/180, and
 Drake's Jaco receivers scale them by 1.34 / 118.68 to the URDF's finger angle (118.68 = 6800
@@ -42,12 +43,23 @@ FINGER_TRAVEL = FINGER_MAX_OPENING / 2
 """Travel (m) of each of our model's finger slides (open at 0.06, closed at 0)."""
 
 
-def dh_from_actuator(q: ArrayLike, reference: ArrayLike) -> NDArray[np.float64]:
+def dh_from_actuator(
+    q: ArrayLike, reference: ArrayLike, limits: tuple[ArrayLike, ArrayLike] | None = None
+) -> NDArray[np.float64]:
     """Our model's DH angles (6, rad) of the actuator angles ``q`` (6, rad), each the 2 pi
-    equivalent nearest ``reference`` (6, rad)."""
+    equivalent nearest ``reference`` (6, rad).
+
+    With ``limits`` (the lower and upper joint limits, 6 each, rad), a joint's angle is the
+    equivalent nearest ``reference`` among those inside its limits; a joint with no equivalent
+    inside them keeps the one nearest ``reference`` (the caller's limit check then names it).
+    """
     theta = JOINT_SIGNS * np.asarray(q, dtype=float) + JOINT_OFFSETS
-    ref = np.asarray(reference, dtype=float)
-    return theta - 2 * math.pi * np.round((theta - ref) / (2 * math.pi))
+    turns = np.round((np.asarray(reference, dtype=float) - theta) / (2 * math.pi))
+    if limits is not None:  # |theta + 2 pi n - reference| is convex in n: clip the nearest n
+        low = np.ceil((np.asarray(limits[0], dtype=float) - theta) / (2 * math.pi))
+        high = np.floor((np.asarray(limits[1], dtype=float) - theta) / (2 * math.pi))
+        turns = np.where(low <= high, np.clip(turns, low, high), turns)
+    return theta + 2 * math.pi * turns
 
 
 def actuator_from_dh(theta: ArrayLike) -> NDArray[np.float64]:

@@ -44,15 +44,29 @@ def _vector(values: object, size: int, name: str) -> tuple[NDArray[np.float64] |
     return arr, ""
 
 
+def out_of_order(utime: int, last_utime: int | None) -> str:
+    """Why a status of ``utime`` (us) cannot follow one of ``last_utime`` (its ``utime`` went back
+    or repeated), or ``""`` when it can (always after no status, ``last_utime`` ``None``)."""
+    if last_utime is None or utime > last_utime:
+        return ""
+    word = "repeated" if utime == last_utime else "went back"
+    return f"utime {word}: {utime} after {last_utime}"
+
+
 def read_status(
-    data: bytes, last_utime: int | None, reference: NDArray[np.float64]
+    data: bytes,
+    last_utime: int | None,
+    reference: NDArray[np.float64],
+    limits: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> tuple[StatusReading | None, str]:
     """Decode and check one status; the reading, or ``None`` and why it was dropped.
 
     A status is dropped when it does not decode, has not 6 joints and 2 fingers, holds a NaN or an
     infinity, or its ``utime`` is not after ``last_utime`` (gone back or repeated). Joint angles
-    are mapped to the DH angles nearest ``reference`` (6, rad); the joint limits are the caller's
-    check (an angle outside them stops the arm rather than dropping the message).
+    are mapped to the DH angles nearest ``reference`` (6, rad), with ``limits`` (lower, upper;
+    rad) the nearest among those inside them (:func:`~drake_disamb.station.lcm.mapping.dh_from_actuator`);
+    the joint limits are the caller's check (an angle outside them stops the arm rather than
+    dropping the message).
     """
     try:
         msg = lcmt_jaco_status.decode(data)
@@ -74,13 +88,13 @@ def read_status(
         if arr is None:
             return None, why
         parts[name] = arr
-    if last_utime is not None and msg.utime <= last_utime:
-        word = "repeated" if msg.utime == last_utime else "went back"
-        return None, f"utime {word}: {msg.utime} after {last_utime}"
+    why = out_of_order(msg.utime, last_utime)
+    if why:
+        return None, why
     return (
         StatusReading(
             utime=int(msg.utime),
-            q=mapping.dh_from_actuator(parts["joint_position"], reference),
+            q=mapping.dh_from_actuator(parts["joint_position"], reference, limits),
             v=mapping.dh_velocity(parts["joint_velocity"]),
             finger_q=mapping.finger_slide(parts["finger_position"]),
             finger_v=mapping.finger_slide_rate(parts["finger_velocity"]),

@@ -12,8 +12,9 @@ arm's status and commands (Drake's ``MakeHardwareStation(..., hardware=True)`` p
 The controller is clocked by the status messages: every control tick the receiver waits for a
 fresh status (as Drake's Jaco controller waits for each status), then the tick's systems run and
 one command answers it. Start checks (:func:`first_status`): a status must arrive within
-``start_timeout``, with 6 joints and 2 fingers, finite, and every joint inside the model's limits;
-the IK, the gripper and the model's default posture are seeded from it.
+``start_timeout``, with 6 joints and 2 fingers, finite, and every joint inside the model's limits
+(each angle the 2 pi equivalent inside them nearest the task's start posture); the IK, the gripper
+and the model's default posture are seeded from it.
 """
 
 from __future__ import annotations
@@ -68,7 +69,9 @@ def first_status(
     reference: np.ndarray,
     where: str,
 ) -> StatusReading:
-    """Wait up to ``timeout`` seconds for the first usable status and check it.
+    """Wait up to ``timeout`` seconds for the first usable status and check it. Each joint's
+    angle is the 2 pi equivalent inside the model's limits nearest ``reference`` (the task's start
+    posture): an arm anywhere inside its limits is taken as it is, whatever the task's posture.
 
     Raises:
         RuntimeError: no status within ``timeout`` (naming the channel and ``where``, the bus), a
@@ -77,10 +80,11 @@ def first_status(
     """
     deadline = time.monotonic() + timeout
     why = ""
+    limits = (lower - LIMIT_TOLERANCE, upper + LIMIT_TOLERANCE)
     while time.monotonic() < deadline:
         inbox.poll(min(0.01, max(deadline - time.monotonic(), 0.0)))
         for data, received in inbox.take():
-            reading, why = read_status(data, None, reference)
+            reading, why = read_status(data, None, reference, limits)
             if reading is None:
                 continue
             for k, (q, lo, hi) in enumerate(zip(reading.q, lower, upper, strict=True)):

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,25 +23,60 @@ from drake_disamb.station.config import ARM_JOINTS, EE_FRAME
 from drake_disamb.station.lcm.bus import CommandLink, StatusInbox
 from drake_disamb.station.lcm.faults import Fault
 from drake_disamb.station.lcm.loop import prepare_loop
-from drake_disamb.station.lcm.messages import StatusReading, make_command, read_status
+from drake_disamb.station.lcm.messages import StatusReading, make_command, out_of_order, read_status
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 
 LIMIT_TOLERANCE = 1e-6
 """Rounding allowed (rad) beyond a joint limit before a measured angle counts as outside it."""
+MAX_JOINT_SPEED = 2.0
+"""A joint speed (rad/s) no arm on the wire reaches: more than twice the MICO's fastest joint (48
+deg/s = 0.84 rad/s)."""
+JUMP_TOLERANCE = 0.05
+"""A status whose joint moved further than ``JUMP_TOLERANCE + MAX_JOINT_SPEED * dt`` (rad) from the
+last status used, ``dt`` the ``utime`` between them, jumped: it is not that arm's."""
+STRAYS_TO_FAULT = 3
+"""Statuses out of sequence (``utime`` gone back or repeated, a posture that jumped) that latch
+:attr:`Fault.TWO_SOURCES` when they fall within :data:`STRAY_WINDOW`."""
+STRAY_WINDOW = 1.0
+"""The window (s of the controller's time) of :data:`STRAYS_TO_FAULT`."""
+
+
+def posture_jump(q: NDArray[np.float64], utime: int, last_q: NDArray[np.float64], last_utime: int) -> str:
+    """Why the DH angles ``q`` (6, rad) at ``utime`` (us) cannot follow ``last_q`` at
+    ``last_utime`` on one arm (a joint moved further than :data:`JUMP_TOLERANCE` plus
+    :data:`MAX_JOINT_SPEED` over the time between them), or ``""``."""
+    dt = max(utime - last_utime, 0) * 1e-6
+    moved = np.abs(np.asarray(q, float) - np.asarray(last_q, float))
+    k = int(np.argmax(moved))
+    if moved[k] <= JUMP_TOLERANCE + MAX_JOINT_SPEED * dt:
+        return ""
+    return f"posture jumped: joint {k + 1} moved {moved[k]:.4f} rad in {dt:.3f} s"
 
 
 class JacoStatusReceiver(LeafSystem):
     """The controller's clock and the arm's measurement: at every tick, waits for a fresh status.
 
     Every ``period`` it polls the bus until a status arrives that decodes, has 6 joints and 2
-    fingers, is finite and has a ``utime`` after the last one used (others are dropped and counted
-    on ``sanitized_input_count``); of several (a burst) the latest is used, and the ones skipped
-    are counted as missed (LCM over UDP keeps only the latest message of a channel, so there they
-    show only as a gap in ``utime``). The loop's first tick discards what waits on the bus (it
-    was published before the loop started, while the station was being built) and waits for a
-    fresh status; the watchdog and the missed count start there. A status that puts a
-    joint outside the model's limits latches :attr:`Fault.JOINT_LIMIT`; no usable status within
-    ``status_timeout`` seconds (wall clock) of the last one latches :attr:`Fault.STATUS_TIMEOUT`.
+    fingers, is finite and follows the last one used: a ``utime`` after its own, and no joint
+    moved further than an arm moves in that time (:func:`posture_jump`). Others are dropped and
+    counted on ``sanitized_input_count``; of several (a burst) the latest is used, and the ones
+    skipped are counted as missed (LCM over UDP keeps only the latest message of a channel, so
+    there they show only as a gap in ``utime``). The loop's first tick discards what waits on the
+    bus (it was published before the loop started, while the station was being built) and waits
+    for a fresh status; the watchdog and the missed count start there. Faults it latches:
+
+    - :attr:`Fault.JOINT_LIMIT`: a status puts a joint outside the model's limits;
+    - :attr:`Fault.STATUS_TIMEOUT`: no usable status within ``status_timeout`` seconds (wall
+      clock) of the last one;
+    - :attr:`Fault.TWO_SOURCES`: :data:`STRAYS_TO_FAULT` statuses out of sequence (``utime`` gone
+      back or repeated, or a posture that jumped) within :data:`STRAY_WINDOW`, or the watchdog's
+      timeout with only such statuses since the last one used: one is a stray (a garbled or
+      replayed message, dropped), a stream of them is a second driver on the channel (over UDP
+      its statuses can also hide the first driver's: one message per channel is kept);
+    - :attr:`Fault.CONTROLLER_STALLED` (with ``real_time``): the bus went unwatched for longer
+      than ``status_timeout`` (the process was paused or starved: what it then receives is stale,
+      and the watchdog could not have tripped meanwhile); a warning names the gap.
+
     Once a fault is latched it no longer waits and its measurement holds still (velocities zero).
 
     @system
@@ -56,7 +92,9 @@ class JacoStatusReceiver(LeafSystem):
 
     At initialisation, with ``real_time``, it readies the process for the loop
     (:meth:`_before_the_loop`). Discrete state: the four output groups, plus ``[utime of the
-    status used (us)]``; all start from the ``first`` status (the station's start check).
+    status used (us)]`` and the controller's times (s) of the last :data:`STRAYS_TO_FAULT` statuses
+    out of sequence (``-inf`` before any); all start from the ``first`` status (the station's start
+    check).
     """
 
     def __init__(
@@ -74,12 +112,14 @@ class JacoStatusReceiver(LeafSystem):
         self._inbox = inbox
         self._lower, self._upper = np.asarray(lower, float), np.asarray(upper, float)
         self._timeout = float(status_timeout)
+        self._real_time = bool(real_time)
         self._period_us = period * 1e6
         self._arm = self.DeclareDiscreteState(np.concatenate([first.q, first.v]))
         self._finger = self.DeclareDiscreteState(np.concatenate([first.finger_q, first.finger_v]))
         self._fault = self.DeclareDiscreteState([float(Fault.NONE)])
         self._counts = self.DeclareDiscreteState(np.zeros(3))
         self._utime = self.DeclareDiscreteState([float(first.utime)])
+        self._strays = self.DeclareDiscreteState(np.full(STRAYS_TO_FAULT, -np.inf))
         self._sanitized = SanitizedInputCounter(self, warn_interval)
         self.DeclareStateOutputPort("arm_joint_state", self._arm)
         self.DeclareStateOutputPort("finger_state", self._finger)
@@ -120,27 +160,53 @@ class JacoStatusReceiver(LeafSystem):
         good_at = 0.0
         fault = Fault.NONE
         reason = ""
+        strays = 0  # statuses out of sequence since the last one used
+        stray_times = context.get_discrete_state(self._strays).get_value().copy()
         while True:
             now = time.monotonic()
-            self._inbox.poll(min(max(self._inbox.last_good + self._timeout - now, 0.0), 0.002))
+            unwatched = self._inbox.poll(min(max(self._inbox.last_good + self._timeout - now, 0.0), 0.002))
+            if self._real_time and unwatched > self._timeout:  # what it took is stale: not used
+                fault = Fault.CONTROLLER_STALLED
+                warnings.warn(
+                    f"{self.get_name() or type(self).__name__} at t = {context.get_time():.3f} s: the "
+                    f"controller missed its periods: the bus went unwatched for {unwatched:.3f} s (paused "
+                    f"or starved), longer than the status timeout ({self._timeout:g} s)",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                break
             for data, received in self._inbox.take():
-                reading, why = read_status(data, last_utime, arm[:6] if good is None else good.q)
-                if reading is None:
+                last_q = arm[:6] if good is None else good.q
+                reading, why = read_status(data, None, last_q)
+                if reading is not None:
+                    why = out_of_order(reading.utime, last_utime)
+                    if not why and (
+                        np.any(reading.q < self._lower - LIMIT_TOLERANCE)
+                        or np.any(reading.q > self._upper + LIMIT_TOLERANCE)
+                    ):
+                        fault = Fault.JOINT_LIMIT
+                        reason = (
+                            f"joint angles {np.round(reading.q, 4).tolist()} rad outside the model's limits"
+                        )
+                        break
+                    why = why or posture_jump(reading.q, reading.utime, last_q, last_utime)
+                    if why:  # a valid status out of sequence: a stray, or another source's
+                        strays += 1
+                        stray_times = np.append(stray_times[1:], context.get_time())
+                if reading is None or why:
                     dropped += 1
                     reason = reason or why
                     continue
-                if np.any(reading.q < self._lower - LIMIT_TOLERANCE) or np.any(
-                    reading.q > self._upper + LIMIT_TOLERANCE
-                ):
-                    fault = Fault.JOINT_LIMIT
-                    reason = f"joint angles {np.round(reading.q, 4).tolist()} rad outside the model's limits"
-                    break
                 good, good_at, last_utime = reading, received, reading.utime
+            if fault == Fault.NONE and stray_times[0] > context.get_time() - STRAY_WINDOW:
+                fault = Fault.TWO_SOURCES
             if fault != Fault.NONE or good is not None:
                 break
             if time.monotonic() >= self._inbox.last_good + self._timeout:
-                fault = Fault.STATUS_TIMEOUT
+                # Statuses that kept coming, none of them this arm's: another source's.
+                fault = Fault.TWO_SOURCES if strays else Fault.STATUS_TIMEOUT
                 break
+        discrete_state.get_mutable_vector(self._strays).SetFromVector(stray_times)
         if reason:
             self._sanitized.record(context, discrete_state, f"status dropped or refused: {reason}")
         if fault != Fault.NONE:
@@ -281,4 +347,14 @@ class JacoCommandSender(LeafSystem):
         return EventStatus.Succeeded()
 
 
-__all__ = ["LIMIT_TOLERANCE", "JacoCommandSender", "JacoStatusReceiver", "ModelEndEffectorState"]
+__all__ = [
+    "JUMP_TOLERANCE",
+    "LIMIT_TOLERANCE",
+    "MAX_JOINT_SPEED",
+    "STRAYS_TO_FAULT",
+    "STRAY_WINDOW",
+    "JacoCommandSender",
+    "JacoStatusReceiver",
+    "ModelEndEffectorState",
+    "posture_jump",
+]
