@@ -503,7 +503,43 @@ def test_demo_record_needs_live_and_a_subject(tmp_path: Path) -> None:
     )
     assert res.returncode == 2 and "--record records a person's trial: it needs --live" in res.stderr
     res = cli("demo", "--live", "--record", str(tmp_path), "--subject", "a/b", "--out", str(tmp_path / "d"))
-    assert res.returncode == 2 and "--subject" in res.stderr
+    assert res.returncode == 2 and "field subject: expected" in res.stderr
+    res = cli("demo", "--live", "--record", str(tmp_path), "--out", str(tmp_path / "d"))
+    assert res.returncode == 2 and "--record needs --subject NAME" in res.stderr
+
+
+@pytest.mark.parametrize(
+    ("subject", "task_name", "field"),
+    [("Ünïcødé", None, "subject"), ("٣٣", None, "subject"), ("P01", "r" * 100, "task")],
+    ids=["unicode-subject", "arabic-indic-digits", "100-character-task"],
+)
+def test_demo_record_refuses_what_the_record_would_before_the_trial(
+    subject: str, task_name: str | None, field: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A name the record would refuse stops ``demo --live --record`` at the start, by the record's
+    own check: one line, status 2, no trial run, nothing recorded (the trial is not lost at the end)."""
+    from drake_disamb.cli import main
+    from drake_disamb.config import embedded_scenario_text
+
+    task = "reaching"
+    if task_name is not None:
+        text = embedded_scenario_text("reaching").replace("task: reaching", f"task: {task_name}", 1)
+        (tmp_path / "long.yaml").write_text(text, encoding="utf-8")
+        task = str(tmp_path / "long.yaml")
+    out, rec = tmp_path / "demo", tmp_path / "people"
+    code = main(
+        ["demo", "--quiet", "--live", "--no-wait", "--duration", "1", "--task", task,
+         "--record", str(rec), "--subject", subject, "--out", str(out)]
+    )  # fmt: skip
+    captured = capsys.readouterr()
+    assert code == 2
+    (line,) = captured.err.strip().splitlines()
+    assert line.startswith(
+        f"drake-disamb demo: error: --record: the trial's record would be refused: field {field}: expected"
+    )
+    assert repr(subject if field == "subject" else task_name)[:40] in line
+    assert "running the trial" not in captured.out and not list(out.iterdir())
+    assert not (rec / "trials.jsonl").exists() and not list((rec / "traces").iterdir())
 
 
 @pytest.mark.slow

@@ -20,7 +20,12 @@ gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 study record (``source: "human"``, the same :class:`~drake_disamb.study.data.records.TrialRecord` the
 simulated study writes, made by the same function) and its time series to
 ``DIR/traces/<trial_id>.npz``, so ``study report DIR`` treats people like simulated subjects. A trial
-ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``).
+ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``). Before the trial
+starts, the folder is checked and the record's names (the subject: ASCII letters, digits, ``_``
+and ``-``, at most 64; the task: ``reaching`` or ``pouring``; the condition; the ``trial_id``) go
+through the record's own check
+(:func:`~drake_disamb.study.data.records.check_names`): a name the record would refuse is a
+one-line error with exit status 2, before anything runs.
 
 ``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
 every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
@@ -242,10 +247,6 @@ def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN00
     return path
 
 
-def _valid_subject(name: str | None) -> bool:
-    return bool(name) and len(name) <= 64 and all(c.isalnum() or c in "_-" for c in name)
-
-
 def check_record_dir(path: Path) -> Path:
     """``--record``: a writable study folder no other process writes (its writer lock is taken and
     held) whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
@@ -259,22 +260,44 @@ def check_record_dir(path: Path) -> Path:
     return folder.path
 
 
+def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]:
+    """The ``trial_id`` and ``repetition`` of a person's next trial of ``scenario`` in the study
+    folder ``folder`` (whose lock this process holds): ``<subject>-<interface>-<task>-<paradigm>-h<n>``,
+    ``n`` counting that person's earlier trials of the condition there.
+
+    Its names pass the record's own check
+    (:func:`~drake_disamb.study.data.records.check_names`), so ``--record`` calls it before the
+    trial runs: a name the record would refuse stops the command before anything is run.
+
+    Raises:
+        ValueError: A name the record refuses (names the field and the value), or the folder's
+            records cannot be read.
+    """
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.data.records import check_names
+    from drake_disamb.study.run.outcome import record_condition
+
+    condition = record_condition(scenario)
+    stem = f"{subject}-{condition['interface']}-{condition['task']}-{condition['paradigm']}-h"
+    ids = {r.trial_id for r in StudyFolder(folder).read_records(repair=True)}
+    n = 0
+    while f"{stem}{n}" in ids:
+        n += 1
+    trial_id = f"{stem}{n}"
+    check_names(trial_id=trial_id, subject=subject, source="human", **condition)
+    return trial_id, n
+
+
 def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN001 (TrialResult)
     """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
-    ``folder/traces/``; returns its ``trial_id`` (``<subject>-<interface>-<task>-<paradigm>-h<n>``,
-    ``n`` counting that person's earlier trials of the condition, also its ``repetition``)."""
+    ``folder/traces/``; returns its ``trial_id`` (:func:`human_trial_id`; its ``n`` is also the
+    record's ``repetition``)."""
     from drake_disamb.study.data.folder import StudyFolder
     from drake_disamb.study.run.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
     study = StudyFolder(folder).prepare()
-    existing = study.read_records(repair=True)
-    stem = f"{subject}-{sc.interface}-{sc.task}-{sc.paradigm}-h"
-    ids = {r.trial_id for r in existing}
-    n = 0
-    while f"{stem}{n}" in ids:
-        n += 1
-    trial_id = f"{stem}{n}"
+    trial_id, n = human_trial_id(folder, subject, sc)
     trace = trace_arrays(result)
     record = record_from_result(
         result,
@@ -372,10 +395,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error("--live needs Meshcat (drop --no-meshcat)")
     if args.record is not None and not args.live:
         return _error("--record records a person's trial: it needs --live")
-    if args.record is not None and not _valid_subject(args.subject):
-        return _error(
-            f"--subject: --record needs a subject name of letters, digits, '_' or '-', got {args.subject!r}"
-        )
+    if args.record is not None and args.subject is None:
+        return _error("--record needs --subject NAME (the person's name or code, e.g. P01)")
     if args.subject is not None and args.record is None:
         return _error("--subject names the person of a recorded trial: it needs --record DIR")
     # First, before the heavy imports and anything is built: a bad folder costs nothing.
@@ -390,6 +411,11 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         backend = station_backend(args)
     except ValueError as exc:
         return _error(exc)
+    if args.record is not None:
+        try:  # every name the record takes, by the record's own check, before the trial runs
+            human_trial_id(args.record, args.subject, scenario)
+        except ValueError as exc:
+            return _error(f"--record: the trial's record would be refused: {exc}")
 
     from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.plotting import write_trial_figures
