@@ -25,7 +25,9 @@ starts, the folder is checked and the record's names (the subject: ASCII letters
 and ``-``, at most 64; the task: ``reaching`` or ``pouring``; the condition; the ``trial_id``) go
 through the record's own check
 (:func:`~drake_disamb.study.data.records.check_names`): a name the record would refuse is a
-one-line error with exit status 2, before anything runs.
+one-line error with exit status 2, before anything runs; so is a simulated study's folder (with
+``study.yaml`` or ``ablation.json``), which takes only its own trials so that ``study run`` can
+resume it.
 
 ``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
 every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
@@ -249,11 +251,13 @@ def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN00
 
 def check_record_dir(path: Path) -> Path:
     """``--record``: a writable study folder no other process writes (its writer lock is taken and
-    held) whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
+    held), not a simulated study's (which takes only its own trials), whose ``trials.jsonl``, if
+    any, reads (raises ``ValueError``)."""
     from drake_disamb.study.data.folder import StudyFolder
 
     try:
         folder = StudyFolder(path).prepare()
+        folder.check_source("human")
         folder.read_records(repair=True)
     except ValueError as exc:
         raise ValueError(f"--record: {exc}") from None

@@ -14,6 +14,15 @@ A study folder ``DIR`` holds, whoever wrote it (``study run``, ``study ablate``'
   within one process the lock is taken once per folder and held until :meth:`StudyFolder.release`
   or the process ends.
 
+**A simulated study's folder takes its own trials only.** A folder with ``study.yaml`` (``study
+run``'s description of its study) or ``ablation.json`` (``study ablate``'s settings,
+:data:`SIMULATED_STUDY_FILES`) refuses records of another source (:meth:`StudyFolder.check_source`,
+which :meth:`StudyFolder.append` applies and ``study import-authors`` and ``demo --record`` call
+before anything is read or run): a person's or the authors' record there would stop ``study run``
+from resuming the study (every record must be one of its trials) or be left out of an ablation's
+report. People and the authors' logs go into folders of their own (``study report --compare``
+sets them beside a study).
+
 **Traces** (:class:`LoggedTrial` holds a record, its trace and the request switches, for people
 and simulated users alike). Arrays, one row per sample unless said: ``t`` (T,) s, increasing;
 ``belief`` (T, n_goals); ``alpha`` (T,); ``u`` (T, 6) the blended command and ``u_h`` the user's
@@ -50,6 +59,7 @@ __all__ = [
     "FolderBusy",
     "FolderWriteError",
     "LoggedTrial",
+    "SIMULATED_STUDY_FILES",
     "StudyFolder",
     "TraceError",
     "check_trace",
@@ -59,6 +69,10 @@ __all__ = [
 
 REQUIRED_TRACE_ARRAYS: tuple[str, ...] = ("t", "belief", "alpha", "u", "mode", "u_h")
 """Arrays every trace has (module docstring)."""
+
+SIMULATED_STUDY_FILES: tuple[str, ...] = ("study.yaml", "ablation.json")
+"""The files that make a folder a simulated study's (``study run``'s description of its study,
+``study ablate``'s settings): it takes simulated records only (module docstring)."""
 
 
 class FolderBusy(ValueError):
@@ -277,6 +291,26 @@ class StudyFolder:
         if fd is not None:
             os.close(fd)  # closing the last descriptor releases the flock
 
+    def check_source(self, source: str) -> None:
+        """Whether the folder takes records of ``source`` (a record's ``source``): a simulated
+        study's folder (:data:`SIMULATED_STUDY_FILES`) takes simulated records only (module
+        docstring).
+
+        Raises:
+            ValueError: It does not (names the folder, the file that makes it a study's and
+                ``source``).
+        """
+        if source == "simulated":
+            return
+        for name in SIMULATED_STUDY_FILES:
+            marker = self.path / name
+            if marker.exists():
+                raise ValueError(
+                    f"study folder {self.path} holds a simulated study ({marker}): it takes only that "
+                    f"study's trials, so that it can be resumed; put the {source} records into a folder "
+                    "of their own"
+                )
+
     @property
     def locked(self) -> bool:
         """Whether this process holds the folder's lock."""
@@ -287,11 +321,14 @@ class StudyFolder:
 
         Raises:
             RuntimeError: This process does not hold the folder's lock (:meth:`prepare` first).
+            ValueError: The folder does not take the record's source (:meth:`check_source`);
+                nothing is written.
             FolderWriteError: A write failed (full disk...); names the file. What was written before
                 is kept, and a half-written trace is removed.
         """
         if not self.locked:
             raise RuntimeError(f"{self}: append without the folder's lock (call prepare() first)")
+        self.check_source(record.source)
         target = self.trace_path(record.trial_id)
         try:
             save_trace(target, trace)
