@@ -182,6 +182,33 @@ def test_a_full_disk_names_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     folder.release()
 
 
+def test_an_unsaved_trial_is_kept_whole_or_not_at_all(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import errno
+
+    import drake_disamb.study.data.folder as F
+
+    folder = tmp_path / "people"
+    first = F.keep_unsaved(folder, _record("a"), _trace())
+    second = F.keep_unsaved(folder, _record("a"), _trace())  # never over the first
+    assert (first.name, second.name) == ("people.unsaved-a.npz", "people.unsaved-a.1.npz")
+    record, trace = F.read_unsaved(second)
+    assert record == _record("a") and trace.keys() == _trace().keys()
+    assert np.array_equal(trace["belief"], _trace()["belief"])
+    trace_file = F.save_trace(tmp_path / "t.npz", _trace())
+    with pytest.raises(RecordError, match=rf"{trace_file}: no 'record'"):
+        F.read_unsaved(trace_file)
+
+    def full(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(F.np, "savez_compressed", full)
+    with pytest.raises(OSError, match="No space left on device"):
+        F.keep_unsaved(folder, _record("b"), _trace())
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([first.name, second.name, "t.npz"])
+
+
 # ----------------------------------------------------------------------------------------------
 # Records: the one check
 

@@ -27,7 +27,10 @@ through the record's own check
 (:func:`~drake_disamb.study.data.records.check_names`): a name the record would refuse is a
 one-line error with exit status 2, before anything runs; so is a simulated study's folder (with
 ``study.yaml`` or ``ablation.json``), which takes only its own trials so that ``study run`` can
-resume it.
+resume it. If the folder still does not take the trial at the end (a full disk, a permission, a
+race), the record and its trace are kept in a new file beside it,
+``DIR.unsaved-<trial_id>.npz`` (never over an existing file), which the one-line error names
+(exit status 4); :func:`~drake_disamb.study.data.folder.read_unsaved` reads it back.
 
 ``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
 every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
@@ -45,7 +48,7 @@ everything above for the trial so far (``metrics.json`` with ``"interrupted": tr
 130. That is also how a person ends a ``--live`` trial. A second Ctrl-C quits without waiting.
 
 Exit status: 0 the trial succeeded, 1 it did not, 2 bad arguments or an unusable ``--out``,
-130 stopped by SIGINT or SIGTERM.
+4 the ``--record`` folder did not take the trial (kept beside it), 130 stopped by SIGINT or SIGTERM.
 """
 
 from __future__ import annotations
@@ -71,6 +74,7 @@ from drake_disamb.commands._meshcat import (
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
+from drake_disamb.commands.study_run import EXIT_WRITE_FAILED
 from drake_disamb.core.interfaces import INTERFACES
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
@@ -292,22 +296,42 @@ def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]
     return trial_id, n
 
 
-def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN001 (TrialResult)
-    """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
-    ``folder/traces/``; returns its ``trial_id`` (:func:`human_trial_id`; its ``n`` is also the
-    record's ``repetition``)."""
-    from drake_disamb.study.data.folder import StudyFolder
+class NotRecorded(Exception):
+    """The ``--record`` folder did not take a person's trial; the message (one line) says why and
+    names the file that keeps it."""
+
+
+def record_human_trial(result, folder: Path, subject: str, trial_id: str, repetition: int) -> str:  # noqa: ANN001 (TrialResult)
+    """Append a person's trial to the study folder ``folder`` (source ``human``) with its trace in
+    ``folder/traces/``, and return its ``trial_id``.
+
+    ``trial_id`` and ``repetition`` are :func:`human_trial_id`'s at the start; they are taken again
+    now (under the folder's lock, held since the start, the same unless a writer that ignores the
+    lock added one of this person's trials meanwhile: then the next free one).
+
+    Raises:
+        NotRecorded: The folder did not take the trial (it cannot be used now, its records cannot
+            be read, a write failed): the record and its trace are kept in a new file beside it
+            (:func:`~drake_disamb.study.data.folder.keep_unsaved`), which the message names.
+        ValueError: A value of the trial the record refuses (names the field).
+    """
+    from drake_disamb.study.data.folder import StudyFolder, keep_unsaved
     from drake_disamb.study.run.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
-    study = StudyFolder(folder).prepare()
-    trial_id, n = human_trial_id(folder, subject, sc)
+    study = StudyFolder(folder)
+    failure: Exception | None = None
+    try:
+        study.prepare()
+        trial_id, repetition = human_trial_id(folder, subject, sc)
+    except ValueError as exc:
+        failure = exc
     trace = trace_arrays(result)
     record = record_from_result(
         result,
         trial_id=trial_id,
         subject=subject,
-        repetition=n,
+        repetition=repetition,
         seed=None,
         start_pose=0 if sc.start_joint_positions is None else None,
         source="human",
@@ -315,8 +339,25 @@ def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN0
         wall_time=0.0,
         extra={"live": True, "scenario_seed": sc.seed},
     )
-    study.append(record, trace)
-    return trial_id
+    if failure is None:
+        try:
+            study.append(record, trace)
+            return trial_id
+        except (OSError, ValueError) as exc:
+            failure = exc
+    why = failure.strerror if isinstance(failure, OSError) and failure.strerror else failure
+    try:
+        kept = keep_unsaved(folder, record, trace)
+    except OSError as exc:
+        raise NotRecorded(
+            f"{folder} did not take the trial ({why}), nor could it be kept beside it ({exc})"
+        ) from None
+    raise NotRecorded(f"{folder} did not take the trial ({why}); it is kept in {kept}")
+
+
+def _record_failed(message: object) -> int:
+    print(f"drake-disamb demo: error: --record: {message}", file=sys.stderr, flush=True)
+    return EXIT_WRITE_FAILED
 
 
 def _say(line: str) -> None:
@@ -417,7 +458,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(exc)
     if args.record is not None:
         try:  # every name the record takes, by the record's own check, before the trial runs
-            human_trial_id(args.record, args.subject, scenario)
+            trial_id, repetition = human_trial_id(args.record, args.subject, scenario)
         except ValueError as exc:
             return _error(f"--record: the trial's record would be refused: {exc}")
 
@@ -481,9 +522,11 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(f"--out: writing into {out} failed ({exc})")
     if args.record is not None:
         try:
-            trial_id = record_human_trial(result, args.record, args.subject)
-        except (OSError, ValueError) as exc:
-            return _error(f"--record: writing into {args.record} failed ({exc})")
+            trial_id = record_human_trial(result, args.record, args.subject, trial_id, repetition)
+        except NotRecorded as exc:
+            return _record_failed(exc)
+        except ValueError as exc:  # a value of the trial the record refuses (names the field)
+            return _record_failed(f"the trial's record is refused ({exc})")
         written.append(args.record / "trials.jsonl")
         print(f"recorded trial {trial_id} of {args.subject}")
     for path in written:
