@@ -85,6 +85,73 @@ def test_demo_record_takes_the_lock(held_folder) -> None:
         check_record_dir(folder)
 
 
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
+
+
+def _files(folder: Path) -> dict[str, str]:
+    return {k: v for k, v in digest(folder).items() if k != StudyFolder.LOCK_NAME}
+
+
+@pytest.fixture(params=["study.yaml", "ablation.json"])
+def simulated_study(request: pytest.FixtureRequest, tmp_path: Path) -> Path:
+    """A simulated study's folder: a planned ``study run`` (its ``study.yaml``, one record), or an
+    ablation's (its ``ablation.json``); this process does not hold its lock."""
+    from drake_disamb.study.design.protocol import quick_protocol
+    from drake_disamb.study.run.runner import plan_study
+
+    folder = tmp_path / "study"
+    if request.param == "study.yaml":
+        plan = plan_study(folder, quick_protocol(), 0, check_scenarios=False)
+        spec = plan.specs[0]
+        record = _record(
+            spec.trial_id, subject=spec.subject, interface=spec.interface, task=spec.task,
+            paradigm=spec.paradigm, repetition=spec.repetition, seed=spec.seed, start_pose=spec.start_pose,
+        )  # fmt: skip
+        plan.folder.append(record, _trace())
+    else:
+        folder.mkdir()
+        (folder / "ablation.json").write_text('{"format": 1, "settings": []}\n')
+    StudyFolder(folder).release()
+    return folder
+
+
+@pytest.mark.parametrize("writer", ["demo", "import-authors", "append"])
+def test_a_simulated_studys_folder_takes_no_other_records(
+    simulated_study: Path, writer: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``demo --record`` and ``study import-authors`` into a simulated study's folder are refused
+    before anything runs (one line, status 2, nothing written); the study still resumes."""
+    before = _files(simulated_study)
+    message = f"study folder {simulated_study} holds a simulated study ({simulated_study}/"
+    if writer == "append":
+        folder = StudyFolder(simulated_study).prepare()
+        with pytest.raises(ValueError, match="holds a simulated study"):
+            folder.append(_record("h", source="human"), _trace())
+        folder.release()
+    else:
+        if writer == "import-authors" and not DATA.is_dir():
+            pytest.skip(f"needs the published data in {DATA}")
+        argv = {
+            "demo": ["demo", "--quiet", "--live", "--no-wait", "--duration", "1", "--record",
+                     str(simulated_study), "--subject", "P01", "--out", str(tmp_path / "demo")],
+            "import-authors": ["study", "import-authors", str(DATA), "--out", str(simulated_study)],
+        }[writer]  # fmt: skip
+        assert main(argv) == 2
+        captured = capsys.readouterr()
+        (line,) = captured.err.strip().splitlines()
+        assert f"error: {'--record: ' if writer == 'demo' else ''}{message}" in line
+        assert "running the trial" not in captured.out and "imported" not in captured.out
+    assert _files(simulated_study) == before
+    StudyFolder(simulated_study).release()
+    if (simulated_study / "study.yaml").exists():
+        from drake_disamb.study.design.protocol import quick_protocol
+        from drake_disamb.study.run.runner import plan_study
+
+        plan = plan_study(simulated_study, quick_protocol(), 0, check_scenarios=False)
+        assert len(plan.finished) == 1 and len(plan.pending) == len(plan.specs) - 1
+        plan.folder.release()
+
+
 def test_append_needs_the_lock_and_reads_back(tmp_path: Path) -> None:
     folder = StudyFolder(tmp_path / "s")
     trace = {"t": np.arange(3.0), "belief": np.full((3, 2), 0.5), "alpha": np.zeros(3)}
@@ -115,6 +182,33 @@ def test_a_full_disk_names_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     folder.release()
 
 
+def test_an_unsaved_trial_is_kept_whole_or_not_at_all(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import errno
+
+    import drake_disamb.study.data.folder as F
+
+    folder = tmp_path / "people"
+    first = F.keep_unsaved(folder, _record("a"), _trace())
+    second = F.keep_unsaved(folder, _record("a"), _trace())  # never over the first
+    assert (first.name, second.name) == ("people.unsaved-a.npz", "people.unsaved-a.1.npz")
+    record, trace = F.read_unsaved(second)
+    assert record == _record("a") and trace.keys() == _trace().keys()
+    assert np.array_equal(trace["belief"], _trace()["belief"])
+    trace_file = F.save_trace(tmp_path / "t.npz", _trace())
+    with pytest.raises(RecordError, match=rf"{trace_file}: no 'record'"):
+        F.read_unsaved(trace_file)
+
+    def full(*args: object, **kwargs: object) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(F.np, "savez_compressed", full)
+    with pytest.raises(OSError, match="No space left on device"):
+        F.keep_unsaved(folder, _record("b"), _trace())
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([first.name, second.name, "t.npz"])
+
+
 # ----------------------------------------------------------------------------------------------
 # Records: the one check
 
@@ -141,6 +235,10 @@ _LINE = json.loads(_record("x").to_json())
         ("repetition", True),
         ("duration", float("nan")),
         ("trial_id", "../x"),
+        ("trial_id", "x\n"),
+        ("subject", "Ünïcødé"),
+        ("subject", "٣٣"),
+        ("subject", "S" * 65),
         ("assistance_onset", "soon"),
         ("request_times", [float("nan")]),
     ],

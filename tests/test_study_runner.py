@@ -503,7 +503,100 @@ def test_demo_record_needs_live_and_a_subject(tmp_path: Path) -> None:
     )
     assert res.returncode == 2 and "--record records a person's trial: it needs --live" in res.stderr
     res = cli("demo", "--live", "--record", str(tmp_path), "--subject", "a/b", "--out", str(tmp_path / "d"))
-    assert res.returncode == 2 and "--subject" in res.stderr
+    assert res.returncode == 2 and "field subject: expected" in res.stderr
+    res = cli("demo", "--live", "--record", str(tmp_path), "--out", str(tmp_path / "d"))
+    assert res.returncode == 2 and "--record needs --subject NAME" in res.stderr
+
+
+@pytest.mark.parametrize(
+    ("subject", "task_name", "field"),
+    [("Ünïcødé", None, "subject"), ("٣٣", None, "subject"), ("P01", "r" * 100, "task")],
+    ids=["unicode-subject", "arabic-indic-digits", "100-character-task"],
+)
+def test_demo_record_refuses_what_the_record_would_before_the_trial(
+    subject: str, task_name: str | None, field: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A name the record would refuse stops ``demo --live --record`` at the start, by the record's
+    own check: one line, status 2, no trial run, nothing recorded (the trial is not lost at the end)."""
+    from drake_disamb.cli import main
+    from drake_disamb.config import embedded_scenario_text
+
+    task = "reaching"
+    if task_name is not None:
+        text = embedded_scenario_text("reaching").replace("task: reaching", f"task: {task_name}", 1)
+        (tmp_path / "long.yaml").write_text(text, encoding="utf-8")
+        task = str(tmp_path / "long.yaml")
+    out, rec = tmp_path / "demo", tmp_path / "people"
+    code = main(
+        ["demo", "--quiet", "--live", "--no-wait", "--duration", "1", "--task", task,
+         "--record", str(rec), "--subject", subject, "--out", str(out)]
+    )  # fmt: skip
+    captured = capsys.readouterr()
+    assert code == 2
+    (line,) = captured.err.strip().splitlines()
+    assert line.startswith(
+        f"drake-disamb demo: error: --record: the trial's record would be refused: field {field}: expected"
+    )
+    assert repr(subject if field == "subject" else task_name)[:40] in line
+    assert "running the trial" not in captured.out and not list(out.iterdir())
+    assert not (rec / "trials.jsonl").exists() and not list((rec / "traces").iterdir())
+
+
+@pytest.mark.parametrize("failure", ["full-disk", "became-a-study"])
+def test_a_trial_the_folder_does_not_take_is_kept_beside_it(
+    failure: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """When the folder does not take a person's trial at the end (a full disk; a simulated study's
+    description written into it while the trial ran), the record and its trace are kept in a new
+    file beside the folder, which the one line names; exit status 4; nothing is overwritten."""
+    import errno
+
+    import drake_disamb.study.data.folder as F
+    import drake_disamb.trial
+    from drake_disamb.cli import main
+
+    rec, trial_id = tmp_path / "people", "P01-head_array-reaching-disambiguation-h0"
+    planted = tmp_path / f"people.unsaved-{trial_id}.npz"
+    planted.write_bytes(b"someone else's file")
+    if failure == "full-disk":
+
+        def full(*args: object, **kwargs: object) -> None:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+        monkeypatch.setattr(F, "append_record", full)
+        reason = f"cannot write {rec / 'trials.jsonl'}: No space left on device"
+    else:
+        real_run_trial = drake_disamb.trial.run_trial
+
+        def racing_run_trial(*args: object, **kwargs: object) -> object:
+            result = real_run_trial(*args, **kwargs)
+            if "stop_requested" in kwargs:  # the person's trial, not the warm-up
+                (rec / "study.yaml").write_text("format: 1\n")
+            return result
+
+        monkeypatch.setattr(drake_disamb.trial, "run_trial", racing_run_trial)
+        reason = f"study folder {rec} holds a simulated study ({rec / 'study.yaml'})"
+    code = main(
+        ["demo", "--quiet", "--live", "--no-wait", "--duration", "1", "--record", str(rec),
+         "--subject", "P01", "--out", str(tmp_path / "demo")]
+    )  # fmt: skip
+    captured = capsys.readouterr()
+    kept = tmp_path / f"people.unsaved-{trial_id}.1.npz"
+    assert code == 4
+    (line,) = captured.err.strip().splitlines()
+    assert line.startswith(f"drake-disamb demo: error: --record: {rec} did not take the trial ({reason}")
+    assert line.endswith(f"; it is kept in {kept}")
+    assert planted.read_bytes() == b"someone else's file"
+    record, trace = F.read_unsaved(kept)
+    assert (record.trial_id, record.subject, record.source) == (trial_id, "P01", "human")
+    assert record.duration > 0.5 and set(trace) == {*TRACE_ARRAYS, "ik_status"} and len(trace["t"]) > 10
+    assert json.loads((tmp_path / "demo" / "metrics.json").read_text())["time"] == record.duration
+    assert not (rec / "trials.jsonl").exists()
+    monkeypatch.undo()
+    (rec / "study.yaml").unlink(missing_ok=True)
+    F.StudyFolder(rec).append(record, trace)  # what the docs say to do once the folder can be written
+    assert [t.record.trial_id for t in F.StudyFolder(rec).read_trials()] == [trial_id]
+    F.StudyFolder(rec).release()
 
 
 @pytest.mark.slow

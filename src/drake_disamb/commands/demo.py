@@ -20,7 +20,17 @@ gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 study record (``source: "human"``, the same :class:`~drake_disamb.study.data.records.TrialRecord` the
 simulated study writes, made by the same function) and its time series to
 ``DIR/traces/<trial_id>.npz``, so ``study report DIR`` treats people like simulated subjects. A trial
-ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``).
+ended with Ctrl-C is recorded too (``done: false``, ``extra.interrupted: true``). Before the trial
+starts, the folder is checked and the record's names (the subject: ASCII letters, digits, ``_``
+and ``-``, at most 64; the task: ``reaching`` or ``pouring``; the condition; the ``trial_id``) go
+through the record's own check
+(:func:`~drake_disamb.study.data.records.check_names`): a name the record would refuse is a
+one-line error with exit status 2, before anything runs; so is a simulated study's folder (with
+``study.yaml`` or ``ablation.json``), which takes only its own trials so that ``study run`` can
+resume it. If the folder still does not take the trial at the end (a full disk, a permission, a
+race), the record and its trace are kept in a new file beside it,
+``DIR.unsaved-<trial_id>.npz`` (never over an existing file), which the one-line error names
+(exit status 4); :func:`~drake_disamb.study.data.folder.read_unsaved` reads it back.
 
 ``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
 every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
@@ -38,7 +48,7 @@ everything above for the trial so far (``metrics.json`` with ``"interrupted": tr
 130. That is also how a person ends a ``--live`` trial. A second Ctrl-C quits without waiting.
 
 Exit status: 0 the trial succeeded, 1 it did not, 2 bad arguments or an unusable ``--out``,
-130 stopped by SIGINT or SIGTERM.
+4 the ``--record`` folder did not take the trial (kept beside it), 130 stopped by SIGINT or SIGTERM.
 """
 
 from __future__ import annotations
@@ -64,6 +74,7 @@ from drake_disamb.commands._meshcat import (
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
+from drake_disamb.commands.study_run import EXIT_WRITE_FAILED
 from drake_disamb.core.interfaces import INTERFACES
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
@@ -242,45 +253,85 @@ def write_metrics(result, out: Path, live: bool = False) -> Path:  # noqa: ANN00
     return path
 
 
-def _valid_subject(name: str | None) -> bool:
-    return bool(name) and len(name) <= 64 and all(c.isalnum() or c in "_-" for c in name)
-
-
 def check_record_dir(path: Path) -> Path:
     """``--record``: a writable study folder no other process writes (its writer lock is taken and
-    held) whose ``trials.jsonl``, if any, reads (raises ``ValueError``)."""
+    held), not a simulated study's (which takes only its own trials), whose ``trials.jsonl``, if
+    any, reads (raises ``ValueError``)."""
     from drake_disamb.study.data.folder import StudyFolder
 
     try:
         folder = StudyFolder(path).prepare()
+        folder.check_source("human")
         folder.read_records(repair=True)
     except ValueError as exc:
         raise ValueError(f"--record: {exc}") from None
     return folder.path
 
 
-def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN001 (TrialResult)
-    """Append a person's trial to ``folder/trials.jsonl`` (source ``human``) with its trace in
-    ``folder/traces/``; returns its ``trial_id`` (``<subject>-<interface>-<task>-<paradigm>-h<n>``,
-    ``n`` counting that person's earlier trials of the condition, also its ``repetition``)."""
-    from drake_disamb.study.data.folder import StudyFolder
-    from drake_disamb.study.run.outcome import record_from_result, trace_arrays
+def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]:
+    """The ``trial_id`` and ``repetition`` of a person's next trial of ``scenario`` in the study
+    folder ``folder`` (whose lock this process holds): ``<subject>-<interface>-<task>-<paradigm>-h<n>``,
+    ``n`` counting that person's earlier trials of the condition there.
 
-    sc = result.scenario
-    study = StudyFolder(folder).prepare()
-    existing = study.read_records(repair=True)
-    stem = f"{subject}-{sc.interface}-{sc.task}-{sc.paradigm}-h"
-    ids = {r.trial_id for r in existing}
+    Its names pass the record's own check
+    (:func:`~drake_disamb.study.data.records.check_names`), so ``--record`` calls it before the
+    trial runs: a name the record would refuse stops the command before anything is run.
+
+    Raises:
+        ValueError: A name the record refuses (names the field and the value), or the folder's
+            records cannot be read.
+    """
+    from drake_disamb.study.data.folder import StudyFolder
+    from drake_disamb.study.data.records import check_names
+    from drake_disamb.study.run.outcome import record_condition
+
+    condition = record_condition(scenario)
+    stem = f"{subject}-{condition['interface']}-{condition['task']}-{condition['paradigm']}-h"
+    ids = {r.trial_id for r in StudyFolder(folder).read_records(repair=True)}
     n = 0
     while f"{stem}{n}" in ids:
         n += 1
     trial_id = f"{stem}{n}"
+    check_names(trial_id=trial_id, subject=subject, source="human", **condition)
+    return trial_id, n
+
+
+class NotRecorded(Exception):
+    """The ``--record`` folder did not take a person's trial; the message (one line) says why and
+    names the file that keeps it."""
+
+
+def record_human_trial(result, folder: Path, subject: str, trial_id: str, repetition: int) -> str:  # noqa: ANN001 (TrialResult)
+    """Append a person's trial to the study folder ``folder`` (source ``human``) with its trace in
+    ``folder/traces/``, and return its ``trial_id``.
+
+    ``trial_id`` and ``repetition`` are :func:`human_trial_id`'s at the start; they are taken again
+    now (under the folder's lock, held since the start, the same unless a writer that ignores the
+    lock added one of this person's trials meanwhile: then the next free one).
+
+    Raises:
+        NotRecorded: The folder did not take the trial (it cannot be used now, its records cannot
+            be read, a write failed): the record and its trace are kept in a new file beside it
+            (:func:`~drake_disamb.study.data.folder.keep_unsaved`), which the message names.
+        ValueError: A value of the trial the record refuses (names the field).
+    """
+    from drake_disamb.study.data.folder import StudyFolder, keep_unsaved
+    from drake_disamb.study.run.outcome import record_from_result, trace_arrays
+
+    sc = result.scenario
+    study = StudyFolder(folder)
+    failure: Exception | None = None
+    try:
+        study.prepare()
+        trial_id, repetition = human_trial_id(folder, subject, sc)
+    except ValueError as exc:
+        failure = exc
     trace = trace_arrays(result)
     record = record_from_result(
         result,
         trial_id=trial_id,
         subject=subject,
-        repetition=n,
+        repetition=repetition,
         seed=None,
         start_pose=0 if sc.start_joint_positions is None else None,
         source="human",
@@ -288,8 +339,25 @@ def record_human_trial(result, folder: Path, subject: str) -> str:  # noqa: ANN0
         wall_time=0.0,
         extra={"live": True, "scenario_seed": sc.seed},
     )
-    study.append(record, trace)
-    return trial_id
+    if failure is None:
+        try:
+            study.append(record, trace)
+            return trial_id
+        except (OSError, ValueError) as exc:
+            failure = exc
+    why = failure.strerror if isinstance(failure, OSError) and failure.strerror else failure
+    try:
+        kept = keep_unsaved(folder, record, trace)
+    except OSError as exc:
+        raise NotRecorded(
+            f"{folder} did not take the trial ({why}), nor could it be kept beside it ({exc})"
+        ) from None
+    raise NotRecorded(f"{folder} did not take the trial ({why}); it is kept in {kept}")
+
+
+def _record_failed(message: object) -> int:
+    print(f"drake-disamb demo: error: --record: {message}", file=sys.stderr, flush=True)
+    return EXIT_WRITE_FAILED
 
 
 def _say(line: str) -> None:
@@ -372,10 +440,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error("--live needs Meshcat (drop --no-meshcat)")
     if args.record is not None and not args.live:
         return _error("--record records a person's trial: it needs --live")
-    if args.record is not None and not _valid_subject(args.subject):
-        return _error(
-            f"--subject: --record needs a subject name of letters, digits, '_' or '-', got {args.subject!r}"
-        )
+    if args.record is not None and args.subject is None:
+        return _error("--record needs --subject NAME (the person's name or code, e.g. P01)")
     if args.subject is not None and args.record is None:
         return _error("--subject names the person of a recorded trial: it needs --record DIR")
     # First, before the heavy imports and anything is built: a bad folder costs nothing.
@@ -390,6 +456,11 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         backend = station_backend(args)
     except ValueError as exc:
         return _error(exc)
+    if args.record is not None:
+        try:  # every name the record takes, by the record's own check, before the trial runs
+            trial_id, repetition = human_trial_id(args.record, args.subject, scenario)
+        except ValueError as exc:
+            return _error(f"--record: the trial's record would be refused: {exc}")
 
     from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.plotting import write_trial_figures
@@ -451,9 +522,11 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(f"--out: writing into {out} failed ({exc})")
     if args.record is not None:
         try:
-            trial_id = record_human_trial(result, args.record, args.subject)
-        except (OSError, ValueError) as exc:
-            return _error(f"--record: writing into {args.record} failed ({exc})")
+            trial_id = record_human_trial(result, args.record, args.subject, trial_id, repetition)
+        except NotRecorded as exc:
+            return _record_failed(exc)
+        except ValueError as exc:  # a value of the trial the record refuses (names the field)
+            return _record_failed(f"the trial's record is refused ({exc})")
         written.append(args.record / "trials.jsonl")
         print(f"recorded trial {trial_id} of {args.subject}")
     for path in written:

@@ -11,6 +11,8 @@ HELP = "Import the authors' published human-study logs (4 of the paper's 8 subje
 EPILOG = """\
 Appends one record per trial file (source "authors") to DIR/trials.jsonl and writes its trace to
 DIR/traces/<trial_id>.npz; trials already in DIR/trials.jsonl are skipped (nothing is overwritten).
+A simulated study's folder (with study.yaml or ablation.json) is refused before anything is
+written: it takes only its own trials, so that study run can resume it.
 See drake_disamb.study.data.authors for how every field is made.
 
 example (from the repository root):

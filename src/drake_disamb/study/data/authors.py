@@ -430,7 +430,7 @@ def import_authors(
 
     Raises:
         ValueError: ``data_dir`` has no trial files or no trial order, or a file is malformed, or
-            ``out_dir`` cannot be written.
+            ``out_dir`` cannot be written or is a simulated study's folder (nothing is written).
         RecordError: ``out_dir/trials.jsonl`` exists but cannot be read (names file and line).
         FolderBusy: Another process writes ``out_dir``.
         FolderWriteError: A write failed (names the file); a rerun imports the rest.
@@ -439,6 +439,7 @@ def import_authors(
     # stops the import before anything is written.
     trials = read_trials(data_dir)
     folder = StudyFolder(out_dir).prepare()
+    folder.check_source("authors")
     done = {r.trial_id for r in folder.read_records(repair=True)}
     imported = 0
     for trial in trials:

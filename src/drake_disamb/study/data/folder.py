@@ -14,6 +14,22 @@ A study folder ``DIR`` holds, whoever wrote it (``study run``, ``study ablate``'
   within one process the lock is taken once per folder and held until :meth:`StudyFolder.release`
   or the process ends.
 
+**A simulated study's folder takes its own trials only.** A folder with ``study.yaml`` (``study
+run``'s description of its study) or ``ablation.json`` (``study ablate``'s settings,
+:data:`SIMULATED_STUDY_FILES`) refuses records of another source (:meth:`StudyFolder.check_source`,
+which :meth:`StudyFolder.append` applies and ``study import-authors`` and ``demo --record`` call
+before anything is read or run): a person's or the authors' record there would stop ``study run``
+from resuming the study (every record must be one of its trials) or be left out of an ablation's
+report. People and the authors' logs go into folders of their own (``study report --compare``
+sets them beside a study).
+
+**A trial the folder did not take** (a full disk, a permission, a race: ``demo --record`` at the
+end of a person's trial) is kept by :func:`keep_unsaved` in a new file beside the folder,
+``<folder>.unsaved-<trial_id>.npz`` (``.1``, ``.2``, ... before ``.npz`` when the name is taken:
+nothing is overwritten): the trace's arrays and ``record``, the record's JSON line.
+:func:`read_unsaved` reads it back, so ``StudyFolder(DIR).prepare().append(*read_unsaved(FILE))``
+puts the trial into a study folder once it can be written.
+
 **Traces** (:class:`LoggedTrial` holds a record, its trace and the request switches, for people
 and simulated users alike). Arrays, one row per sample unless said: ``t`` (T,) s, increasing;
 ``belief`` (T, n_goals); ``alpha`` (T,); ``u`` (T, 6) the blended command and ``u_h`` the user's
@@ -32,6 +48,7 @@ from __future__ import annotations
 
 import errno
 import fcntl
+import json
 import os
 import sys
 import tempfile
@@ -50,15 +67,22 @@ __all__ = [
     "FolderBusy",
     "FolderWriteError",
     "LoggedTrial",
+    "SIMULATED_STUDY_FILES",
     "StudyFolder",
     "TraceError",
     "check_trace",
+    "keep_unsaved",
+    "read_unsaved",
     "save_trace",
     "write_atomic",
 ]
 
 REQUIRED_TRACE_ARRAYS: tuple[str, ...] = ("t", "belief", "alpha", "u", "mode", "u_h")
 """Arrays every trace has (module docstring)."""
+
+SIMULATED_STUDY_FILES: tuple[str, ...] = ("study.yaml", "ablation.json")
+"""The files that make a folder a simulated study's (``study run``'s description of its study,
+``study ablate``'s settings): it takes simulated records only (module docstring)."""
 
 
 class FolderBusy(ValueError):
@@ -162,6 +186,70 @@ def save_trace(path: str | Path, arrays: Mapping[str, NDArray[Any]]) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def _load_arrays(path: Path, what: str) -> dict[str, NDArray[Any]]:
+    """The arrays of the ``.npz`` file ``path`` (no pickles); :class:`TraceError` naming the file
+    and ``what`` it should be if it cannot be read."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: np.asarray(z[k]) for k in z.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
+        raise TraceError(f"{path}: not a readable {what} ({type(exc).__name__}: {exc})") from None
+
+
+UNSAVED_RECORD = "record"
+"""The array of an unsaved trial's file (:func:`keep_unsaved`) that holds its record's JSON line."""
+
+
+def keep_unsaved(folder: str | Path, record: TrialRecord, trace: Mapping[str, NDArray[Any]]) -> Path:
+    """Keep a trial the study folder ``folder`` did not take in a new file beside it (module
+    docstring): ``<folder>.unsaved-<trial_id>.npz``, or with ``.1``, ``.2``, ... before ``.npz``
+    when the name is taken; created exclusively, so nothing is overwritten, and written whole or
+    removed. Returns its path.
+
+    Raises:
+        OSError: It cannot be written either (what was begun is removed).
+    """
+    folder = Path(os.path.abspath(folder))
+    stem = f"{folder.name or 'study'}.unsaved-{record.trial_id}"
+    for k in range(1000):
+        path = folder.parent / (f"{stem}.npz" if k == 0 else f"{stem}.{k}.npz")
+        try:
+            f = open(path, "xb")  # exclusive: never over an existing file (or through a symlink)
+        except FileExistsError:
+            continue
+        try:
+            with f:
+                np.savez_compressed(f, **{UNSAVED_RECORD: np.array(record.to_json())}, **trace)
+                f.flush()
+                os.fsync(f.fileno())
+        except BaseException:
+            path.unlink(missing_ok=True)
+            raise
+        return path
+    raise FileExistsError(errno.EEXIST, f"{folder.parent / stem}.npz and 999 more are taken")
+
+
+def read_unsaved(path: str | Path) -> tuple[TrialRecord, dict[str, NDArray[Any]]]:
+    """The record and the checked trace of a file :func:`keep_unsaved` wrote.
+
+    Raises:
+        RecordError: It has no record, or not a valid one (names the file and the field).
+        TraceError: It cannot be read, or its trace fails :func:`check_trace` (names the file).
+    """
+    path = Path(path)
+    arrays = _load_arrays(path, "unsaved trial")
+    line = arrays.pop(UNSAVED_RECORD, None)
+    if line is None or line.ndim != 0 or line.dtype.kind != "U":
+        raise RecordError(f"{path}: no {UNSAVED_RECORD!r} (a record's JSON line): not an unsaved trial")
+    try:
+        record = TrialRecord.from_dict(json.loads(str(line)))
+    except json.JSONDecodeError as err:
+        raise RecordError(f"{path}: not a JSON record: {err}") from None
+    except RecordError as err:
+        raise RecordError(f"{path}: {err}") from None
+    return record, check_trace(arrays, str(path))
 
 
 def write_atomic(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
@@ -277,6 +365,26 @@ class StudyFolder:
         if fd is not None:
             os.close(fd)  # closing the last descriptor releases the flock
 
+    def check_source(self, source: str) -> None:
+        """Whether the folder takes records of ``source`` (a record's ``source``): a simulated
+        study's folder (:data:`SIMULATED_STUDY_FILES`) takes simulated records only (module
+        docstring).
+
+        Raises:
+            ValueError: It does not (names the folder, the file that makes it a study's and
+                ``source``).
+        """
+        if source == "simulated":
+            return
+        for name in SIMULATED_STUDY_FILES:
+            marker = self.path / name
+            if marker.exists():
+                raise ValueError(
+                    f"study folder {self.path} holds a simulated study ({marker}): it takes only that "
+                    f"study's trials, so that it can be resumed; put the {source} records into a folder "
+                    "of their own"
+                )
+
     @property
     def locked(self) -> bool:
         """Whether this process holds the folder's lock."""
@@ -287,11 +395,14 @@ class StudyFolder:
 
         Raises:
             RuntimeError: This process does not hold the folder's lock (:meth:`prepare` first).
+            ValueError: The folder does not take the record's source (:meth:`check_source`);
+                nothing is written.
             FolderWriteError: A write failed (full disk...); names the file. What was written before
                 is kept, and a half-written trace is removed.
         """
         if not self.locked:
             raise RuntimeError(f"{self}: append without the folder's lock (call prepare() first)")
+        self.check_source(record.source)
         target = self.trace_path(record.trial_id)
         try:
             save_trace(target, trace)
@@ -322,12 +433,7 @@ class StudyFolder:
         path = self.trace_path(trial_id)
         if not path.is_file():
             raise TraceError(f"{path}: the trace of record {trial_id!r} is missing")
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                arrays = {k: np.asarray(z[k]) for k in z.files}
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
-            raise TraceError(f"{path}: not a readable trace ({type(exc).__name__}: {exc})") from None
-        return check_trace(arrays, str(path))
+        return check_trace(_load_arrays(path, "trace"), str(path))
 
     def read_trials(self, warn: Callable[[str], None] = _stderr_warning) -> list[LoggedTrial]:
         """Every record with its trace, in record order; a record whose trace is missing or fails

@@ -43,6 +43,7 @@ __all__ = [
     "TrialRecord",
     "append_record",
     "assistance_onset",
+    "check_names",
     "read_records",
     "write_records",
 ]
@@ -215,21 +216,58 @@ def _is_real(v: Any) -> bool:
     return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def _check_fields(r: TrialRecord) -> None:
-    """The one check of a record's values: types, finite numbers, ranges and registered names
-    (:class:`RecordError` naming the field; a reader adds the file and line)."""
-    from drake_disamb.config.schema import MAX_GOALS
+def check_names(
+    *,
+    trial_id: Any,
+    subject: Any,
+    interface: Any,
+    task: Any,
+    paradigm: Any,
+    disambiguation_method: Any,
+    source: Any,
+) -> None:
+    """The one check of a record's names: its ``trial_id``, ``subject`` and condition names
+    (:class:`RecordError` naming the field and the value).
 
-    if not isinstance(r.trial_id, str) or not _SAFE_ID.match(r.trial_id):
-        raise _bad("trial_id", "letters, digits, '_', '-' or '.' (not first), at most 128", r.trial_id)
-    if not isinstance(r.subject, str) or not r.subject:
-        raise _bad("subject", "a non-empty string", r.subject)
+    :class:`TrialRecord` applies it to every record; a producer whose names come from its user
+    (``demo --live --record``) calls it with the record's names before the trial runs, so the
+    record it makes afterwards is never refused for them.
+    """
+    if not isinstance(subject, str) or not _SAFE_SUBJECT.fullmatch(subject):
+        raise _bad("subject", "letters, digits, '_' or '-' (ASCII), at most 64 characters", subject)
+    values = {
+        "interface": interface,
+        "task": task,
+        "paradigm": paradigm,
+        "disambiguation_method": disambiguation_method,
+        "source": source,
+    }
     for name, choices in _names().items():
-        value = getattr(r, name)
+        value = values[name]
         if value is None and name == "disambiguation_method":
             continue
         if not isinstance(value, str) or value not in choices:
             raise _bad(name, f"one of {', '.join(choices)}", value)
+    if not isinstance(trial_id, str) or not _SAFE_ID.fullmatch(trial_id):
+        raise _bad(
+            "trial_id", "letters, digits, '_', '-' or '.' (not first), at most 128 characters", trial_id
+        )
+
+
+def _check_fields(r: TrialRecord) -> None:
+    """The one check of a record's values: its names (:func:`check_names`), types, finite numbers
+    and ranges (:class:`RecordError` naming the field; a reader adds the file and line)."""
+    from drake_disamb.config.schema import MAX_GOALS
+
+    check_names(
+        trial_id=r.trial_id,
+        subject=r.subject,
+        interface=r.interface,
+        task=r.task,
+        paradigm=r.paradigm,
+        disambiguation_method=r.disambiguation_method,
+        source=r.source,
+    )
     for name in ("repetition", "mode_switches", "requests", "automatic_switches", "button_presses", "format"):
         value = getattr(r, name)
         if not (_is_int(value) and value >= 0):
@@ -274,8 +312,12 @@ def _check_fields(r: TrialRecord) -> None:
         raise _bad("extra", "an object", r.extra)
 
 
-_SAFE_ID = re.compile(r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,127}$")
+_SAFE_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,127}")
 """A ``trial_id`` is also its trace file's stem: no path separator, not hidden."""
+
+_SAFE_SUBJECT = re.compile(r"[A-Za-z0-9_-]{1,64}")
+"""A ``subject`` is part of a person's ``trial_id`` (``demo --live --record``): ASCII letters,
+digits, ``_`` and ``-``, short enough to leave the id room for its condition."""
 
 
 def _required(cls: type, name: str) -> bool:

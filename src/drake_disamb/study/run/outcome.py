@@ -42,6 +42,7 @@ __all__ = [
     "IK_HELD_WINDOW",
     "TRACE_ARRAYS",
     "ik_held_share",
+    "record_condition",
     "record_from_result",
     "stage_onsets",
     "trace_arrays",
@@ -122,6 +123,19 @@ def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def record_condition(scenario: Any) -> dict[str, str | None]:
+    """The names of a trial's condition in its record, from its scenario: ``interface``, ``task``,
+    ``paradigm`` and ``disambiguation_method`` (None in the Manual paradigm, which has no requests)."""
+    paradigm = scenario.paradigm
+    method = None if paradigm == "manual" else getattr(scenario.disambiguation, "method", "algorithm1")
+    return {
+        "interface": scenario.interface,
+        "task": scenario.task,
+        "paradigm": paradigm,
+        "disambiguation_method": method,
+    }
+
+
 def record_from_result(
     result: Any,
     *,
@@ -153,8 +167,6 @@ def record_from_result(
     events = result.events
     switches = [e for e in events if e.kind == "mode_switch"]
     automatic = [float(e.time) for e in events if e.kind == "automatic_switch"]
-    paradigm = sc.paradigm
-    method = None if paradigm == "manual" else getattr(sc.disambiguation, "method", "algorithm1")
     commanding = np.any(np.abs(trace["u_h"]) > 1e-9, axis=1)
     variant = interface_variant(sc)  # the trial's mode order names its modes
     info: dict[str, Any] = {
@@ -172,10 +184,7 @@ def record_from_result(
     return TrialRecord(
         trial_id=trial_id,
         subject=subject,
-        interface=sc.interface,
-        task=sc.task,
-        paradigm=paradigm,
-        disambiguation_method=method,
+        **record_condition(sc),
         repetition=int(repetition),
         seed=seed,
         start_pose=start_pose,
