@@ -84,8 +84,20 @@ def _cli(*argv: str, timeout: float = 120) -> subprocess.CompletedProcess:
             ],
             "request_latency: expected a number of seconds in",
         ),
+        (  # 2e0 is a number (YAML 1.2; 1.1 reads a string): the first value passes, the second is named
+            [
+                "study",
+                "ablate",
+                "--quick",
+                "--out",
+                "{tmp}/c",
+                "--switch",
+                "disambiguation.request_latency=2e0,1e9",
+            ],
+            r"--switch disambiguation.request_latency=1000000000.0: .*expected a number of seconds in",
+        ),
     ],
-    ids=["station-demo-duration", "demo-duration", "switch-tau1", "switch-latency"],
+    ids=["station-demo-duration", "demo-duration", "switch-tau1", "switch-latency", "switch-exponent"],
 )
 def test_the_commands_use_the_same_bounds(argv: list[str], message: str, tmp_path: Path) -> None:
     res = _cli(*[a.format(tmp=tmp_path) for a in argv])

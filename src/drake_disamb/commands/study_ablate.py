@@ -9,7 +9,8 @@ protocol (or ``--quick``) once per setting into ``DIR/<setting>/``, each a norma
                                 "overrides": {"inference.agreement": "dot"}}, ...]}
 
 ``PATH`` is a dotted scenario field path (``inference.agreement``, ``disambiguation.method``,
-``blending.assist_without_input``); each value is read as YAML (``true``, ``0.5``, ``dot``).
+``blending.assist_without_input``); each value is read as YAML, as a file's values are (``true``,
+``0.5``, ``2e0``, ``dot``: :func:`~drake_disamb.yaml_safety.load_yaml_value`).
 Several ``--switch`` options give every combination; a setting's name joins its ``PATH=value``
 parts with ``+``. Every path and value is checked against the scenario schema (on both tasks)
 before any trial runs. ``study report DIR`` reads the folder.
@@ -22,8 +23,6 @@ import itertools
 import json
 from typing import Any
 
-import yaml
-
 from drake_disamb.commands.study_run import (
     add_common_arguments,
     build_protocol,
@@ -31,6 +30,7 @@ from drake_disamb.commands.study_run import (
     execute,
     stopped_before_the_first_trial,
 )
+from drake_disamb.yaml_safety import load_yaml_value
 
 HELP = "Run the study once per setting of scenario switches (--switch PATH=V1,V2) into DIR/<setting>/."
 
@@ -50,9 +50,9 @@ def _switch(text: str) -> tuple[str, list[tuple[str, Any]]]:
         if not raw:
             raise argparse.ArgumentTypeError(f"{path}: an empty value in {values!r}")
         try:
-            value = yaml.safe_load(raw)
-        except yaml.YAMLError:
-            raise argparse.ArgumentTypeError(f"{path}: cannot read the value {raw!r}") from None
+            value = load_yaml_value(raw, f"{path}: the value {raw!r}")
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
         parsed.append((raw, value))
     return path, parsed
 
