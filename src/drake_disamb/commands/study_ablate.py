@@ -14,6 +14,15 @@ protocol (or ``--quick``) once per setting into ``DIR/<setting>/``, each a norma
 Several ``--switch`` options give every combination; a setting's name joins its ``PATH=value``
 parts with ``+``. Every path and value is checked against the scenario schema (on both tasks)
 before any trial runs. ``study report DIR`` reads the folder.
+
+A field that is a trial's condition or identity, which its record keeps, is not switchable
+(:data:`~drake_disamb.study.run.runner.CONDITION_FIELDS`: ``task``, ``goals``, ``stages``,
+``interface``, ``paradigm``, ``seed``, ``initial_mode``, ``start_joint_positions``,
+``user.goals``, or a section holding one, ``user``): the protocol sets it per trial, and an
+override would leave every record naming a condition that did not run. It is refused with one
+line naming the field and why (exit status 2); change the protocol (``--protocol``) or the
+study seed (``--seed``) instead. A switched ``disambiguation.request_latency`` replaces every
+trial's drawn latency, and the records' ``extra.request_latency`` is the switched value.
 """
 
 from __future__ import annotations
@@ -66,7 +75,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="append",
         required=True,
         metavar="PATH=V1,V2",
-        help="a dotted scenario field and the values to run it with (repeatable: every combination)",
+        help="a dotted scenario field and the values to run it with (repeatable: every combination); "
+        "not a trial's condition (task, goals, stages, interface, paradigm, seed, initial_mode, "
+        "start_joint_positions, user.goals): the protocol sets those",
     )
 
 
@@ -100,10 +111,11 @@ def run(args: argparse.Namespace) -> int:
         with sigterm_as_sigint():
             settings = settings_of(args.switch)
             protocol = build_protocol(args)
+            for path, values in args.switch:  # each value once, before the folder is touched
+                for _, value in values:
+                    check_overrides({path: value}, "--switch")
             out = check_output_dir(args.out, "--out")
             StudyFolder(out).lock()  # first: one writer of ablation.json and of every setting's folder
-            for s in settings:
-                check_overrides(s["overrides"], "--switch")
             manifest = {"format": ABLATION_FORMAT, "settings": settings}
             path = out / "ablation.json"
             if path.exists():
