@@ -416,6 +416,28 @@ def test_ablate_runs_one_study_per_setting(tmp_path: Path) -> None:
         assert yaml.safe_load((out / s["dir"] / "study.yaml").read_text())["overrides"] == s["overrides"]
 
 
+def test_ablate_prints_its_totals_before_planning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """4 settings of the quick protocol's 12 trials, at 30 and 60 s (the switched durations)."""
+    from drake_disamb.cli import main
+    from drake_disamb.study.run import runner
+
+    def plan_study(*args: object, **kwargs: object) -> None:
+        raise ValueError("planning stopped here")
+
+    monkeypatch.setattr(runner, "plan_study", plan_study)
+    out = tmp_path / "abl"
+    argv = ["study", "ablate", "--quick", "--out", str(out), "--switch", "inference.agreement=dot,cosine"]
+    assert main([*argv, "--switch", "duration=30,60"]) == 2
+    printed, err = capsys.readouterr()
+    assert (
+        f"ablation in {out}: 4 settings x 12 trials = 48 trials (at most 0.6 h simulated) "
+        "(inference.agreement=dot+duration=30, inference.agreement=dot+duration=60, " in printed
+    )
+    assert "error: planning stopped here" in err
+
+
 CONDITION_SWITCHES = {
     "task": "task=pouring",
     "goals": "goals=[]",

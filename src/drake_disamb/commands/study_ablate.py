@@ -15,6 +15,13 @@ Several ``--switch`` options give every combination; a setting's name joins its 
 parts with ``+``. Every path and value is checked against the scenario schema (on both tasks)
 before any trial runs. ``study report DIR`` reads the folder.
 
+An ablation is capped like a protocol: at most 100,000 trials (its settings times the protocol's
+trials) and 10,000 simulated hours (every trial run to its duration, a switched ``duration``'s
+where there is one). Past the cap it is refused at once with one line (exit status 2), before
+the settings are listed or anything is written; within it, the totals are printed before the
+settings' studies are planned: ``ablation in DIR: S settings x N trials = T trials (at most H h
+simulated) (<setting names>)``.
+
 A field that is a trial's condition or identity, which its record keeps, is not switchable
 (:data:`~drake_disamb.study.run.runner.CONDITION_FIELDS`: ``task``, ``goals``, ``stages``,
 ``interface``, ``paradigm``, ``seed``, ``initial_mode``, ``start_joint_positions``,
@@ -30,6 +37,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import math
 from typing import Any
 
 from drake_disamb.commands.study_run import (
@@ -100,6 +108,26 @@ def settings_of(switches: list[tuple[str, list[tuple[str, Any]]]]) -> list[dict[
     return settings
 
 
+def ablation_size(switches: list[tuple[str, list[tuple[str, Any]]]], protocol: Any) -> tuple[int, int, float]:
+    """The ablation's settings, trials and simulated seconds at most (every trial run to its
+    duration: a switched ``duration`` value's where it is a valid one), without listing the settings.
+
+    Raises:
+        ValueError: more trials or simulated hours than a protocol may have
+            (:func:`~drake_disamb.study.design.protocol.check_study_size`).
+    """
+    from drake_disamb.core.validation import is_real
+    from drake_disamb.study.design.protocol import check_study_size
+
+    n_settings = math.prod(len(values) for _, values in switches)
+    n_trials = n_settings * protocol.n_trials
+    durations = dict(switches).get("duration", [("", None)])
+    bounds = [protocol.time_bound(d if is_real(d) and d > 0 else None) for _, d in durations]
+    seconds = n_settings // len(bounds) * sum(bounds)  # each duration in as many settings
+    check_study_size(n_trials, seconds, "--switch", f"{n_settings} settings x {protocol.n_trials} trials")
+    return n_settings, n_trials, seconds
+
+
 def run(args: argparse.Namespace) -> int:
     """``study ablate``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
@@ -109,8 +137,9 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         with sigterm_as_sigint():
-            settings = settings_of(args.switch)
             protocol = build_protocol(args)
+            n_settings, n_trials, seconds = ablation_size(args.switch, protocol)  # before listing them
+            settings = settings_of(args.switch)
             for path, values in args.switch:  # each value once, before the folder is touched
                 for _, value in values:
                     check_overrides({path: value}, "--switch")
@@ -128,6 +157,11 @@ def run(args: argparse.Namespace) -> int:
                         f"{path}: this folder holds another ablation (its settings differ); "
                         "choose another --out"
                     )
+            print(
+                f"ablation in {out}: {n_settings} settings x {protocol.n_trials} trials = {n_trials} trials "
+                f"(at most {seconds / 3600.0:.1f} h simulated) ({', '.join(s['name'] for s in settings)})",
+                flush=True,
+            )
             plans = [plan_study(out / s["dir"], protocol, args.seed, s["overrides"]) for s in settings]
             if not path.exists():
                 tmp = out / ".ablation.json.tmp"
@@ -137,10 +171,4 @@ def run(args: argparse.Namespace) -> int:
         return error("ablate", exc)
     except KeyboardInterrupt:
         return stopped_before_the_first_trial("ablate")
-    print(
-        f"ablation in {out}: {len(settings)} settings x {len(plans[0].specs)} trials "
-        f"(at most {len(settings) * protocol.simulated_time_bound / 3600.0:.1f} h simulated) "
-        f"({', '.join(s['name'] for s in settings)})",
-        flush=True,
-    )
     return execute(plans, args, "ablate")
