@@ -423,6 +423,27 @@ def test_bad_input_names_the_file_and_line(tmp_path: Path, capsys: pytest.Captur
     assert not (cut / "report").exists()
 
 
+def test_a_record_whose_goal_is_not_one_of_its_tasks_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Goal 99 of the five-goal reaching task: not summarised (nor set per goal beside another folder)."""
+    records = [r for r in synthetic_records() if r.task == "reaching"][:4]
+    folder = write_study(tmp_path / "here", records)
+    rows = [json.loads(line) for line in (folder / "trials.jsonl").read_text().splitlines()]
+    rows[2]["intended_goals"] = [99]
+    (folder / "trials.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    err = _report_fails(folder, capsys)
+    assert err.count("\n") == 1, err
+    assert (
+        "here/trials.jsonl:3: field intended_goals: expected indices of the reaching task's goals "
+        "(5 goals: 0 to 4), got [99]" in err
+    )
+    other = write_study(tmp_path / "other", records)
+    assert main(["study", "report", str(other), "--compare", str(folder), "--no-mixed-model"]) == 2
+    assert "here/trials.jsonl:3: field intended_goals" in capsys.readouterr().err
+    assert not (other / "report" / "per_goal.json").exists()
+
+
 def test_an_unreadable_trace_is_left_out(tmp_path: Path) -> None:
     records = [r for r in synthetic_records() if r.interface == "joystick" and r.task == "reaching"]
     write_study(tmp_path, records)

@@ -26,6 +26,7 @@ written out but those that are ``None``; the text loads back to an equal scenari
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
@@ -86,6 +87,14 @@ def embedded_scenario_text(name: str) -> str:
     if name not in EMBEDDED_TASKS:
         raise ValueError(f"task: expected one of {', '.join(EMBEDDED_TASKS)} or a YAML path, got {name!r}")
     return resources.files("drake_disamb.tasks").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+
+
+@functools.cache
+def embedded_stage_goals(name: str) -> tuple[int, ...]:
+    """Goals per stage of an embedded task (``"reaching"``: ``(5,)``; ``"pouring"``: ``(2, 2)``),
+    its scenario loaded once per process."""
+    scenario = load_scenario(name)
+    return tuple(len(scenario.stage_goals(k)) for k in range(scenario.n_stages))
 
 
 def load_scenario(path_or_name: str | Path) -> Scenario:

@@ -454,14 +454,6 @@ def condition_order(protocol: Protocol, subject_index: int) -> list[tuple[str, s
     return [(i, t, p) for i in interfaces for t in tasks for p in paradigms]
 
 
-def _n_stages(task: str) -> list[int]:
-    """Goals per stage of an embedded task."""
-    from drake_disamb.config import load_scenario
-
-    sc = load_scenario(task)
-    return [len(sc.stage_goals(k)) for k in range(sc.n_stages)]
-
-
 def _n_initial_modes(interface: str, initial_modes: str) -> int:
     from drake_disamb.core.interfaces import arm_modes, interface_modes
 
@@ -479,12 +471,14 @@ def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None
     ``protocol.request_latency``; drawn even when ``None``, so the other draws do not depend on
     it), the scenario seed (a 31-bit integer).
     """
+    from drake_disamb.config.yaml_io import embedded_stage_goals
+
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
     names = subject_names or [f"S{i + 1:02d}" for i in range(protocol.subjects)]
     if len(names) != protocol.subjects:
         raise ValueError(f"subject_names: expected {protocol.subjects} names, got {len(names)}")
-    stages = {t.task: _n_stages(t.task) for t in protocol.tasks}
+    stages = {t.task: embedded_stage_goals(t.task) for t in protocol.tasks}
     poses = {t.task: len(t.start_poses) for t in protocol.tasks}
     canonical = [
         (s, i, t.task, p.name, r)
