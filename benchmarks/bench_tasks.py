@@ -28,8 +28,6 @@ import itertools
 import statistics
 import time
 
-import yaml
-
 from drake_disamb.config import (
     Scenario,
     load_scenario,
@@ -39,6 +37,7 @@ from drake_disamb.config import (
 )
 from drake_disamb.config.system_presets import SYSTEM_PRESETS, apply_system_preset
 from drake_disamb.trial import run_trial
+from drake_disamb.yaml_safety import load_yaml_value
 
 
 def with_settings(scenario: Scenario, settings: list[str]) -> Scenario:
@@ -54,7 +53,10 @@ def with_settings(scenario: Scenario, settings: list[str]) -> Scenario:
             node = getattr(node, name)
         if not hasattr(node, leaf):
             raise SystemExit(f"--set: no scenario field {path!r}")
-        setattr(node, leaf, yaml.safe_load(text))
+        try:
+            setattr(node, leaf, load_yaml_value(text, f"--set {path}"))
+        except ValueError as exc:
+            raise SystemExit(str(exc)) from None
     return validate_scenario(s)
 
 

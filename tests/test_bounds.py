@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -84,8 +85,20 @@ def _cli(*argv: str, timeout: float = 120) -> subprocess.CompletedProcess:
             ],
             "request_latency: expected a number of seconds in",
         ),
+        (  # 2e0 is a number (YAML 1.2; 1.1 reads a string): the first value passes, the second is named
+            [
+                "study",
+                "ablate",
+                "--quick",
+                "--out",
+                "{tmp}/c",
+                "--switch",
+                "disambiguation.request_latency=2e0,1e9",
+            ],
+            r"--switch disambiguation.request_latency=1000000000.0: .*expected a number of seconds in",
+        ),
     ],
-    ids=["station-demo-duration", "demo-duration", "switch-tau1", "switch-latency"],
+    ids=["station-demo-duration", "demo-duration", "switch-tau1", "switch-latency", "switch-exponent"],
 )
 def test_the_commands_use_the_same_bounds(argv: list[str], message: str, tmp_path: Path) -> None:
     res = _cli(*[a.format(tmp=tmp_path) for a in argv])
@@ -127,9 +140,49 @@ def test_a_protocol_of_millions_of_trials_is_refused_before_expansion(
     assert not (tmp_path / "o").exists()
 
 
+def test_an_ablation_past_the_trials_cap_is_refused_at_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """27,000 settings of the quick protocol's 12 trials: refused in one line before the settings are
+    listed or any of the 90 values is checked (one, 1e9 s, is out of range: it is not the one named)."""
+    values = ",".join(f"{0.1 + 0.01 * k:.2f}" for k in range(30))
+    argv = ["study", "ablate", "--quick", "--out", str(tmp_path / "a")]
+    for path in ("user.config.reaction_time", "inference.dft.tau1"):
+        argv += ["--switch", f"{path}={values}"]
+    argv += ["--switch", f"disambiguation.request_latency={values[:-4]}1e9"]
+    start = time.perf_counter()
+    assert main(argv) == 2
+    elapsed = time.perf_counter() - start
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert "error: --switch: 324000 trials (27000 settings x 12 trials), expected at most 100000" in err, err
+    assert elapsed < 10.0, f"took {elapsed:.1f} s"
+    assert not (tmp_path / "a").exists()
+
+
+def test_an_ablation_past_the_hours_cap_counts_a_switched_duration(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """50 settings of the paper's 416 trials: 20,800 trials, and at 3000 and 3600 s each (the
+    switched durations, not the protocol's 180 s) 19,067 simulated hours. The scheduler cannot be
+    reached: were the ablation taken, the command would stop there."""
+    values = ",".join(f"{0.1 + 0.01 * k:.2f}" for k in range(25))
+    argv = ["study", "ablate", "--out", str(tmp_path / "a"), "--scheduler", "tcp://127.0.0.1:9"]
+    argv += ["--switch", "duration=3000,3600", "--switch", f"user.config.reaction_time={values}"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert (
+        "error: --switch: up to 19067 h of simulated time (20800 trials x their duration), expected at most"
+        in err
+    )
+    assert not (tmp_path / "a").exists()
+
+
 def test_the_simulated_time_is_bounded_by_the_trials_durations() -> None:
     p = P.default_protocol()
     assert p.duration is not None and p.simulated_time_bound == pytest.approx(p.n_trials * p.duration)
     data = yaml.safe_load(P.default_protocol_text())
     data.pop("duration")  # each task's own (the embedded tasks: 60 s)
     assert P.protocol_from_dict(data).simulated_time_bound == pytest.approx(p.n_trials * 60.0)
+    assert p.time_bound(3600.0) == pytest.approx(p.n_trials * 3600.0)  # a scenario override's

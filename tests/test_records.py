@@ -96,3 +96,31 @@ def test_inconsistent_counts_are_refused():
         _record(source="robot")
     with pytest.raises(RecordError, match="duration"):
         _record(duration=float("nan"))
+
+
+@pytest.mark.parametrize(
+    "task, intended, reached, message",
+    [
+        ("reaching", [99], [99], r"field intended_goals: expected indices of the reaching task's goals "
+         r"\(5 goals: 0 to 4\), got \[99\]"),
+        ("reaching", [5], None, r"field intended_goals: .*\(5 goals: 0 to 4\), got \[5\]"),
+        ("reaching", [4], [5], r"field reached_goals: .*\(5 goals: 0 to 4 or -1\), got \[5\]"),
+        ("pouring", [0, 2], [0, 1], r"field intended_goals: .*pouring task's goals \(per stage: 0 to 1, "
+         r"0 to 1\), got \[0, 2\]"),
+        ("pouring", [4], None, r"field intended_goals: .*\(4 goals: 0 to 3\), got \[4\]"),
+        ("pouring", [0, 1, 0], None, r"field intended_goals: expected one goal index per stage of the "
+         r"pouring task \(2\) or one index into its 4 goals"),
+    ],
+)  # fmt: skip
+def test_a_goal_that_is_not_one_of_the_tasks_is_refused(task, intended, reached, message):
+    with pytest.raises(RecordError, match=message):
+        _record(task=task, intended_goals=intended, reached_goals=reached)
+
+
+def test_the_goals_of_every_task_are_accepted():
+    for goal in range(5):
+        _record(intended_goals=[goal], reached_goals=[-1])
+    for goals in ([0, 0], [1, 1], [1, 0]):
+        _record(task="pouring", intended_goals=goals, reached_goals=[goals[0], -1])
+    for goal in range(4):  # the people's pouring logs name one of the task's 4 goals
+        _record(task="pouring", intended_goals=[goal], reached_goals=None)

@@ -94,13 +94,15 @@ def synthetic_records(seed: int = 0, scale: float = 1.0, source: str = "simulate
     return records
 
 
-def write_study(folder: Path, records: list[TrialRecord], traces: bool = True) -> Path:
-    """``folder/trials.jsonl`` and (for the first repetitions) ``folder/traces/<id>.npz`` in the
-    contract's layout."""
+def write_study(
+    folder: Path, records: list[TrialRecord], traces: bool = True, all_traces: bool = False
+) -> Path:
+    """``folder/trials.jsonl`` and (for the first repetitions, or with ``all_traces`` every record)
+    ``folder/traces/<id>.npz`` in the contract's layout."""
     (folder / "traces").mkdir(parents=True, exist_ok=True)
     for r in records:
         append_record(folder / "trials.jsonl", r)
-        if traces and r.repetition == 0:
+        if traces and (all_traces or r.repetition == 0):
             n_goals = 5 if r.task == "reaching" else 2
             t = np.linspace(0, r.duration, 200)
             logits = np.outer(t / r.duration, np.arange(n_goals) == 1) * 3.0
@@ -421,6 +423,47 @@ def test_bad_input_names_the_file_and_line(tmp_path: Path, capsys: pytest.Captur
     (cut / "trials.jsonl").write_bytes((cut / "trials.jsonl").read_bytes()[:-10])
     assert "cut/trials.jsonl:3: the last line is incomplete" in _report_fails(cut, capsys)
     assert not (cut / "report").exists()
+
+
+def test_a_record_whose_goal_is_not_one_of_its_tasks_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Goal 99 of the five-goal reaching task: not summarised (nor set per goal beside another folder)."""
+    records = [r for r in synthetic_records() if r.task == "reaching"][:4]
+    folder = write_study(tmp_path / "here", records)
+    rows = [json.loads(line) for line in (folder / "trials.jsonl").read_text().splitlines()]
+    rows[2]["intended_goals"] = [99]
+    (folder / "trials.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    err = _report_fails(folder, capsys)
+    assert err.count("\n") == 1, err
+    assert (
+        "here/trials.jsonl:3: field intended_goals: expected indices of the reaching task's goals "
+        "(5 goals: 0 to 4), got [99]" in err
+    )
+    other = write_study(tmp_path / "other", records)
+    assert main(["study", "report", str(other), "--compare", str(folder), "--no-mixed-model"]) == 2
+    assert "here/trials.jsonl:3: field intended_goals" in capsys.readouterr().err
+    assert not (other / "report" / "per_goal.json").exists()
+
+
+def test_each_missing_trace_is_named_and_the_figures_are_drawn_without_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The traces of two Manual trials deleted: the first of its condition (its figure is drawn from
+    the next trial) and another; one warning line each, naming the file."""
+    records = [r for r in synthetic_records() if r.interface == "joystick" and r.task == "reaching"]
+    write_study(tmp_path, records, all_traces=True)
+    manual = sorted(r.trial_id for r in records if r.paradigm == "manual" and r.valid)
+    for trial_id in manual[:2]:
+        (tmp_path / "traces" / f"{trial_id}.npz").unlink()
+    capsys.readouterr()
+    assert main(["study", "report", str(tmp_path), "--no-mixed-model"]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if line.startswith("warning:")]
+    assert warnings == [
+        f"warning: {tmp_path}/traces/{t}.npz: the trace of record {t!r} is missing; left out of the figures"
+        for t in manual[:2]
+    ]
+    assert (tmp_path / "report" / "traces_joystick_reaching_manual.png").is_file()
 
 
 def test_an_unreadable_trace_is_left_out(tmp_path: Path) -> None:

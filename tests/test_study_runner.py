@@ -416,6 +416,85 @@ def test_ablate_runs_one_study_per_setting(tmp_path: Path) -> None:
         assert yaml.safe_load((out / s["dir"] / "study.yaml").read_text())["overrides"] == s["overrides"]
 
 
+def test_ablate_prints_its_totals_before_planning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """4 settings of the quick protocol's 12 trials, at 30 and 60 s (the switched durations)."""
+    from drake_disamb.cli import main
+    from drake_disamb.study.run import runner
+
+    def plan_study(*args: object, **kwargs: object) -> None:
+        raise ValueError("planning stopped here")
+
+    monkeypatch.setattr(runner, "plan_study", plan_study)
+    out = tmp_path / "abl"
+    argv = ["study", "ablate", "--quick", "--out", str(out), "--switch", "inference.agreement=dot,cosine"]
+    assert main([*argv, "--switch", "duration=30,60"]) == 2
+    printed, err = capsys.readouterr()
+    assert (
+        f"ablation in {out}: 4 settings x 12 trials = 48 trials (at most 0.6 h simulated) "
+        "(inference.agreement=dot+duration=30, inference.agreement=dot+duration=60, " in printed
+    )
+    assert "error: planning stopped here" in err
+
+
+CONDITION_SWITCHES = {
+    "task": "task=pouring",
+    "goals": "goals=[]",
+    "stages": "stages=[]",
+    "interface": "interface=joystick",
+    "paradigm": "paradigm=manual,automatic",
+    "seed": "seed=1,2",
+    "initial_mode": "initial_mode=0",
+    "start_joint_positions": "start_joint_positions=null",
+    "user.goals": "user.goals=[0]",
+    "user": "user={goals: [0]}",
+}
+
+
+@pytest.mark.parametrize("name", list(CONDITION_SWITCHES))
+def test_ablate_refuses_a_switch_of_a_trials_condition(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Its records would name a condition that did not run (task=pouring ran the reaching trials
+    labelled pouring; seed=1,2 changed every outcome, each record keeping its seed). The scheduler
+    cannot be reached: were the switch taken, the command would stop there, not run a study."""
+    from drake_disamb.cli import main
+
+    out = tmp_path / "abl"
+    argv = ["study", "ablate", "--quick", "--out", str(out), "--switch", CONDITION_SWITCHES[name]]
+    assert main([*argv, "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    what = "" if name != "user" else " (it holds user.goals)"
+    assert f"error: --switch {name}: not switchable{what}: " in err and "record" in err, err
+    assert not out.exists()
+
+
+def test_the_refused_switches_are_the_ones_ablates_help_names(capsys: pytest.CaptureFixture[str]) -> None:
+    from drake_disamb.cli import main
+    from drake_disamb.study.run.runner import CONDITION_FIELDS
+
+    assert set(CONDITION_FIELDS) == set(CONDITION_SWITCHES) - {"user"}
+    with pytest.raises(SystemExit):
+        main(["study", "ablate", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert all(name in help_text.split("not a trial's condition")[1] for name in CONDITION_FIELDS)
+
+
+def test_a_switched_request_latency_is_the_one_its_records_keep() -> None:
+    import dataclasses
+
+    from drake_disamb.study.run.runner import StudyContext, run_trial_job
+
+    protocol = dataclasses.replace(P.quick_protocol(), subjects=1, duration=0.5)
+    spec = next(s for s in P.expand_trials(protocol, 0) if s.paradigm == "disambiguation")
+    for overrides, latency in (({}, spec.request_latency), ({"disambiguation.request_latency": 2.0}, 2.0)):
+        output = run_trial_job(spec, StudyContext(protocol=P.protocol_to_dict(protocol), overrides=overrides))
+        assert output.error is None and output.record.extra["request_latency"] == latency
+    assert spec.request_latency != 2.0
+
+
 # -- bad input ---------------------------------------------------------------------------------------
 
 

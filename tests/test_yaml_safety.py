@@ -11,6 +11,7 @@ import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support import benchmark_module
 
 from drake_disamb.config import (
     EMBEDDED_TASKS,
@@ -27,6 +28,8 @@ from drake_disamb.yaml_safety import (
     MAX_YAML_NODES,
     check_yaml_text,
     decode_yaml_bytes,
+    load_yaml_document,
+    load_yaml_value,
     read_yaml_file,
 )
 
@@ -202,10 +205,53 @@ def test_other_malformed_input_names_file_and_line() -> None:
         _fails_fast(scenario_from_yaml, text, "m.yaml", match=r"m\.yaml.*" + match)
 
 
-def test_exponent_without_a_dot_is_a_number() -> None:
-    """YAML 1.1 reads ``1e-3`` as a string; scenarios follow YAML 1.2 (and Drake's reader)."""
-    text = embedded_scenario_text("reaching").replace("control_period: 0.01", "control_period: 1e-2")
-    assert scenario_from_yaml(text).control_period == 0.01
+# Numbers YAML 1.1 reads as strings and YAML 1.2 as numbers, and YAML 1.1's own forms (unchanged).
+YAML_12_FORMS = {"2e0": 2.0, "1e-2": 0.01, "1E3": 1000.0, "+.5": 0.5, "-.5": -0.5, "+.5e1": 5.0, "0o17": 15}
+YAML_11_FORMS = {".5": 0.5, "+1": 1, "0x10": 16, "1.": 1.0, "1_000": 1000, "-1.5": -1.5, ".inf": float("inf")}
+
+
+@pytest.mark.parametrize("text, value", [*YAML_12_FORMS.items(), *YAML_11_FORMS.items()])
+def test_every_yaml_12_number_is_a_number(text: str, value: float) -> None:
+    read = load_yaml_value(text, "v")
+    assert read == value and type(read) is type(value)
+    assert load_yaml_document(f"x: {text}\n", "d.yaml", root="x") == {"x": value}
+
+
+def test_a_value_on_the_command_line_is_checked_like_a_file() -> None:
+    assert load_yaml_value("dot", "v") == "dot" and load_yaml_value("[1, 2e0]", "v") == [1, 2.0]
+    with pytest.raises(ValueError, match=r"^--switch a: the value '\[1': malformed YAML"):
+        load_yaml_value("[1", "--switch a: the value '[1'")
+    with pytest.raises(ValueError, match=r"^v, line 1: YAML anchor &x"):
+        load_yaml_value("&x 1", "v")
+
+
+@pytest.mark.parametrize(
+    "line, field, value",
+    [("control_period: 1e-2", "control_period", 0.01), ("control_period: +.01", "control_period", 0.01),
+     ("seed: 0o17", "seed", 15)],
+)  # fmt: skip
+def test_a_scenario_reads_yaml_12_numbers(line: str, field: str, value: float) -> None:
+    """A float and an int field: Drake's loader reads the values the checks read."""
+    old = {"control_period": "control_period: 0.01", "seed": "\nseed: 0\n"}[field]
+    new = line if field == "control_period" else f"\n{line}\n"
+    assert getattr(scenario_from_yaml(embedded_scenario_text("reaching").replace(old, new)), field) == value
+
+
+def test_a_protocol_file_reads_yaml_12_numbers(tmp_path: Path) -> None:
+    from drake_disamb.study.design.protocol import default_protocol_text, load_protocol
+
+    text = default_protocol_text()
+    for old, new in (("duration: 180.0", "1.2e2"), ("give_up_after: 60.0", "6e1"), ("subjects: 8", "0o10")):
+        text = text.replace(old, f"{old.split(':')[0]}: {new}")
+    (tmp_path / "p.yaml").write_text(text)
+    protocol = load_protocol(tmp_path / "p.yaml")
+    assert (protocol.duration, protocol.give_up_after, protocol.subjects) == (120.0, 60.0, 8)
+
+
+def test_a_benchmarks_set_value_reads_yaml_12_numbers() -> None:
+    with benchmark_module("bench_tasks") as bench:
+        scenario = bench.with_settings(load_scenario("reaching"), ["disambiguation.request_latency=2e0"])
+    assert scenario.disambiguation.request_latency == 2.0
 
 
 # ------------------------------------------------------------------------------------------------

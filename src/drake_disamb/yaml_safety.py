@@ -131,7 +131,23 @@ class _Frame:
         self.index = 0  # the next item's index (sequences)
 
 
-_resolver = Resolver()
+YAML_12_NUMBERS: tuple[tuple[str, str], ...] = (
+    ("tag:yaml.org,2002:float", r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$"),
+    ("tag:yaml.org,2002:float", r"^[-+]\.[0-9][0-9_]*$"),
+    ("tag:yaml.org,2002:int", r"^[-+]?0o[0-7_]+$"),
+)
+"""The YAML 1.2 numbers that YAML 1.1 reads as strings, as (tag, pattern), which :class:`SafeYamlLoader`
+reads as numbers: checked after YAML 1.1's own patterns, so a YAML 1.1 number keeps its value."""
+
+
+class _Resolver(Resolver):
+    """YAML 1.1's implicit types and :data:`YAML_12_NUMBERS` (as :class:`SafeYamlLoader` resolves)."""
+
+
+for _tag, _pattern in YAML_12_NUMBERS:
+    _Resolver.add_implicit_resolver(_tag, re.compile(_pattern), list("-+0123456789."))
+
+_resolver = _Resolver()
 _NUMBER_TAGS = ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
 
 
@@ -293,10 +309,12 @@ __all__ = [
     "MAX_YAML_NODES",
     "MAX_YAML_BYTES",
     "MAX_YAML_DEPTH",
+    "YAML_12_NUMBERS",
     "SafeYamlLoader",
     "check_yaml_text",
     "decode_yaml_bytes",
     "load_yaml_document",
+    "load_yaml_value",
     "read_yaml_file",
     "yaml_error_message",
 ]
@@ -305,11 +323,15 @@ __all__ = [
 class SafeYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
     """PyYAML's safe loader (libyaml's parser when there is one) with two changes.
 
-    A number written with an exponent but no dot (``1e-6``) is a float, as in YAML 1.2 (YAML 1.1
-    reads it as a string, which Drake's loader then converts for a ``float`` field). A scalar the
-    constructor cannot convert (a date such as ``2020-13-45``) is reported with its line instead
-    of a bare ``ValueError``.
+    Every number YAML 1.2 writes is a number (:data:`YAML_12_NUMBERS`): besides YAML 1.1's forms, a
+    float with an exponent but no dot (``2e0``, ``1e-6``, ``1E3``), a float with a sign before its
+    leading dot (``-.5``, ``+.5``) and an octal integer ``0o17`` (YAML 1.1 reads all of these as
+    strings). YAML 1.1's own forms keep their values (``0x10`` is 16, ``010`` is 8, ``1_000`` is
+    1000, as Drake's loader reads them). A scalar the constructor cannot convert (a date such as
+    ``2020-13-45``) is reported with its line instead of a bare ``ValueError``.
     """
+
+    yaml_implicit_resolvers = _Resolver.yaml_implicit_resolvers  # the types :func:`check_yaml_text` sees
 
     def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
         try:
@@ -319,11 +341,24 @@ class SafeYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ig
             raise yaml.constructor.ConstructorError(None, None, message, node.start_mark) from None
 
 
-SafeYamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
+def _parse(text: str, source: str, root: str) -> Any:
+    """:func:`check_yaml_text`, then :class:`SafeYamlLoader` (``None`` for an empty document)."""
+    check_yaml_text(text, source, root=root)
+    try:
+        return yaml.load(text, Loader=SafeYamlLoader)  # noqa: S506 (a safe loader)
+    except yaml.YAMLError as exc:
+        raise ValueError(yaml_error_message(exc, source)) from None
+
+
+def load_yaml_value(text: str, source: str) -> Any:
+    """One value written inline, a command line's ``PATH=VALUE``: checked and read like a file's
+    values (:class:`SafeYamlLoader`: ``2e0`` is the number 2.0, ``dot`` a string, ``[1, 2]`` a
+    list); ``None`` for an empty text.
+
+    Raises:
+        ValueError: unsafe or malformed YAML, naming ``source``.
+    """
+    return _parse(text, source, root="")
 
 
 def load_yaml_document(text: str | bytes, source: str, *, root: str) -> Any:
@@ -336,11 +371,7 @@ def load_yaml_document(text: str | bytes, source: str, *, root: str) -> Any:
     """
     if isinstance(text, bytes | bytearray):
         text = decode_yaml_bytes(bytes(text), source)
-    check_yaml_text(text, source, root=root)
-    try:
-        data = yaml.load(text, Loader=SafeYamlLoader)  # noqa: S506 (a safe loader)
-    except yaml.YAMLError as exc:
-        raise ValueError(yaml_error_message(exc, source)) from None
+    data = _parse(text, source, root)
     if data is None:
         raise ValueError(f"{source}: empty YAML document, expected a {root} mapping")
     return data

@@ -9,10 +9,27 @@ protocol (or ``--quick``) once per setting into ``DIR/<setting>/``, each a norma
                                 "overrides": {"inference.agreement": "dot"}}, ...]}
 
 ``PATH`` is a dotted scenario field path (``inference.agreement``, ``disambiguation.method``,
-``blending.assist_without_input``); each value is read as YAML (``true``, ``0.5``, ``dot``).
+``blending.assist_without_input``); each value is read as YAML, as a file's values are (``true``,
+``0.5``, ``2e0``, ``dot``: :func:`~drake_disamb.yaml_safety.load_yaml_value`).
 Several ``--switch`` options give every combination; a setting's name joins its ``PATH=value``
 parts with ``+``. Every path and value is checked against the scenario schema (on both tasks)
 before any trial runs. ``study report DIR`` reads the folder.
+
+An ablation is capped like a protocol: at most 100,000 trials (its settings times the protocol's
+trials) and 10,000 simulated hours (every trial run to its duration, a switched ``duration``'s
+where there is one). Past the cap it is refused at once with one line (exit status 2), before
+the settings are listed or anything is written; within it, the totals are printed before the
+settings' studies are planned: ``ablation in DIR: S settings x N trials = T trials (at most H h
+simulated) (<setting names>)``.
+
+A field that is a trial's condition or identity, which its record keeps, is not switchable
+(:data:`~drake_disamb.study.run.runner.CONDITION_FIELDS`: ``task``, ``goals``, ``stages``,
+``interface``, ``paradigm``, ``seed``, ``initial_mode``, ``start_joint_positions``,
+``user.goals``, or a section holding one, ``user``): the protocol sets it per trial, and an
+override would leave every record naming a condition that did not run. It is refused with one
+line naming the field and why (exit status 2); change the protocol (``--protocol``) or the
+study seed (``--seed``) instead. A switched ``disambiguation.request_latency`` replaces every
+trial's drawn latency, and the records' ``extra.request_latency`` is the switched value.
 """
 
 from __future__ import annotations
@@ -20,9 +37,8 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import math
 from typing import Any
-
-import yaml
 
 from drake_disamb.commands.study_run import (
     add_common_arguments,
@@ -31,6 +47,7 @@ from drake_disamb.commands.study_run import (
     execute,
     stopped_before_the_first_trial,
 )
+from drake_disamb.yaml_safety import load_yaml_value
 
 HELP = "Run the study once per setting of scenario switches (--switch PATH=V1,V2) into DIR/<setting>/."
 
@@ -50,9 +67,9 @@ def _switch(text: str) -> tuple[str, list[tuple[str, Any]]]:
         if not raw:
             raise argparse.ArgumentTypeError(f"{path}: an empty value in {values!r}")
         try:
-            value = yaml.safe_load(raw)
-        except yaml.YAMLError:
-            raise argparse.ArgumentTypeError(f"{path}: cannot read the value {raw!r}") from None
+            value = load_yaml_value(raw, f"{path}: the value {raw!r}")
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
         parsed.append((raw, value))
     return path, parsed
 
@@ -66,7 +83,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="append",
         required=True,
         metavar="PATH=V1,V2",
-        help="a dotted scenario field and the values to run it with (repeatable: every combination)",
+        help="a dotted scenario field and the values to run it with (repeatable: every combination); "
+        "not a trial's condition (task, goals, stages, interface, paradigm, seed, initial_mode, "
+        "start_joint_positions, user.goals): the protocol sets those",
     )
 
 
@@ -89,6 +108,26 @@ def settings_of(switches: list[tuple[str, list[tuple[str, Any]]]]) -> list[dict[
     return settings
 
 
+def ablation_size(switches: list[tuple[str, list[tuple[str, Any]]]], protocol: Any) -> tuple[int, int, float]:
+    """The ablation's settings, trials and simulated seconds at most (every trial run to its
+    duration: a switched ``duration`` value's where it is a valid one), without listing the settings.
+
+    Raises:
+        ValueError: more trials or simulated hours than a protocol may have
+            (:func:`~drake_disamb.study.design.protocol.check_study_size`).
+    """
+    from drake_disamb.core.validation import is_real
+    from drake_disamb.study.design.protocol import check_study_size
+
+    n_settings = math.prod(len(values) for _, values in switches)
+    n_trials = n_settings * protocol.n_trials
+    durations = dict(switches).get("duration", [("", None)])
+    bounds = [protocol.time_bound(d if is_real(d) and d > 0 else None) for _, d in durations]
+    seconds = n_settings // len(bounds) * sum(bounds)  # each duration in as many settings
+    check_study_size(n_trials, seconds, "--switch", f"{n_settings} settings x {protocol.n_trials} trials")
+    return n_settings, n_trials, seconds
+
+
 def run(args: argparse.Namespace) -> int:
     """``study ablate``: 0 all trials ran, 1 a trial raised, 2 bad input, 130 interrupted."""
     from drake_disamb.commands._outputs import check_output_dir
@@ -98,12 +137,14 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         with sigterm_as_sigint():
-            settings = settings_of(args.switch)
             protocol = build_protocol(args)
+            n_settings, n_trials, seconds = ablation_size(args.switch, protocol)  # before listing them
+            settings = settings_of(args.switch)
+            for path, values in args.switch:  # each value once, before the folder is touched
+                for _, value in values:
+                    check_overrides({path: value}, "--switch")
             out = check_output_dir(args.out, "--out")
             StudyFolder(out).lock()  # first: one writer of ablation.json and of every setting's folder
-            for s in settings:
-                check_overrides(s["overrides"], "--switch")
             manifest = {"format": ABLATION_FORMAT, "settings": settings}
             path = out / "ablation.json"
             if path.exists():
@@ -116,6 +157,11 @@ def run(args: argparse.Namespace) -> int:
                         f"{path}: this folder holds another ablation (its settings differ); "
                         "choose another --out"
                     )
+            print(
+                f"ablation in {out}: {n_settings} settings x {protocol.n_trials} trials = {n_trials} trials "
+                f"(at most {seconds / 3600.0:.1f} h simulated) ({', '.join(s['name'] for s in settings)})",
+                flush=True,
+            )
             plans = [plan_study(out / s["dir"], protocol, args.seed, s["overrides"]) for s in settings]
             if not path.exists():
                 tmp = out / ".ablation.json.tmp"
@@ -125,10 +171,4 @@ def run(args: argparse.Namespace) -> int:
         return error("ablate", exc)
     except KeyboardInterrupt:
         return stopped_before_the_first_trial("ablate")
-    print(
-        f"ablation in {out}: {len(settings)} settings x {len(plans[0].specs)} trials "
-        f"(at most {len(settings) * protocol.simulated_time_bound / 3600.0:.1f} h simulated) "
-        f"({', '.join(s['name'] for s in settings)})",
-        flush=True,
-    )
     return execute(plans, args, "ablate")

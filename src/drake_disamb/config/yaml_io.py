@@ -6,13 +6,16 @@ Reading YAML (:func:`load_scenario`, :func:`scenario_from_yaml`) takes five step
 1. the text itself (:mod:`drake_disamb.yaml_safety`): at most 1 MiB of UTF-8 text (a binary or
    undecodable file is named as such), nesting at most 32 deep, at most 50,000 values, no anchors
    or aliases, no duplicate keys, one document;
-2. parsing with PyYAML's safe loader (libyaml's), reading ``1e-3`` as a number as YAML 1.2 does;
+2. parsing with PyYAML's safe loader (libyaml's), reading every YAML 1.2 number as a number
+   (``2e0``, ``-.5``, ``0o17``; :class:`~drake_disamb.yaml_safety.SafeYamlLoader`);
 3. the parsed data against the schema (:func:`~drake_disamb.config.checks.check_data`: unknown
    keys, types, finite numbers, vector lengths, choices, required keys) and the goal and stage
    counts (:func:`~drake_disamb.config.validation.check_counts`), both cheap, before the slower
    step 4 (Drake parses in pure Python);
 4. :func:`pydrake.common.yaml.yaml_load_typed` builds the :class:`~drake_disamb.config.schema.Scenario`
-   (an unknown key is an error, a key left out keeps its default);
+   (an unknown key is an error, a key left out keeps its default) from the data of step 2 dumped
+   again, so every value is the one steps 2 and 3 read (Drake's own reading of the text is YAML
+   1.1's, which has no ``0o17``);
 5. the resolver's checks (:func:`~drake_disamb.config.resolve.validate_scenario`).
 
 :func:`dump_scenario` writes a scenario with :func:`pydrake.common.yaml.yaml_dump_typed`, every field
@@ -23,6 +26,7 @@ written out but those that are ``None``; the text loads back to an equal scenari
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
@@ -41,12 +45,11 @@ EMBEDDED_TASKS: tuple[str, ...] = ("reaching", "pouring")
 """Names of the scenarios shipped as package data in ``drake_disamb/tasks``."""
 
 
-def _typed(data: Any, text: str | None, source: str) -> Scenario:
-    """Steps 3 to 5 on parsed ``data``; ``text`` is what Drake reads (``None``: ``data`` dumped)."""
+def _typed(data: Any, source: str) -> Scenario:
+    """Steps 3 to 5 on parsed ``data``; Drake reads ``data`` dumped again (module docstring)."""
     check_data(Scenario, data, "scenario")
     check_counts(len(data.get("goals", [])), len(data.get("stages", [None])), "scenario")
-    if text is None:
-        text = yaml.dump(data, Dumper=getattr(yaml, "CSafeDumper", yaml.SafeDumper))
+    text = yaml.dump(data, Dumper=getattr(yaml, "CSafeDumper", yaml.SafeDumper))
     try:
         scenario = yaml_load_typed(schema=Scenario, data=text, allow_yaml_with_no_schema=False)
     except (RuntimeError, ValueError, TypeError) as exc:  # not expected once check_data has passed
@@ -64,7 +67,7 @@ def scenario_from_dict(data: Any, source: str = "scenario") -> Scenario:
     """
     if not isinstance(data, dict):
         raise ValueError(f"scenario: expected a mapping of Scenario fields, got {fmt(data)}")
-    return _typed(data, None, source)
+    return _typed(data, source)
 
 
 def scenario_from_yaml(text: str | bytes, source: str = "<string>") -> Scenario:
@@ -76,7 +79,7 @@ def scenario_from_yaml(text: str | bytes, source: str = "<string>") -> Scenario:
     data = load_yaml_document(text, source, root="scenario")
     if not isinstance(data, dict):
         raise ValueError(f"scenario: expected a mapping of Scenario fields, got {fmt(data)}")
-    return _typed(data, text, source)
+    return _typed(data, source)
 
 
 def embedded_scenario_text(name: str) -> str:
@@ -84,6 +87,14 @@ def embedded_scenario_text(name: str) -> str:
     if name not in EMBEDDED_TASKS:
         raise ValueError(f"task: expected one of {', '.join(EMBEDDED_TASKS)} or a YAML path, got {name!r}")
     return resources.files("drake_disamb.tasks").joinpath(f"{name}.yaml").read_text(encoding="utf-8")
+
+
+@functools.cache
+def embedded_stage_goals(name: str) -> tuple[int, ...]:
+    """Goals per stage of an embedded task (``"reaching"``: ``(5,)``; ``"pouring"``: ``(2, 2)``),
+    its scenario loaded once per process."""
+    scenario = load_scenario(name)
+    return tuple(len(scenario.stage_goals(k)) for k in range(scenario.n_stages))
 
 
 def load_scenario(path_or_name: str | Path) -> Scenario:

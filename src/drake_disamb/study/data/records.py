@@ -7,8 +7,9 @@ trial finishes (:func:`append_record`), so a killed run loses at most the trial 
 half-written last line is what a kill can leave, and :func:`read_records` with ``repair=True`` cuts
 it off (the trial is then run again). Any other malformed line is an error naming the file and the
 line number. Every record, written or read, passes the one check of its values (types, finite
-numbers, ranges, the registered interface, task, paradigm, method and source names): an error names
-the field, and a reader adds the file and line.
+numbers, ranges, the registered interface, task, paradigm, method and source names, intended and
+reached goals that are goals of the task): an error names the field and the value, and a reader
+adds the file and line.
 
 Times are seconds from the trial's start. Counts follow the paper (Section "Study Methods", Metrics):
 ``mode_switches`` are the user's own mode-button presses (switches made by a disambiguation
@@ -77,7 +78,9 @@ class TrialRecord:
         start_pose: 0-based index of the start pose (the paper's 3 home positions).
         initial_mode: Name of the mode at the start (``vx_vy``, ``vx``, ... as in
             :data:`drake_disamb.core.interfaces`), or None if unknown.
-        intended_goals: Per stage, the user's intended goal index (0-based within the stage).
+        intended_goals: Per stage, the user's intended goal index (0-based within the stage); the
+            people's logs of a multi-step task name one target: one index into all its goals.
+            Every index is one of the task's goals (the embedded task's).
         reached_goals: Per stage, the goal index reached (-1 if none), or None where not logged.
         success: Every stage completed at the intended goal (None where not logged).
         done: Every stage completed at some goal (None where not logged).
@@ -286,6 +289,7 @@ def _check_fields(r: TrialRecord) -> None:
             continue
         if not isinstance(value, list) or not all(_is_int(g) and lowest <= g < MAX_GOALS for g in value):
             raise _bad(name, f"a list of goal indices in [{lowest}, {MAX_GOALS})", value)
+    _check_goals(r)
     for name in ("success", "done"):
         value = getattr(r, name)
         if value is not None and not isinstance(value, bool):
@@ -310,6 +314,36 @@ def _check_fields(r: TrialRecord) -> None:
         raise _bad("mode_switch_modes", "a list of mode names", r.mode_switch_modes)
     if not isinstance(r.extra, dict):
         raise _bad("extra", "an object", r.extra)
+
+
+def _check_goals(r: TrialRecord) -> None:
+    """The intended and reached goals are goals of the record's (embedded) task: one index per
+    stage within the stage's goals, or one index into all the task's goals (the people's logs of
+    a multi-step task name one target)."""
+    from drake_disamb.config.yaml_io import embedded_stage_goals
+
+    per_stage = embedded_stage_goals(r.task)
+    if len(r.intended_goals) == len(per_stage):
+        sizes = per_stage
+    elif len(r.intended_goals) == 1:
+        sizes = (sum(per_stage),)
+    else:
+        raise _bad(
+            "intended_goals",
+            f"one goal index per stage of the {r.task} task ({len(per_stage)}) or one index into its "
+            f"{sum(per_stage)} goals",
+            r.intended_goals,
+        )
+    where = (
+        f"{sizes[0]} goals: 0 to {sizes[0] - 1}"
+        if len(sizes) == 1
+        else "per stage: " + ", ".join(f"0 to {n - 1}" for n in sizes)
+    )
+    for name in ("intended_goals", "reached_goals"):
+        value = getattr(r, name)
+        if value is not None and any(g >= n for g, n in zip(value, sizes, strict=False)):
+            none = " or -1" if name == "reached_goals" else ""
+            raise _bad(name, f"indices of the {r.task} task's goals ({where}{none})", value)
 
 
 _SAFE_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,127}")

@@ -60,6 +60,7 @@ __all__ = [
     "StartPoseSpec",
     "TaskProtocol",
     "TrialSpec",
+    "check_study_size",
     "default_protocol",
     "expand_trials",
     "load_protocol",
@@ -181,8 +182,16 @@ class Protocol:
     @property
     def simulated_time_bound(self) -> float:
         """Simulated seconds if every trial ran to its duration (the protocol's, or its task's)."""
+        return self.time_bound()
+
+    def time_bound(self, duration: float | None = None) -> float:
+        """Simulated seconds if every trial ran to ``duration`` (s: a scenario override's, which
+        has the last word on every trial's), or with ``None`` to its duration (the protocol's, or
+        its task's)."""
         per_task = self.n_trials // len(self.tasks)
-        return float(sum(per_task * (self.duration or _task_duration(t.task)) for t in self.tasks))
+        return float(
+            sum(per_task * (duration or self.duration or _task_duration(t.task)) for t in self.tasks)
+        )
 
 
 def _task_duration(task: str) -> float:
@@ -198,10 +207,11 @@ def _stage_names(task: str) -> list[str]:
 
 
 MAX_TRIALS = 100_000
-"""Most trials a protocol may have (every trial is expanded, and recorded, before the first runs)."""
+"""Most trials a protocol may have (every trial is expanded, and recorded, before the first runs),
+and an ablation (``study ablate``: its settings times the protocol's trials)."""
 
 MAX_SIMULATED_HOURS = 10_000.0
-"""Most simulated time (h) a protocol may ask for: its trials times their duration."""
+"""Most simulated time (h) a protocol or an ablation may ask for: its trials times their duration."""
 
 
 def _check_choices(path: str, items: list[Any], choices: tuple[str, ...], what: str, attr: str = "") -> None:
@@ -271,18 +281,27 @@ def validate_protocol(protocol: Protocol, name: str = "protocol") -> Protocol:
         check_duration(protocol.duration, f"{name}.duration")
     if protocol.give_up_after is not None:
         check_duration(protocol.give_up_after, f"{name}.give_up_after")
-    if protocol.n_trials > MAX_TRIALS:
-        raise ValueError(
-            f"{name}: {protocol.n_trials} trials (subjects x interfaces x tasks x paradigms' trials), "
-            f"expected at most {MAX_TRIALS}"
-        )
-    hours = protocol.simulated_time_bound / 3600.0
+    check_study_size(
+        protocol.n_trials,
+        protocol.simulated_time_bound,
+        name,
+        "subjects x interfaces x tasks x paradigms' trials",
+    )
+    return protocol
+
+
+def check_study_size(n_trials: int, simulated_time: float, name: str, made_of: str) -> None:
+    """Refuse a study (a protocol, an ablation) of more than :data:`MAX_TRIALS` trials or
+    :data:`MAX_SIMULATED_HOURS` simulated hours (``simulated_time`` s, every trial run to its
+    duration): a ``ValueError`` naming ``name``, and ``made_of`` saying what the trials are."""
+    if n_trials > MAX_TRIALS:
+        raise ValueError(f"{name}: {n_trials} trials ({made_of}), expected at most {MAX_TRIALS}")
+    hours = simulated_time / 3600.0
     if hours > MAX_SIMULATED_HOURS:
         raise ValueError(
-            f"{name}: up to {hours:.0f} h of simulated time ({protocol.n_trials} trials x their duration), "
+            f"{name}: up to {hours:.0f} h of simulated time ({n_trials} trials x their duration), "
             f"expected at most {MAX_SIMULATED_HOURS:g} h"
         )
-    return protocol
 
 
 # -- reading and writing ---------------------------------------------------------------------------
@@ -435,14 +454,6 @@ def condition_order(protocol: Protocol, subject_index: int) -> list[tuple[str, s
     return [(i, t, p) for i in interfaces for t in tasks for p in paradigms]
 
 
-def _n_stages(task: str) -> list[int]:
-    """Goals per stage of an embedded task."""
-    from drake_disamb.config import load_scenario
-
-    sc = load_scenario(task)
-    return [len(sc.stage_goals(k)) for k in range(sc.n_stages)]
-
-
 def _n_initial_modes(interface: str, initial_modes: str) -> int:
     from drake_disamb.core.interfaces import arm_modes, interface_modes
 
@@ -460,12 +471,14 @@ def expand_trials(protocol: Protocol, seed: int, subject_names: list[str] | None
     ``protocol.request_latency``; drawn even when ``None``, so the other draws do not depend on
     it), the scenario seed (a 31-bit integer).
     """
+    from drake_disamb.config.yaml_io import embedded_stage_goals
+
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed: expected a non-negative integer, got {seed!r}")
     names = subject_names or [f"S{i + 1:02d}" for i in range(protocol.subjects)]
     if len(names) != protocol.subjects:
         raise ValueError(f"subject_names: expected {protocol.subjects} names, got {len(names)}")
-    stages = {t.task: _n_stages(t.task) for t in protocol.tasks}
+    stages = {t.task: embedded_stage_goals(t.task) for t in protocol.tasks}
     poses = {t.task: len(t.start_poses) for t in protocol.tasks}
     canonical = [
         (s, i, t.task, p.name, r)

@@ -320,8 +320,9 @@ def trace_figures(
     warn: Callable[[str], None] | None = None,
 ) -> list[Path]:
     """One goal-probability figure per condition: its first valid trial that has a usable trace
-    (:meth:`~drake_disamb.study.data.folder.StudyFolder.read_trace`); a bad one is left out, with
-    ``warn`` naming the file."""
+    (:meth:`~drake_disamb.study.data.folder.StudyFolder.read_trace`). Every record whose trace is
+    missing, and a trace read for a figure that is bad, is left out with one ``warn`` naming the
+    file."""
     from drake_disamb.plotting import goal_probability_figure
     from drake_disamb.study.data.folder import StudyFolder, TraceError
 
@@ -334,13 +335,14 @@ def trace_figures(
     ):
         r = m.record
         key = (r.interface, r.task, r.paradigm)
-        if key in seen or not r.valid or not study.trace_path(r.trial_id).is_file():
+        missing = not study.trace_path(r.trial_id).is_file()  # each one warned (read_trace says so)
+        if not missing and (key in seen or not r.valid):
             continue
         try:
             trace = study.read_trace(r.trial_id)
         except TraceError as exc:  # left out of the examples, not fatal
             if warn is not None:
-                warn(f"{exc}; not drawn")
+                warn(f"{exc}; left out of the figures")
             continue
         t, belief = np.asarray(trace["t"], dtype=float), np.asarray(trace["belief"], dtype=float)
         u_h = np.asarray(trace["u_h"], dtype=float)

@@ -34,8 +34,9 @@ Nothing outside ``DIR/report/`` is written: ``report`` must be a real folder (a 
 refused), and every file is written whole into a new temporary file and renamed over its name
 (:func:`~drake_disamb.study.data.folder.write_atomic`), so a symlink planted in ``report/`` is replaced,
 never written through. Bad records stop the report with
-:class:`drake_disamb.study.data.records.RecordError` naming the file, the line and the field; a bad trace
-is left out of the example figures with a warning naming it.
+:class:`drake_disamb.study.data.records.RecordError` naming the file, the line and the field; a missing trace
+(each one) and a bad trace read for an example figure are left out of the figures with a warning
+naming the file.
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ pose's joint offsets), seed, the protocol's duration, the joystick's mode select
 (``Scenario.interface_mode_selection``), the mode-selection method and the drawn request
 latency (``Scenario.disambiguation.method`` and ``.request_latency``), the subject's overrides
 of ``Scenario.user.config`` and last the study's overrides (dotted field paths, ``study
-ablate``). Built through
+ablate``; never a field of the trial's condition, :data:`CONDITION_FIELDS`). Built through
 :func:`~drake_disamb.config.scenario_from_dict`: every value passes the scenario's checks.
 
 Subjects come from :func:`drake_disamb.study.design.population.draw_subjects` (``study.yaml`` names the
@@ -61,6 +61,7 @@ from drake_disamb.study.design.protocol import (
 )
 
 __all__ = [
+    "CONDITION_FIELDS",
     "ExecutorLost",
     "StudyContext",
     "StudyMismatch",
@@ -163,9 +164,33 @@ def apply_override(plain: dict[str, Any], path: str, value: Any) -> None:
     node[parts[-1]] = copy.deepcopy(value)
 
 
+CONDITION_FIELDS: dict[str, str] = {
+    "task": "the trial's task, kept as its record's task (the protocol's tasks)",
+    "goals": "the task's goals: the record's task names the embedded task and its goals",
+    "stages": "the task's stages: the record's task names the embedded task and its stages",
+    "interface": "the trial's interface, kept as its record's interface (the protocol's interfaces)",
+    "paradigm": "the trial's paradigm, kept as its record's paradigm (the protocol's paradigms)",
+    "seed": "drawn per trial from the study seed, kept in its record (seed, extra.scenario_seed; --seed)",
+    "initial_mode": "drawn per trial, kept as its record's initial_mode (the protocol's initial_modes)",
+    "start_joint_positions": "the trial's start pose, kept as its record's start_pose (the protocol's "
+    "start_poses)",
+    "user.goals": "drawn per trial, kept as its record's intended_goals",
+}
+"""The scenario fields that are a trial's condition or identity, which its record keeps: the
+protocol sets them per trial, and an override (``study ablate --switch``) of one of them, or of a
+section holding one (``user``), is refused: the records would not say what ran. Field path ->
+why."""
+
+
+def _covers(path: str, name: str) -> bool:
+    """Whether an override of the dotted ``path`` sets the field ``name`` (it or a section holding it)."""
+    return path == name or name.startswith(f"{path}.")
+
+
 def check_overrides(overrides: dict[str, Any], option: str = "overrides") -> None:
-    """Check that every dotted path names a scenario field and its value passes the scenario's checks
-    on every embedded task (raises ``ValueError`` naming ``option``, the path and the value)."""
+    """Check that every dotted path names a scenario field that is not a trial's condition
+    (:data:`CONDITION_FIELDS`) and its value passes the scenario's checks on every embedded task
+    (raises ``ValueError`` naming ``option``, the path and the value)."""
     from drake_disamb.config import scenario_from_dict
 
     for path, value in overrides.items():
@@ -173,6 +198,12 @@ def check_overrides(overrides: dict[str, Any], option: str = "overrides") -> Non
             _field_path_types(path)
         except ValueError as exc:
             raise ValueError(f"{option} {exc}") from None
+        for name, why in CONDITION_FIELDS.items():
+            if _covers(path, name):
+                inside = "" if path == name else f" (it holds {name})"
+                raise ValueError(
+                    f"{option} {path}: not switchable{inside}: {why}; the records would not say what ran"
+                )
         for task in ("reaching", "pouring"):
             plain = copy.deepcopy(_task_plain(task))
             apply_override(plain, path, value)
@@ -263,10 +294,13 @@ def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
     result = run_trial(scenario, progress=False)
     trace = trace_arrays(result)
     task = _task_protocol(context, spec.task)
+    latency = spec.request_latency
+    if any(_covers(path, "disambiguation.request_latency") for path in context.overrides):
+        latency = float(scenario.disambiguation.request_latency)  # the override's: what ran
     extra = {
         "order": spec.order,
         "start_pose_name": task["start_poses"][spec.start_pose]["name"],
-        "request_latency": spec.request_latency,
+        "request_latency": latency,
         "scenario_seed": spec.scenario_seed,
     }
     if context.overrides:
