@@ -621,6 +621,37 @@ def test_demo_record_refuses_what_the_record_would_before_the_trial(
     assert not (rec / "trials.jsonl").exists() and not list((rec / "traces").iterdir())
 
 
+def test_demo_record_refuses_goals_the_record_would_before_the_trial(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A reaching scenario with a sixth goal: the trial could reach goal 5, which the reaching
+    task's record refuses; ``demo --live --record`` says so at the start (status 2, nothing run)."""
+    import copy
+
+    import yaml
+
+    from drake_disamb.cli import main
+    from drake_disamb.config import embedded_scenario_text
+
+    data = yaml.safe_load(embedded_scenario_text("reaching"))
+    extra = copy.deepcopy(dict(data["goals"][-1], name="extra_goal"))
+    extra["position"] = [p + 0.05 for p in extra["position"]]
+    data["goals"].append(extra)
+    path = tmp_path / "six.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    out, rec = tmp_path / "demo", tmp_path / "people"
+    code = main(
+        ["demo", "--quiet", "--live", "--no-wait", "--duration", "1", "--task", str(path),
+         "--record", str(rec), "--subject", "P01", "--out", str(out)]
+    )  # fmt: skip
+    captured = capsys.readouterr()
+    assert code == 2
+    (line,) = captured.err.strip().splitlines()
+    assert "--record: the trial's record would be refused: field reached_goals: expected" in line
+    assert "running the trial" not in captured.out and not list(out.iterdir())
+    assert not (rec / "trials.jsonl").exists()
+
+
 @pytest.mark.parametrize("failure", ["full-disk", "became-a-study"])
 def test_a_trial_the_folder_does_not_take_is_kept_beside_it(
     failure: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]

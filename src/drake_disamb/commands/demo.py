@@ -273,16 +273,18 @@ def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]
     folder ``folder`` (whose lock this process holds): ``<subject>-<interface>-<task>-<paradigm>-h<n>``,
     ``n`` counting that person's earlier trials of the condition there.
 
-    Its names pass the record's own check
-    (:func:`~drake_disamb.study.data.records.check_names`), so ``--record`` calls it before the
-    trial runs: a name the record would refuse stops the command before anything is run.
+    Its names and the scenario's goals pass the record's own checks
+    (:func:`~drake_disamb.study.data.records.check_names`,
+    :func:`~drake_disamb.study.data.records.check_goals`: any goal the trial could reach), so
+    ``--record`` calls it before the trial runs: what the record would refuse stops the command
+    before anything is run.
 
     Raises:
         ValueError: A name the record refuses (names the field and the value), or the folder's
             records cannot be read.
     """
     from drake_disamb.study.data.folder import StudyFolder
-    from drake_disamb.study.data.records import check_names
+    from drake_disamb.study.data.records import check_goals, check_names
     from drake_disamb.study.run.outcome import record_condition
 
     condition = record_condition(scenario)
@@ -293,6 +295,8 @@ def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]
         n += 1
     trial_id = f"{stem}{n}"
     check_names(trial_id=trial_id, subject=subject, source="human", **condition)
+    largest = [len(scenario.stage_goals(k)) - 1 for k in range(scenario.n_stages)]
+    check_goals(scenario.task, list(scenario.user.goals), largest)
     return trial_id, n
 
 

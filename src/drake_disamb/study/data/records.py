@@ -44,6 +44,7 @@ __all__ = [
     "TrialRecord",
     "append_record",
     "assistance_onset",
+    "check_goals",
     "check_names",
     "read_records",
     "write_records",
@@ -289,7 +290,7 @@ def _check_fields(r: TrialRecord) -> None:
             continue
         if not isinstance(value, list) or not all(_is_int(g) and lowest <= g < MAX_GOALS for g in value):
             raise _bad(name, f"a list of goal indices in [{lowest}, {MAX_GOALS})", value)
-    _check_goals(r)
+    check_goals(r.task, r.intended_goals, r.reached_goals)
     for name in ("success", "done"):
         value = getattr(r, name)
         if value is not None and not isinstance(value, bool):
@@ -316,34 +317,36 @@ def _check_fields(r: TrialRecord) -> None:
         raise _bad("extra", "an object", r.extra)
 
 
-def _check_goals(r: TrialRecord) -> None:
-    """The intended and reached goals are goals of the record's (embedded) task: one index per
-    stage within the stage's goals, or one index into all the task's goals (the people's logs of
-    a multi-step task name one target)."""
+def check_goals(task: Any, intended_goals: Any, reached_goals: Any) -> None:
+    """The one check that a record's intended and reached goals are goals of its (embedded) task:
+    one index per stage within the stage's goals, or one index into all the task's goals (the
+    people's logs of a multi-step task name one target) (:class:`RecordError` naming the field).
+
+    :class:`TrialRecord` applies it to every record; ``demo --live --record`` calls it before the
+    trial with the scenario's intended goals and the largest index each stage could reach."""
     from drake_disamb.config.yaml_io import embedded_stage_goals
 
-    per_stage = embedded_stage_goals(r.task)
-    if len(r.intended_goals) == len(per_stage):
+    per_stage = embedded_stage_goals(task)
+    if len(intended_goals) == len(per_stage):
         sizes = per_stage
-    elif len(r.intended_goals) == 1:
+    elif len(intended_goals) == 1:
         sizes = (sum(per_stage),)
     else:
         raise _bad(
             "intended_goals",
-            f"one goal index per stage of the {r.task} task ({len(per_stage)}) or one index into its "
+            f"one goal index per stage of the {task} task ({len(per_stage)}) or one index into its "
             f"{sum(per_stage)} goals",
-            r.intended_goals,
+            intended_goals,
         )
     where = (
         f"{sizes[0]} goals: 0 to {sizes[0] - 1}"
         if len(sizes) == 1
         else "per stage: " + ", ".join(f"0 to {n - 1}" for n in sizes)
     )
-    for name in ("intended_goals", "reached_goals"):
-        value = getattr(r, name)
+    for name, value in (("intended_goals", intended_goals), ("reached_goals", reached_goals)):
         if value is not None and any(g >= n for g, n in zip(value, sizes, strict=False)):
             none = " or -1" if name == "reached_goals" else ""
-            raise _bad(name, f"indices of the {r.task} task's goals ({where}{none})", value)
+            raise _bad(name, f"indices of the {task} task's goals ({where}{none})", value)
 
 
 _SAFE_ID = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]{0,127}")
