@@ -27,6 +27,7 @@ import yaml
 from drake_disamb.commands.study_run import (
     add_common_arguments,
     build_protocol,
+    check_scheduler_address,
     error,
     execute,
     stopped_before_the_first_trial,
@@ -98,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         with sigterm_as_sigint():
+            check_scheduler_address(args.scheduler)
             settings = settings_of(args.switch)
             protocol = build_protocol(args)
             out = check_output_dir(args.out, "--out")
