@@ -68,13 +68,16 @@ class StopRequest:
 
 @contextlib.contextmanager
 def sigterm_as_sigint() -> Iterator[None]:
-    """While inside, SIGTERM raises ``KeyboardInterrupt`` as SIGINT does (for work that cannot look
-    at a :class:`StopRequest`, such as checking a study's scenarios); outside the main thread, a
-    no-op."""
+    """While inside, SIGTERM does what SIGINT does (for work that cannot look at a
+    :class:`StopRequest`, such as checking a study's scenarios): SIGINT's handler (the command
+    line's, or Python's, which raises ``KeyboardInterrupt``); outside the main thread, a no-op."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    handler = signal.getsignal(signal.SIGINT)
+    if not callable(handler):  # ignored, the default action, or not set from Python
+        handler = signal.default_int_handler
+    previous = signal.signal(signal.SIGTERM, handler)
     try:
         yield
     finally:
