@@ -84,6 +84,23 @@ def sigterm_as_sigint() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+@contextlib.contextmanager
+def sigterm_ends_at_once() -> Iterator[None]:
+    """While inside, SIGTERM has its default action: the kernel ends the process at once, without a
+    line (exit status 143 as a shell shows it). For a compiled call that holds the interpreter and
+    may block, such as Meshcat's constructor: Python runs no signal handler until it returns, so a
+    handler would leave SIGTERM unanswered meanwhile. Outside the main thread, a no-op."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        yield
+    finally:
+        if previous is not None:  # None: a handler set outside Python, which cannot be put back
+            signal.signal(signal.SIGTERM, previous)
+
+
 def worker_init() -> None:
     """Initializer of the study's worker processes: ignore SIGINT (a terminal's Ctrl-C reaches the
     whole process group; the parent stops the run and ends the workers, which then print nothing),
