@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import pytest
-from support import cli_process
+from support import SRC, cli_process
 
 from drake_disamb import cli
 
@@ -130,3 +132,49 @@ def test_sigterm_as_sigint_gives_sigterm_the_command_lines_handler() -> None:
             assert signal.getsignal(signal.SIGTERM) is signal.default_int_handler
     finally:
         signal.signal(signal.SIGINT, before)
+
+
+_WARNING_SCRIPT = """\
+import sys, warnings
+from drake_disamb.commands import demo
+
+def run(args):
+    warnings.warn("live_input: raw signal [nan] is not finite\\n  it is read as 0", RuntimeWarning)
+    print("done")
+    return 0
+
+demo.run = run
+from drake_disamb.cli import main
+sys.exit(main())
+"""
+
+
+def test_a_warning_prints_as_one_line_without_source_paths(tmp_path: Path) -> None:
+    """The entry point as the console script calls it, with a command that warns."""
+    script = tmp_path / "warns.py"
+    script.write_text(_WARNING_SCRIPT)
+    env = dict(os.environ, PYTHONPATH=str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    res = subprocess.run(
+        [sys.executable, str(script), "demo"], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert res.returncode == 0 and res.stdout == "done\n", res.stderr
+    assert res.stderr == "drake-disamb: warning: live_input: raw signal [nan] is not finite it is read as 0\n"
+
+
+def test_library_users_keep_pythons_warnings_and_signals(monkeypatch: pytest.MonkeyPatch, capsys) -> None:  # noqa: ANN001
+    """``main`` called from Python formats warnings while it runs, then gives back the caller's
+    ``warnings.showwarning`` and signal handlers."""
+    from drake_disamb.commands import demo
+
+    before = (warnings.showwarning, signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+
+    def run(args) -> int:  # noqa: ANN001
+        warnings.warn("something odd", RuntimeWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(demo, "run", run)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        assert cli.main(["demo"]) == 0
+    assert capsys.readouterr().err == "drake-disamb: warning: something odd\n"
+    assert (warnings.showwarning, signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before

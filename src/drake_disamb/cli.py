@@ -1,10 +1,11 @@
 """The ``drake-disamb`` command line: one sub-command per module in :mod:`drake_disamb.commands`.
 
-:func:`main` first takes SIGINT and SIGTERM, before anything heavy is imported: a signal that
-comes before a command takes it over (while the sub-commands and their imports load, or in a
-command that does not take signals) ends the command with one line, ``drake-disamb: stopped by
-SIGINT`` (exit status 130), never a traceback. A library user who imports the package keeps
-Python's own behaviour.
+:func:`main` first takes SIGINT and SIGTERM and Python's warnings, before anything heavy is
+imported: a signal that comes before a command takes it over (while the sub-commands and their
+imports load, or in a command that does not take signals) ends the command with one line,
+``drake-disamb: stopped by SIGINT`` (exit status 130), never a traceback, and a warning prints as
+one line, ``drake-disamb: warning: <message>``, without our source paths. A library user who
+imports the package keeps Python's own behaviour.
 """
 
 from __future__ import annotations
@@ -12,8 +13,9 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import warnings
 from types import FrameType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
     import argparse
@@ -83,6 +85,25 @@ def _exit_now(signum: int, frame: FrameType | None) -> None:
         os._exit(EXIT_INTERRUPTED)
 
 
+def _show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
+    """``warnings.showwarning`` of the command line: one line, ``drake-disamb: warning: <message>``
+    (the source file and line are for developers, who run the code as a library)."""
+    text = " ".join(part.strip() for part in str(message).splitlines() if part.strip())
+    stream = sys.stderr if file is None else file
+    try:
+        stream.write(f"drake-disamb: warning: {text}\n")
+        stream.flush()
+    except (OSError, ValueError):  # as Python's own: a warning never fails the command
+        pass
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser with every registered sub-command."""
     import argparse
@@ -106,14 +127,17 @@ def main(argv: list[str] | None = None) -> int:
     runs the main job (``demo``) with its defaults.
 
     SIGINT and SIGTERM end the command with one line and exit status 130 (a command that takes
-    them over, to stop cleanly, prints its own). Called without ``argv`` it owns the process: a
-    signal after the command has returned, while the interpreter exits, also gives the one line.
-    Called with ``argv`` (from Python), the previous signal handlers are restored on return.
+    them over, to stop cleanly, prints its own); warnings print as one line (module docstring).
+    Called without ``argv`` it owns the process: a signal after the command has returned, while the
+    interpreter exits, also gives the one line. Called with ``argv`` (from Python), the previous
+    signal handlers and ``warnings.showwarning`` are restored on return.
     """
     try:
         previous = {sig: signal.signal(sig, _interrupt) for sig in _SIGNALS}
     except ValueError:  # not the main thread, where Python runs signal handlers: keep them
         previous = {}
+    show_warning = warnings.showwarning
+    warnings.showwarning = _show_warning
     try:
         return _run(list(sys.argv[1:] if argv is None else argv))
     except KeyboardInterrupt as exc:
@@ -124,12 +148,12 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.write(_stopped_line(name))
         return EXIT_INTERRUPTED
     finally:
-        _hand_back(previous, owner=argv is None)
+        _hand_back(previous, show_warning, owner=argv is None)
 
 
-def _hand_back(previous: dict[int, Any], owner: bool) -> None:
-    """After :func:`main`: the process's owner keeps one-line signals (:func:`_exit_now`) for the
-    interpreter's exit; a caller from Python gets its own back."""
+def _hand_back(previous: dict[int, Any], show_warning: Any, owner: bool) -> None:
+    """After :func:`main`: the process's owner keeps one-line signals (:func:`_exit_now`) and
+    warnings for the interpreter's exit; a caller from Python gets its own back."""
     if owner:
         if previous:
             for sig in _SIGNALS:
@@ -137,6 +161,7 @@ def _hand_back(previous: dict[int, Any], owner: bool) -> None:
         return
     for sig, handler in previous.items():
         signal.signal(sig, handler)
+    warnings.showwarning = show_warning
 
 
 def _run(argv: list[str]) -> int:
