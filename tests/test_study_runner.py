@@ -553,6 +553,73 @@ def test_unreachable_scheduler_fails_fast(tmp_path: Path) -> None:
     assert not (tmp_path / "o" / "trials.jsonl").exists()
 
 
+@pytest.mark.parametrize(
+    "address", ["garbage", "tcp://127.0.0.1", "foo://127.0.0.1:8786", "tcp://127.0.0.1:99999"]
+)
+def test_a_malformed_scheduler_address_fails_at_once_in_one_line(address: str, tmp_path: Path) -> None:
+    """Before the folder is made and without Dask's client: no 10 s wait for a half-made client and
+    its ``Exception ignored ... TimeoutError`` traceback at exit."""
+    start = time.monotonic()
+    res = cli("study", "run", "--quick", "--out", str(tmp_path / "o"), "--scheduler", address, timeout=60)
+    elapsed = time.monotonic() - start
+    assert res.returncode == 2 and res.stdout == ""
+    assert res.stderr.count("\n") == 1 and res.stderr.startswith(
+        f"drake-disamb study run: error: --scheduler: {address!r} is not a Dask scheduler's address ("
+    )
+    assert "expected one like tcp://HOST:8786" in res.stderr
+    assert elapsed < 5, f"took {elapsed:.1f} s"
+    assert not (tmp_path / "o").exists()
+
+
+def _dask_scheduler(workdir: Path) -> tuple[subprocess.Popen, str]:
+    """A ``dask scheduler`` process on localhost (a free port, no dashboard) and its address."""
+    argv = ["--host", "127.0.0.1", "--port", "0", "--no-dashboard"]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", *argv],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ, DASK_TEMPORARY_DIRECTORY=str(workdir)),  # its scratch space
+    )
+    end = time.monotonic() + 60
+    while time.monotonic() < end:
+        line = proc.stderr.readline()
+        if "Scheduler at:" in line:
+            return proc, line.split("Scheduler at:", 1)[1].strip()
+        if not line and proc.poll() is not None:
+            break
+    proc.kill()
+    raise AssertionError("the dask scheduler did not start")
+
+
+def test_a_lost_scheduler_ends_the_run_in_one_line_without_dask_tracebacks(tmp_path: Path) -> None:
+    scheduler, address = _dask_scheduler(tmp_path)
+    proc = cli_process(
+        "study", "run", "--quick", "--out", str(tmp_path / "o"), "--scheduler", address, "--quiet"
+    )
+    try:
+        try:
+            wait_for_line(proc, "trials to run", timeout=120)  # connected; no worker: the trials wait
+        finally:
+            scheduler.kill()
+            scheduler.communicate()
+        lost = time.monotonic()
+        out, err = proc.communicate(timeout=30)
+        elapsed = time.monotonic() - lost
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 3, err
+    assert err.splitlines() == [
+        f"warning: the scheduler at {address} has no workers yet: the trials wait for "
+        f"`dask worker {address}`",
+        "drake-disamb study run: error: the executor cancelled the trials (the Dask scheduler was lost?); "
+        f"0 records in {tmp_path / 'o' / 'trials.jsonl'} (0 written now); rerun the same command to resume",
+    ]
+    assert out == ""
+    assert elapsed < 5, f"took {elapsed:.1f} s"
+
+
 # -- a person's trial --------------------------------------------------------------------------------
 
 

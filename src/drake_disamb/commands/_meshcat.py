@@ -7,9 +7,12 @@ import contextlib
 import logging
 import socket
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
+
+from drake_disamb.commands._signals import sigterm_ends_at_once
 
 
 def add_meshcat_arguments(parser: argparse.ArgumentParser) -> None:
@@ -34,11 +37,16 @@ def start_meshcat(args: argparse.Namespace) -> Any:
     (:func:`exposure_warning`; with ``args.live``, they can drive the arm). A ``--meshcat-port``
     that another program holds is named, with the next free port (``ValueError``).
 
+    The host is resolved first, within :data:`RESOLVE_TIMEOUT` seconds (:func:`check_host`): Meshcat's
+    constructor, which holds the interpreter, would spend minutes on a name that does not resolve.
+    While the constructor runs, SIGTERM ends the process at once (:func:`sigterm_ends_at_once`).
+
     Drake's own "Meshcat listening for connections at URL" log line is held back: the command
     prints the URL itself, once, where the user needs it."""
     from pydrake.geometry import Meshcat, MeshcatParams
 
     host = args.meshcat_host
+    check_host(host)
     params = MeshcatParams(host=host)
     port = args.meshcat_port
     if port is not None:
@@ -48,7 +56,7 @@ def start_meshcat(args: argparse.Namespace) -> Any:
             raise ValueError(_taken(host, port))
         params.port = port
     try:
-        with _drake_info_held_back():
+        with _drake_info_held_back(), sigterm_ends_at_once():
             meshcat = Meshcat(params)
     except RuntimeError as exc:
         if port is not None:
@@ -63,9 +71,44 @@ def start_meshcat(args: argparse.Namespace) -> Any:
 LOCAL_HOSTS = ("localhost", "127.0.0.1", "::1", "ip6-localhost")
 """Hosts that only this machine reaches."""
 
+RESOLVE_TIMEOUT = 3.0
+"""Seconds :func:`check_host` waits for a host name to resolve."""
+
 
 def _bind_host(host: str) -> str:
     return "" if host in ("*", "0.0.0.0", "::") else host
+
+
+def check_host(host: str, timeout: float = RESOLVE_TIMEOUT) -> None:
+    """Resolve ``host`` (``--meshcat-host``) as a server's address, waiting at most ``timeout``
+    seconds (the look-up runs in a daemon thread: a resolver that hangs is left behind); ``'*'`` and
+    the any-addresses need none.
+
+    Raises:
+        ValueError: The name does not resolve, or not within ``timeout`` seconds (the message
+            names ``--meshcat-host`` and the value).
+    """
+    name = _bind_host(host)
+    if not name:
+        return
+    outcome: list[BaseException | None] = []
+
+    def resolve() -> None:
+        try:
+            socket.getaddrinfo(name, None, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+        except OSError as exc:
+            outcome.append(exc)
+        else:
+            outcome.append(None)
+
+    worker = threading.Thread(target=resolve, name="meshcat-host", daemon=True)
+    worker.start()
+    worker.join(timeout)
+    if not outcome:
+        raise ValueError(f"--meshcat-host {host!r}: the name did not resolve within {timeout:g} s")
+    if outcome[0] is not None:
+        reason = getattr(outcome[0], "strerror", None) or outcome[0]
+        raise ValueError(f"--meshcat-host {host!r}: the name does not resolve ({reason})")
 
 
 def port_is_free(host: str, port: int) -> bool:
@@ -75,7 +118,7 @@ def port_is_free(host: str, port: int) -> bool:
             _bind_host(host) or None, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
         )
     except OSError:
-        return True  # an unknown host: Meshcat reports it
+        return True  # an unknown host: check_host reports it
     for family, kind, proto, _, address in infos:
         with socket.socket(family, kind, proto) as probe:
             probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

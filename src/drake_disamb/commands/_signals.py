@@ -67,18 +67,35 @@ class StopRequest:
 
 
 @contextlib.contextmanager
-def sigterm_as_sigint() -> Iterator[None]:
-    """While inside, SIGTERM raises ``KeyboardInterrupt`` as SIGINT does (for work that cannot look
-    at a :class:`StopRequest`, such as checking a study's scenarios); outside the main thread, a
-    no-op."""
+def _sigterm_handled_by(handler: Any) -> Iterator[None]:
+    """While inside, SIGTERM's handler is ``handler``; outside the main thread, a no-op."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    previous = signal.signal(signal.SIGTERM, handler)
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        if previous is not None:  # None: a handler set outside Python, which cannot be put back
+            signal.signal(signal.SIGTERM, previous)
+
+
+def sigterm_as_sigint() -> contextlib.AbstractContextManager[None]:
+    """While inside, SIGTERM does what SIGINT does (for work that cannot look at a
+    :class:`StopRequest`, such as checking a study's scenarios): SIGINT's handler (the command
+    line's, or Python's, which raises ``KeyboardInterrupt``); outside the main thread, a no-op."""
+    handler = signal.getsignal(signal.SIGINT)
+    if not callable(handler):  # ignored, the default action, or not set from Python
+        handler = signal.default_int_handler
+    return _sigterm_handled_by(handler)
+
+
+def sigterm_ends_at_once() -> contextlib.AbstractContextManager[None]:
+    """While inside, SIGTERM has its default action: the kernel ends the process at once, without a
+    line (exit status 143 as a shell shows it). For a compiled call that holds the interpreter and
+    may block, such as Meshcat's constructor: Python runs no signal handler until it returns, so a
+    handler would leave SIGTERM unanswered meanwhile. Outside the main thread, a no-op."""
+    return _sigterm_handled_by(signal.SIG_DFL)
 
 
 def worker_init() -> None:

@@ -43,6 +43,7 @@ from typing import Any
 from drake_disamb.commands.study_run import (
     add_common_arguments,
     build_protocol,
+    check_scheduler_address,
     error,
     execute,
     stopped_before_the_first_trial,
@@ -137,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         with sigterm_as_sigint():
+            check_scheduler_address(args.scheduler)
             protocol = build_protocol(args)
             n_settings, n_trials, seconds = ablation_size(args.switch, protocol)  # before listing them
             settings = settings_of(args.switch)

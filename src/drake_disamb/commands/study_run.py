@@ -11,7 +11,7 @@ Trials run in parallel: ``--workers N`` processes on this machine (default: the 
 ``--scheduler ADDRESS`` on an existing Dask cluster (``dask scheduler`` and ``dask worker ADDRESS``
 on the machines; each worker needs drake-disamb installed; the results come back to this process,
 which writes them). Every input (protocol, options, ``--out``, the scheduler) is checked before the
-first trial runs.
+first trial runs; an address that names no scheduler is refused before the folder is made.
 
 The folder has one writer: a second ``study run`` (or ``ablate``, ``import-authors``, ``demo
 --record``) into it is refused at once, naming the process that writes it. SIGINT (Ctrl-C, to the
@@ -112,33 +112,39 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
     and die with this process), or the executor of a Dask client connected to ``scheduler``. On an
     exception (a stop, a fault) the pool's processes are ended at once, never left behind.
 
+    While the Dask client is open the process's log is held back (:func:`_log_held_back`): Dask logs
+    a lost scheduler with its tracebacks, and the caller reports it in one line.
+
     Raises:
-        ValueError: the scheduler cannot be reached within :data:`SCHEDULER_TIMEOUT` seconds.
+        ValueError: ``scheduler`` is not a scheduler's address (:func:`check_scheduler_address`), or
+            the scheduler cannot be reached within :data:`SCHEDULER_TIMEOUT` seconds.
     """
     if scheduler is not None:
+        check_scheduler_address(scheduler)
         from distributed import Client
 
-        try:
-            client = Client(scheduler, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
-        except Exception as exc:  # OSError, TimeoutError, ValueError for a malformed address
-            raise ValueError(
-                f"--scheduler: cannot reach a Dask scheduler at {scheduler!r} within {SCHEDULER_TIMEOUT:g} s "
-                f"({type(exc).__name__}: {exc}); start one with `dask scheduler` and workers with "
-                "`dask worker ADDRESS`"
-            ) from None
-        try:
-            n = len(client.scheduler_info().get("workers", {}))
-            if n == 0:
-                print(
-                    f"warning: the scheduler at {scheduler} has no workers yet: the trials wait for "
-                    f"`dask worker {scheduler}`",
-                    file=sys.stderr,
-                    flush=True,
-                )
-            yield client.get_executor(), f"Dask scheduler {scheduler} ({n} workers now)"
-        finally:
-            with contextlib.suppress(Exception):  # a lost scheduler: nothing left to close
-                client.close(timeout=SCHEDULER_TIMEOUT)
+        with _log_held_back():
+            try:
+                client = Client(scheduler, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
+            except Exception as exc:  # OSError, TimeoutError
+                raise ValueError(
+                    f"--scheduler: cannot reach a Dask scheduler at {scheduler!r} within "
+                    f"{SCHEDULER_TIMEOUT:g} s ({type(exc).__name__}: {exc}); start one with `dask scheduler` "
+                    "and workers with `dask worker ADDRESS`"
+                ) from None
+            try:
+                n = len(client.scheduler_info().get("workers", {}))
+                if n == 0:
+                    print(
+                        f"warning: the scheduler at {scheduler} has no workers yet: the trials wait for "
+                        f"`dask worker {scheduler}`",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+                yield client.get_executor(), f"Dask scheduler {scheduler} ({n} workers now)"
+            finally:
+                with contextlib.suppress(Exception):  # a lost scheduler: nothing left to close
+                    client.close(timeout=SCHEDULER_TIMEOUT)
         return
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
@@ -157,6 +163,42 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown(wait=True)
+
+
+def check_scheduler_address(address: str | None) -> None:
+    """Refuse (``ValueError`` naming ``--scheduler``) an address that names no scheduler: no port, an
+    unknown scheme, a port outside 1..65535. Dask's client would take it, fail inside, and leave a
+    half-made client that the interpreter waits 10 s to close at exit. ``None`` (no ``--scheduler``)
+    passes."""
+    if address is None:
+        return
+    from distributed.comm import get_address_host_port
+
+    try:
+        host, port = get_address_host_port(address)
+    except ValueError as exc:
+        reason = str(exc)
+    else:
+        if host and 0 < port < 65536:
+            return
+        reason = "expected a host and a port in 1..65535"
+    raise ValueError(
+        f"--scheduler: {address!r} is not a Dask scheduler's address ({reason}); expected one like "
+        "tcp://HOST:8786, as `dask scheduler` prints it"
+    )
+
+
+@contextlib.contextmanager
+def _log_held_back() -> Iterator[None]:
+    """Drop every log record while inside (``logging.disable``), then restore the previous level."""
+    import logging
+
+    level = logging.root.manager.disable
+    logging.disable(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logging.disable(level)
 
 
 EXIT_TRIAL_ERROR = 1
@@ -256,6 +298,7 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         with sigterm_as_sigint():
+            check_scheduler_address(args.scheduler)
             protocol = build_protocol(args)
             plan = plan_study(check_output_dir(args.out, "--out"), protocol, args.seed)
     except ValueError as exc:
