@@ -271,15 +271,15 @@ class _Interface:
 
 def test_interface_system_switches_latency_after_the_press() -> None:
     d = _Interface(InterfaceConfig(kind="head_array", request_latency=0.04), choice=3.0)
-    assert d.out("disambiguation_pending") == 0
+    assert d.out("paused") == 0
     d.tick(PRESS)  # t = 0
     for _ in range(3):
         d.tick(IDLE)  # 0.01 .. 0.03
         assert d.out("mode") == 0 and d.out("served_count") == 0 and d.out("request_count") == 1
-        assert d.out("disambiguation_pending") == 1  # being computed
+        assert d.out("paused") == 1  # being computed
     d.tick(IDLE)  # 0.04
     assert d.out("mode") == 3 and d.out("served_count") == 1
-    assert d.out("disambiguation_pending") == 0
+    assert d.out("paused") == 0
     assert d.log() == [(0.0, "disambiguation_request"), (0.04, "disambiguation_switch")]
 
 

@@ -7,7 +7,7 @@
     autonomy.u_a --------------------------> blender.u_a, inference.u_a
     inference.belief ----------------------> blender, disambiguation, user, visualizer
     disambiguation.disambiguation_mode ----> interface.disambiguation_mode   (disambiguation, automatic)
-    interface.disambiguation_pending ------> inference.hold, blender.hold, user  (hold_while_computing)
+    interface.paused ----------------------> inference, blender, user .paused  (hold_while_computing)
     interface.mode / served_count ---------> disambiguation.current_mode / request_count
     inference.belief, interface.u_h, mode -> automatic_trigger              (automatic paradigm)
     automatic_trigger.automatic_request_count -> interface.automatic_request_count
@@ -278,11 +278,11 @@ def build_shared_control_diagram(
         )
         systems["disambiguation"] = disamb
         if scenario.disambiguation.hold_while_computing:  # the loop pauses while a request is computed
-            pending = interface.GetOutputPort("disambiguation_pending")
-            builder.Connect(pending, inference.GetInputPort("hold"))
-            builder.Connect(pending, blender.GetInputPort("hold"))
+            paused = interface.GetOutputPort("paused")
+            builder.Connect(paused, inference.GetInputPort("paused"))
+            builder.Connect(paused, blender.GetInputPort("paused"))
             if input_source is None:  # the simulated user sees the arm stop and waits
-                builder.Connect(pending, user.GetInputPort("system_busy"))
+                builder.Connect(paused, user.GetInputPort("paused"))
     if config.automatic is not None:
         trigger = builder.AddSystem(
             AutomaticTrigger(n, config.automatic, scenario.control_period, config.interface.request_latency)

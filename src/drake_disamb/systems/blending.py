@@ -42,7 +42,7 @@ class SharedControlBlender(LeafSystem):
         - u_h
         - belief
         - u_a
-        - hold
+        - paused
         output_ports:
         - u
         - alpha
@@ -54,9 +54,9 @@ class SharedControlBlender(LeafSystem):
         belief (n): probability of each goal.
         u_a (n * 6): per-goal autonomy commands, goal i in entries ``6 i .. 6 i + 5``, same order
             and frame as ``u_h``.
-        hold (1, optional): while above 0.5 the loop is paused: ``u`` is zero and ``alpha`` 0 (the
+        paused (1, optional): while above 0.5 the loop is paused: ``u`` is zero and ``alpha`` 0 (the
             study's system sent the arm nothing while it computed a disambiguation request: the
-            interface's ``disambiguation_pending``). Unconnected: never paused.
+            interface's ``paused``). Unconnected: never paused.
 
     Output ports (``u``, ``alpha``, ``g_star``: direct feedthrough from the inputs only, no state):
         u (6): blended, speed-limited command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world
@@ -117,10 +117,10 @@ class SharedControlBlender(LeafSystem):
         self._u_h_port = self.DeclareVectorInputPort("u_h", 6)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_a_port = self.DeclareVectorInputPort("u_a", 6 * self.n_goals)
-        self._hold_port = self.DeclareVectorInputPort("hold", 1)
+        self._paused_port = self.DeclareVectorInputPort("paused", 1)
         # One blending step per change of the inputs, shared by the three outputs (a cache entry
         # that depends on the inputs alone, not on time or on any state).
-        ports = (self._u_h_port, self._belief_port, self._u_a_port, self._hold_port)
+        ports = (self._u_h_port, self._belief_port, self._u_a_port, self._paused_port)
         inputs = {port.ticket() for port in ports}
         self._memo: tuple[bytes, tuple] | None = None
         self._step = self.DeclareCacheEntry(
@@ -185,8 +185,8 @@ class SharedControlBlender(LeafSystem):
             u, alpha, g_star, finite = self._compute(u_h, p, u_a)
             memo = self._memo = (key, (u, np.array([alpha]), np.array([float(g_star)]), finite))
         step = memo[1]
-        if flag_set(self._hold_port, context):
-            # Paused (the ``hold`` input): nothing reaches the arm; g_star stays the belief's argmax.
+        if flag_set(self._paused_port, context):
+            # Paused (the ``paused`` input): nothing reaches the arm; g_star stays the belief's argmax.
             step = (np.zeros(6), np.zeros(1), step[2], step[3])
         value.set_value(step)
 

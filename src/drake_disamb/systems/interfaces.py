@@ -64,7 +64,7 @@ class InterfaceSystem(LeafSystem):
         - mode_switch_count
         - nonfinite_count
         - served_count
-        - disambiguation_pending
+        - paused
         - event_log
 
     Input ports:
@@ -95,9 +95,11 @@ class InterfaceSystem(LeafSystem):
         nonfinite_count (1): updates whose raw signal held NaN/inf.
         served_count (1): disambiguations served so far (requests and automatic triggers whose
             ``disambiguation_mode`` was read); the disambiguation system's ``request_count`` input.
-        disambiguation_pending (1): 1 from a request press (or an automatic trigger) until the
-            update that serves it, ``config.request_latency`` later (the time the system takes to
-            answer); else 0. Always 0 with no latency (served in the press's update).
+        paused (1): 1 from a request press (or an automatic trigger) until the update that serves
+            it, ``config.request_latency`` later, while the system computes it; else 0. Always 0
+            with no latency (served in the press's update). With
+            ``disambiguation.hold_while_computing`` it pauses the loop (the inference's, the
+            blender's and the simulated user's ``paused`` inputs).
         event_log (abstract): :class:`EventLog` (a ``tuple[InterfaceEvent, ...]``), every mode
             switch, request and disambiguation or automatic switch with its time, in order.
 
@@ -224,7 +226,7 @@ class InterfaceSystem(LeafSystem):
             "request_count": [float(state.request_count)],
             "nonfinite_count": [float(state.nonfinite_count)],
             "served_count": [float(state.served_count)],
-            "disambiguation_pending": [1.0 if state.pending_due >= 0.0 else 0.0],
+            "paused": [1.0 if state.pending_due >= 0.0 else 0.0],
         }
 
     def _write(self, state: InterfaceState, discrete_state, vector=None) -> None:  # noqa: ANN001
