@@ -190,6 +190,51 @@ def test_dft_belief_is_computed_once_per_tick(monkeypatch: pytest.MonkeyPatch) -
     assert abs(p.sum() - 1.0) <= module.SIMPLEX_TOLERANCE and p[0] > 0.5  # moving towards goal 0
 
 
+@pytest.mark.parametrize("discrete", [False, True])
+def test_belief_outputs_share_one_projection(monkeypatch: pytest.MonkeyPatch, discrete: bool) -> None:
+    """``belief``, ``g_star`` and ``p_star`` project the stored belief once per change of it (the
+    belief output's cache entry, which the other two read), in every context."""
+    from drake_disamb.systems import inference as module
+
+    calls = _counting(monkeypatch, module, "normalize_belief")
+    system = (
+        module.RecursiveBayesIntentInference(2) if discrete else FieldTheoreticIntentInference(2, DFTParams())
+    )
+    contexts = [system.CreateDefaultContext() for _ in range(2)]
+    for ctx, p in zip(contexts, ([0.6, 0.2], [0.1, 0.3]), strict=True):
+        if discrete:
+            ctx.SetDiscreteState(0, [*p, *GOALS.ravel()])
+        else:
+            ctx.SetContinuousState(p)
+    for _ in range(2):
+        for ctx in contexts:
+            out = [system.GetOutputPort(name).Eval(ctx) for name in ("belief", "g_star", "p_star")]
+    assert calls[0] == 2  # once per context
+    np.testing.assert_allclose(np.concatenate(out), [0.25, 0.75, 1.0, 0.75], rtol=1e-15)
+
+
+def test_blender_and_inference_keep_nothing_on_the_system() -> None:
+    """Their values computed from a context live in that context (cache entries), not on the
+    system object, where every context would share them."""
+    blender = SharedControlBlender(2)
+    inference = FieldTheoreticIntentInference(2, DFTParams())
+
+    def attributes(system: object) -> dict[str, int]:  # identities only: no reference kept
+        return {name: id(value) for name, value in vars(system).items()}
+
+    before = [attributes(blender), attributes(inference)]
+    for p in ([0.9, 0.1], [0.4, 0.6]):
+        ctx = blender.CreateDefaultContext()
+        blender.GetInputPort("u_h").FixValue(ctx, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
+        blender.GetInputPort("belief").FixValue(ctx, p)
+        blender.GetInputPort("u_a").FixValue(ctx, np.arange(12.0) / 100)
+        blender.GetOutputPort("u").Eval(ctx)
+        ctx = inference.CreateDefaultContext()
+        ctx.SetContinuousState(p)
+        inference.GetOutputPort("belief").Eval(ctx)
+    assert [attributes(blender), attributes(inference)] == before
+
+
 def test_dft_projection_writes_only_when_the_belief_left_the_simplex() -> None:
     from pydrake.systems.framework import EventStatus
 

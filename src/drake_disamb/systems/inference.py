@@ -20,7 +20,9 @@ Input ports (vector-valued):
 
 Output ports (vector-valued, computed from state only: no direct feedthrough):
 
-- ``belief`` (n): the goal probabilities, a probability vector at every instant.
+- ``belief`` (n): the goal probabilities, a probability vector at every instant (the stored
+  belief projected onto the simplex, once per change of the state; ``g_star`` and ``p_star`` read
+  this output's cached value).
 - ``g_star`` (1): 0-based index of the most probable goal (first one on ties).
 - ``p_star`` (1): its probability.
 - ``sanitized_input_count`` (1): control ticks so far at which an input the method reads held a
@@ -127,7 +129,6 @@ class _IntentInferenceBase(LeafSystem):
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
         self._u_a = self.DeclareVectorInputPort("u_a", 6 * self._n)
         self._paused = self.DeclareVectorInputPort("paused", 1)
-        self._belief_memo: tuple[bytes, NDArray[np.float64]] | None = None  # see _belief
 
     @property
     def n_goals(self) -> int:
@@ -140,9 +141,14 @@ class _IntentInferenceBase(LeafSystem):
         return self._period
 
     def _declare_outputs(self, ticket) -> None:  # noqa: ANN001 (DependencyTicket)
-        self.DeclareVectorOutputPort("belief", BasicVector(self._n), self._calc_belief, {ticket})
-        self.DeclareVectorOutputPort("g_star", BasicVector(1), self._calc_g_star, {ticket})
-        self.DeclareVectorOutputPort("p_star", BasicVector(1), self._calc_p_star, {ticket})
+        # The belief output projects the stored belief (``ticket``: the state it is stored in) once
+        # per change of that state; g_star and p_star read the belief output's cached value.
+        self._belief_port = self.DeclareVectorOutputPort(
+            "belief", BasicVector(self._n), self._calc_belief, {ticket}
+        )
+        projected = {self._belief_port.cache_entry().ticket()}
+        self.DeclareVectorOutputPort("g_star", BasicVector(1), self._calc_g_star, projected)
+        self.DeclareVectorOutputPort("p_star", BasicVector(1), self._calc_p_star, projected)
         self._sanitized = SanitizedInputCounter(self)
 
     # -- inputs ---------------------------------------------------------------------------------
@@ -182,21 +188,13 @@ class _IntentInferenceBase(LeafSystem):
 
     # -- outputs --------------------------------------------------------------------------------
 
-    def _belief(self, context: Context) -> NDArray[np.float64]:
-        # A copy projected onto the simplex: the stored state may carry integrator error. The
-        # projection is a pure function of the stored belief: a one-entry memo of the last one
-        # keeps it from being recomputed when the state is rewritten unchanged (at ticks where any
-        # subsystem's unrestricted update writes, Drake rewrites it too). Read-only: the outputs
-        # copy it.
-        raw = self._raw_belief(context)
-        key = raw.tobytes()
-        memo = self._belief_memo
-        if memo is None or memo[0] != key:
-            memo = self._belief_memo = (key, normalize_belief(raw))  # raw: a copy, normalize_belief copies
-        return memo[1]
-
     def _calc_belief(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._belief(context))
+        # A copy projected onto the simplex: the stored state may carry integrator error.
+        output.SetFromVector(normalize_belief(self._raw_belief(context)))
+
+    def _belief(self, context: Context) -> NDArray[np.float64]:
+        """The belief output's (cached) value."""
+        return self._belief_port.Eval(context)
 
     def _calc_g_star(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector([float(np.argmax(self._belief(context)))])
