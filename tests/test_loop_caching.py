@@ -120,7 +120,7 @@ def test_interface_outputs_are_state_and_follow_set_mode() -> None:
     interface = make_interface(InterfaceConfig(kind="head_array", initial_mode=0))
     ctx = interface.CreateDefaultContext()
     interface.GetInputPort("raw").FixValue(ctx, [1.0, 0.0, 0.0, 0.0])  # "left": + along the mode
-    interface.GetInputPort("disambiguation_mode").FixValue(ctx, [-1.0])
+    interface.GetInputPort("answer").FixValue(ctx, [0.0, -1.0])
     simulator = Simulator(interface, ctx)
     simulator.AdvanceTo(0.005)  # the update at t = 0
     np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0.1, 0, 0, 0, 0, 0])
@@ -140,27 +140,21 @@ def test_event_log_is_shared_by_copies() -> None:
     assert log == (InterfaceEvent(0.5, "mode_switch", 0, 1),) and isinstance(log, tuple)
 
 
-def test_disambiguation_state_is_numeric_and_last_result_memoised() -> None:
+def test_disambiguation_state_is_numeric_and_written_once_per_request() -> None:
+    from drake_disamb.systems.disambiguation import LatchedRequest
+
     system = DisambiguationSystem(2, [[0], [1], [2], [3], [4], [5]], control_period=0.01)
     ctx = system.CreateDefaultContext()
     assert ctx.num_abstract_states() == 0  # nothing to deep-copy at unrestricted updates
-    for name, value in (
-        ("belief", [0.5, 0.5]),
-        ("ee_pose", EE_POSE),
-        ("goal_poses", GOALS.ravel()),
-        ("current_mode", [0.0]),
-        ("request_count", [0.0]),
-    ):
-        system.GetInputPort(name).FixValue(ctx, np.asarray(value, dtype=float))
+    request = system.GetInputPort("request")
+    request.FixValue(ctx, LatchedRequest.none(2).to_vector())
     simulator = Simulator(system, ctx)
     simulator.AdvanceTo(0.015)
-    system.GetInputPort("request_count").FixValue(ctx, [1.0])
-    simulator.AdvanceTo(0.025)
-    calls = _count(system, "_solve")
-    first = system.GetOutputPort("last_result").Eval(ctx)
-    simulator.AdvanceTo(0.055)  # the state is rewritten every tick with the same served request
-    assert system.GetOutputPort("last_result").Eval(ctx) is first
-    assert calls[0] == 1
+    assert simulator.get_num_discrete_updates() == 0  # no request: nothing written
+    request.FixValue(ctx, LatchedRequest(1.0, np.array([0.5, 0.5]), EE_POSE, GOALS.ravel(), 0.0).to_vector())
+    simulator.AdvanceTo(0.055)
+    assert simulator.get_num_discrete_updates() == 1  # answered once, then nothing written
+    assert system.GetOutputPort("answer").Eval(ctx)[0] == 1.0
 
 
 def test_dft_belief_is_computed_once_per_tick(monkeypatch: pytest.MonkeyPatch) -> None:
