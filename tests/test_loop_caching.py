@@ -134,6 +134,37 @@ def test_interface_outputs_are_state_and_follow_set_mode() -> None:
     np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0, 0, 0, 0, 0.2, 0])
 
 
+def test_interface_updates_once_per_change_of_its_inputs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An update that changes the state also checks the next one with the same inputs; the updates
+    that follow with those inputs compute and write nothing (what the context records, not a memo
+    on the system). ``set_mode`` makes the next update compute again."""
+    from drake_disamb.systems import interfaces as module
+
+    calls = _counting(monkeypatch, module, "interface_update")
+    interface = make_interface(InterfaceConfig(kind="head_array", initial_mode=0))
+    ctx = interface.CreateDefaultContext()
+    raw = interface.GetInputPort("raw")
+    raw.FixValue(ctx, [1.0, 0.0, 0.0, 0.0])
+    simulator = Simulator(interface, ctx)
+    simulator.AdvanceTo(0.005)  # t = 0: the held raw signal changes: the update and its check
+    assert calls[0] == 2 and simulator.get_num_unrestricted_updates() == 1
+    simulator.AdvanceTo(0.095)  # nine ticks with the same raw signal
+    assert calls[0] == 2 and simulator.get_num_unrestricted_updates() == 1
+    raw.FixValue(ctx, [0.0, 1.0, 0.0, 0.0])
+    simulator.AdvanceTo(0.195)
+    assert calls[0] == 4 and simulator.get_num_unrestricted_updates() == 2
+    interface.set_mode(ctx, 3)
+    simulator.AdvanceTo(0.295)  # one update finds the new state settled and records it
+    assert calls[0] == 5 and simulator.get_num_unrestricted_updates() == 3
+    np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0, 0, 0, -0.2, 0, 0])
+    # A raw signal whose update does not settle at once (non-finite: counted at every update) is
+    # computed at every tick.
+    raw.FixValue(ctx, [np.nan, 0.0, 0.0, 0.0])
+    with pytest.warns(RuntimeWarning, match="non-finite"):
+        simulator.AdvanceTo(0.395)
+    assert interface.GetOutputPort("nonfinite_count").Eval(ctx)[0] == 10
+
+
 def test_event_log_is_shared_by_copies() -> None:
     log = EventLog((InterfaceEvent(0.5, "mode_switch", 0, 1),))
     assert copy.deepcopy(log) is log and copy.copy(log) is log

@@ -22,6 +22,7 @@ from drake_disamb.core.interfaces import (
     InterfaceEvent,
     InterfaceState,
     command_from_raw,
+    disambiguation_due,
     initial_state,
     interface_update,
 )
@@ -132,13 +133,16 @@ class InterfaceSystem(LeafSystem):
     is automatic, served count, automatic count seen]``
     (:class:`~drake_disamb.core.interfaces.InterfaceState`); one more discrete group per vector
     output holding its value (so the outputs are state output ports, evaluated without calling
-    Python); the latched ``request``; and the
+    Python); the latched ``request``; ``[stable (0/1), raw (4), automatic count, pending switch
+    time]``, whether the update of that raw signal and trigger count leaves the state as it is
+    (see below); and the
     abstract event log. All are updated together by a periodic unrestricted update every
     ``config.control_period`` seconds (first at t = 0), so that the rest of the loop sees this
-    tick's command in this tick. With no disambiguation pending the update is a pure function of
-    the state and the raw signal (time only stamps events): a (state, raw) pair that gave no
-    change and no event is remembered (one entry, on the system) and its repetitions return at
-    once, writing nothing.
+    tick's command in this tick. The update is a pure function of the state and its inputs (time
+    only stamps events and brings a pending disambiguation due): an update that changes the state
+    also checks whether the same raw signal and trigger count would change it again, and records
+    the answer; the following updates with those inputs (and no disambiguation due) end at once,
+    writing nothing, so that Drake rewrites no state at such a tick.
 
     Attributes:
         config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
@@ -148,6 +152,13 @@ class InterfaceSystem(LeafSystem):
         arm_modes: ``modes`` without the gripper mode (what the disambiguation system indexes).
         raw_layout: The names of the raw entries.
     """
+
+    _NO_TRIGGER = -1.0
+    """The stable record's trigger count when ``automatic_request_count`` is unconnected (a count is
+    never negative, and a negative one starts nothing, as no trigger does)."""
+
+    _NOT_STABLE = np.array([0.0, *[np.nan] * RAW_SIZE, np.nan, -1.0])
+    """The stable record of a state whose next update has not been checked."""
 
     def __init__(self, config: InterfaceConfig, n_goals: int = 1) -> None:
         super().__init__()
@@ -164,7 +175,6 @@ class InterfaceSystem(LeafSystem):
 
         initial = initial_state(config)
         n = self.n_goals
-        self._fixed_point: bytes | None = None  # see _update
         self._state_index = self.DeclareDiscreteState(initial.to_vector())
         self._log_index = self.DeclareAbstractState(AbstractValue.Make(EventLog()))
         # Every vector output is a copy of state, so each gets its own discrete group, written by
@@ -173,6 +183,7 @@ class InterfaceSystem(LeafSystem):
             name: self.DeclareDiscreteState(value) for name, value in self._output_values(initial).items()
         }
         self._request_index = self.DeclareDiscreteState(LatchedRequest.none(n).to_vector())
+        self._stable_index = self.DeclareDiscreteState(self._NOT_STABLE)
 
         self._raw_port = self.DeclareVectorInputPort("raw", RAW_SIZE)
         self._request_inputs = (
@@ -199,7 +210,9 @@ class InterfaceSystem(LeafSystem):
         if not (isinstance(mode, int | np.integer) and 0 <= mode < len(self.modes)):
             raise ValueError(f"mode: expected an integer in [0, {len(self.modes) - 1}], got {mode!r}")
         state = replace(self._read_state(context), mode=int(mode))
-        self._write(state, context.get_mutable_discrete_state())
+        discrete = context.get_mutable_discrete_state()
+        self._write(state, discrete)
+        discrete.get_mutable_vector(self._stable_index).SetFromVector(self._NOT_STABLE)
 
     def get_event_log(self, context: Context) -> EventLog:
         """The events logged so far in ``context`` (an immutable tuple)."""
@@ -208,23 +221,25 @@ class InterfaceSystem(LeafSystem):
     # -- update and outputs ------------------------------------------------------------------------
 
     def _update(self, context: Context, state: State) -> EventStatus:
-        vector = context.get_discrete_state(self._state_index).get_value()
         raw = self._raw_port.Eval(context)
         automatic = (
             float(self._automatic_port.Eval(context)[0]) if self._automatic_port.HasValue(context) else None
         )
-        # With no disambiguation pending the update is a pure function of the state, the raw signal
-        # and the automatic trigger's count (time only stamps events): such a triple that last gave
-        # no change and no event is a fixed point, and the common period -- the same raw signal,
-        # mode and counts as the previous one -- ends here (before the state is even unpacked). A
-        # pending disambiguation is served at its due time, so time matters then and nothing is
-        # remembered.
-        key = None
-        if vector[InterfaceState.PENDING_DUE_INDEX] < 0.0:
-            key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes() + repr(automatic).encode()
-            if key == self._fixed_point:
-                return DID_NOTHING
+        trigger = self._NO_TRIGGER if automatic is None else automatic
+        # The common period: the same raw signal and trigger count as an update that was found to
+        # leave the state as it is, and no disambiguation due. It ends here (before the state is
+        # even read).
+        stable = context.get_discrete_state(self._stable_index).get_value()
+        known, *known_raw, known_trigger, due = stable.tolist()
+        if (
+            known
+            and known_trigger == trigger
+            and known_raw == raw.tolist()
+            and not disambiguation_due(due, context.get_time())
+        ):
+            return DID_NOTHING
         time = context.get_time()
+        vector = context.get_discrete_state(self._state_index).get_value()
         before = InterfaceState.from_vector(vector)
         answer = None
         if self._answer_port.HasValue(context):
@@ -246,12 +261,17 @@ class InterfaceSystem(LeafSystem):
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
-        if changed or events:
-            return EventStatus.Succeeded()
-        if key is not None:
-            self._fixed_point = key
-        # Nothing written: the simulator then leaves the context (and every cached value) alone.
-        return DID_NOTHING
+        if changed or events:  # would the same inputs change the new state again?
+            again, more = interface_update(after, raw, time, self.config, answer, None, automatic)
+            settled = not more and np.array_equal(again.to_vector(), after_vector)
+        else:
+            settled = True
+        record = np.array([1.0 if settled else 0.0, *raw, trigger, after.pending_due])
+        if not (changed or events) and record.tobytes() == stable.tobytes():
+            # Nothing written: the simulator then leaves the context (and every cached value) alone.
+            return DID_NOTHING
+        discrete.get_mutable_vector(self._stable_index).SetFromVector(record)
+        return EventStatus.Succeeded()
 
     def _latch(
         self, context: Context, after: InterfaceState, events: list[InterfaceEvent], discrete: DiscreteValues
