@@ -268,8 +268,8 @@ def test_one_step_is_a_row_of_the_batch() -> None:
             assert isinstance(one[1], float) and isinstance(one[2], int)
 
 
-def test_blender_hold_pauses_the_loop() -> None:
-    """``hold`` above 0.5 (a request being computed by the study's system): nothing reaches the arm
+def test_blender_paused_pauses_the_loop() -> None:
+    """``paused`` above 0.5 (a request being computed by the study's system): nothing reaches the arm
     and alpha is 0, whatever the inputs; g_star is still the belief's argmax."""
     from drake_disamb.systems.blending import SharedControlBlender
 
@@ -279,9 +279,9 @@ def test_blender_hold_pauses_the_loop() -> None:
     u_a[:, 0] = [0.1, 0.2, -0.2, 0.0]
     ctx = _blender_context(blender, [0.0, 0.1, 0.0, 0.0, 0.0, 0.0], [0.1, 0.1, 0.7, 0.1], u_a)
     assert blender.GetOutputPort("alpha").Eval(ctx)[0] > 0  # unconnected: never paused
-    blender.GetInputPort("hold").FixValue(ctx, [1.0])
+    blender.GetInputPort("paused").FixValue(ctx, [1.0])
     np.testing.assert_array_equal(blender.GetOutputPort("u").Eval(ctx), np.zeros(6))
     assert blender.GetOutputPort("alpha").Eval(ctx)[0] == 0.0
     assert blender.GetOutputPort("g_star").Eval(ctx)[0] == 2
-    blender.GetInputPort("hold").FixValue(ctx, [0.0])
+    blender.GetInputPort("paused").FixValue(ctx, [0.0])
     assert blender.GetOutputPort("alpha").Eval(ctx)[0] == pytest.approx(0.7)

@@ -168,7 +168,7 @@ def test_task_goal_set_is_one_belief_over_every_goal_of_the_pouring_task() -> No
     task = handles.systems["task"]
     # Every consumer sees the 4 goals, whatever the stage; the task manager completes a stage only at
     # one of that stage's 2 goals.
-    for name in ("inference", "autonomy", "blender", "disambiguation", "user"):
+    for name in ("inference", "autonomy", "blender", "interface", "user"):
         port = handles.systems[name].GetInputPort("goal_poses" if name != "blender" else "belief")
         assert port.size() == (4 * 7 if name != "blender" else 4), name
     goal_poses = handles.systems["inference"].GetInputPort("goal_poses")

@@ -302,8 +302,8 @@ def test_simulated_published_trial_agrees_with_the_euler_replay() -> None:
 
 
 @pytest.mark.parametrize("kind", list(SYSTEMS))
-def test_hold_input_holds_the_belief_and_releasing_it_resumes(kind: str) -> None:
-    """``hold`` above 0.5 (the study's system while it computes a request): the belief stays where
+def test_paused_input_holds_the_belief_and_releasing_it_resumes(kind: str) -> None:
+    """``paused`` above 0.5 (the study's system while it computes a request): the belief stays where
     it is whatever the command and the motion; below it, the method updates again; unconnected:
     never held."""
     n = 3
@@ -311,20 +311,20 @@ def test_hold_input_holds_the_belief_and_releasing_it_resumes(kind: str) -> None
     u = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.0])  # toward goal 0
     no_u_a = np.zeros((n, 6))
     system = SYSTEMS[kind](n)
-    assert system.GetInputPort("hold").size() == 1
+    assert system.GetInputPort("paused").size() == 1
     simulator = Simulator(system)
     context = simulator.get_mutable_context()
     fix_inputs(system, context, u, np.zeros(3), goals, no_u_a)
-    system.GetInputPort("hold").FixValue(context, [0.0])
+    system.GetInputPort("paused").FixValue(context, [0.0])
     simulator.Initialize()
     fix_inputs(system, context, u, [0.02, 0.0, 0.0], goals, no_u_a)  # it moved toward goal 0
     simulator.AdvanceTo(0.035)
     moving = outputs(system, context)[0].copy()
     assert moving[0] > moving[1] + 1e-9
-    system.GetInputPort("hold").FixValue(context, [1.0])
+    system.GetInputPort("paused").FixValue(context, [1.0])
     fix_inputs(system, context, -u, [-0.05, 0.0, 0.0], goals, no_u_a)  # now toward goal 1: held
     simulator.AdvanceTo(0.5)
     np.testing.assert_array_equal(outputs(system, context)[0], moving)
-    system.GetInputPort("hold").FixValue(context, [0.0])
+    system.GetInputPort("paused").FixValue(context, [0.0])
     simulator.AdvanceTo(0.6)
     assert outputs(system, context)[0][1] > moving[1] + 1e-9

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from drake_disamb.core.interfaces import (
+    Answer,
     InterfaceConfig,
     InterfaceState,
     command_from_raw,
@@ -108,30 +109,30 @@ def test_head_array_commands_per_mode() -> None:
     assert g == -head.gripper_speed
 
 
-def test_core_update_disambiguation_choice_is_read_only_on_a_rising_edge() -> None:
+def test_core_update_a_request_is_served_when_its_answer_comes() -> None:
     cfg = InterfaceConfig(kind="head_array", initial_mode=0)
-    calls: list[int] = []
-
-    def choice() -> float:
-        calls.append(1)
-        return 4.0
-
+    none = Answer(0.0, -1.0)  # the disambiguation system has answered nothing yet
     s = initial_state(cfg)
-    s, ev = interface_update(s, [0, 0, 0, 1], 0.0, cfg, choice)
-    assert s.mode == 4 and s.request_count == 1 and len(calls) == 1
-    assert [e.kind for e in ev] == ["disambiguation_request", "disambiguation_switch"]
-    for k in range(1, 5):  # held: no new request, no new read
-        s, ev = interface_update(s, [0, 0, 0, 1], k * DT, cfg, choice)
-        assert ev == []
-    assert len(calls) == 1 and s.request_count == 1
+    s, ev = interface_update(s, [0, 0, 0, 1], 0.0, cfg, none)
+    assert s.mode == 0 and s.request_count == 1 and s.started_count == 1 and s.pending_due == 0.0
+    assert [e.kind for e in ev] == ["disambiguation_request"]
+    s, ev = interface_update(s, [0, 0, 0, 1], DT, cfg, Answer(2.0, 3.0))  # another request's answer
+    assert ev == [] and s.mode == 0 and s.pending_due == 0.0 and s.served_count == 0
+    s, ev = interface_update(s, [0, 0, 0, 1], 2 * DT, cfg, Answer(1.0, 4.0))  # its own
+    assert s.mode == 4 and s.served_count == 1 and s.pending_due == -1.0 and s.started_count == 1
+    assert [(e.time, e.kind, e.from_mode, e.to_mode) for e in ev] == [(2 * DT, "disambiguation_switch", 0, 4)]
+    for k in range(3, 6):  # held: no new request, and the answer is not applied again
+        s, ev = interface_update(s, [0, 0, 0, 1], k * DT, cfg, Answer(1.0, 2.0))
+        assert ev == [] and s.mode == 4
+    assert s.request_count == 1
 
 
 def test_core_update_invalid_choice_warns_and_keeps_mode() -> None:
     cfg = InterfaceConfig(kind="joystick", initial_mode=1)
     messages: list[str] = []
     s = initial_state(cfg)
-    s, ev = interface_update(s, [0, 0, 0, 1], 0.0, cfg, lambda: 4.0, messages.append)  # 4 = gripper
-    assert s.mode == 1 and [e.kind for e in ev] == ["disambiguation_request"]
+    s, ev = interface_update(s, [0, 0, 0, 1], 0.0, cfg, Answer(1.0, 4.0), messages.append)  # 4 = gripper
+    assert s.mode == 1 and s.served_count == 1 and [e.kind for e in ev] == ["disambiguation_request"]
     assert len(messages) == 1 and "disambiguation_mode" in messages[0]
 
 
@@ -143,17 +144,21 @@ def test_core_update_invalid_choice_warns_and_keeps_mode() -> None:
 class _Driver:
     """Steps an interface system tick by tick with fixed input values (a Simulator underneath)."""
 
-    def __init__(self, system, disambiguation_mode: float | None = None) -> None:
+    def __init__(self, system, answer: tuple[float, float] | None = None) -> None:
         from pydrake.systems.analysis import Simulator
 
         self.system = system
         self.sim = Simulator(system)
         self.ctx = self.sim.get_mutable_context()
         self.k = 0
-        if disambiguation_mode is not None:
-            system.GetInputPort("disambiguation_mode").FixValue(self.ctx, [disambiguation_mode])
+        if answer is not None:
+            self.answer(*answer)
         system.GetInputPort("raw").FixValue(self.ctx, np.zeros(4))
         self.sim.Initialize()
+
+    def answer(self, request: float, mode: float) -> None:
+        """The disambiguation system's answer from now on: ``mode`` for request ``request``."""
+        self.system.GetInputPort("answer").FixValue(self.ctx, [request, mode])
 
     def tick(self, raw) -> None:
         """Hold ``raw`` for one update (the update at time k * DT)."""
@@ -207,30 +212,85 @@ def test_head_array_back_cycles_seven_modes() -> None:
     assert d.scalar("mode_switch_count") == 8
 
 
-def test_request_switches_mode_in_the_same_update() -> None:
+def test_request_switches_mode_when_its_answer_comes() -> None:
     from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(make_interface("head_array", initial_mode=0), disambiguation_mode=4)
+    d = _Driver(make_interface("head_array", initial_mode=0), answer=(0.0, -1.0))
     d.tick([1, 0, 0, 1])  # left held and request pressed in the same update
-    assert d.scalar("mode") == 4  # switched by this very update
+    assert d.scalar("mode") == 0 and d.scalar("paused") == 1  # waiting for the answer
     assert d.scalar("request_count") == 1 and d.scalar("mode_switch_count") == 0
+    d.answer(1.0, 4.0)  # what the disambiguation system answers in the press's tick
+    d.tick([1, 0, 0, 1])  # still held: no second request; the answer is applied
+    assert d.scalar("mode") == 4 and d.scalar("paused") == 0 and d.scalar("served_count") == 1
     np.testing.assert_allclose(d.out("u_h"), [0, 0, 0, 0, 0.2, 0])  # held "left" now drives wy
-    d.tick([0, 0, 0, 1])  # still held: no second request
     assert d.scalar("request_count") == 1
     log = d.system.get_event_log(d.ctx)
-    assert [(e.kind, e.from_mode, e.to_mode) for e in log] == [
-        ("disambiguation_request", 0, 0),
-        ("disambiguation_switch", 0, 4),
+    assert [(e.kind, e.from_mode, e.to_mode, round(e.time, 6)) for e in log] == [
+        ("disambiguation_request", 0, 0, 0.0),
+        ("disambiguation_switch", 0, 4, DT),
     ]
+
+
+def test_interface_latches_each_request_when_it_starts() -> None:
+    """The update that starts a disambiguation latches its belief, poses and mode (after a manual
+    switch in the same update) into the ``request`` state; nothing changes it until the next one."""
+    from drake_disamb.systems.disambiguation import LatchedRequest
+    from drake_disamb.systems.interfaces import make_interface
+
+    system = make_interface("head_array", n_goals=2, initial_mode=0, request_latency=0.05)
+    d = _Driver(system, answer=(0.0, -1.0))
+
+    def inputs(belief: list[float], x: float) -> None:
+        system.GetInputPort("belief").FixValue(d.ctx, belief)
+        system.GetInputPort("ee_pose").FixValue(d.ctx, [x, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0])
+        system.GetInputPort("goal_poses").FixValue(d.ctx, np.arange(14.0) + x)
+
+    def latched() -> LatchedRequest:
+        return LatchedRequest.from_vector(d.out("request"), 2)
+
+    inputs([0.3, 0.7], 0.1)
+    assert latched().id == 0.0 and np.isnan(latched().belief).all()  # none yet
+    d.tick([0, 0, 1, 1])  # the mode button and the request together: the mode switches first
+    first = latched()
+    assert (first.id, first.current_mode, first.belief.tolist()) == (1.0, 1.0, [0.3, 0.7])
+    np.testing.assert_array_equal(first.ee_pose, [0.1, 0.2, 0.3, 1.0, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(first.goal_poses, np.arange(14.0) + 0.1)
+    inputs([0.9, 0.1], 0.5)  # what the request was made of changes during the wait
+    d.tick([0, 0, 0, 0])
+    d.tick([0, 0, 0, 1])  # a press during the wait: a request, but it starts nothing
+    d.answer(1.0, 4.0)
+    np.testing.assert_array_equal(latched().to_vector(), first.to_vector())
+    d.tick([0, 0, 0, 0])  # 0.03
+    d.tick([0, 0, 0, 0])  # 0.04
+    assert d.scalar("mode") == 1 and d.scalar("paused") == 1
+    d.tick([0, 0, 0, 0])  # 0.05: due, and answered
+    assert d.scalar("mode") == 4 and d.scalar("paused") == 0 and d.scalar("request_count") == 2
+    d.tick([0, 0, 0, 1])  # the next request: the inputs of now
+    second = latched()
+    assert (second.id, second.current_mode, second.belief.tolist()) == (2.0, 4.0, [0.9, 0.1])
+    np.testing.assert_array_equal(second.goal_poses, np.arange(14.0) + 0.5)
+
+
+def test_unconnected_request_inputs_are_latched_as_nan() -> None:
+    from drake_disamb.systems.disambiguation import LatchedRequest
+    from drake_disamb.systems.interfaces import make_interface
+
+    d = _Driver(make_interface("joystick", initial_mode=2), answer=(0.0, -1.0))
+    d.tick([0, 0, 0, 1])
+    request = LatchedRequest.from_vector(d.out("request"), 1)
+    assert request.id == 1.0 and request.current_mode == 2.0
+    assert np.isnan(request.to_vector()[1:-1]).all()
 
 
 def test_request_minus_one_keeps_mode() -> None:
     from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(make_interface("joystick", initial_mode=2), disambiguation_mode=-1)
-    d.tick([0, 0, 0, 1])
-    d.tick([0, 0, 0, 0])
-    d.tick([0, 0, 0, 1])
+    d = _Driver(make_interface("joystick", initial_mode=2), answer=(0.0, -1.0))
+    for request in (1.0, 2.0):
+        d.tick([0, 0, 0, 1])
+        d.answer(request, -1.0)
+        d.tick([0, 0, 0, 0])
+        assert d.scalar("served_count") == request and d.scalar("paused") == 0
     assert d.scalar("mode") == 2
     assert d.scalar("request_count") == 2
     assert [e.kind for e in d.system.get_event_log(d.ctx)] == ["disambiguation_request"] * 2
@@ -239,9 +299,10 @@ def test_request_minus_one_keeps_mode() -> None:
 def test_request_without_disambiguation_system_is_logged_only() -> None:
     from drake_disamb.systems.interfaces import make_interface
 
-    d = _Driver(make_interface("joystick", initial_mode=3))  # disambiguation_mode left unconnected
+    d = _Driver(make_interface("joystick", initial_mode=3))  # answer left unconnected
     d.tick([0, 0, 0, 1])
     assert d.scalar("mode") == 3 and d.scalar("request_count") == 1
+    assert d.scalar("served_count") == 1 and d.scalar("paused") == 0  # no latency: served at once
 
 
 def test_nonfinite_raw_gives_zero_command() -> None:
@@ -286,12 +347,10 @@ def test_gripper_mode_drives_only_the_gripper() -> None:
 def test_outputs_come_from_state() -> None:
     from drake_disamb.systems.interfaces import make_interface
 
-    for system in (make_interface("joystick"), make_interface("head_array")):
-        raw = system.GetInputPort("raw").get_index()
-        disamb = system.GetInputPort("disambiguation_mode").get_index()
-        for i in range(system.num_output_ports()):
-            assert not system.HasDirectFeedthrough(raw, i)
-            assert not system.HasDirectFeedthrough(disamb, i)
+    for system in (make_interface("joystick"), make_interface("head_array", n_goals=3)):
+        for j in range(system.num_input_ports()):
+            for i in range(system.num_output_ports()):
+                assert not system.HasDirectFeedthrough(j, i)
     # The raw signal is only seen after an update.
     system = make_interface("joystick")
     ctx = system.CreateDefaultContext()

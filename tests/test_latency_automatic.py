@@ -13,8 +13,14 @@ from pydrake.systems.analysis import Simulator
 from drake_disamb.config import load_scenario, resolve_scenario
 from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import select_disambiguating_mode
-from drake_disamb.core.interfaces import InterfaceConfig, InterfaceState, initial_state, interface_update
-from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
+from drake_disamb.core.interfaces import (
+    Answer,
+    InterfaceConfig,
+    InterfaceState,
+    initial_state,
+    interface_update,
+)
+from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem, LatchedRequest
 from drake_disamb.systems.interfaces import make_interface
 
 DT = 0.01
@@ -29,39 +35,40 @@ TRIGGER = AutomaticConfig(confidence_threshold=0.5, dwell_time=0.05, min_interva
 
 
 def _run(config: InterfaceConfig, raws, choice: float = 4.0, automatic=None):  # type: ignore[no-untyped-def]
-    """Run the core update over ``raws`` (one per tick); returns the states, the events and the times
-    at which the disambiguation choice was read."""
-    state, events, reads = initial_state(config), [], []
+    """Run the core update over ``raws`` (one per tick), the disambiguation system answering every
+    request ``choice`` in the tick it starts (as in a diagram: the next update has the answer);
+    returns the states, the events and the times at which a disambiguation was served."""
+    state, events, served = initial_state(config), [], []
     states = []
     for k, raw in enumerate(raws):
         t = round(k * DT, 10)
-
-        def read(t: float = t) -> float:
-            reads.append(t)
-            return choice
-
+        answer = Answer(float(state.started_count), choice)
         auto = None if automatic is None else automatic[k]
-        state, new = interface_update(state, raw, t, config, read, None, auto)
+        new_state, new = interface_update(state, raw, t, config, answer, None, auto)
+        if new_state.served_count > state.served_count:
+            served.append(t)
+        state = new_state
         events += new
         states.append(state)
-    return states, events, reads
+    return states, events, served
 
 
-def test_latency_zero_switches_in_the_press_update() -> None:
-    states, events, reads = _run(InterfaceConfig(kind="head_array"), [PRESS, IDLE])
-    assert reads == [0.0] and states[0].mode == 4 and states[0].served_count == 1
+def test_latency_zero_switches_in_the_update_after_the_press() -> None:
+    states, events, served = _run(InterfaceConfig(kind="head_array"), [PRESS, IDLE, IDLE])
+    assert served == [0.01] and [s.mode for s in states] == [0, 4, 4] and states[1].served_count == 1
+    assert [s.pending_due for s in states] == [0.0, -1.0, -1.0]
     assert [(e.time, e.kind) for e in events] == [
         (0.0, "disambiguation_request"),
-        (0.0, "disambiguation_switch"),
+        (0.01, "disambiguation_switch"),
     ]
 
 
-def test_the_switch_comes_latency_after_the_press_with_the_choice_of_then() -> None:
+def test_the_switch_comes_latency_after_the_press_with_the_answer_to_it() -> None:
     cfg = InterfaceConfig(kind="head_array", request_latency=0.05)
     raws = [IDLE, PRESS, IDLE, PRESS, IDLE, IDLE, IDLE, IDLE, IDLE]
-    states, events, reads = _run(cfg, raws)
-    # Pressed at 0.01: read and switched at 0.06 (the first update >= 0.01 + 0.05), not before.
-    assert reads == [0.06]
+    states, events, served = _run(cfg, raws)
+    # Pressed at 0.01: switched at 0.06 (the first update >= 0.01 + 0.05), not before.
+    assert served == [0.06]
     assert [s.mode for s in states] == [0, 0, 0, 0, 0, 0, 4, 4, 4]
     assert states[1].pending_due == pytest.approx(0.06) and states[6].pending_due == -1.0
     # The second press (0.03, during the wait) is a request, but starts nothing.
@@ -73,27 +80,38 @@ def test_the_switch_comes_latency_after_the_press_with_the_choice_of_then() -> N
     assert states[-1].request_count == 2 and states[-1].served_count == 1
 
 
+def test_a_due_request_waits_for_its_answer() -> None:
+    cfg = InterfaceConfig(kind="head_array", request_latency=0.02)
+    state, _ = interface_update(initial_state(cfg), PRESS, 0.0, cfg, Answer(0.0, -1.0))
+    for t in (0.02, 0.03):  # due, but the answer is to an earlier request: still pending
+        state, events = interface_update(state, IDLE, t, cfg, Answer(0.0, 3.0))
+        assert events == [] and state.pending_due == pytest.approx(0.02) and state.mode == 0
+    state, events = interface_update(state, IDLE, 0.04, cfg, Answer(1.0, 3.0))
+    assert state.mode == 3 and state.pending_due == -1.0
+    assert [(e.time, e.kind) for e in events] == [(0.04, "disambiguation_switch")]
+
+
 def test_a_manual_switch_during_the_wait_is_applied_and_the_choice_can_keep_it() -> None:
     cfg = InterfaceConfig(kind="head_array", request_latency=0.03)
     back = [0.0, 0.0, 1.0, 0.0]
-    # Press at 0, mode button at 0.01 (0 -> 1); the choice at 0.03 is mode 1: nothing to switch.
-    states, events, reads = _run(cfg, [PRESS, back, IDLE, IDLE, IDLE], choice=1.0)
-    assert reads == [0.03] and states[-1].mode == 1 and states[-1].mode_switch_count == 1
+    # Press at 0, mode button at 0.01 (0 -> 1); the answer served at 0.03 is mode 1: nothing to switch.
+    states, events, served = _run(cfg, [PRESS, back, IDLE, IDLE, IDLE], choice=1.0)
+    assert served == [0.03] and states[-1].mode == 1 and states[-1].mode_switch_count == 1
     assert [e.kind for e in events] == ["disambiguation_request", "mode_switch"]
 
 
 def test_requests_not_served_without_serve_requests() -> None:
     cfg = InterfaceConfig(kind="head_array", serve_requests=False)
-    states, events, reads = _run(cfg, [PRESS, IDLE])
-    assert reads == [] and states[-1].mode == 0 and states[-1].request_count == 1
+    states, events, served = _run(cfg, [PRESS, IDLE])
+    assert served == [] and states[-1].mode == 0 and states[-1].request_count == 1
     assert [e.kind for e in events] == ["disambiguation_request"]
 
 
 def test_an_automatic_trigger_switches_without_a_press_after_the_latency() -> None:
     cfg = InterfaceConfig(kind="head_array", request_latency=0.02)
     counts = [0, 1, 1, 2, 2, 2, 2]  # the second trigger (0.03) comes during the wait: dropped
-    states, events, reads = _run(cfg, [IDLE] * 7, automatic=counts)
-    assert reads == [0.03]
+    states, events, served = _run(cfg, [IDLE] * 7, automatic=counts)
+    assert served == [0.03]
     assert [(e.time, e.kind, e.from_mode, e.to_mode) for e in events] == [(0.03, "automatic_switch", 0, 4)]
     s = states[-1]
     assert s.request_count == 0 and s.mode_switch_count == 0 and s.served_count == 1 and s.automatic_seen == 2
@@ -244,13 +262,15 @@ def test_automatic_trigger_system_counts_the_interval_from_the_switch() -> None:
 
 
 class _Interface:
-    """A head array stepped tick by tick with fixed inputs."""
+    """A head array stepped tick by tick with fixed inputs; the disambiguation system's answer is
+    ``choice`` for every request, given in the tick the request starts (as in a diagram)."""
 
     def __init__(self, config: InterfaceConfig, choice: float) -> None:
         self.system = make_interface(config)
         self.sim = Simulator(self.system)
         self.ctx = self.sim.get_mutable_context()
-        self.system.GetInputPort("disambiguation_mode").FixValue(self.ctx, [choice])
+        self.choice = choice
+        self.system.GetInputPort("answer").FixValue(self.ctx, [0.0, -1.0])
         self.system.GetInputPort("raw").FixValue(self.ctx, IDLE)
         self.system.GetInputPort("automatic_request_count").FixValue(self.ctx, [0.0])
         self.sim.Initialize()
@@ -261,6 +281,8 @@ class _Interface:
         self.system.GetInputPort("automatic_request_count").FixValue(self.ctx, [automatic])
         self.sim.AdvanceTo(self.k * DT + 0.5 * DT)
         self.k += 1
+        request = self.system.GetOutputPort("request").Eval(self.ctx)[0]
+        self.system.GetInputPort("answer").FixValue(self.ctx, [request, self.choice])
 
     def out(self, name: str) -> float:
         return float(self.system.GetOutputPort(name).Eval(self.ctx)[0])
@@ -271,26 +293,27 @@ class _Interface:
 
 def test_interface_system_switches_latency_after_the_press() -> None:
     d = _Interface(InterfaceConfig(kind="head_array", request_latency=0.04), choice=3.0)
-    assert d.out("disambiguation_pending") == 0
+    assert d.out("paused") == 0
     d.tick(PRESS)  # t = 0
     for _ in range(3):
         d.tick(IDLE)  # 0.01 .. 0.03
         assert d.out("mode") == 0 and d.out("served_count") == 0 and d.out("request_count") == 1
-        assert d.out("disambiguation_pending") == 1  # being computed
+        assert d.out("paused") == 1  # being computed
     d.tick(IDLE)  # 0.04
     assert d.out("mode") == 3 and d.out("served_count") == 1
-    assert d.out("disambiguation_pending") == 0
+    assert d.out("paused") == 0
     assert d.log() == [(0.0, "disambiguation_request"), (0.04, "disambiguation_switch")]
 
 
 def test_interface_system_logs_an_automatic_switch() -> None:
     d = _Interface(InterfaceConfig(kind="head_array"), choice=2.0)
     d.tick(IDLE)
-    d.tick(IDLE, automatic=1.0)  # the trigger's count grew: served in this update (latency 0)
+    d.tick(IDLE, automatic=1.0)  # the trigger's count grew: a disambiguation starts (latency 0)
+    assert d.out("paused") == 1 and d.out("mode") == 0
+    d.tick(IDLE, automatic=1.0)  # no new trigger; the answer is applied
     assert d.out("mode") == 2 and d.out("request_count") == 0 and d.out("mode_switch_count") == 0
-    d.tick(IDLE, automatic=1.0)  # no new trigger
     assert d.out("served_count") == 1
-    assert d.log() == [(0.01, "automatic_switch")]
+    assert d.log() == [(0.02, "automatic_switch")]
 
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
@@ -305,23 +328,17 @@ def test_disambiguation_system_runs_the_chosen_method(method: str) -> None:
     assert system.method.name == method
     context = system.CreateDefaultContext()
     belief = np.array([0.55, 0.45])
-    system.GetInputPort("belief").FixValue(context, belief)
-    system.GetInputPort("ee_pose").FixValue(context, EE_POSE)
-    system.GetInputPort("goal_poses").FixValue(context, GOAL_POSES.ravel())
-    system.GetInputPort("current_mode").FixValue(context, [5.0])
-    system.GetInputPort("request_count").FixValue(context, [0.0])
-    simulator = Simulator(system, context)
-    simulator.AdvanceTo(0.015)
-    system.GetInputPort("request_count").FixValue(context, [1.0])
-    simulator.AdvanceTo(0.025)
+    request = LatchedRequest(1.0, belief, EE_POSE, GOAL_POSES.ravel(), 5.0)
+    system.GetInputPort("request").FixValue(context, request.to_vector())
+    Simulator(system, context).AdvanceTo(0.005)  # the update at t = 0 answers it
     result = system.get_last_result(context)
     assert result is not None and result.method == method
     expected = select_disambiguating_mode(
         method, belief, EE_POSE[:3], GOAL_POSES[:, :3], modes, current_mode=5
     )
     np.testing.assert_allclose(result.mode_scores, expected.mode_scores, rtol=1e-12)
-    mode = system.GetOutputPort("disambiguation_mode").Eval(context)[0]
-    assert mode == (-1.0 if result.mode is None else result.mode)
+    answer = system.GetOutputPort("answer").Eval(context)
+    assert answer.tolist() == [1.0, -1.0 if result.mode is None else result.mode]
 
 
 def test_disambiguation_system_rejects_an_unknown_method() -> None:

@@ -120,7 +120,7 @@ def test_interface_outputs_are_state_and_follow_set_mode() -> None:
     interface = make_interface(InterfaceConfig(kind="head_array", initial_mode=0))
     ctx = interface.CreateDefaultContext()
     interface.GetInputPort("raw").FixValue(ctx, [1.0, 0.0, 0.0, 0.0])  # "left": + along the mode
-    interface.GetInputPort("disambiguation_mode").FixValue(ctx, [-1.0])
+    interface.GetInputPort("answer").FixValue(ctx, [0.0, -1.0])
     simulator = Simulator(interface, ctx)
     simulator.AdvanceTo(0.005)  # the update at t = 0
     np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0.1, 0, 0, 0, 0, 0])
@@ -134,33 +134,58 @@ def test_interface_outputs_are_state_and_follow_set_mode() -> None:
     np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0, 0, 0, 0, 0.2, 0])
 
 
+def test_interface_updates_once_per_change_of_its_inputs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An update that changes the state also checks the next one with the same inputs; the updates
+    that follow with those inputs compute and write nothing (what the context records, not a memo
+    on the system). ``set_mode`` makes the next update compute again."""
+    from drake_disamb.systems import interfaces as module
+
+    calls = _counting(monkeypatch, module, "interface_update")
+    interface = make_interface(InterfaceConfig(kind="head_array", initial_mode=0))
+    ctx = interface.CreateDefaultContext()
+    raw = interface.GetInputPort("raw")
+    raw.FixValue(ctx, [1.0, 0.0, 0.0, 0.0])
+    simulator = Simulator(interface, ctx)
+    simulator.AdvanceTo(0.005)  # t = 0: the held raw signal changes: the update and its check
+    assert calls[0] == 2 and simulator.get_num_unrestricted_updates() == 1
+    simulator.AdvanceTo(0.095)  # nine ticks with the same raw signal
+    assert calls[0] == 2 and simulator.get_num_unrestricted_updates() == 1
+    raw.FixValue(ctx, [0.0, 1.0, 0.0, 0.0])
+    simulator.AdvanceTo(0.195)
+    assert calls[0] == 4 and simulator.get_num_unrestricted_updates() == 2
+    interface.set_mode(ctx, 3)
+    simulator.AdvanceTo(0.295)  # one update finds the new state settled and records it
+    assert calls[0] == 5 and simulator.get_num_unrestricted_updates() == 3
+    np.testing.assert_allclose(interface.GetOutputPort("u_h").Eval(ctx), [0, 0, 0, -0.2, 0, 0])
+    # A raw signal whose update does not settle at once (non-finite: counted at every update) is
+    # computed at every tick.
+    raw.FixValue(ctx, [np.nan, 0.0, 0.0, 0.0])
+    with pytest.warns(RuntimeWarning, match="non-finite"):
+        simulator.AdvanceTo(0.395)
+    assert interface.GetOutputPort("nonfinite_count").Eval(ctx)[0] == 10
+
+
 def test_event_log_is_shared_by_copies() -> None:
     log = EventLog((InterfaceEvent(0.5, "mode_switch", 0, 1),))
     assert copy.deepcopy(log) is log and copy.copy(log) is log
     assert log == (InterfaceEvent(0.5, "mode_switch", 0, 1),) and isinstance(log, tuple)
 
 
-def test_disambiguation_state_is_numeric_and_last_result_memoised() -> None:
+def test_disambiguation_state_is_numeric_and_written_once_per_request() -> None:
+    from drake_disamb.systems.disambiguation import LatchedRequest
+
     system = DisambiguationSystem(2, [[0], [1], [2], [3], [4], [5]], control_period=0.01)
     ctx = system.CreateDefaultContext()
     assert ctx.num_abstract_states() == 0  # nothing to deep-copy at unrestricted updates
-    for name, value in (
-        ("belief", [0.5, 0.5]),
-        ("ee_pose", EE_POSE),
-        ("goal_poses", GOALS.ravel()),
-        ("current_mode", [0.0]),
-        ("request_count", [0.0]),
-    ):
-        system.GetInputPort(name).FixValue(ctx, np.asarray(value, dtype=float))
+    request = system.GetInputPort("request")
+    request.FixValue(ctx, LatchedRequest.none(2).to_vector())
     simulator = Simulator(system, ctx)
     simulator.AdvanceTo(0.015)
-    system.GetInputPort("request_count").FixValue(ctx, [1.0])
-    simulator.AdvanceTo(0.025)
-    calls = _count(system, "_solve")
-    first = system.GetOutputPort("last_result").Eval(ctx)
-    simulator.AdvanceTo(0.055)  # the state is rewritten every tick with the same served request
-    assert system.GetOutputPort("last_result").Eval(ctx) is first
-    assert calls[0] == 1
+    assert simulator.get_num_discrete_updates() == 0  # no request: nothing written
+    request.FixValue(ctx, LatchedRequest(1.0, np.array([0.5, 0.5]), EE_POSE, GOALS.ravel(), 0.0).to_vector())
+    simulator.AdvanceTo(0.055)
+    assert simulator.get_num_discrete_updates() == 1  # answered once, then nothing written
+    assert system.GetOutputPort("answer").Eval(ctx)[0] == 1.0
 
 
 def test_dft_belief_is_computed_once_per_tick(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -188,6 +213,51 @@ def test_dft_belief_is_computed_once_per_tick(monkeypatch: pytest.MonkeyPatch) -
     assert calls[0] == 10
     p = sub.get_continuous_state_vector().CopyToVector()
     assert abs(p.sum() - 1.0) <= module.SIMPLEX_TOLERANCE and p[0] > 0.5  # moving towards goal 0
+
+
+@pytest.mark.parametrize("discrete", [False, True])
+def test_belief_outputs_share_one_projection(monkeypatch: pytest.MonkeyPatch, discrete: bool) -> None:
+    """``belief``, ``g_star`` and ``p_star`` project the stored belief once per change of it (the
+    belief output's cache entry, which the other two read), in every context."""
+    from drake_disamb.systems import inference as module
+
+    calls = _counting(monkeypatch, module, "normalize_belief")
+    system = (
+        module.RecursiveBayesIntentInference(2) if discrete else FieldTheoreticIntentInference(2, DFTParams())
+    )
+    contexts = [system.CreateDefaultContext() for _ in range(2)]
+    for ctx, p in zip(contexts, ([0.6, 0.2], [0.1, 0.3]), strict=True):
+        if discrete:
+            ctx.SetDiscreteState(0, [*p, *GOALS.ravel()])
+        else:
+            ctx.SetContinuousState(p)
+    for _ in range(2):
+        for ctx in contexts:
+            out = [system.GetOutputPort(name).Eval(ctx) for name in ("belief", "g_star", "p_star")]
+    assert calls[0] == 2  # once per context
+    np.testing.assert_allclose(np.concatenate(out), [0.25, 0.75, 1.0, 0.75], rtol=1e-15)
+
+
+def test_blender_and_inference_keep_nothing_on_the_system() -> None:
+    """Their values computed from a context live in that context (cache entries), not on the
+    system object, where every context would share them."""
+    blender = SharedControlBlender(2)
+    inference = FieldTheoreticIntentInference(2, DFTParams())
+
+    def attributes(system: object) -> dict[str, int]:  # identities only: no reference kept
+        return {name: id(value) for name, value in vars(system).items()}
+
+    before = [attributes(blender), attributes(inference)]
+    for p in ([0.9, 0.1], [0.4, 0.6]):
+        ctx = blender.CreateDefaultContext()
+        blender.GetInputPort("u_h").FixValue(ctx, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
+        blender.GetInputPort("belief").FixValue(ctx, p)
+        blender.GetInputPort("u_a").FixValue(ctx, np.arange(12.0) / 100)
+        blender.GetOutputPort("u").Eval(ctx)
+        ctx = inference.CreateDefaultContext()
+        ctx.SetContinuousState(p)
+        inference.GetOutputPort("belief").Eval(ctx)
+    assert [attributes(blender), attributes(inference)] == before
 
 
 def test_dft_projection_writes_only_when_the_belief_left_the_simplex() -> None:

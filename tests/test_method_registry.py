@@ -285,16 +285,18 @@ def test_a_registered_method_is_selectable_from_yaml_and_runs_in_the_diagram(las
         "mode_scores": [0.0, 1.0, 2.0, 3.0, 4.0, 5.0],
     }
     assert result.explain().endswith("The last mode always wins.")
+    from pydrake.systems.analysis import Simulator
+
+    from drake_disamb.systems.disambiguation import LatchedRequest
+
     context = system.CreateDefaultContext()  # the system serves it like any method
-    system.GetInputPort("belief").FixValue(context, np.full(system.n_goals, 1.0 / system.n_goals))
-    system.GetInputPort("ee_pose").FixValue(context, [0.0, 0.0, 0.1, 1.0, 0.0, 0.0, 0.0])
-    goal_poses = np.hstack(
-        [np.arange(3.0 * system.n_goals).reshape(-1, 3) / 10, np.tile([1.0, 0, 0, 0], (system.n_goals, 1))]
-    )
-    system.GetInputPort("goal_poses").FixValue(context, goal_poses.ravel())
-    system.GetInputPort("current_mode").FixValue(context, [0.0])
-    system.GetInputPort("request_count").FixValue(context, [0.0])
-    assert system.GetOutputPort("disambiguation_mode").Eval(context)[0] == len(system.modes) - 1
+    n = system.n_goals
+    goal_poses = np.hstack([np.arange(3.0 * n).reshape(-1, 3) / 10, np.tile([1.0, 0, 0, 0], (n, 1))])
+    request = LatchedRequest(1.0, np.full(n, 1.0 / n), np.array([0.0, 0.0, 0.1, 1.0, 0.0, 0.0, 0.0]),
+                             goal_poses.ravel(), 0.0)  # fmt: skip
+    system.GetInputPort("request").FixValue(context, request.to_vector())
+    Simulator(system, context).AdvanceTo(0.005)  # the update at t = 0 answers it
+    assert system.GetOutputPort("answer").Eval(context).tolist() == [1.0, len(system.modes) - 1]
 
 
 def test_a_registered_method_is_selectable_from_the_protocol_and_the_command_line(

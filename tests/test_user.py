@@ -906,7 +906,7 @@ def test_the_rules_are_one_function_each_in_order() -> None:
 
 
 def test_a_user_waits_while_the_system_is_busy_and_its_watches_start_again() -> None:
-    """While the system computes a disambiguation with its loop paused (``system_busy``) the
+    """While the system computes a disambiguation with its loop paused (``paused``) the
     user lets go, whatever it was doing, and its stall and blocked watches start again after."""
     state = UserState()
     for k in range(30):  # driving +x in vx, watches running

@@ -5,15 +5,16 @@
     user.raw ------------------------------> interface.raw
     interface.u_h -------------------------> blender.u_h, inference.u_h
     autonomy.u_a --------------------------> blender.u_a, inference.u_a
-    inference.belief ----------------------> blender, disambiguation, user, visualizer
-    disambiguation.disambiguation_mode ----> interface.disambiguation_mode   (disambiguation, automatic)
-    interface.disambiguation_pending ------> inference.hold, blender.hold, user  (hold_while_computing)
-    interface.mode / served_count ---------> disambiguation.current_mode / request_count
+    inference.belief ----------------------> blender, interface, user, visualizer
+    interface.request ---------------------> disambiguation.request          (disambiguation, automatic)
+    disambiguation.answer -----------------> interface.answer                (disambiguation, automatic)
+    interface.paused ----------------------> inference, blender, user .paused  (hold_while_computing)
     inference.belief, interface.u_h, mode -> automatic_trigger              (automatic paradigm)
     automatic_trigger.automatic_request_count -> interface.automatic_request_count
     blender.u -----------------------------> station.ee_velocity_command
     interface.gripper_command -------------> station.gripper_command
-    station.ee_pose -----------------------> everyone
+    station.ee_pose -----------------------> everyone (the interface latches it, and the belief and
+                                             goal poses, into a request at a press)
     station.gripper_opening ---------------> task.gripper_opening      (stages that end with a release)
     task.goal_poses -----------------------> everyone (the goal set switches between stages)
       (inference.goal_set "task": a constant source of every goal instead; the task manager still
@@ -167,7 +168,7 @@ def build_shared_control_diagram(
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])
 
-    interface = builder.AddSystem(make_interface(config.interface))
+    interface = builder.AddSystem(make_interface(config.interface, n))
     modes = [list(m) for m in interface.modes]
 
     task = builder.AddSystem(
@@ -268,21 +269,20 @@ def build_shared_control_diagram(
             )
         )
         disamb.set_name("disambiguation")
-        builder.Connect(inference.GetOutputPort("belief"), disamb.GetInputPort("belief"))
-        builder.Connect(ee_pose, disamb.GetInputPort("ee_pose"))
-        builder.Connect(goal_poses, disamb.GetInputPort("goal_poses"))
-        builder.Connect(interface.GetOutputPort("mode"), disamb.GetInputPort("current_mode"))
-        builder.Connect(interface.GetOutputPort("served_count"), disamb.GetInputPort("request_count"))
-        builder.Connect(
-            disamb.GetOutputPort("disambiguation_mode"), interface.GetInputPort("disambiguation_mode")
-        )
+        # A request is a value: the interface latches what it is made of at the press, the
+        # disambiguation system answers it once, and the interface applies the answer.
+        builder.Connect(inference.GetOutputPort("belief"), interface.GetInputPort("belief"))
+        builder.Connect(ee_pose, interface.GetInputPort("ee_pose"))
+        builder.Connect(goal_poses, interface.GetInputPort("goal_poses"))
+        builder.Connect(interface.GetOutputPort("request"), disamb.GetInputPort("request"))
+        builder.Connect(disamb.GetOutputPort("answer"), interface.GetInputPort("answer"))
         systems["disambiguation"] = disamb
         if scenario.disambiguation.hold_while_computing:  # the loop pauses while a request is computed
-            pending = interface.GetOutputPort("disambiguation_pending")
-            builder.Connect(pending, inference.GetInputPort("hold"))
-            builder.Connect(pending, blender.GetInputPort("hold"))
+            paused = interface.GetOutputPort("paused")
+            builder.Connect(paused, inference.GetInputPort("paused"))
+            builder.Connect(paused, blender.GetInputPort("paused"))
             if input_source is None:  # the simulated user sees the arm stop and waits
-                builder.Connect(pending, user.GetInputPort("system_busy"))
+                builder.Connect(paused, user.GetInputPort("paused"))
     if config.automatic is not None:
         trigger = builder.AddSystem(
             AutomaticTrigger(n, config.automatic, scenario.control_period, config.interface.request_latency)

@@ -42,7 +42,7 @@ class SharedControlBlender(LeafSystem):
         - u_h
         - belief
         - u_a
-        - hold
+        - paused
         output_ports:
         - u
         - alpha
@@ -54,9 +54,9 @@ class SharedControlBlender(LeafSystem):
         belief (n): probability of each goal.
         u_a (n * 6): per-goal autonomy commands, goal i in entries ``6 i .. 6 i + 5``, same order
             and frame as ``u_h``.
-        hold (1, optional): while above 0.5 the loop is paused: ``u`` is zero and ``alpha`` 0 (the
+        paused (1, optional): while above 0.5 the loop is paused: ``u`` is zero and ``alpha`` 0 (the
             study's system sent the arm nothing while it computed a disambiguation request: the
-            interface's ``disambiguation_pending``). Unconnected: never paused.
+            interface's ``paused``). Unconnected: never paused.
 
     Output ports (``u``, ``alpha``, ``g_star``: direct feedthrough from the inputs only, no state):
         u (6): blended, speed-limited command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s), world
@@ -66,14 +66,10 @@ class SharedControlBlender(LeafSystem):
         sanitized_input_count (1): control ticks so far at which an input held a NaN/inf (see
             below); from state.
 
-    The three outputs share one blending step, a cache entry that depends on the three inputs only
+    The three outputs share one blending step, a cache entry that depends on the four inputs only
     (computed once per change of the inputs, not per output or per integrator stage); it also holds
     whether the inputs were finite, the verdict the periodic check reuses when the step is already
-    up to date (in a loop it is: the station's update reads ``u`` in the same context). The step is
-    a pure function of the inputs' values, and a one-entry memo on the system keeps the last one:
-    when Drake invalidates inputs whose values did not change (at a tick where one subsystem's
-    unrestricted update writes, the interface's when the user's raw signal changes, Drake rewrites
-    the belief and ``u_h`` unchanged too), the entry is refilled without a new blending step.
+    up to date (in a loop it is: the station's update reads ``u`` in the same context).
 
     **No user input.** The paper blends "always", so with ``assist_without_input=True`` a user who
     lets go is still driven toward ``g*`` at up to ``rho3 |u_a|`` (0.14 m/s with the default
@@ -117,12 +113,11 @@ class SharedControlBlender(LeafSystem):
         self._u_h_port = self.DeclareVectorInputPort("u_h", 6)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_a_port = self.DeclareVectorInputPort("u_a", 6 * self.n_goals)
-        self._hold_port = self.DeclareVectorInputPort("hold", 1)
+        self._paused_port = self.DeclareVectorInputPort("paused", 1)
         # One blending step per change of the inputs, shared by the three outputs (a cache entry
         # that depends on the inputs alone, not on time or on any state).
-        ports = (self._u_h_port, self._belief_port, self._u_a_port, self._hold_port)
+        ports = (self._u_h_port, self._belief_port, self._u_a_port, self._paused_port)
         inputs = {port.ticket() for port in ports}
-        self._memo: tuple[bytes, tuple] | None = None
         self._step = self.DeclareCacheEntry(
             "shared_control step (u, alpha, g_star)",
             ValueProducer(allocate=lambda: AbstractValue.Make(_NO_STEP), calc=self._calc_step),
@@ -175,20 +170,11 @@ class SharedControlBlender(LeafSystem):
         return u, float(alpha), int(g_star), finite
 
     def _calc_step(self, context: Context, value: AbstractValue) -> None:
-        u_h, p, u_a = self._inputs(context)
-        # The step is a pure function of the three inputs: a one-entry memo of the last one keeps
-        # it from being recomputed when Drake invalidates inputs whose values did not change (the
-        # belief and u_h are rewritten, unchanged, at ticks where any unrestricted update writes).
-        key = u_h.tobytes() + p.tobytes() + u_a.tobytes()
-        memo = self._memo
-        if memo is None or memo[0] != key:
-            u, alpha, g_star, finite = self._compute(u_h, p, u_a)
-            memo = self._memo = (key, (u, np.array([alpha]), np.array([float(g_star)]), finite))
-        step = memo[1]
-        if flag_set(self._hold_port, context):
-            # Paused (the ``hold`` input): nothing reaches the arm; g_star stays the belief's argmax.
-            step = (np.zeros(6), np.zeros(1), step[2], step[3])
-        value.set_value(step)
+        u, alpha, g_star, finite = self._compute(*self._inputs(context))
+        if flag_set(self._paused_port, context):
+            # Paused (the ``paused`` input): nothing reaches the arm; g_star stays the belief's argmax.
+            u, alpha = np.zeros(6), 0.0
+        value.set_value((u, np.array([alpha]), np.array([float(g_star)]), finite))
 
     def _calc_u(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._step.Eval(context)[0])

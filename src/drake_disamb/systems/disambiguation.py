@@ -2,11 +2,12 @@
 and the Automatic paradigm's trigger.
 
 All the algorithms live in the core (:mod:`drake_disamb.core.disambiguation`,
-:mod:`drake_disamb.core.automatic`); :class:`DisambiguationSystem` only reads its inputs, makes a
-:class:`~drake_disamb.core.disambiguation.DisambiguationRequest`, runs its mode-selection method's
-``select`` on it and keeps the last result;
-:class:`AutomaticTrigger` holds the trigger's state and runs
-:func:`~drake_disamb.core.automatic.automatic_trigger_update` every control period.
+:mod:`drake_disamb.core.automatic`). A request is a value: the interface latches it at the press
+(:class:`LatchedRequest`: the belief, the end-effector and goal poses, the mode) and
+:class:`DisambiguationSystem` solves it once, in its own update, with its mode-selection method's
+``select``, into its state (the answer the interface applies); :class:`AutomaticTrigger` holds the
+trigger's state and runs :func:`~drake_disamb.core.automatic.automatic_trigger_update` every
+control period.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import (
@@ -34,17 +35,60 @@ from drake_disamb.core.validation import is_real
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.system_helpers.status import DID_NOTHING
 
-__all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult"]
+__all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult", "LatchedRequest"]
 
 
 @dataclass(frozen=True)
-class _Inputs:
-    """The inputs of one disambiguation request (a snapshot of the input ports)."""
+class LatchedRequest:
+    """One disambiguation request as a value: what the interface latches when it starts one (its
+    ``request`` output, from state) and the disambiguation system solves.
 
+    As a vector (:meth:`to_vector`): ``[id, belief (n), ee_pose (7), goal_poses (7 n), current_mode]``.
+
+    Attributes:
+        id: The request's id: the interface's count of started disambiguations (requests and
+            automatic triggers), 1 for the first; 0 before any.
+        belief: The belief over the ``n`` goals at the request.
+        ee_pose: The end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m) at the request.
+        goal_poses: The ``n`` goal poses, each ``[x, y, z, qw, qx, qy, qz]``, flattened.
+        current_mode: The interface's mode at the request (an index into its modes: arm modes first,
+            the gripper mode last).
+    """
+
+    id: float
     belief: NDArray[np.float64]
     ee_pose: NDArray[np.float64]
     goal_poses: NDArray[np.float64]
     current_mode: float
+
+    @staticmethod
+    def size(n_goals: int) -> int:
+        """Length of the vector of a request over ``n_goals`` goals."""
+        return 2 + n_goals + POSE_SIZE + n_goals * POSE_SIZE
+
+    @classmethod
+    def none(cls, n_goals: int) -> LatchedRequest:
+        """The value before any request: id 0, every other entry NaN."""
+        return cls.from_vector(np.concatenate(([0.0], np.full(cls.size(n_goals) - 1, np.nan))), n_goals)
+
+    def to_vector(self) -> NDArray[np.float64]:
+        """``[id, belief, ee_pose, goal_poses, current_mode]``."""
+        return np.concatenate(([self.id], self.belief, self.ee_pose, self.goal_poses, [self.current_mode]))
+
+    @classmethod
+    def from_vector(cls, vector: NDArray[np.float64], n_goals: int) -> LatchedRequest:
+        """Inverse of :meth:`to_vector` (copies)."""
+        v = np.asarray(vector, dtype=float)
+        if v.shape != (cls.size(n_goals),):
+            raise ValueError(f"request: expected {cls.size(n_goals)} numbers, got shape {v.shape}")
+        n = n_goals
+        return cls(
+            id=float(v[0]),
+            belief=v[1 : 1 + n].copy(),
+            ee_pose=v[1 + n : 1 + n + POSE_SIZE].copy(),
+            goal_poses=v[1 + n + POSE_SIZE : 1 + n + POSE_SIZE + n * POSE_SIZE].copy(),
+            current_mode=float(v[-1]),
+        )
 
 
 @dataclass(frozen=True)
@@ -57,9 +101,9 @@ class LastResult:
 
     Attributes:
         result: The :class:`~drake_disamb.core.disambiguation.DisambiguationResult` of the last
-            served request, or None before any request or when that request's inputs were
+            answered request, or None before any request or when that request's inputs were
             unusable (the mode was kept).
-        served: True once a request has been served (``result`` may still be None).
+        served: True once a request has been answered (``result`` may still be None).
     """
 
     result: DisambiguationResult | None = None
@@ -70,71 +114,56 @@ _NO_REQUEST = LastResult()
 
 
 class DisambiguationSystem(LeafSystem):
-    """Chooses the disambiguating control mode ``m*`` (paper Algorithm 1, or ``method``) on request.
+    """Chooses the disambiguating control mode ``m*`` (paper Algorithm 1, or ``method``) for each
+    request, once.
 
     .. pydrake_system::
 
         name: DisambiguationSystem
         input_ports:
-        - belief
-        - ee_pose
-        - goal_poses
-        - current_mode
-        - request_count
+        - request
         output_ports:
-        - disambiguation_mode
+        - answer
         - last_result
         - sanitized_input_count
 
     Input ports:
-        belief (n): the current belief over the ``n`` goals (probability vector; renormalised
-            here if it drifted).
-        ee_pose (7): end-effector pose ``[x, y, z, qw, qx, qy, qz]`` in W (m; unit quaternion).
-        goal_poses (n * 7): the goal poses, each ``[x, y, z, qw, qx, qy, qz]`` in W.
-        current_mode (1): the interface's current mode, an index into its mode list (arm modes
-            first, gripper mode last); must come from interface *state*.
-        request_count (1): the interface's running count of *served* disambiguations (its
-            ``served_count`` output, from its state): requests and automatic triggers, counted when
-            the interface reads ``disambiguation_mode``, i.e. at the switch time, ``request_latency``
-            after a press.
+        request (9 + 8 n): the interface's latched request (its ``request`` output, from its
+            state), a :class:`LatchedRequest` vector ``[id, belief (n), ee_pose (7), goal_poses
+            (7 n), current_mode]``: the belief over the ``n`` goals (renormalised here if it
+            drifted), the end-effector and goal poses ``[x, y, z, qw, qx, qy, qz]`` in W (m; unit
+            quaternions) and the interface's mode at the request (arm modes first, gripper last).
 
-    Output ports:
-        disambiguation_mode (1): ``m*`` as an index into ``modes``, or -1 when the current mode is
-            kept (ties, or unusable inputs, see below). Computed on demand from
-            ``belief``, ``ee_pose``, ``goal_poses`` and ``current_mode`` (direct feedthrough from
-            those four, not from ``request_count``): the interface evaluates it only in the update
-            in which it serves a disambiguation (a press, or ``request_latency`` after it), and
-            switches mode in that same control period.
+    Output ports (from state):
+        answer (2): ``[id, m*]``: the id of the last request answered (0 before any) and the mode
+            chosen for it, an index into ``modes``, or -1 when the current mode is kept (ties, or
+            unusable inputs, see below). The interface applies it at the request's due time.
         last_result (abstract): a :class:`LastResult` holding the
-            :class:`~drake_disamb.core.disambiguation.DisambiguationResult` of the last request
-            (scores per dimension and mode, features, the chosen mode), or ``None`` before any
-            request (``served`` False) or if its inputs were unusable. Computed from state (the
-            inputs of the served request), on demand; treat it as read-only.
-            :meth:`get_last_result` returns the result itself.
-        sanitized_input_count (1): served requests so far whose inputs were unusable (from state).
+            :class:`~drake_disamb.core.disambiguation.DisambiguationResult` of the last answered
+            request (scores per dimension and mode, features, the chosen mode), or ``None`` before
+            any request (``served`` False) or if its inputs were unusable. A diagnostic, never
+            read by the loop (which reads ``answer``): solved again from the stored request when
+            it is evaluated, with the numbers of the update's solve, and cached until the state is
+            next written (in a simulated diagram Drake marks every discrete state written at each
+            tick); treat it as read-only. :meth:`get_last_result` returns the result itself.
+        sanitized_input_count (1): answered requests so far whose inputs were unusable.
 
     **Unusable inputs.** A belief that is not a probability vector up to scale (a NaN/inf or
     negative entry, or no positive one), a non-finite ``current_mode``, or a pose that is not
     finite or has an unusable quaternion (:func:`~drake_disamb.system_helpers.sanitized.usable_poses`)
-    are detected before the core is called: ``disambiguation_mode`` is then -1 (the mode is kept)
-    and, when the interface served such a request, the next update adds one to
-    ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other
-    error of the core propagates out of the port evaluation (and so out of the simulation).
+    are detected before the core is called: the answer is then -1 (the mode is kept), one is added
+    to ``sanitized_input_count`` and a warning is issued (at most once per second of simulated
+    time). Any other error of the core propagates out of the update (and so out of the simulation).
 
-    State: numeric only. Two discrete groups updated by a periodic *discrete* update every
-    ``control_period`` seconds (first at t = 0; initialised from the inputs): the *tick* group
-    ``[request_count seen, current_mode seen]`` and the *served* group ``[has request, request]``,
-    where a request is ``[belief (n), ee_pose (7), goal_poses (7 n), current_mode (1)]``. Drake
-    runs a tick's discrete updates after its unrestricted ones, so when ``request_count`` has grown
-    since the previous tick, the interface served the request in this very tick, from inputs that
-    the discrete phase still sees unchanged (the belief, the sampled pose and the goals change
-    at discrete updates or by integration, later), except the mode, which the interface has just
-    switched: the request takes the mode seen at the previous tick, the one the interface had. So
-    the served request is exactly what the interface used (unless the belief was reset or
-    re-projected in that same tick), and ``last_result`` shows it from that tick on. The update
-    writes only when the count or the mode changed (at other ticks it does nothing, so nothing
-    computed from this system is recomputed). Two more groups, ``[sanitised-input count]`` and
-    ``[time of the last warning]`` (s), are written only when an unusable request was served.
+    State: numeric only, updated by a periodic *discrete* update every ``control_period`` seconds
+    (first at t = 0) that writes only when the request's id differs from the one last answered:
+    it then solves the request (once: one call of the method per request) and writes the answer
+    ``[id, m*]`` and the request itself (the *served* group, what ``last_result`` shows). In a
+    diagram the interface latches a request in its (unrestricted) update of the press's tick and
+    this update answers it in the same tick (Drake runs a tick's unrestricted updates before its
+    discrete ones); the answer carries the request's id, so what the interface applies never
+    depends on that order, only when it can. Two more groups, ``[sanitised-input count]`` and
+    ``[time of the last warning]`` (s), are written only when an unusable request was answered.
 
     The constructor runs one request on a small scene: it loads the core's compiled kernels (a
     fraction of a second, once per process) so that the user's first request in a simulation or a
@@ -172,23 +201,11 @@ class DisambiguationSystem(LeafSystem):
         self.method = mode_selection_method(method)
 
         n = self.n_goals
-        self._belief = self.DeclareVectorInputPort("belief", n)
-        self._ee_pose = self.DeclareVectorInputPort("ee_pose", POSE_SIZE)
-        self._goal_poses = self.DeclareVectorInputPort("goal_poses", n * POSE_SIZE)
-        self._current_mode = self.DeclareVectorInputPort("current_mode", 1)
-        self._request_count = self.DeclareVectorInputPort("request_count", 1)
-
-        # Tick group: [request_count seen, current_mode seen]; served group: [has request (0/1),
-        # request] (the request's layout is that of _pack).
-        self._tick_index = self.DeclareDiscreteState(np.zeros(2))
-        self._served_index = self.DeclareDiscreteState(np.zeros(1 + n + POSE_SIZE + n * POSE_SIZE + 1))
-        self._memo: tuple[bytes, LastResult] | None = None
-        feedthrough = {
-            port.ticket() for port in (self._belief, self._ee_pose, self._goal_poses, self._current_mode)
-        }
-        self.DeclareVectorOutputPort(
-            "disambiguation_mode", 1, self._calc_mode, prerequisites_of_calc=feedthrough
-        )
+        size = LatchedRequest.size(n)
+        self._request = self.DeclareVectorInputPort("request", size)
+        self._answer_index = self.DeclareDiscreteState(np.array([0.0, -1.0]))
+        self._served_index = self.DeclareDiscreteState(LatchedRequest.none(n).to_vector())
+        self.DeclareStateOutputPort("answer", self._answer_index)
         self.DeclareAbstractOutputPort(
             "last_result",
             lambda: AbstractValue.Make(_NO_REQUEST),
@@ -196,7 +213,6 @@ class DisambiguationSystem(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._served_index)},
         )
         self._sanitized = SanitizedInputCounter(self)
-        self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(control_period, 0.0, self._update)
         # One request on a small scene now, so that the compiled kernels of the core are loaded
         # (a fraction of a second, once per process) before a simulation, not at the user's first
@@ -213,34 +229,6 @@ class DisambiguationSystem(LeafSystem):
 
     # ------------------------------------------------------------------------------------------
 
-    def _read(self, context: Context) -> _Inputs:
-        return _Inputs(
-            belief=np.array(self._belief.Eval(context), dtype=float),
-            ee_pose=np.array(self._ee_pose.Eval(context), dtype=float),
-            goal_poses=np.array(self._goal_poses.Eval(context), dtype=float),
-            current_mode=float(self._current_mode.Eval(context)[0]),
-        )
-
-    def _pack(self, context: Context) -> NDArray[np.float64]:
-        """The inputs now as one snapshot vector ``[belief, ee_pose, goal_poses, current_mode]``."""
-        return np.concatenate(
-            (
-                self._belief.Eval(context),
-                self._ee_pose.Eval(context),
-                self._goal_poses.Eval(context),
-                self._current_mode.Eval(context),
-            )
-        )
-
-    def _unpack(self, snapshot: NDArray[np.float64]) -> _Inputs:
-        n = self.n_goals
-        return _Inputs(
-            belief=snapshot[:n].copy(),
-            ee_pose=snapshot[n : n + POSE_SIZE].copy(),
-            goal_poses=snapshot[n + POSE_SIZE : n + POSE_SIZE + n * POSE_SIZE].copy(),
-            current_mode=float(snapshot[-1]),
-        )
-
     @staticmethod
     def _normalised_belief(p: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """``p`` (entries >= -1e-9, any positive scale) as a probability vector, or None if unusable."""
@@ -249,7 +237,7 @@ class DisambiguationSystem(LeafSystem):
         p = np.maximum(p, 0.0) / p.max()  # scaled first: the sum cannot overflow
         return p / p.sum()
 
-    def _unusable(self, request: _Inputs) -> str | None:
+    def _unusable(self, request: LatchedRequest) -> str | None:
         """Why ``request`` cannot be solved (an input out of range), or None if it can."""
         if self._normalised_belief(request.belief) is None:
             return f"belief: expected a probability vector, got {request.belief.tolist()!r}"
@@ -262,11 +250,13 @@ class DisambiguationSystem(LeafSystem):
             )
         return None
 
-    def _solve(self, request: _Inputs) -> DisambiguationResult | None:
-        """Run the core on one request; an unusable one (see :meth:`_unusable`) gives None (keep the
-        mode). Any error of the core propagates."""
-        if self._unusable(request) is not None:
-            return None
+    def _solve(self, request: LatchedRequest) -> DisambiguationResult | None:
+        """Run the mode-selection method on one request; an unusable one (see the class docstring)
+        gives None (keep the mode). Any error of the core propagates."""
+        return None if self._unusable(request) is not None else self._select(request)
+
+    def _select(self, request: LatchedRequest) -> DisambiguationResult:
+        """The method's result for a usable ``request``."""
         p = self._normalised_belief(request.belief)
         current = round(request.current_mode)
         goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
@@ -284,56 +274,34 @@ class DisambiguationSystem(LeafSystem):
         )
 
     def get_last_result(self, context: Context) -> DisambiguationResult | None:
-        """The result of the last served request in ``context`` (None before any, or if unusable)."""
+        """The result of the last answered request in ``context`` (None before any, or if unusable)."""
         return self.GetOutputPort("last_result").Eval(context).result
 
     def get_sanitized_input_count(self, context: Context) -> int:
-        """Served requests so far in ``context`` whose inputs were unusable."""
+        """Answered requests so far in ``context`` whose inputs were unusable."""
         return self._sanitized.count(context)
 
-    def _calc_mode(self, context: Context, output: BasicVector) -> None:
-        result = self._solve(self._read(context))
-        output.SetAtIndex(0, -1.0 if result is None or result.mode is None else float(result.mode))
-
     def _calc_last_result(self, context: Context, output: AbstractValue) -> None:
-        served = context.get_discrete_state(self._served_index).get_value()
-        if served[0] < 0.5:
+        stored = context.get_discrete_state(self._served_index).get_value()
+        served = LatchedRequest.from_vector(stored, self.n_goals)
+        if served.id == 0.0:
             output.set_value(_NO_REQUEST)
             return
-        # The method is a pure function of the served request: a one-entry memo keeps a result
-        # from being recomputed when the state is rewritten with the same request every tick.
-        key = served.tobytes()
-        if self._memo is None or self._memo[0] != key:
-            self._memo = (key, LastResult(self._solve(self._unpack(served[1:])), served=True))
-        output.set_value(self._memo[1])
-
-    def _seen(self, context: Context, previous_count: float) -> tuple[float, float]:
-        """``(request_count, current_mode)`` now; a non-finite count keeps ``previous_count`` (a
-        non-finite mode is kept as it is: a request served with it is unusable, and counted)."""
-        count = float(self._request_count.Eval(context)[0])
-        mode = float(self._current_mode.Eval(context)[0])
-        return (count if math.isfinite(count) else previous_count), mode
-
-    def _initialize(self, context: Context, discrete_state: DiscreteValues) -> None:
-        discrete_state.get_mutable_vector(self._tick_index).SetFromVector(self._seen(context, 0.0))
+        output.set_value(LastResult(self._solve(served), served=True))
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        seen_count, seen_mode = context.get_discrete_state(self._tick_index).get_value()
-        count, mode = self._seen(context, float(seen_count))
-        same_mode = mode == seen_mode or (math.isnan(mode) and math.isnan(seen_mode))
-        if count == seen_count and same_mode:
-            return DID_NOTHING  # no request served, the same mode: nothing to write
-        if count > seen_count:  # served in this tick, with the mode the interface had before it
-            request = self._pack(context)
-            request[-1] = seen_mode
-            discrete_state.get_mutable_vector(self._served_index).SetFromVector(
-                np.concatenate(([1.0], request))
-            )
-            reason = self._unusable(self._unpack(request))
-            if reason is not None:
-                message = f"request ignored, the mode is kept: {reason}"
-                self._sanitized.record(context, discrete_state, message)
-        discrete_state.get_mutable_vector(self._tick_index).SetFromVector([count, mode])
+        vector = self._request.Eval(context)
+        answered = context.get_discrete_state(self._answer_index).get_value()[0]
+        if vector[0] == answered or not math.isfinite(vector[0]):
+            return DID_NOTHING  # no new request: nothing to write
+        request = LatchedRequest.from_vector(vector, self.n_goals)
+        reason = self._unusable(request)
+        result = None if reason is not None else self._select(request)  # the one solve of this request
+        mode = -1.0 if result is None or result.mode is None else float(result.mode)
+        discrete_state.get_mutable_vector(self._answer_index).SetFromVector([request.id, mode])
+        discrete_state.get_mutable_vector(self._served_index).SetFromVector(vector)
+        if reason is not None:
+            self._sanitized.record(context, discrete_state, f"request ignored, the mode is kept: {reason}")
         return EventStatus.Succeeded()
 
 

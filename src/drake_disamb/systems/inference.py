@@ -13,14 +13,16 @@ Input ports (vector-valued):
 - ``u_a`` (6 n): per-goal autonomy commands ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, W),
   flattened. Only evaluated by the DFT system with the agreement term on; may stay unconnected
   otherwise.
-- ``hold`` (1, optional): while it is above 0.5 the belief is held where it is (the DFT's time
+- ``paused`` (1, optional): while it is above 0.5 the belief is held where it is (the DFT's time
   derivative is zero, the discrete methods skip their step; a changed goal set still resets it):
   the study's system did not update its belief while it computed a disambiguation request (the
-  interface's ``disambiguation_pending``). Unconnected: never held.
+  interface's ``paused``). Unconnected: never paused.
 
 Output ports (vector-valued, computed from state only: no direct feedthrough):
 
-- ``belief`` (n): the goal probabilities, a probability vector at every instant.
+- ``belief`` (n): the goal probabilities, a probability vector at every instant (the stored
+  belief projected onto the simplex, once per change of the state; ``g_star`` and ``p_star`` read
+  this output's cached value).
 - ``g_star`` (1): 0-based index of the most probable goal (first one on ties).
 - ``p_star`` (1): its probability.
 - ``sanitized_input_count`` (1): control ticks so far at which an input the method reads held a
@@ -126,8 +128,7 @@ class _IntentInferenceBase(LeafSystem):
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_poses = self.DeclareVectorInputPort("goal_poses", 7 * self._n)
         self._u_a = self.DeclareVectorInputPort("u_a", 6 * self._n)
-        self._hold = self.DeclareVectorInputPort("hold", 1)
-        self._belief_memo: tuple[bytes, NDArray[np.float64]] | None = None  # see _belief
+        self._paused = self.DeclareVectorInputPort("paused", 1)
 
     @property
     def n_goals(self) -> int:
@@ -140,9 +141,14 @@ class _IntentInferenceBase(LeafSystem):
         return self._period
 
     def _declare_outputs(self, ticket) -> None:  # noqa: ANN001 (DependencyTicket)
-        self.DeclareVectorOutputPort("belief", BasicVector(self._n), self._calc_belief, {ticket})
-        self.DeclareVectorOutputPort("g_star", BasicVector(1), self._calc_g_star, {ticket})
-        self.DeclareVectorOutputPort("p_star", BasicVector(1), self._calc_p_star, {ticket})
+        # The belief output projects the stored belief (``ticket``: the state it is stored in) once
+        # per change of that state; g_star and p_star read the belief output's cached value.
+        self._belief_port = self.DeclareVectorOutputPort(
+            "belief", BasicVector(self._n), self._calc_belief, {ticket}
+        )
+        projected = {self._belief_port.cache_entry().ticket()}
+        self.DeclareVectorOutputPort("g_star", BasicVector(1), self._calc_g_star, projected)
+        self.DeclareVectorOutputPort("p_star", BasicVector(1), self._calc_p_star, projected)
         self._sanitized = SanitizedInputCounter(self)
 
     # -- inputs ---------------------------------------------------------------------------------
@@ -168,8 +174,8 @@ class _IntentInferenceBase(LeafSystem):
         return True
 
     def _held(self, context: Context) -> bool:
-        """The ``hold`` input is set: the belief is not updated."""
-        return flag_set(self._hold, context)
+        """The ``paused`` input is set: the belief is not updated."""
+        return flag_set(self._paused, context)
 
     def _position(self, context: Context) -> NDArray[np.float64]:
         return np.asarray(self._ee_pose.Eval(context), dtype=float)[:3]
@@ -182,21 +188,13 @@ class _IntentInferenceBase(LeafSystem):
 
     # -- outputs --------------------------------------------------------------------------------
 
-    def _belief(self, context: Context) -> NDArray[np.float64]:
-        # A copy projected onto the simplex: the stored state may carry integrator error. The
-        # projection is a pure function of the stored belief: a one-entry memo of the last one
-        # keeps it from being recomputed when the state is rewritten unchanged (at ticks where any
-        # subsystem's unrestricted update writes, Drake rewrites it too). Read-only: the outputs
-        # copy it.
-        raw = self._raw_belief(context)
-        key = raw.tobytes()
-        memo = self._belief_memo
-        if memo is None or memo[0] != key:
-            memo = self._belief_memo = (key, normalize_belief(raw))  # raw: a copy, normalize_belief copies
-        return memo[1]
-
     def _calc_belief(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._belief(context))
+        # A copy projected onto the simplex: the stored state may carry integrator error.
+        output.SetFromVector(normalize_belief(self._raw_belief(context)))
+
+    def _belief(self, context: Context) -> NDArray[np.float64]:
+        """The belief output's (cached) value."""
+        return self._belief_port.Eval(context)
 
     def _calc_g_star(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector([float(np.argmax(self._belief(context)))])
@@ -216,7 +214,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         - ee_pose
         - goal_poses
         - u_a
-        - hold
+        - paused
         output_ports:
         - belief
         - g_star
@@ -225,7 +223,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     Ports are described in the module docstring: ``u_h`` (6; m/s, rad/s; ``[v; w]`` order),
     ``ee_pose`` (7; m, ``[x, y, z, qw, qx, qy, qz]``), ``goal_poses`` (7 n), ``u_a`` (6 n; only
-    evaluated with ``params.agreement``), ``hold`` (1; optional: above 0.5 the belief is held) in;
+    evaluated with ``params.agreement``), ``paused`` (1; optional: above 0.5 the belief is held) in;
     ``belief`` (n), ``g_star`` (1, 0-based index), ``p_star`` (1), ``sanitized_input_count`` (1;
     ticks with a non-finite ``u_h``) out.
 
@@ -285,7 +283,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
         # The drive (the part of the right-hand side that does not depend on p) changes only with
         # the inputs, which are held between control ticks: a cache entry computes it once per
         # change instead of at every integrator stage.
-        inputs = [self._u_h, self._ee_pose, self._goal_poses, self._hold]
+        inputs = [self._u_h, self._ee_pose, self._goal_poses, self._paused]
         inputs += [self._u_a] if params.agreement else []
         self._drive = self.DeclareCacheEntry(
             "DFT drive rest/tau2 + lambda sigma(xi) (1/s), u_h finite, goal_poses, held",
@@ -324,7 +322,7 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     def DoCalcTimeDerivatives(self, context: Context, derivatives) -> None:  # noqa: N802, ANN001
         drive, _, _, held = self._drive.Eval(context)
-        if held:  # the belief is held (the ``hold`` input)
+        if held:  # the belief is held (the ``paused`` input)
             derivatives.get_mutable_vector().SetFromVector(np.zeros(self._n))
             return
         p = context.get_continuous_state_vector().CopyToVector()
@@ -414,7 +412,7 @@ class RecursiveBayesIntentInference(_DiscreteInference):
         - ee_pose
         - goal_poses
         - u_a
-        - hold
+        - paused
         output_ports:
         - belief
         - g_star
@@ -468,7 +466,7 @@ class MemoryBasedIntentInference(_DiscreteInference):
         - ee_pose
         - goal_poses
         - u_a
-        - hold
+        - paused
         output_ports:
         - belief
         - g_star

@@ -2,7 +2,8 @@
 
 The logic (raw layout, modes, speeds, edge detection, request handling) is in
 :mod:`drake_disamb.core.interfaces` (one module per kind); :class:`InterfaceSystem` holds its
-state and runs its update every control period, whatever the kind (:func:`make_interface`).
+state, latches the disambiguation requests it starts and runs its update every control period,
+whatever the kind (:func:`make_interface`).
 """
 
 from __future__ import annotations
@@ -12,18 +13,22 @@ from dataclasses import replace
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
+from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem, State
 
 from drake_disamb.core.interfaces import (
     RAW_SIZE,
+    Answer,
     InterfaceConfig,
     InterfaceEvent,
     InterfaceState,
     command_from_raw,
+    disambiguation_due,
     initial_state,
     interface_update,
 )
+from drake_disamb.core.layout import POSE_SIZE
 from drake_disamb.system_helpers.status import DID_NOTHING
+from drake_disamb.systems.disambiguation import LatchedRequest
 
 __all__ = ["EventLog", "InterfaceEvent", "InterfaceSystem", "make_interface"]
 
@@ -47,14 +52,18 @@ class EventLog(tuple):
 
 
 class InterfaceSystem(LeafSystem):
-    """A control interface: raw device signals in, the human command and mode bookkeeping out.
+    """A control interface: raw device signals in, the human command, mode bookkeeping and
+    disambiguation requests out.
 
     .. pydrake_system::
 
         name: InterfaceSystem
         input_ports:
         - raw
-        - disambiguation_mode
+        - belief
+        - ee_pose
+        - goal_poses
+        - answer
         - automatic_request_count
         output_ports:
         - u_h
@@ -64,7 +73,8 @@ class InterfaceSystem(LeafSystem):
         - mode_switch_count
         - nonfinite_count
         - served_count
-        - disambiguation_pending
+        - paused
+        - request
         - event_log
 
     Input ports:
@@ -73,17 +83,24 @@ class InterfaceSystem(LeafSystem):
             buttons 0/1; head array ``[left, right, back, disambiguation_button]``, switches 0/1).
             Levels ``>= button_threshold`` (0.5) count as pressed; NaN/inf entries are read as 0
             (counted in ``nonfinite_count``, warned once).
-        disambiguation_mode (1): the disambiguation system's choice, an index into ``arm_modes``
-            or -1 = keep the current mode. Evaluated only in an update that serves a disambiguation:
-            ``config.request_latency`` after a request press (the same update when it is 0) or an
-            automatic trigger. May be left unconnected (manual paradigm): requests are then logged
-            and counted but the mode is kept.
+        belief (n), ee_pose (7), goal_poses (7 n): what a disambiguation request is made of: the
+            belief over the ``n_goals`` goals, the end-effector pose ``[x, y, z, qw, qx, qy, qz]``
+            in W (m) and the goal poses, flattened. Evaluated only in an update that starts a
+            disambiguation (a request press or an automatic trigger), which latches them into the
+            ``request`` state. May be left unconnected with no disambiguation system (latched as
+            NaN).
+        answer (2): the disambiguation system's ``answer`` ``[request id, m*]``: the id of the last
+            request it answered and the mode chosen for it (an index into ``arm_modes``, or -1 =
+            keep the current mode). Read by the updates from a started disambiguation's due time
+            (``config.request_latency`` after it) on, until the answer carries its id; that update
+            applies it. May be left unconnected (manual paradigm): requests are then logged,
+            counted and waited for, and the mode is kept.
         automatic_request_count (1): the Automatic paradigm's trigger count
             (:class:`~drake_disamb.systems.disambiguation.AutomaticTrigger`); when it grows, a
             disambiguation starts as on a request press, but with no press, and the mode change it
             causes is logged as ``"automatic_switch"``. Unconnected in the other paradigms.
 
-    Output ports (all computed from state, so none depends directly on an input):
+    Output ports (all state output ports, so none depends directly on an input):
         u_h (6): human command ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s) in the world frame, from
             the raw signal held at the last update and the current mode; zero in the gripper mode.
             (The paper's order, not Drake's ``[w; v]``.)
@@ -94,44 +111,70 @@ class InterfaceSystem(LeafSystem):
         mode_switch_count (1): manual mode switches so far (disambiguation switches not counted).
         nonfinite_count (1): updates whose raw signal held NaN/inf.
         served_count (1): disambiguations served so far (requests and automatic triggers whose
-            ``disambiguation_mode`` was read); the disambiguation system's ``request_count`` input.
-        disambiguation_pending (1): 1 from a request press (or an automatic trigger) until the
-            update that serves it, ``config.request_latency`` later (the time the system takes to
-            answer); else 0. Always 0 with no latency (served in the press's update).
+            answer was applied).
+        paused (1): 1 from the update that starts a disambiguation (a request press or an
+            automatic trigger) until the update that applies its answer, while the system
+            computes it, else 0. With ``disambiguation.hold_while_computing`` it pauses the loop
+            (the inference's, the blender's and the simulated user's ``paused`` inputs).
+        request (9 + 8 n): the latest disambiguation request, latched by the update that started
+            it: a :class:`~drake_disamb.systems.disambiguation.LatchedRequest` vector ``[id, belief,
+            ee_pose, goal_poses, mode]`` (the inputs of that update and the mode after its manual
+            switch, if any; id 0 before any). The disambiguation system's ``request`` input.
         event_log (abstract): :class:`EventLog` (a ``tuple[InterfaceEvent, ...]``), every mode
             switch, request and disambiguation or automatic switch with its time, in order.
+
+    **A request's timing.** The update of the press's tick latches the request; in a diagram the
+    disambiguation system answers it in its discrete update of that same tick, and the interface
+    applies the answer in the first update at least ``config.request_latency`` after the press
+    that has it: ``request_latency`` after the press (the next tick when the latency is 0).
 
     State: discrete ``[mode, previous mode-button level, previous request-button level, mode-switch
     count, request count, non-finite count, held raw (4), pending switch time (s, -1 if none), pending
     is automatic, served count, automatic count seen]``
-    (:class:`~drake_disamb.core.interfaces.InterfaceState`), one more discrete group per vector
+    (:class:`~drake_disamb.core.interfaces.InterfaceState`); one more discrete group per vector
     output holding its value (so the outputs are state output ports, evaluated without calling
-    Python), and the abstract event log; all are updated together by a periodic unrestricted update
-    every ``config.control_period`` seconds (first update at t = 0). The update is a pure function
-    of the state and the raw signal (time only stamps events): a (state, raw) pair that gave no
-    change and no event is remembered (one entry, on the system) and its repetitions return at
-    once, writing nothing.
+    Python); the latched ``request``; ``[stable (0/1), raw (4), automatic count, pending switch
+    time]``, whether the update of that raw signal and trigger count leaves the state as it is
+    (see below); and the
+    abstract event log. All are updated together by a periodic unrestricted update every
+    ``config.control_period`` seconds (first at t = 0), so that the rest of the loop sees this
+    tick's command in this tick. The update is a pure function of the state and its inputs (time
+    only stamps events and brings a pending disambiguation due): an update that changes the state
+    also checks whether the same raw signal and trigger count would change it again, and records
+    the answer; the following updates with those inputs (and no disambiguation due) end at once,
+    writing nothing, so that Drake rewrites no state at such a tick.
 
     Attributes:
         config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
+        n_goals: The number of goals a request's belief and goal poses cover.
         modes: All control modes as lists of dimension indices (0..5 = vx..wz, 6 = gripper);
             the gripper mode is the last entry.
         arm_modes: ``modes`` without the gripper mode (what the disambiguation system indexes).
         raw_layout: The names of the raw entries.
     """
 
-    def __init__(self, config: InterfaceConfig) -> None:
+    _NO_TRIGGER = -1.0
+    """The stable record's trigger count when ``automatic_request_count`` is unconnected (a count is
+    never negative, and a negative one starts nothing, as no trigger does)."""
+
+    _NOT_STABLE = np.array([0.0, *[np.nan] * RAW_SIZE, np.nan, -1.0])
+    """The stable record of a state whose next update has not been checked."""
+
+    def __init__(self, config: InterfaceConfig, n_goals: int = 1) -> None:
         super().__init__()
         if not isinstance(config, InterfaceConfig):
             raise ValueError(f"config: expected an InterfaceConfig, got {config!r}")
+        if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
+            raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
         self.config = config
+        self.n_goals = int(n_goals)
         self.modes: list[list[int]] = [list(m) for m in config.modes]
         self.arm_modes: list[list[int]] = [list(m) for m in config.arm_modes]
         self.raw_layout: tuple[str, ...] = config.raw_layout
         self.set_name(config.kind)
 
         initial = initial_state(config)
-        self._fixed_point: bytes | None = None  # see _update
+        n = self.n_goals
         self._state_index = self.DeclareDiscreteState(initial.to_vector())
         self._log_index = self.DeclareAbstractState(AbstractValue.Make(EventLog()))
         # Every vector output is a copy of state, so each gets its own discrete group, written by
@@ -139,13 +182,21 @@ class InterfaceSystem(LeafSystem):
         self._output_groups = {
             name: self.DeclareDiscreteState(value) for name, value in self._output_values(initial).items()
         }
+        self._request_index = self.DeclareDiscreteState(LatchedRequest.none(n).to_vector())
+        self._stable_index = self.DeclareDiscreteState(self._NOT_STABLE)
 
         self._raw_port = self.DeclareVectorInputPort("raw", RAW_SIZE)
-        self._disamb_port = self.DeclareVectorInputPort("disambiguation_mode", 1)
+        self._request_inputs = (
+            self.DeclareVectorInputPort("belief", n),
+            self.DeclareVectorInputPort("ee_pose", POSE_SIZE),
+            self.DeclareVectorInputPort("goal_poses", n * POSE_SIZE),
+        )
+        self._answer_port = self.DeclareVectorInputPort("answer", 2)
         self._automatic_port = self.DeclareVectorInputPort("automatic_request_count", 1)
 
         for name, group in self._output_groups.items():
             self.DeclareStateOutputPort(name, group)
+        self.DeclareStateOutputPort("request", self._request_index)
         self.DeclareStateOutputPort("event_log", self._log_index)
         self.DeclarePeriodicUnrestrictedUpdateEvent(config.control_period, 0.0, self._update)
 
@@ -159,7 +210,9 @@ class InterfaceSystem(LeafSystem):
         if not (isinstance(mode, int | np.integer) and 0 <= mode < len(self.modes)):
             raise ValueError(f"mode: expected an integer in [0, {len(self.modes) - 1}], got {mode!r}")
         state = replace(self._read_state(context), mode=int(mode))
-        self._write(state, context.get_mutable_discrete_state())
+        discrete = context.get_mutable_discrete_state()
+        self._write(state, discrete)
+        discrete.get_mutable_vector(self._stable_index).SetFromVector(self._NOT_STABLE)
 
     def get_event_log(self, context: Context) -> EventLog:
         """The events logged so far in ``context`` (an immutable tuple)."""
@@ -168,50 +221,72 @@ class InterfaceSystem(LeafSystem):
     # -- update and outputs ------------------------------------------------------------------------
 
     def _update(self, context: Context, state: State) -> EventStatus:
-        vector = context.get_discrete_state(self._state_index).get_value()
         raw = self._raw_port.Eval(context)
         automatic = (
             float(self._automatic_port.Eval(context)[0]) if self._automatic_port.HasValue(context) else None
         )
-        # With no disambiguation pending the update is a pure function of the state, the raw signal
-        # and the automatic trigger's count (time only stamps events): such a triple that last gave
-        # no change and no event is a fixed point, and the common period -- the same raw signal,
-        # mode and counts as the previous one -- ends here (before the state is even unpacked). A
-        # pending disambiguation is served at its due time, so time matters then and nothing is
-        # remembered.
-        key = None
-        if vector[InterfaceState.PENDING_DUE_INDEX] < 0.0:
-            key = vector.tobytes() + np.asarray(raw, dtype=float).tobytes() + repr(automatic).encode()
-            if key == self._fixed_point:
-                return DID_NOTHING
+        trigger = self._NO_TRIGGER if automatic is None else automatic
+        # The common period: the same raw signal and trigger count as an update that was found to
+        # leave the state as it is, and no disambiguation due. It ends here (before the state is
+        # even read).
+        stable = context.get_discrete_state(self._stable_index).get_value()
+        known, *known_raw, known_trigger, due = stable.tolist()
+        if (
+            known
+            and known_trigger == trigger
+            and known_raw == raw.tolist()
+            and not disambiguation_due(due, context.get_time())
+        ):
+            return DID_NOTHING
+        time = context.get_time()
+        vector = context.get_discrete_state(self._state_index).get_value()
         before = InterfaceState.from_vector(vector)
-
-        def read_disambiguation_mode() -> float | None:
-            if not self._disamb_port.HasValue(context):
-                return None
-            return float(self._disamb_port.Eval(context)[0])
+        answer = None
+        if self._answer_port.HasValue(context):
+            request_id, choice = self._answer_port.Eval(context)
+            answer = Answer(float(request_id), float(choice))
 
         def warn(message: str) -> None:
             warnings.warn(f"{self.get_name()}: {message}", RuntimeWarning, stacklevel=2)
 
-        after, events = interface_update(
-            before, raw, context.get_time(), self.config, read_disambiguation_mode, warn, automatic
-        )
-        # ``state`` starts as a copy of the current state: an unchanged state needs no writing (the
-        # common case: the same raw signal, mode and counts as in the previous period).
+        after, events = interface_update(before, raw, time, self.config, answer, warn, automatic)
+        # ``state`` starts as a copy of the current state: only what changed is written.
+        discrete = state.get_mutable_discrete_state()
         after_vector = after.to_vector()
         changed = not np.array_equal(after_vector, vector)
         if changed:
-            self._write(after, state.get_mutable_discrete_state(), after_vector)
+            self._write(after, discrete, after_vector)
+        if after.started_count > before.started_count:
+            self._latch(context, after, events, discrete)
         if events:
             log = context.get_abstract_state(self._log_index).get_value()
             state.get_mutable_abstract_state(self._log_index).set_value(EventLog((*log, *events)))
-        if changed or events:
-            return EventStatus.Succeeded()
-        if key is not None:
-            self._fixed_point = key
-        # Nothing written: the simulator then leaves the context (and every cached value) alone.
-        return DID_NOTHING
+        if changed or events:  # would the same inputs change the new state again?
+            again, more = interface_update(after, raw, time, self.config, answer, None, automatic)
+            settled = not more and np.array_equal(again.to_vector(), after_vector)
+        else:
+            settled = True
+        record = np.array([1.0 if settled else 0.0, *raw, trigger, after.pending_due])
+        if not (changed or events) and record.tobytes() == stable.tobytes():
+            # Nothing written: the simulator then leaves the context (and every cached value) alone.
+            return DID_NOTHING
+        discrete.get_mutable_vector(self._stable_index).SetFromVector(record)
+        return EventStatus.Succeeded()
+
+    def _latch(
+        self, context: Context, after: InterfaceState, events: list[InterfaceEvent], discrete: DiscreteValues
+    ) -> None:
+        """Write the request that this update started into the ``request`` group: its id, the
+        request inputs now (NaN where unconnected) and the mode it was made in."""
+        values = [
+            port.Eval(context) if port.HasValue(context) else np.full(port.size(), np.nan)
+            for port in self._request_inputs
+        ]
+        # The mode after this update's manual switch: before the answer, if one was applied at once.
+        applied = [e for e in events if e.kind in ("disambiguation_switch", "automatic_switch")]
+        mode = applied[0].from_mode if applied else after.mode
+        request = LatchedRequest(float(after.started_count), *values, float(mode))
+        discrete.get_mutable_vector(self._request_index).SetFromVector(request.to_vector())
 
     def _output_values(self, state: InterfaceState) -> dict[str, list[float]]:
         """The value of every vector output port for ``state`` (port name -> vector)."""
@@ -224,10 +299,10 @@ class InterfaceSystem(LeafSystem):
             "request_count": [float(state.request_count)],
             "nonfinite_count": [float(state.nonfinite_count)],
             "served_count": [float(state.served_count)],
-            "disambiguation_pending": [1.0 if state.pending_due >= 0.0 else 0.0],
+            "paused": [1.0 if state.pending_due >= 0.0 else 0.0],
         }
 
-    def _write(self, state: InterfaceState, discrete_state, vector=None) -> None:  # noqa: ANN001
+    def _write(self, state: InterfaceState, discrete_state: DiscreteValues, vector=None) -> None:  # noqa: ANN001
         """Write ``state`` (and its ``vector``, if already computed) and every output group."""
         vector = state.to_vector() if vector is None else vector
         discrete_state.get_mutable_vector(self._state_index).SetFromVector(vector)
@@ -235,11 +310,11 @@ class InterfaceSystem(LeafSystem):
             discrete_state.get_mutable_vector(self._output_groups[name]).SetFromVector(value)
 
 
-def make_interface(config: InterfaceConfig | str, **overrides: object) -> InterfaceSystem:
+def make_interface(config: InterfaceConfig | str, n_goals: int = 1, **overrides: object) -> InterfaceSystem:
     """The interface system of ``config`` (or of the registered kind named ``config``, with its
-    defaults), with ``overrides`` of :class:`~drake_disamb.core.interfaces.InterfaceConfig` fields;
-    named after its kind."""
+    defaults) latching requests over ``n_goals`` goals, with ``overrides`` of
+    :class:`~drake_disamb.core.interfaces.InterfaceConfig` fields; named after its kind."""
     cfg = InterfaceConfig(kind=config) if isinstance(config, str) else config
     if not isinstance(cfg, InterfaceConfig):
         raise ValueError(f"config: expected an InterfaceConfig or an interface name, got {config!r}")
-    return InterfaceSystem(replace(cfg, **overrides) if overrides else cfg)
+    return InterfaceSystem(replace(cfg, **overrides) if overrides else cfg, n_goals)

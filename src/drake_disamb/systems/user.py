@@ -29,7 +29,7 @@ class SimulatedUser(LeafSystem):
         - goal_poses
         - belief
         - stage
-        - system_busy
+        - paused
         output_ports:
         - raw
         - sanitized_input_count
@@ -43,9 +43,9 @@ class SimulatedUser(LeafSystem):
         stage (1): the task's current stage (e.g. ``TaskManager``'s ``stage``); optional,
             unconnected = stage 0. The user's goal is ``goal_index[stage]``; at or past the last
             stage (the task is done) the user lets go.
-        system_busy (1): above 0.5 while the system computes a disambiguation with its loop paused
-            (the interface's ``disambiguation_pending`` with ``hold_while_computing``); optional,
-            unconnected = never. The user waits meanwhile (``user_step``'s ``system_busy``).
+        paused (1): above 0.5 while the system computes a disambiguation with its loop paused
+            (the interface's ``paused`` with ``hold_while_computing``); optional, unconnected =
+            never. The user waits meanwhile (``user_step``'s ``paused``).
 
     Output ports:
         raw (4): the interface's raw signal, computed at the last update and held (no direct
@@ -131,7 +131,7 @@ class SimulatedUser(LeafSystem):
         self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._stage_port = self.DeclareVectorInputPort("stage", 1)
-        self._busy_port = self.DeclareVectorInputPort("system_busy", 1)
+        self._paused_port = self.DeclareVectorInputPort("paused", 1)
         self.DeclareStateOutputPort("raw", self._raw_index)
         self._sanitized = SanitizedInputCounter(self)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
@@ -181,7 +181,7 @@ class SimulatedUser(LeafSystem):
                 self.config,
                 belief,
                 self.releases[int(stage)],
-                flag_set(self._busy_port, context),
+                flag_set(self._paused_port, context),
             )
         else:
             message = (

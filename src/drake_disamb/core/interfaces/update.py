@@ -4,11 +4,12 @@ The update (:func:`interface_update`) is what the Drake system runs every contro
 sanitises the raw signal (the kind's :meth:`~drake_disamb.core.interfaces.base.Interface.sanitize`;
 non-finite entries never reach the arm: they are read as 0 and counted), reads the kind's mode
 event (a mode-button press, or what the kind uses) and changes or selects the mode, detects the
-request button's rising edge (a held button counts once), handles a disambiguation request (or an
-automatic trigger) by asking for the disambiguation system's choice ``request_latency`` after it
-(in the same update when that is 0), holds the sanitised raw signal, and returns the events it
-logged. The commands (:func:`command_from_raw`) are the kind's drives of the current mode's
-dimensions times their speeds.
+request button's rising edge (a held button counts once), starts a disambiguation at a request (or
+an automatic trigger) and applies the disambiguation system's answer to it ``request_latency``
+later (the answer is a value the update is given, :class:`Answer`; the update calls nothing),
+holds the sanitised raw signal, and returns the events it logged. The commands
+(:func:`command_from_raw`) are the kind's drives of the current mode's dimensions times their
+speeds.
 """
 
 from __future__ import annotations
@@ -40,6 +41,12 @@ _DUE_TOLERANCE = 1e-6
 started (update times are sums of control periods, off by rounding)."""
 
 
+def disambiguation_due(pending_due: float, time: float) -> bool:
+    """Whether a disambiguation pending since ``pending_due`` (:attr:`InterfaceState.pending_due`,
+    -1 if none) may be served by the update at ``time``."""
+    return pending_due >= 0 and time >= pending_due - _DUE_TOLERANCE
+
+
 @dataclass(frozen=True)
 class InterfaceConfig:
     """Settings of one interface.
@@ -55,9 +62,9 @@ class InterfaceConfig:
         initial_mode: Mode index at the start of a trial (the study randomised it).
         request_latency: Time (s, finite, >= 0) from a request press (or an automatic trigger) to
             the mode switch it causes: the paper's system took 2 to 2.5 s to compute the mode. The
-            switch is made by the first update at least this long after the press, with the
-            disambiguation system's choice *at that time* (its computation finished then: the
-            belief, pose and current mode of the switch time). 0 (default): the same update.
+            switch is made by the first update at least this long after the press that has the
+            disambiguation system's answer to that request (the mode chosen for the belief, pose,
+            goals and mode of the press). 0 (default): the first update that has the answer.
         serve_requests: Whether a request press starts a disambiguation (default). False: presses
             are logged and counted but never switch the mode (the Automatic paradigm without its
             request button).
@@ -176,12 +183,14 @@ class InterfaceState:
         request_count: Disambiguation requests so far (request-button presses).
         nonfinite_count: Updates whose raw signal held a NaN or infinity.
         held_raw: The sanitised raw signal of the last update; the commands are computed from it.
-        pending_due: Time (s) at which the pending disambiguation switches the mode; -1 if none
-            (a number, not NaN: an unchanged state vector compares equal and is not rewritten).
+        pending_due: Time (s) from which the pending disambiguation may switch the mode (its start
+            plus ``request_latency``); -1 if none (a number, not NaN: an unchanged state vector
+            compares equal and is not rewritten). The pending disambiguation's request id is
+            :attr:`started_count`.
         pending_automatic: The pending disambiguation was started by an automatic trigger (1) or by
             a request press (0).
-        served_count: Disambiguations served so far (the disambiguation system's choice read and
-            applied: requests and automatic triggers).
+        served_count: Disambiguations served so far (their answer applied, or, with no
+            disambiguation system, their wait over: requests and automatic triggers).
         automatic_seen: The automatic trigger's request count seen at the last update.
     """
 
@@ -200,6 +209,12 @@ class InterfaceState:
     VECTOR_SIZE = 10 + RAW_SIZE
     PENDING_DUE_INDEX = 6 + RAW_SIZE
     """Where ``pending_due`` is in :meth:`to_vector` (read without building the state)."""
+
+    @property
+    def started_count(self) -> int:
+        """Disambiguations started so far (served ones and the pending one): the pending one's
+        request id, the one the disambiguation system's :class:`Answer` must carry."""
+        return self.served_count + (1 if self.pending_due >= 0 else 0)
 
     def to_vector(self) -> NDArray[np.float64]:
         """Flat vector ``[mode, prev_mode, prev_req, n_switch, n_req, n_bad, raw (4), pending_due,
@@ -285,11 +300,26 @@ def command_from_raw(
     return np.array(u7[:6]), u7[GRIPPER_DIM]
 
 
+@dataclass(frozen=True)
+class Answer:
+    """The disambiguation system's answer to one request, the value :func:`interface_update` reads.
+
+    Attributes:
+        request: The id of the request answered: the :attr:`InterfaceState.started_count` the
+            request was started with (1 for the first); 0 before any answer.
+        mode: The arm-mode index chosen for it, or -1 to keep the current mode (ties, unusable
+            inputs). Any other value is invalid: warned about, the mode kept.
+    """
+
+    request: float
+    mode: float
+
+
 def parse_disambiguation_mode(value: float | None, n_arm_modes: int) -> int | None:
     """Read the disambiguation system's choice: an arm-mode index, or ``None`` to keep the mode.
 
-    ``None`` (input not connected), -1, and invalid values (non-finite, non-integer, out of range)
-    all keep the mode; the caller warns about invalid ones (see :func:`interface_update`).
+    ``None`` (no disambiguation system), -1, and invalid values (non-finite, non-integer, out of
+    range) all keep the mode; the caller warns about invalid ones (see :func:`interface_update`).
     """
     if value is None:
         return None
@@ -307,7 +337,7 @@ def interface_update(
     raw: ArrayLike,
     time: float,
     config: InterfaceConfig,
-    read_disambiguation_mode: Callable[[], float | None] | None = None,
+    answer: Answer | None = None,
     warn: Callable[[str], None] | None = None,
     automatic_requests: float | None = None,
 ) -> tuple[InterfaceState, list[InterfaceEvent]]:
@@ -318,9 +348,9 @@ def interface_update(
         raw: The raw signal now (any values; sanitised here).
         time: Current time (s), stamped on the events.
         config: The interface.
-        read_disambiguation_mode: Called only when a disambiguation is served (see below); returns
-            the disambiguation system's choice (arm-mode index, -1 = keep) or ``None`` when there is
-            no disambiguation system (manual paradigm: the request is logged, the mode kept).
+        answer: The disambiguation system's latest answer (:class:`Answer`), or ``None`` when there
+            is no disambiguation system (manual paradigm: a request is logged and waited for, and
+            the mode kept). Read only when a pending disambiguation is due.
         warn: Called with a message on the first non-finite raw signal and on an invalid
             disambiguation choice.
         automatic_requests: The automatic trigger's running count of triggers (Automatic
@@ -334,18 +364,21 @@ def interface_update(
         one ``mode_switch`` per event (also when a direct selection keeps the mode). A
         request-button rising edge logs ``disambiguation_request`` (at the press) and, with
         ``config.serve_requests``, starts a disambiguation; so does a new automatic trigger. A
-        started disambiguation is served by the first update at least ``config.request_latency``
-        after it started (the same update when the latency is 0): the disambiguation system's
-        choice is read then (from that time's belief, pose and mode) and, if it is an arm mode
-        different from the current one, the mode switches to it, logged as
-        ``disambiguation_switch`` (a request's) or ``automatic_switch`` (a trigger's) at the switch
-        time. One disambiguation at a time: a press during the wait is logged and counted as a
-        request but starts nothing, and a trigger during the wait is dropped; manual mode switches
-        during the wait work as usual (the choice served at the end sees the mode they left).
-        When the mode button and a served disambiguation fall in the same update the manual
-        switch is applied first and the disambiguation choice last. Only manual switches count in
-        ``mode_switch_count``; requests count in ``request_count`` (the paper's "button presses" is
-        their sum), served disambiguations in ``served_count``.
+        started disambiguation is request number ``new_state.started_count``: the caller latches
+        what the disambiguation system solves (the belief, pose and goals of this update, and the
+        mode after this update's manual switch, if any), and the system answers it. It is served
+        by the first update at least ``config.request_latency`` after it started that has the
+        answer to it (``answer.request`` equal to its id; with no disambiguation system, the first
+        update at least that late): if the answer is an arm mode different from the current one
+        the mode switches to it, logged as ``disambiguation_switch`` (a request's) or
+        ``automatic_switch`` (a trigger's) at the switch time. One disambiguation at a time: a
+        press during the wait is logged and counted as a request but starts nothing, and a
+        trigger during the wait is dropped; manual mode switches during the wait work as usual
+        (and an answer equal to the mode they reached keeps it). When the mode button and a
+        served disambiguation fall in the same update the manual switch is applied first and the
+        answer last. Only manual switches count in ``mode_switch_count``; requests count in
+        ``request_count`` (the paper's "button presses" is their sum), served disambiguations in
+        ``served_count``.
     """
     variant = config.variant
     values, bad = _sanitized(raw, config)
@@ -383,9 +416,11 @@ def interface_update(
         if due < 0:  # a trigger while a disambiguation is pending is dropped
             due, automatic = float(time) + config.request_latency, 1
     served = state.served_count
-    if due >= 0 and time >= due - _DUE_TOLERANCE:
+    pending_id = served + 1
+    answered = answer is None or answer.request == pending_id
+    if disambiguation_due(due, time) and answered:
         served += 1
-        value = read_disambiguation_mode() if read_disambiguation_mode is not None else None
+        value = None if answer is None else answer.mode
         choice = parse_disambiguation_mode(value, len(config.arm_modes))
         if value is not None and choice is None and float(value) != -1.0 and warn is not None:
             warn(

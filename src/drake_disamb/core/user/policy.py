@@ -13,7 +13,7 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
    mode (pressing as in rule 4, then its settle) and opens the gripper until the stage ends.
 2. **Reacting**: after any button press it waits a reaction time with everything released (so
    presses are single rising edges and it sees the new mode before acting again).
-   While the system computes a disambiguation with its loop paused (``system_busy``: the arm does
+   While the system computes a disambiguation with its loop paused (``paused``: the arm does
    not respond) it waits too, everything released, and its stall and blocked watches (rule 5) and
    its "unhelped" timer (rule 3) start again after.
 3. **Request**: it presses the disambiguation button at the start of the trial
@@ -163,7 +163,7 @@ def user_step(
     config: UserConfig,
     belief: ArrayLike | None = None,
     release: bool = False,
-    system_busy: bool = False,
+    paused: bool = False,
 ) -> UserState:
     """One decision of the simulated user. Returns the new state; its ``raw`` is the output.
 
@@ -182,7 +182,7 @@ def user_step(
             release, :attr:`drake_disamb.config.StageSpec.release_opening`): at the goal the user
             changes to the gripper mode and opens the gripper, instead of letting go of the
             interface (rule 1).
-        system_busy: The system is computing a disambiguation and its loop is paused (the arm
+        paused: The system is computing a disambiguation and its loop is paused (the arm
             does not respond: :attr:`drake_disamb.config.DisambiguationSpec.hold_while_computing`,
             also after an automatic trigger the user did not ask for). The user sees the arm stop
             and waits, everything released; its stall and blocked watches start again after.
@@ -205,7 +205,7 @@ def user_step(
         )
     if reached:  # at the goal, letting go of the object (rule 1 with a release): no late release
         state = evolve(state, hold_until=0.0)
-    if system_busy:
+    if paused:
         # Waiting for the system's answer is not being unhelped: that timer starts again after too
         # (else a user that asks when unhelped for less than the answer takes asks again at once).
         return evolve(
