@@ -101,33 +101,33 @@ def test_default_protocol_is_the_papers() -> None:
 
 def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> None:
     from drake_disamb.config import resolve_scenario
-    from drake_disamb.study.run.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, trial_scenario
 
     protocol = P.quick_protocol()
     context = StudyContext(protocol=P.protocol_to_dict(protocol))
     seen = {}
     for spec in P.expand_trials(protocol, 0):
-        interface = resolve_scenario(build_scenario(spec, context)).interface
+        interface = resolve_scenario(trial_scenario(spec, context)).interface
         seen[spec.interface] = interface.mode_selection
     assert seen == {"joystick": "direct", "head_array": "cycle"}
     data = P.protocol_to_dict(protocol)
     data["interface_mode_selection"] = "cycle"
     context = StudyContext(protocol=data)
     spec = next(s for s in P.expand_trials(protocol, 0) if s.interface == "joystick")
-    assert resolve_scenario(build_scenario(spec, context)).interface.mode_selection == "cycle"
+    assert resolve_scenario(trial_scenario(spec, context)).interface.mode_selection == "cycle"
 
 
 def test_the_protocols_named_targets_end_the_reaches_only() -> None:
     """The experimenter named the reaching target: the reach ends only at the subject's goal; the
     pouring task's pour and place end at whatever goal they are done at."""
-    from drake_disamb.study.run.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, trial_scenario
 
     protocol = P.default_protocol()
     assert {t.task: t.target_stages for t in protocol.tasks} == {"reaching": ["reach"], "pouring": []}
     context = StudyContext(protocol=P.protocol_to_dict(protocol))
     seen = {}
     for spec in P.expand_trials(protocol, 0)[:60]:
-        scenario = build_scenario(spec, context)
+        scenario = trial_scenario(spec, context)
         seen[spec.task] = [stage.ends_at_target for stage in scenario.stages]
     assert seen == {"reaching": [True], "pouring": [False, False]}
 
@@ -507,7 +507,7 @@ def test_a_switched_request_latency_is_the_one_its_records_keep() -> None:
         ("method", r"protocol\.disambiguation_method: .*'coin_flip'"),
         ("malformed", r"protocol\.yaml.*line"),
         ("out_is_a_file", r"--out: .* is a file"),
-        ("switch_path", r"--switch inference\.agreemnt: .*no field 'agreemnt'"),
+        ("switch_path", r"--switch inference\.agreemnt='dot': scenario\.inference\.agreemnt: unknown key"),
         ("switch_value", r"--switch user\.config\.reaction_time='slow'"),
     ],
 )
@@ -783,7 +783,7 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
     and a trial from each succeeds (head array, disambiguation, the first goal of every stage)."""
     import dataclasses
 
-    from drake_disamb.study.run.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, trial_scenario
     from drake_disamb.trial import run_trial
 
     data = compatible_protocol_data()
@@ -796,7 +796,7 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
         one = dataclasses.replace(
             spec, interface="head_array", start_pose=pose, initial_mode=0, goals=(0,) * len(spec.goals)
         )
-        scenario = build_scenario(one, context)
+        scenario = trial_scenario(one, context)
         postures.append(scenario.start_joint_positions)
         result = run_trial(scenario, progress=False)
         assert result.success, (
