@@ -29,7 +29,8 @@ start pose's joint offsets); the trial's draws (interface, paradigm, seed, initi
 intended goals, request latency); the subject's overrides of ``Scenario.user.config``; last the
 study's overrides, one layer each (dotted field paths, ``study ablate --switch``; never a field
 of the trial's condition, :data:`CONDITION_FIELDS`). Every value passes the scenario's checks,
-and an error names its layer.
+and an error names its layer. Each record keeps the scenario that ran (``extra.scenario``), from
+which ``study rerun`` runs the trial again.
 
 Subjects come from :func:`drake_disamb.study.design.population.draw_subjects` (``study.yaml`` names the
 population).
@@ -73,6 +74,7 @@ __all__ = [
     "draw_study_subjects",
     "override_layers",
     "plan_study",
+    "rerun_trial",
     "run_study",
     "run_trial_job",
     "trial_layers",
@@ -294,6 +296,42 @@ def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
         extra=extra,
     )
     return TrialOutput(record=record, trace=trace)
+
+
+def rerun_trial(
+    record: TrialRecord, source: str = "the record", progress: bool = False
+) -> tuple[TrialRecord, dict[str, np.ndarray]]:
+    """Run a simulated trial again from its record alone: the scenario it keeps
+    (:func:`~drake_disamb.study.run.outcome.record_scenario`), the record's identity and its
+    producer's ``extra`` (the order, the start pose's name...). Returns the new record and trace;
+    a trial is a pure function of its scenario, so both equal the first run's but ``wall_time``.
+
+    Raises:
+        ValueError: a person's trial (the person's commands are not in the scenario), or a record
+            that keeps no scenario, naming ``source``.
+    """
+    from drake_disamb.study.run.outcome import record_from_result, record_scenario, trace_arrays
+    from drake_disamb.trial import run_trial
+
+    if record.source != "simulated":
+        raise ValueError(
+            f"{source}: a {record.source} trial (source {record.source}) cannot be rerun: the person's "
+            "commands are not in its scenario"
+        )
+    result = run_trial(record_scenario(record, source), progress=progress)
+    trace = trace_arrays(result)
+    fresh = record_from_result(
+        result,
+        trial_id=record.trial_id,
+        subject=record.subject,
+        repetition=record.repetition,
+        seed=record.seed,
+        start_pose=record.start_pose,
+        source=record.source,
+        trace=trace,
+    )
+    producer = {k: v for k, v in record.extra.items() if k not in fresh.extra}
+    return dataclasses.replace(fresh, extra={**fresh.extra, **producer}), trace
 
 
 # -- the study -------------------------------------------------------------------------------------
