@@ -43,7 +43,7 @@ from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput, Tr
 from pydrake.trajectories import PiecewisePolynomial
 
 from drake_disamb.builder import build_shared_control_diagram
-from drake_disamb.config import Scenario, load_scenario, resolve_scenario, with_overrides
+from drake_disamb.config import Scenario, load_scenario, resolve_scenario
 from drake_disamb.station import build_station
 from drake_disamb.trial import run_trial
 
@@ -77,7 +77,7 @@ def measure(
     seconds: float, time_step: float, interface: str, profile: bool
 ) -> tuple[float, float, str, tuple[float, float]]:
     """``(wall rate, cpu rate, profile table, station floor rates)`` of ``seconds`` of the reaching loop."""
-    scenario = with_overrides(load_scenario("reaching"), interface=interface)
+    scenario = load_scenario("reaching", {"interface": interface})
     plant_config = copy.copy(scenario.plant_config)
     plant_config.time_step = time_step
     scenario = dataclasses.replace(scenario, duration=seconds, plant_config=plant_config)

@@ -21,7 +21,6 @@ Results stream to ``--jsonl`` (one line per trial) so a long run can be read whi
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import sys
 import time
@@ -29,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_disamb.config import load_scenario, validate_scenario, with_overrides
+from drake_disamb.config import load_scenario
 from drake_disamb.core.interfaces import interface_modes
 from drake_disamb.study.data.authors import read_trials
 from drake_disamb.study.design.population import draw_subjects
@@ -51,12 +50,18 @@ def run_one(itf: str, task: str, par: str, subject, seed: int) -> dict:
     rng = np.random.default_rng([seed, 7])
     base = load_scenario(task)
     goals = [int(rng.integers(len(base.stage_goals(k)))) for k in range(base.n_stages)]
-    s = with_overrides(base, interface=itf, paradigm=par, seed=seed, goal=goals)
-    s = dataclasses.replace(s, interface_mode_selection=default_protocol().interface_mode_selection)
     n_modes = len(interface_modes(itf))
-    user = dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
-    s = validate_scenario(
-        dataclasses.replace(s, user=user, duration=ARGS.duration, initial_mode=int(rng.integers(n_modes)))
+    s = load_scenario(
+        task,
+        {
+            "interface": itf,
+            "paradigm": par,
+            "seed": seed,
+            "user": {"goals": goals, "config": dict(subject.user)},
+            "interface_mode_selection": default_protocol().interface_mode_selection,
+            "duration": ARGS.duration,
+            "initial_mode": int(rng.integers(n_modes)),
+        },
     )
     r = run_trial(s, progress=False)
     return {

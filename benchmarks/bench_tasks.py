@@ -23,41 +23,43 @@ machine.
 from __future__ import annotations
 
 import argparse
-import copy
 import itertools
 import statistics
 import time
 
 from drake_disamb.config import (
     Scenario,
+    data_layer,
+    load_layers,
     load_scenario,
-    scenario_from_dict,
-    scenario_to_dict,
-    validate_scenario,
+    setting_layer,
+    task_layer,
 )
-from drake_disamb.config.system_presets import SYSTEM_PRESETS, apply_system_preset
+from drake_disamb.config.system_presets import SYSTEM_PRESETS, system_layer
 from drake_disamb.trial import run_trial
 from drake_disamb.yaml_safety import load_yaml_value
 
 
-def with_settings(scenario: Scenario, settings: list[str]) -> Scenario:
-    """A copy of ``scenario`` with each ``PATH=VALUE`` of ``settings`` applied (validated)."""
-    s = copy.deepcopy(scenario)
+def setting_layers(settings: list[str]) -> list:
+    """A layer per ``PATH=VALUE`` of ``settings`` (the value read as YAML)."""
+    layers = []
     for item in settings:
         path, sep, text = item.partition("=")
         if not sep:
             raise SystemExit(f"--set: expected PATH=VALUE, got {item!r}")
-        *parents, leaf = path.split(".")
-        node = s
-        for name in parents:
-            node = getattr(node, name)
-        if not hasattr(node, leaf):
-            raise SystemExit(f"--set: no scenario field {path!r}")
         try:
-            setattr(node, leaf, load_yaml_value(text, f"--set {path}"))
+            layers.append(setting_layer(path, load_yaml_value(text, f"--set {path}"), f"--set {item}"))
         except ValueError as exc:
             raise SystemExit(str(exc)) from None
-    return validate_scenario(s)
+    return layers
+
+
+def with_settings(scenario: Scenario, settings: list[str]) -> Scenario:
+    """``scenario`` with each ``PATH=VALUE`` of ``settings`` layered on it (validated)."""
+    try:
+        return load_layers(setting_layers(settings), base=scenario)
+    except ValueError as exc:
+        raise SystemExit(str(exc)) from None
 
 
 def goal_choices(task: str) -> list[list[int]]:
@@ -91,11 +93,13 @@ def main() -> None:
         for interface in args.interface:
             totals, successes, presses = [], 0, []
             for goals in goal_choices(task):
-                plain = apply_system_preset(scenario_to_dict(load_scenario(task)), args.system)
-                plain.update(interface=interface, paradigm=args.paradigm)
-                plain["user"]["goals"] = list(goals)
-                scenario = scenario_from_dict(plain, f"<{task} with system {args.system}>")
-                r = run_trial(with_settings(scenario, args.set), progress=False)
+                trial = {"interface": interface, "paradigm": args.paradigm, "user": {"goals": list(goals)}}
+                layers = [task_layer(task), system_layer(args.system), data_layer(trial, "the trial")]
+                try:
+                    scenario = load_layers([*layers, *setting_layers(args.set)])
+                except ValueError as exc:
+                    raise SystemExit(str(exc)) from None
+                r = run_trial(scenario, progress=False)
                 successes += r.success
                 presses.append(r.button_presses)
                 _, alpha = r.logs["alpha"]

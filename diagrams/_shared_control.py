@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from drake_disamb.builder import build_shared_control_diagram
-from drake_disamb.config import load_scenario, with_overrides
+from drake_disamb.config import load_scenario, merge_layers, task_layer
 from drake_disamb.diagram_io import write_diagram_graph
 from drake_disamb.trial import run_trial
 
@@ -23,10 +23,12 @@ def main(task: str, argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("out/diagrams"), help="output folder")
     parser.add_argument("--max-depth", type=int, default=1, help="nested diagrams to expand in the picture")
     args = parser.parse_args(argv)
-    scenario = with_overrides(
-        load_scenario(task), interface=args.interface, paradigm=args.paradigm, goal=args.goal
-    )
-    if args.duration is not None:
+    fields = {"interface": args.interface, "paradigm": args.paradigm}
+    layer = {name: value for name, value in fields.items() if value is not None}
+    if args.goal is not None:
+        layer["user"] = {"goals": [args.goal] * merge_layers([task_layer(task)]).n_stages}
+    scenario = load_scenario(task, layer)
+    if args.duration is not None:  # cut short on purpose, below the hold times
         import dataclasses
 
         scenario = dataclasses.replace(scenario, duration=args.duration)

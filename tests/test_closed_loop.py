@@ -14,14 +14,14 @@ import pytest
 from pydrake.systems.framework import LeafSystem
 
 from drake_disamb.builder import build_shared_control_diagram
-from drake_disamb.config import load_scenario, with_overrides
+from drake_disamb.config import load_scenario
 from drake_disamb.core.geometry import quat_to_matrix
 from drake_disamb.trial import TrialResult, run_trial
 
 
 @functools.cache
 def _reaching(interface: str, goal: int, agreement: str | None = None) -> TrialResult:
-    scenario = with_overrides(load_scenario("reaching"), interface=interface, goal=goal)
+    scenario = load_scenario("reaching", {"interface": interface, "user": {"goals": [goal]}})
     if agreement is not None:
         scenario.inference.agreement = agreement
     return run_trial(scenario, progress=False)
@@ -78,7 +78,9 @@ def test_first_request_keeps_vx_with_the_papers_agreement_term() -> None:
 
 
 def test_manual_paradigm_has_no_requests() -> None:
-    scenario = with_overrides(load_scenario("reaching"), interface="joystick", paradigm="manual", goal=3)
+    scenario = load_scenario(
+        "reaching", {"interface": "joystick", "paradigm": "manual", "user": {"goals": [3]}}
+    )
     r = run_trial(scenario, progress=False)
     assert r.success and r.requests == 0 and r.button_presses == r.mode_switches
     assert "disambiguation" not in build_shared_control_diagram(scenario).systems
@@ -86,7 +88,7 @@ def test_manual_paradigm_has_no_requests() -> None:
 
 @functools.cache
 def _pouring(interface: str, goals: tuple[int, int], goal_set: str = "stage") -> TrialResult:
-    scenario = with_overrides(load_scenario("pouring"), interface=interface, goal=list(goals))
+    scenario = load_scenario("pouring", {"interface": interface, "user": {"goals": list(goals)}})
     scenario.inference.goal_set = goal_set
     return run_trial(scenario, progress=False)
 
@@ -201,7 +203,7 @@ def test_nan_input_never_reaches_the_arm() -> None:
 @pytest.mark.parametrize("method", ["bayes", "memory"])
 def test_baseline_inference_methods_build_and_run(method: str) -> None:
     paradigm = "manual" if method == "memory" else "disambiguation"  # memory has no forward projection
-    s = with_overrides(load_scenario("reaching"), paradigm=paradigm)
+    s = load_scenario("reaching", {"paradigm": paradigm})
     s = dataclasses.replace(s, inference=dataclasses.replace(s.inference, method=method), duration=0.5)
     r = run_trial(s, progress=False)
     _, belief = r.logs["belief"]
@@ -211,7 +213,7 @@ def test_baseline_inference_methods_build_and_run(method: str) -> None:
 
 def test_unknown_names_and_bad_scenarios() -> None:
     with pytest.raises(ValueError, match="interface"):
-        with_overrides(load_scenario("reaching"), interface="chin_switch")
+        load_scenario("reaching", {"interface": "chin_switch"})
     with pytest.raises(ValueError, match="task"):
         load_scenario("knitting")
     s = load_scenario("reaching")
@@ -226,7 +228,7 @@ def test_direct_mode_selection_reaches_with_fewer_mode_button_presses() -> None:
     # its target modes in one press each instead of cycling through the modes on the way.
     results = {}
     for selection in ("cycle", "direct"):
-        scenario = with_overrides(load_scenario("reaching"), interface="joystick", goal=1, seed=0)
+        scenario = load_scenario("reaching", {"interface": "joystick", "user": {"goals": [1]}, "seed": 0})
         scenario.interface_mode_selection = selection
         scenario.duration = 20.0
         results[selection] = run_trial(scenario, progress=False)

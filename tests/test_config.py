@@ -23,7 +23,6 @@ from drake_disamb.config import (
     load_scenario,
     resolve_scenario,
     scenario_from_yaml,
-    with_overrides,
 )
 from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.disambiguation import preset
@@ -178,12 +177,13 @@ def test_core_configs_are_declared_once() -> None:
     [
         ("reaching", {}),
         ("pouring", {}),
-        ("reaching", {"interface": "joystick", "goal": 2}),
-        ("pouring", {"interface": "joystick", "goal": [1, 0], "paradigm": "manual", "seed": 7}),
+        ("reaching", {"interface": "joystick", "user": {"goals": [2]}}),
+        ("pouring", {"interface": "joystick", "user": {"goals": [1, 0]}, "paradigm": "manual", "seed": 7}),
+        ("reaching", {"station": {"_tag": "!Lcm", "lcm_url": "memq://", "status_timeout": 0.05}}),
     ],
 )
 def test_dump_loads_back_equal(task: str, overrides: dict, tmp_path: Path) -> None:
-    s = with_overrides(load_scenario(task), **overrides)
+    s = load_scenario(task, overrides)
     text = dump_scenario(s)
     assert scenario_from_yaml(text) == s
     path = tmp_path / "dumped.yaml"
@@ -213,14 +213,162 @@ def test_demo_dump_scenario_prints_the_resolved_scenario(capsys, tmp_path: Path)
     argv = ["demo", "--dump-scenario", "--interface", "joystick", "--goal", "2", "--duration", "5"]
     assert main([*argv, "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    expected = dataclasses.replace(
-        with_overrides(load_scenario("reaching"), interface="joystick", goal=2), duration=5.0
-    )
+    expected = load_scenario("reaching", {"interface": "joystick", "user": {"goals": [2]}, "duration": 5.0})
     assert scenario_from_yaml(text) == expected
     assert "integration_scheme: explicit_euler" in text and "time_step: 0.01" in text
+    assert "\nstation: {}\n" in text  # the simulated station: Drake writes no tag for the first variant
     assert not out.exists()
     assert main(["demo", "--dump-scenario", "--goal", "9"]) == 2
-    assert "goal: expected an index in [0, 4]" in capsys.readouterr().err
+    assert "--goal: scenario.user.goals[0]: expected a goal index in [0, 4], got 9" in capsys.readouterr().err
+    assert (
+        main(["demo", "--dump-scenario", "--task", "pouring", "--goal", "1"]) == 0
+    )  # one index, every stage
+    assert scenario_from_yaml(capsys.readouterr().out).user.goals == [1, 1]
+
+
+def test_demo_scenario_text_sets_the_station(capsys) -> None:
+    from drake_disamb.station.backends import Lcm, Sim
+
+    assert main(["demo", "--dump-scenario", "--scenario-text", "station: !Lcm {}"]) == 0
+    text = capsys.readouterr().out
+    assert "\nstation: !Lcm\n  lcm_url: udpm://239.255.76.67:7667?ttl=0\n" in text
+    back = scenario_from_yaml(text)
+    assert isinstance(back.station, Lcm) and back == load_scenario("reaching", "station: !Lcm {}")
+    assert main(["demo", "--dump-scenario", "--station", "lcm"]) == 0  # the shorthand writes the same layer
+    assert capsys.readouterr().out == text
+    argv = ["--scenario-text", "station: !Lcm {status_timeout: 0.05}", "--lcm-url", "memq://"]
+    assert main(["demo", "--dump-scenario", *argv]) == 0  # the same tag merges: both settings kept
+    station = scenario_from_yaml(capsys.readouterr().out).station
+    assert (station.lcm_url, station.status_timeout) == ("memq://", 0.05)
+    argv = ["--scenario-text", "station: !Lcm {}", "--scenario-text", "station: {}"]
+    assert main(["demo", "--dump-scenario", *argv]) == 0  # no tag: the first backend, the simulation
+    assert isinstance(scenario_from_yaml(capsys.readouterr().out).station, Sim)
+    assert main(["demo", "--dump-scenario", "--scenario-text", "station: !Lcm {lcm_url: nourl}"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error: --scenario-text: scenario.station.lcm_url: expected a URL" in err
+
+
+def test_the_builder_builds_the_scenarios_station() -> None:
+    # No driver on this bus: the station on the wire waits for a status that never comes.
+    s = load_scenario("reaching", "station: !Lcm {lcm_url: 'memq://', start_timeout: 0.05}")
+    assert resolve_scenario(s).backend == s.station
+    with pytest.raises(
+        RuntimeError, match=r"station: no usable arm status on 'KINOVA_JACO_STATUS' at memq://"
+    ):
+        build_shared_control_diagram(s)
+
+
+# ------------------------------------------------------------------------------------------------
+# The one loader: layers merged by Drake's yaml_load_typed with defaults=
+# ------------------------------------------------------------------------------------------------
+
+
+def test_a_layer_merges_structs_and_maps_and_replaces_lists_and_scalars() -> None:
+    from drake_disamb.config import data_layer, load_layers, task_layer, text_layer
+    from drake_disamb.station.backends import Lcm, Sim
+
+    base = load_scenario("pouring")
+    layer = text_layer(
+        """
+        inference: {dft: {tau1: 3.0}}          # a struct: the other fields of dft kept
+        goals: [{name: a, position: [0.3, -0.45, 0.3]}, {name: b, position: [-0.3, -0.45, 0.3]}]
+        stages: [{name: reach}]                # lists: replaced whole
+        user: {goals: [0]}
+        interface_mode_order: {joystick: [[0, 1], [2], [3, 4], [5]]}
+        carried_object: null                   # an optional: cleared
+        seed: 5
+        """,
+        "layer.yaml",
+    )
+    s = load_layers(
+        [
+            task_layer("pouring"),
+            data_layer({"interface_mode_order": {"head_array": [[0], [1], [2], [5], [3], [4]]}}),
+            layer,
+        ]
+    )
+    assert s.inference.dft.tau1 == 3.0 and s.inference.dft.tau2 == base.inference.dft.tau2
+    assert s.inference.dft.lam == base.inference.dft.lam and s.user.config == base.user.config
+    assert [g.name for g in s.goals] == ["a", "b"] and len(s.stages) == 1 and s.carried_object is None
+    assert set(s.interface_mode_order) == {"head_array", "joystick"}  # a map: key by key
+    assert s.seed == 5 and s.duration == base.duration
+    # A variant: the same tag merges into the value below, another tag (or none: Sim) starts afresh.
+    layers = [task_layer("reaching"), data_layer({"station": {"_tag": "!Lcm", "lcm_url": "memq://"}})]
+    same = load_layers([*layers, data_layer({"station": {"_tag": "!Lcm", "status_timeout": 0.05}})]).station
+    assert isinstance(same, Lcm) and (same.lcm_url, same.status_timeout) == ("memq://", 0.05)
+    assert isinstance(load_layers([*layers, data_layer({"station": {}})]).station, Sim)
+    fresh = load_layers(
+        [*layers, data_layer({"station": {}}), data_layer({"station": {"_tag": "!Lcm"}})]
+    ).station
+    assert fresh == Lcm()
+
+
+def test_an_error_names_the_layer_that_wrote_the_field() -> None:
+    from drake_disamb.config import data_layer, load_layers, task_layer, text_layer
+
+    task = task_layer("reaching")
+    with pytest.raises(
+        ValueError,
+        match=r"^--switch: scenario\.control_period: expected a finite number in \[0\.001, 0\.1\] s, got 0",
+    ):
+        load_layers([task, data_layer({"control_period": 0.5}, "--switch")])
+    with pytest.raises(ValueError, match=r"^t\.yaml: scenario\.goals\[1\]\.position: goal 'b' is out of"):
+        goals = "goals: [{name: a, position: [0.3, -0.45, 0.3]}, {name: b, position: [2.0, 0.0, 0.3]}]"
+        load_layers([task, data_layer({"seed": 1}, "a"), text_layer(goals, "t.yaml"), data_layer({}, "b")])
+    with pytest.raises(ValueError, match=r"^t\.yaml, line 2: duplicate key 'seed'"):
+        load_layers([task, text_layer("seed: 1\nseed: 2\n", "t.yaml")])  # the text's hardening, per layer
+    with pytest.raises(
+        ValueError, match=r"^b: scenario\.user\.goals\[0\]: expected a goal index in \[0, 4\]"
+    ):
+        load_layers([task, data_layer({"user": {"goals": [7]}}, "b")])
+    # A field no layer wrote (the blending thresholds, for the one goal left): every layer is named.
+    one = data_layer({"goals": [{"name": "a", "position": [0.3, -0.45, 0.3]}]}, "c")
+    with pytest.raises(ValueError, match=r"^<embedded reaching\.yaml> \+ c: scenario\.blending: rho1: "):
+        load_layers([task, one])
+
+
+def test_every_task_preset_and_example_loads_through_the_one_loader() -> None:
+    from drake_disamb.config import load_layers, task_layer
+    from drake_disamb.config.system_presets import SYSTEM_PRESETS, system_layer
+    from drake_disamb.study.design.protocol import (
+        default_protocol,
+        expand_trials,
+        load_protocol,
+        protocol_to_dict,
+    )
+    from drake_disamb.study.run.runner import StudyContext, draw_study_subjects, trial_layers
+
+    for task in EMBEDDED_TASKS:
+        assert load_layers([task_layer(task)]) == load_scenario(task)
+        for name in SYSTEM_PRESETS:
+            s = load_layers([task_layer(task), system_layer(name)])
+            assert scenario_from_yaml(dump_scenario(s)) == s
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    protocols = [default_protocol(), *(load_protocol(p) for p in sorted(examples.glob("*.yaml")))]
+    assert len(protocols) >= 2
+    for protocol in protocols:  # every condition and start pose of the protocol's tasks, every subject
+        subjects, _ = draw_study_subjects(protocol.subjects, 0)
+        context = StudyContext(protocol_to_dict(protocol), subject_users=dict(subjects))
+        seen = set()
+        for spec in expand_trials(protocol, 0, [n for n, _ in subjects]):
+            for pose in range(len(next(t for t in protocol.tasks if t.task == spec.task).start_poses)):
+                key = (spec.task, spec.interface, spec.paradigm, pose, spec.subject)
+                if key[:4] in seen and spec.subject in seen:
+                    continue
+                seen |= {key[:4], spec.subject}
+                layers = trial_layers(dataclasses.replace(spec, start_pose=pose), context)
+                assert [layer.source for layer in layers[:3]] == [
+                    f"<embedded {spec.task}.yaml>",
+                    f"<system {protocol.system}.yaml>",
+                    "protocol",
+                ]
+                s = load_layers(layers)
+                assert (s.task, s.interface, s.paradigm, s.seed) == (
+                    spec.task,
+                    spec.interface,
+                    spec.paradigm,
+                    spec.scenario_seed,
+                )
 
 
 # ------------------------------------------------------------------------------------------------
@@ -279,7 +427,7 @@ def test_memory_inference_has_no_projection_to_disambiguate_with() -> None:
         ValueError, match=r"scenario\.inference\.method: the disambiguation paradigm .* got 'memory'"
     ):
         resolve_scenario(s)
-    assert resolve_scenario(with_overrides(s, paradigm="manual")).disambiguation is None
+    assert resolve_scenario(dataclasses.replace(s, paradigm="manual")).disambiguation is None
 
 
 def test_core_config_errors_name_the_scenario_field() -> None:

@@ -9,7 +9,7 @@ import math
 import pytest
 from support import study_trial
 
-from drake_disamb.config import load_scenario, scenario_from_dict, scenario_to_dict, with_overrides
+from drake_disamb.config import load_scenario, scenario_from_dict, scenario_to_dict
 from drake_disamb.study.measures.metrics import summarize
 from drake_disamb.study.run.outcome import ik_held_share, trace_arrays
 from drake_disamb.trial import run_trial
@@ -18,7 +18,7 @@ from drake_disamb.trial import run_trial
 def _stuck(give_up_after: float | None):  # noqa: ANN202
     # From the left container to the low right platform the elbow reaches its limit, and a user
     # that never backs off (backoff_time 0) keeps pushing: no progress from about 15 s on.
-    scenario = with_overrides(load_scenario("pouring"), interface="head_array", goal=[1, 0])
+    scenario = load_scenario("pouring", {"interface": "head_array", "user": {"goals": [1, 0]}})
     scenario.inference.goal_set = "stage"
     scenario.user.config.backoff_time = 0.0
     scenario.success.give_up_after = give_up_after

@@ -325,22 +325,19 @@ def test_blending_thresholds_above_uniform() -> None:
 
 
 def _preset_scenario(task: str, name: str):
-    import yaml
+    from drake_disamb.config import load_scenario, resolve_scenario
+    from drake_disamb.config.system_presets import system_layer
 
-    from drake_disamb.config import embedded_scenario_text, resolve_scenario, scenario_from_dict
-    from drake_disamb.config.system_presets import apply_system_preset
-
-    plain = apply_system_preset(yaml.safe_load(embedded_scenario_text(task)), name)
-    scenario = scenario_from_dict(plain, f"{task} with {name}")
+    scenario = load_scenario(task, system_layer(name))
     return scenario, resolve_scenario(scenario)
 
 
 def test_system_presets_load_and_resolve() -> None:
-    from drake_disamb.config.system_presets import SYSTEM_PRESETS, system_preset
+    from drake_disamb.config.system_presets import SYSTEM_PRESETS, system_layer
 
-    assert system_preset("mico") == {}
+    assert system_layer("mico").data == {}
     with pytest.raises(ValueError, match="system: expected one of mico, tnsre2020_study, got 'nope'"):
-        system_preset("nope")
+        system_layer("nope")
     for name in SYSTEM_PRESETS:
         for task in ("reaching", "pouring"):
             _preset_scenario(task, name)
@@ -380,10 +377,10 @@ def test_the_preset_runs_the_head_array_in_the_studys_mode_order() -> None:
 
 @needs_data
 def test_study_preset_holds_the_identified_values() -> None:
-    from drake_disamb.config.system_presets import system_preset
+    from drake_disamb.config.system_presets import system_layer
 
     _, ident = _logs()
-    preset = system_preset("tnsre2020_study")
+    preset = system_layer("tnsre2020_study").data
     dft, blending = preset["inference"]["dft"], preset["blending"]
     assert dft["tau1"] == dft["tau2"] == pytest.approx(ident.decay.tau, abs=1e-3)
     assert dft["euler_equivalent_step"] == pytest.approx(ident.period.period)

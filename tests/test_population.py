@@ -723,12 +723,11 @@ def test_subjects_apply_to_a_scenario_and_survive_yaml() -> None:
         load_scenario,
         resolve_scenario,
         scenario_from_yaml,
-        with_overrides,
     )
 
     subject = draw_subjects(1, 9)[0]
     for paradigm in ("manual", "disambiguation"):
-        s = with_overrides(load_scenario("reaching"), paradigm=paradigm)
+        s = load_scenario("reaching", {"paradigm": paradigm})
         s = dataclasses.replace(
             s, user=dataclasses.replace(s.user, config=dataclasses.replace(s.user.config, **subject.user))
         )

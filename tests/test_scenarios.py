@@ -1,4 +1,4 @@
-"""The typed YAML scenarios: embedded tasks, strict loading, validation, CLI overrides."""
+"""The typed YAML scenarios: embedded tasks, strict loading, validation, layers over a task."""
 
 from __future__ import annotations
 
@@ -22,7 +22,6 @@ from drake_disamb.config import (
     scenario_from_dict,
     scenario_from_yaml,
     scenario_to_dict,
-    with_overrides,
 )
 from drake_disamb.core.geometry import orientation_error
 
@@ -182,22 +181,24 @@ def test_unknown_task_name_and_missing_file() -> None:
         load_scenario("/nonexistent/dir/task.yaml")
 
 
-def test_overrides() -> None:
+def test_layers_over_a_task() -> None:
     s = load_scenario("pouring")
-    o = with_overrides(s, interface="joystick", paradigm="manual", goal=1, seed=7)
+    layer = {"interface": "joystick", "paradigm": "manual", "user": {"goals": [1, 1]}, "seed": 7}
+    o = load_scenario("pouring", layer)
     assert (o.interface, o.paradigm, o.user.goals, o.seed) == ("joystick", "manual", [1, 1], 7)
-    assert with_overrides(s, goal=[1, 0]).user.goals == [1, 0]
-    assert s.user.goals == [0, 0]  # the original is untouched
-    with pytest.raises(ValueError, match="interface: expected one of"):
-        with_overrides(s, interface="chin_switch")
-    with pytest.raises(ValueError, match="paradigm"):
-        with_overrides(s, paradigm="telepathy")
-    with pytest.raises(ValueError, match="goal: expected an index in"):
-        with_overrides(s, goal=2)
-    with pytest.raises(ValueError, match="goal: expected one index or 2"):
-        with_overrides(s, goal=[0, 0, 0])
-    with pytest.raises(ValueError, match="seed"):
-        with_overrides(s, seed=-1)
+    assert load_scenario("pouring", "user: {goals: [1, 0]}").user.goals == [1, 0]
+    assert o.user.config == s.user.config  # a struct merges: user.goals changed, user.config kept
+    assert s.user.goals == [0, 0]  # the task is untouched
+    with pytest.raises(ValueError, match=r"^<layer 1>: scenario\.interface: expected one of"):
+        load_scenario("pouring", {"interface": "chin_switch"})
+    with pytest.raises(ValueError, match=r"<layer 2>: scenario\.paradigm"):
+        load_scenario("pouring", {}, {"paradigm": "telepathy"})
+    with pytest.raises(ValueError, match=r"^<layer 1>: scenario\.user\.goals\[0\]: expected a goal index in"):
+        load_scenario("pouring", {"user": {"goals": [2, 0]}})
+    with pytest.raises(ValueError, match=r"user\.goals: expected one intended goal index per stage \(2\)"):
+        load_scenario("pouring", {"user": {"goals": [0, 0, 0]}})
+    with pytest.raises(ValueError, match=r"^<layer 1>: scenario\.seed"):
+        load_scenario("pouring", "seed: -1")
 
 
 def test_stages_need_equal_goal_counts() -> None:

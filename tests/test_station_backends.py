@@ -7,14 +7,16 @@ import pytest
 
 from drake_disamb.builder import start_ee_pose
 from drake_disamb.station import EE_FRAME, StationConfig
-from drake_disamb.station.backends import BACKENDS, Sim, backend_named, make_station
+from drake_disamb.station.backends import BACKENDS, Sim, make_station
 from drake_disamb.station.ports import OUTPUT_SIZES, SHARED_INPUTS, SHARED_OUTPUTS, SIMULATION_OUTPUTS
 
 
 def test_unknown_backend_lists_the_registered_ones() -> None:
-    with pytest.raises(ValueError, match=r"unknown backend 'ros'; registered: sim"):
-        backend_named("ros")
-    assert isinstance(backend_named("sim"), Sim) and BACKENDS["sim"] is Sim
+    from drake_disamb.config import load_scenario
+
+    with pytest.raises(ValueError, match=r"scenario\.station: unknown tag '!Ros' \(one of !Sim, !Lcm\)"):
+        load_scenario("reaching", "station: !Ros {}")
+    assert isinstance(load_scenario("reaching").station, Sim) and BACKENDS["sim"] is Sim
 
 
 def test_the_simulated_station_offers_the_shared_and_the_simulation_ports() -> None:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -13,7 +14,7 @@ from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 
 from drake_disamb.station import MICO_HOME_Q, StationConfig, build_station
-from drake_disamb.station.backends import BACKENDS, InProcessLcm, Lcm, load_station_choice
+from drake_disamb.station.backends import BACKENDS, InProcessLcm, Lcm
 from drake_disamb.station.lcm import mapping
 from drake_disamb.station.lcm.driver import DEFAULT_COMMAND_CHANNEL, DEFAULT_STATUS_CHANNEL, SimulatedDriver
 from drake_disamb.station.lcm.faults import Fault
@@ -118,14 +119,16 @@ def test_bad_commands_are_ignored_by_the_driver() -> None:
 
 
 def test_the_backends_are_chosen_by_a_yaml_tag() -> None:
-    backend = load_station_choice("station: !Lcm {lcm_url: 'memq://', status_timeout: 0.05}")
+    from drake_disamb.config import load_scenario
+
+    backend = load_scenario("reaching", "station: !Lcm {lcm_url: 'memq://', status_timeout: 0.05}").station
     assert isinstance(backend, Lcm) and backend.status_timeout == 0.05
     assert set(BACKENDS) == {"sim", "lcm"}
     from drake_disamb.commands._station import STATION_CHOICES
 
     assert set(STATION_CHOICES) == set(BACKENDS)
-    with pytest.raises(ValueError, match=r"registered backends: !Sim, !Lcm"):
-        load_station_choice("station: !Ros {}")
+    with pytest.raises(ValueError, match=r"scenario\.station: unknown tag '!Ros' \(one of !Sim, !Lcm\)"):
+        load_scenario("reaching", "station: !Ros {}")
     with pytest.raises(
         ValueError, match=r"station\.status_timeout: expected a number in \(0.005, 1\], got 0"
     ):
@@ -476,15 +479,14 @@ def test_the_station_starts_where_the_arm_is() -> None:
 def test_the_pouring_task_starts_on_the_wire_with_the_arm_at_home() -> None:
     """Every task runs against a driver whose arm is anywhere inside its limits (`mico-driver`
     starts at home, far from the pouring task's start posture)."""
-    import dataclasses
-
     from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.config import load_scenario
     from drake_disamb.trial import run_trial
 
     driver = SimulatedDriver(DrakeLcm("memq://"), StationConfig())  # at home, as mico-driver
     scenario = dataclasses.replace(load_scenario("pouring"), duration=0.5)
-    handles = build_shared_control_diagram(scenario, backend=InProcessLcm(lcm_url="memq://", driver=driver))
+    scenario = dataclasses.replace(scenario, station=InProcessLcm(lcm_url="memq://", driver=driver))
+    handles = build_shared_control_diagram(scenario)
     np.testing.assert_allclose(handles.station.config.home_q, MICO_HOME_Q, atol=1e-9)
     result = run_trial(handles, progress=False)
     assert result.fault == "" and result.time == pytest.approx(0.5)
@@ -497,7 +499,9 @@ def test_the_seeded_trial_on_the_wire_matches_the_simulated_one() -> None:
 
     scenario = load_scenario("reaching")
     sim = run_trial(scenario, progress=False)
-    handles = build_shared_control_diagram(scenario, backend=InProcessLcm(lcm_url="memq://"))
+    handles = build_shared_control_diagram(
+        dataclasses.replace(scenario, station=InProcessLcm(lcm_url="memq://"))
+    )
     wire = run_trial(handles, progress=False)
     assert wire.fault == "" and wire.success == sim.success and wire.reached_goals == sim.reached_goals
     assert abs(wire.mode_switches - sim.mode_switches) <= 1 and abs(wire.requests - sim.requests) <= 1
@@ -543,15 +547,16 @@ def test_two_processes_run_the_seeded_trial_as_the_simulation_does() -> None:
     driver = cli_process("mico-driver", "--lcm-url", url, "--duration", "120")
     try:
         wait_for_line(driver, "mico-driver:", timeout=60)
-        scenario = load_scenario("reaching")
         # The watchdog's own tests hold it to its 30 ms (3 periods); this one compares the trials, and on
         # a shared 2-core CI runner a process can lose the CPU for longer than that (seen: one fault).
-        handles = build_shared_control_diagram(scenario, backend=Lcm(lcm_url=url, status_timeout=0.25))
-        wire = run_trial(handles, progress=False)
+        on_the_wire = load_scenario(
+            "reaching", {"station": {"_tag": "!Lcm", "lcm_url": url, "status_timeout": 0.25}}
+        )
+        wire = run_trial(build_shared_control_diagram(on_the_wire), progress=False)
     finally:
         driver.terminate()
         driver.communicate(timeout=30)
-    sim = run_trial(scenario, progress=False)
+    sim = run_trial(load_scenario("reaching"), progress=False)
     assert wire.fault == "", wire.fault
     assert wire.success and wire.reached_goals == sim.reached_goals
     assert abs(wire.mode_switches - sim.mode_switches) <= 1 and abs(wire.requests - sim.requests) <= 1
@@ -782,7 +787,7 @@ def test_the_commands_name_a_bad_station_option(capsys, tmp_path) -> None:  # no
     assert "--lcm-url: the sim station has no bus (add --station lcm)" in capsys.readouterr().err
     args = ["station-demo", "--station", "lcm", "--lcm-url", "nourl", "--no-meshcat", "--out", str(tmp_path)]
     assert main(args) == 2
-    assert "--lcm-url: station.lcm_url: expected a URL" in capsys.readouterr().err
+    assert "--lcm-url: scenario.station.lcm_url: expected a URL" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("stop", ["signal", "exception"])
@@ -793,7 +798,7 @@ def test_a_trial_that_stops_sends_zero_several_times(stop: str) -> None:
     from drake_disamb.trial import run_trial
 
     backend = InProcessLcm(lcm_url="memq://")
-    handles = build_shared_control_diagram(load_scenario("reaching"), backend=backend)
+    handles = build_shared_control_diagram(dataclasses.replace(load_scenario("reaching"), station=backend))
     seen: list[np.ndarray] = []
     backend.driver.lcm.Subscribe(
         DEFAULT_COMMAND_CHANNEL,
@@ -834,10 +839,9 @@ def test_a_live_input_on_the_wire_passes_through_the_deadman() -> None:
 
     meshcat = Meshcat(MeshcatParams(host="localhost"))
     handles = build_shared_control_diagram(
-        load_scenario("reaching"),
+        dataclasses.replace(load_scenario("reaching"), station=InProcessLcm(lcm_url="memq://")),
         meshcat=meshcat,
         input_source=HeldSwitch(),
-        backend=InProcessLcm(lcm_url="memq://"),
     )
     deadman = handles.diagram.GetSubsystemByName("deadman")
     interface = handles.systems["interface"]

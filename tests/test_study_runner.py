@@ -101,33 +101,33 @@ def test_default_protocol_is_the_papers() -> None:
 
 def test_the_protocols_mode_selection_reaches_the_joysticks_trials_only() -> None:
     from drake_disamb.config import resolve_scenario
-    from drake_disamb.study.run.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, trial_scenario
 
     protocol = P.quick_protocol()
     context = StudyContext(protocol=P.protocol_to_dict(protocol))
     seen = {}
     for spec in P.expand_trials(protocol, 0):
-        interface = resolve_scenario(build_scenario(spec, context)).interface
+        interface = resolve_scenario(trial_scenario(spec, context)).interface
         seen[spec.interface] = interface.mode_selection
     assert seen == {"joystick": "direct", "head_array": "cycle"}
     data = P.protocol_to_dict(protocol)
     data["interface_mode_selection"] = "cycle"
     context = StudyContext(protocol=data)
     spec = next(s for s in P.expand_trials(protocol, 0) if s.interface == "joystick")
-    assert resolve_scenario(build_scenario(spec, context)).interface.mode_selection == "cycle"
+    assert resolve_scenario(trial_scenario(spec, context)).interface.mode_selection == "cycle"
 
 
 def test_the_protocols_named_targets_end_the_reaches_only() -> None:
     """The experimenter named the reaching target: the reach ends only at the subject's goal; the
     pouring task's pour and place end at whatever goal they are done at."""
-    from drake_disamb.study.run.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, trial_scenario
 
     protocol = P.default_protocol()
     assert {t.task: t.target_stages for t in protocol.tasks} == {"reaching": ["reach"], "pouring": []}
     context = StudyContext(protocol=P.protocol_to_dict(protocol))
     seen = {}
     for spec in P.expand_trials(protocol, 0)[:60]:
-        scenario = build_scenario(spec, context)
+        scenario = trial_scenario(spec, context)
         seen[spec.task] = [stage.ends_at_target for stage in scenario.stages]
     assert seen == {"reaching": [True], "pouring": [False, False]}
 
@@ -329,6 +329,66 @@ def test_sigkill_then_rerun_completes_without_repeating_a_trial(
     assert all(by_id[r.trial_id] == r for r in before)
 
 
+def test_a_trial_reruns_from_its_record_alone(
+    reference: tuple[Path, dict], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Each record keeps its trial's scenario (the YAML ``demo --dump-scenario`` writes): ``study
+    rerun`` runs the trial again from that record alone (a folder with nothing else) to the same
+    record and trace; what the record keeps is what runs; an older record without it still reads."""
+    import shutil
+
+    from drake_disamb.cli import main
+    from drake_disamb.config import dump_scenario
+    from drake_disamb.study.run.runner import (
+        StudyContext,
+        draw_study_subjects,
+        rerun_trial,
+        trial_scenario,
+    )
+
+    out, by_id = reference
+    protocol = P.protocol_from_dict(tiny_protocol_data())
+    subjects, _ = draw_study_subjects(protocol.subjects, 3)
+    context = StudyContext(P.protocol_to_dict(protocol), subject_users=dict(subjects))
+    for spec in P.expand_trials(protocol, 3, [n for n, _ in subjects]):
+        assert by_id[spec.trial_id]["extra"]["scenario"] == dump_scenario(trial_scenario(spec, context))
+    trial_id = next(t for t in by_id if "disambiguation" in t)
+    lines = (out / "trials.jsonl").read_text().splitlines()
+    row = next(json.loads(line) for line in lines if json.loads(line)["trial_id"] == trial_id)
+
+    def alone(name: str, record: dict) -> Path:
+        folder = tmp_path / name
+        (folder / "traces").mkdir(parents=True)
+        (folder / "trials.jsonl").write_text(json.dumps(record) + "\n")
+        shutil.copy(out / "traces" / f"{trial_id}.npz", folder / "traces")
+        return folder
+
+    folder = alone("alone", row)
+    assert main(["study", "rerun", str(folder), trial_id, "--quiet"]) == 0
+    assert "the same record and trace" in capsys.readouterr().out
+    record = read_records(folder / "trials.jsonl")[0]
+    again, trace = rerun_trial(record)
+    assert records_by_id([again]) == records_by_id([record]) and set(trace) >= set(TRACE_ARRAYS)
+    # What the record keeps is what runs: a shorter duration there, a shorter trial.
+    cut = dict(
+        row,
+        extra=dict(row["extra"], scenario=row["extra"]["scenario"].replace("duration: 2.5", "duration: 1.5")),
+    )
+    assert main(["study", "rerun", str(alone("cut", cut)), trial_id, "--quiet"]) == 1
+    text = capsys.readouterr().out
+    assert "the rerun differs from the record" in text and "duration: 2.5 -> 1.5" in text
+    # An older record (no extra.scenario) still reads; it cannot be rerun, and says why in one line.
+    old = dict(row, extra={k: v for k, v in row["extra"].items() if k != "scenario"})
+    assert read_records(alone("old", old) / "trials.jsonl")[0].trial_id == trial_id
+    assert main(["study", "rerun", str(tmp_path / "old"), trial_id]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{trial_id}: keeps no scenario (extra.scenario" in err
+    assert main(["study", "rerun", str(folder), "S09-nobody"]) == 2
+    assert "no trial 'S09-nobody'" in capsys.readouterr().err
+    assert main(["study", "rerun", str(alone("human", dict(row, source="human"))), trial_id]) == 2
+    assert "a human trial (source human) cannot be rerun" in capsys.readouterr().err
+
+
 def test_quick_study_end_to_end(tmp_path: Path) -> None:
     """``study run --quick`` on the paper's protocol, then ``study report`` on its records (its wall
     time is printed by ``python benchmarks/bench_study.py --quick``, not asserted here)."""
@@ -507,7 +567,7 @@ def test_a_switched_request_latency_is_the_one_its_records_keep() -> None:
         ("method", r"protocol\.disambiguation_method: .*'coin_flip'"),
         ("malformed", r"protocol\.yaml.*line"),
         ("out_is_a_file", r"--out: .* is a file"),
-        ("switch_path", r"--switch inference\.agreemnt: .*no field 'agreemnt'"),
+        ("switch_path", r"--switch inference\.agreemnt='dot': scenario\.inference\.agreemnt: unknown key"),
         ("switch_value", r"--switch user\.config\.reaction_time='slow'"),
     ],
 )
@@ -783,7 +843,7 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
     and a trial from each succeeds (head array, disambiguation, the first goal of every stage)."""
     import dataclasses
 
-    from drake_disamb.study.run.runner import StudyContext, build_scenario
+    from drake_disamb.study.run.runner import StudyContext, trial_scenario
     from drake_disamb.trial import run_trial
 
     data = compatible_protocol_data()
@@ -796,7 +856,7 @@ def test_every_start_pose_is_valid_and_its_trials_succeed(task: str) -> None:
         one = dataclasses.replace(
             spec, interface="head_array", start_pose=pose, initial_mode=0, goals=(0,) * len(spec.goals)
         )
-        scenario = build_scenario(one, context)
+        scenario = trial_scenario(one, context)
         postures.append(scenario.start_joint_positions)
         result = run_trial(scenario, progress=False)
         assert result.success, (

@@ -21,15 +21,15 @@ SCRIPT = textwrap.dedent(
     before = signatures()
     from drake_disamb.builder import build_shared_control_diagram
     import dataclasses
-    from drake_disamb.config import load_scenario, with_overrides
+    from drake_disamb.config import load_scenario
     from drake_disamb.station.backends import InProcessLcm
     from drake_disamb.trial import run_trial
 
     reaching = load_scenario("reaching")
     run_trial(dataclasses.replace(reaching, duration=4.0), progress=False)
-    pouring = with_overrides(load_scenario("pouring"), interface="joystick", paradigm="manual")
-    pouring = dataclasses.replace(pouring, duration=4.0)
-    run_trial(build_shared_control_diagram(pouring, backend=InProcessLcm(lcm_url="memq://")), progress=False)
+    pouring = load_scenario("pouring", {"interface": "joystick", "paradigm": "manual", "duration": 4.0})
+    pouring = dataclasses.replace(pouring, station=InProcessLcm(lcm_url="memq://"))
+    run_trial(build_shared_control_diagram(pouring), progress=False)
     after = signatures()
     new = {n: sorted(map(str, after[n] - before[n])) for n in after if after[n] - before[n]}
     print("NEW", new)

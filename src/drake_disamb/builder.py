@@ -141,7 +141,6 @@ def build_shared_control_diagram(
     scenario: Scenario,
     meshcat: Meshcat | None = None,
     input_source: System | None = None,
-    backend: Any = None,
 ) -> SharedControlDiagram:
     """Assemble the full shared-control diagram of ``scenario``.
 
@@ -151,8 +150,8 @@ def build_shared_control_diagram(
             active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
         input_source: A system with one 4-vector output port ``raw`` to drive the interface
             instead of the simulated user (a recorded log, a live device, a fault injector).
-        backend: The station backend (:mod:`drake_disamb.station.backends`); ``None`` is the
-            in-process simulation.
+
+    The station is the one of the scenario's ``station`` backend (:mod:`drake_disamb.station.backends`).
 
     Raises:
         ValueError: an invalid scenario, or a goal on top of the gripper's start position.
@@ -163,7 +162,7 @@ def build_shared_control_diagram(
     n = config.n_goals
     builder = DiagramBuilder()
 
-    station = make_station(backend, config.station, meshcat=meshcat)
+    station = make_station(config.backend, config.station, meshcat=meshcat)
     builder.AddSystem(station.diagram)
     plant = station.plant
     check_start_clearance(scenario, start_ee_pose(station)[:3])

@@ -321,7 +321,7 @@ __all__ = [
 
 
 class SafeYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
-    """PyYAML's safe loader (libyaml's parser when there is one) with two changes.
+    """PyYAML's safe loader (libyaml's parser when there is one) with three changes.
 
     Every number YAML 1.2 writes is a number (:data:`YAML_12_NUMBERS`): besides YAML 1.1's forms, a
     float with an exponent but no dot (``2e0``, ``1e-6``, ``1E3``), a float with a sign before its
@@ -329,6 +329,11 @@ class SafeYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ig
     strings). YAML 1.1's own forms keep their values (``0x10`` is 16, ``010`` is 8, ``1_000`` is
     1000, as Drake's loader reads them). A scalar the constructor cannot convert (a date such as
     ``2020-13-45``) is reported with its line instead of a bare ``ValueError``.
+
+    A mapping with a local tag, ``!Lcm {lcm_url: ...}`` (how Drake's YAML names the alternative of
+    a variant field), reads as Drake's loader reads it: the mapping with one more key, ``_tag``
+    (``"!Lcm"``), which Drake's ``yaml_dump`` writes back as the tag. A local tag on a scalar or a
+    sequence is an error.
     """
 
     yaml_implicit_resolvers = _Resolver.yaml_implicit_resolvers  # the types :func:`check_yaml_text` sees
@@ -339,6 +344,20 @@ class SafeYamlLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ig
         except (ValueError, TypeError, OverflowError) as exc:
             message = str(exc) if len(str(exc)) <= 200 else str(exc)[:197] + "..."
             raise yaml.constructor.ConstructorError(None, None, message, node.start_mark) from None
+
+    def construct_variant(self, suffix: str, node: yaml.Node) -> dict[Any, Any]:
+        """A ``!Tag`` node: a mapping with its tag in ``_tag``."""
+        if not isinstance(node, yaml.MappingNode):
+            raise yaml.constructor.ConstructorError(
+                None,
+                None,
+                f"the tag !{suffix[:40]} names a variant: it takes a mapping (!{suffix[:40]} {{}})",
+                node.start_mark,
+            )
+        return {**self.construct_mapping(node, deep=True), "_tag": f"!{suffix}"}
+
+
+SafeYamlLoader.add_multi_constructor("!", SafeYamlLoader.construct_variant)
 
 
 def _parse(text: str, source: str, root: str) -> Any:

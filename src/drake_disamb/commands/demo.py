@@ -32,9 +32,18 @@ race), the record and its trace are kept in a new file beside it,
 ``DIR.unsaved-<trial_id>.npz`` (never over an existing file), which the one-line error names
 (exit status 4); :func:`~drake_disamb.study.data.folder.read_unsaved` reads it back.
 
-``--dump-scenario`` prints the fully resolved scenario (the task with the options above applied,
-every field written out) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the
-same scenario. Nothing is run and ``--out`` is not touched.
+The trial's scenario is the whole experiment, its station included, made of layers that the one
+scenario loader merges in order (:mod:`drake_disamb.config.yaml_io`): ``--task`` (an embedded task
+or a YAML file), each ``--scenario-text YAML`` (e.g. ``'station: !Lcm {lcm_url: ...}'``,
+``'{inference: {agreement: dot}}'``), then the shorthands ``--interface``, ``--paradigm``,
+``--seed``, ``--station``, ``--lcm-url``, ``--goal`` and ``--duration``, each a layer of its one
+field (``--duration`` cuts a trial short on purpose: unlike a ``duration`` in a file or a
+``--scenario-text``, it need not outlast the hold times). A bad value is one line naming the layer
+(the file or the option), the field and the value (exit status 2).
+
+``--dump-scenario`` prints the fully resolved scenario (every field written out, the ``station:``
+included) as YAML and exits: saved to a file, it loads back (``--task FILE``) to the same
+scenario. Nothing is run and ``--out`` is not touched.
 
 Run from a terminal with Meshcat, the demo first compiles what it needs (announced on a first run),
 prints the URL and waits up to 30 s for a browser to open it (``--no-wait`` starts at once), runs
@@ -73,7 +82,13 @@ from drake_disamb.commands._meshcat import (
 )
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
-from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
+from drake_disamb.commands._station import (
+    EXIT_STATION_FAULT,
+    add_scenario_text_argument,
+    add_station_arguments,
+    scenario_text_layers,
+    station_layers,
+)
 from drake_disamb.commands.study_run import EXIT_WRITE_FAILED
 from drake_disamb.core.interfaces import INTERFACES
 
@@ -124,6 +139,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
     parser.add_argument("--no-meshcat", action="store_true", help="run without Meshcat (no recording)")
+    add_scenario_text_argument(parser)
     add_station_arguments(parser)
     add_meshcat_arguments(parser)
     add_wait_argument(parser)
@@ -368,6 +384,9 @@ def _say(line: str) -> None:
     print(line, flush=True)
 
 
+LIVE_DURATION = 600.0
+"""Simulated-time limit (s) of a ``--live`` trial without ``--duration``."""
+
 WARM_UP = 0.05
 """Simulated seconds of a headless trial run before a watched one, to have its kernels ready (the
 simulated user asks for disambiguation at the start, so the first ticks use them all)."""
@@ -416,19 +435,33 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _scenario(args: argparse.Namespace) -> Any:
-    """The scenario of ``--task`` with the command-line options applied (raises ``ValueError``)."""
-    from drake_disamb.config import load_scenario, with_overrides
+    """The scenario of ``--task``, ``--scenario-text`` and the shorthands, in that order, each a
+    layer (module docstring; raises ``ValueError`` naming the layer and the field)."""
+    from drake_disamb.config import data_layer, load_layers, merge_layers, task_layer, validate_scenario
     from drake_disamb.config.checks import check_duration
 
-    scenario = load_scenario(args.task)
-    scenario = with_overrides(
-        scenario, interface=args.interface, paradigm=args.paradigm, goal=args.goal, seed=args.seed
+    layers = [task_layer(args.task), *scenario_text_layers(args)]
+    for option, value in (
+        ("--interface", args.interface),
+        ("--paradigm", args.paradigm),
+        ("--seed", args.seed),
+    ):
+        if value is not None:
+            layers.append(data_layer({option[2:]: value}, option))
+    layers += station_layers(args, layers)
+    if args.goal is not None:
+        goals = [args.goal] * merge_layers(layers).n_stages if isinstance(args.goal, int) else args.goal
+        layers.append(data_layer({"user": {"goals": goals}}, "--goal"))
+    scenario = load_layers(layers)
+    if args.duration is None and not args.live:
+        return scenario
+    # A trial cut short (or lengthened) on purpose: the hold times are not held to its duration.
+    if args.duration is not None:
+        check_duration(args.duration, "--duration")
+    duration = data_layer(
+        {"duration": LIVE_DURATION if args.duration is None else args.duration}, "--duration"
     )
-    duration = args.duration if args.duration is not None else (600.0 if args.live else None)
-    if duration is not None:
-        check_duration(duration, "--duration")
-        scenario = dataclasses.replace(scenario, duration=duration)
-    return scenario
+    return load_layers([duration], base=scenario, check=validate_scenario)
 
 
 def _run(args: argparse.Namespace, stop: StopRequest) -> int:
@@ -457,7 +490,6 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(exc)
     try:
         scenario = _scenario(args)
-        backend = station_backend(args)
     except ValueError as exc:
         return _error(exc)
     if args.record is not None:
@@ -491,14 +523,15 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     watched = meshcat is not None and (args.live or _waits_for_browser(args))
     with announce_kernel_compilation(_say):
         try:
-            handles = build_shared_control_diagram(
-                scenario, meshcat=meshcat, input_source=source, backend=backend
-            )
+            handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
         if watched:
-            # Someone will watch from the first tick: compile (or load) every kernel now, not then.
-            run_trial(dataclasses.replace(scenario, duration=WARM_UP), progress=False)
+            # Someone will watch from the first tick: compile (or load) every kernel now, not then
+            # (on the simulated station: the arm on a wire is the watched trial's only).
+            from drake_disamb.station.backends import Sim
+
+            run_trial(dataclasses.replace(scenario, duration=WARM_UP, station=Sim()), progress=False)
     if meshcat is not None:
         _show_url(meshcat, args, stop)
     if args.live:

@@ -4,7 +4,10 @@ With Meshcat it runs at real time when started from a terminal, and as fast as i
 (standard input not a terminal).
 
 ``--station lcm --lcm-url URL`` drives an arm behind an LCM driver instead (a Kinova Gen2 arm's, or
-``drake-disamb mico-driver``).
+``drake-disamb mico-driver``). The station is the scenario's part that makes it (its ``station``
+backend, ``plant_config`` and ``control_period``): the schema's defaults with each
+``--scenario-text YAML`` layered on them, then the shorthands ``--station``, ``--lcm-url`` and
+``--time-step`` (``plant_config: {time_step: ...}``), as ``demo`` takes them.
 
 Exit status: 0 done, 2 bad arguments (one line on stderr naming the option and value, checked
 before anything is built, ``--out`` included), 3 a station fault (the arm on the wire was commanded
@@ -28,7 +31,13 @@ import numpy as np
 from drake_disamb.commands._meshcat import add_meshcat_arguments, attended, start_meshcat
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
-from drake_disamb.commands._station import EXIT_STATION_FAULT, add_station_arguments, station_backend
+from drake_disamb.commands._station import (
+    EXIT_STATION_FAULT,
+    add_scenario_text_argument,
+    add_station_arguments,
+    scenario_text_layers,
+    station_layers,
+)
 
 MIN_TIME_STEP = 1e-3
 """Smallest ``--time-step`` (s): finer plant steps make a demo take hours for no visible gain."""
@@ -142,8 +151,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--time-step",
         type=float,
         default=None,
-        help=f"plant time step, s, from {MIN_TIME_STEP:g} to the control period (default: StationConfig)",
+        help=f"plant time step, s, from {MIN_TIME_STEP:g} to the control period (default: the scenario's)",
     )
+    add_scenario_text_argument(parser)
     add_station_arguments(parser)
 
 
@@ -169,19 +179,17 @@ def _check_arguments(args: argparse.Namespace) -> None:
         )
 
 
-def _station_config(time_step: float | None) -> Any:
-    """The StationConfig with ``--time-step`` (at most the control period)."""
-    from drake_disamb.station import StationConfig, default_plant_config
+def _station_scenario(args: argparse.Namespace) -> Any:
+    """The scenario of ``--scenario-text`` and the shorthands, its station's part checked
+    (:func:`~drake_disamb.config.validation.check_station`; ``ValueError`` naming the layer)."""
+    from drake_disamb.config import data_layer, load_layers
+    from drake_disamb.config.validation import check_station
 
-    config = StationConfig()
-    if time_step is None:
-        return config
-    if time_step > config.control_period:
-        raise ValueError(
-            f"--time-step: expected at most the control period ({config.control_period:g} s), "
-            f"got {time_step!r}"
-        )
-    return StationConfig(plant_config=default_plant_config(time_step))
+    layers = scenario_text_layers(args)
+    layers += station_layers(args, layers)
+    if args.time_step is not None:
+        layers.append(data_layer({"plant_config": {"time_step": args.time_step}}, "--time-step"))
+    return load_layers(layers, check=check_station)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -199,17 +207,15 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         _check_arguments(args)
         segments = pattern(args.speed)
         out = check_output_dir(args.out, "--out")
-        backend = station_backend(args)
+        scenario = _station_scenario(args)
     except ValueError as exc:
         return _error(exc)
 
     from drake_disamb.diagram_io import write_diagram_graph
+    from drake_disamb.station import StationConfig
     from drake_disamb.station.backends import make_station
 
-    try:
-        config = _station_config(args.time_step)
-    except ValueError as exc:
-        return _error(exc)
+    config = StationConfig(plant_config=scenario.plant_config, control_period=scenario.control_period)
     meshcat = None
     if not args.no_meshcat:
         try:
@@ -218,7 +224,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             return _error(exc)
         print(f"Meshcat: {meshcat.web_url()}", flush=True)
     try:
-        station = make_station(backend, config, meshcat=meshcat)
+        station = make_station(scenario.station, config, meshcat=meshcat)
     except RuntimeError as exc:
         return _error(exc)
     if meshcat is not None:

@@ -15,6 +15,7 @@ HELP = "Run the user study with simulated users, import the authors' human logs,
 STUDY_COMMANDS: dict[str, str] = {
     "run": "study_run",
     "ablate": "study_ablate",
+    "rerun": "study_rerun",
     "report": "study_report",
     "import-authors": "study_import_authors",
     "calibrate": "study_calibrate",

@@ -10,7 +10,9 @@ protocol (or ``--quick``) once per setting into ``DIR/<setting>/``, each a norma
 
 ``PATH`` is a dotted scenario field path (``inference.agreement``, ``disambiguation.method``,
 ``blending.assist_without_input``); each value is read as YAML, as a file's values are (``true``,
-``0.5``, ``2e0``, ``dot``: :func:`~drake_disamb.yaml_safety.load_yaml_value`).
+``0.5``, ``2e0``, ``dot``: :func:`~drake_disamb.yaml_safety.load_yaml_value`). A setting is a layer
+of every trial's scenario, the last (:func:`~drake_disamb.study.run.runner.trial_layers`): it merges
+as a ``--scenario-text`` of its one field would (a struct's other fields kept, a list replaced).
 Several ``--switch`` options give every combination; a setting's name joins its ``PATH=value``
 parts with ``+``. Every path and value is checked against the scenario schema (on both tasks)
 before any trial runs. ``study report DIR`` reads the folder.

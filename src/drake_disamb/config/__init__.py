@@ -3,9 +3,12 @@ resolved into the frozen configs the core and the systems use.
 
 - :mod:`~drake_disamb.config.schema`: :class:`Scenario` and its parts, nesting Drake's
   ``SimulatorConfig`` (``simulator_config``) and ``MultibodyPlantConfig`` (``plant_config``);
-- :mod:`~drake_disamb.config.yaml_io`: :func:`load_scenario` (embedded task name or YAML path),
-  :func:`dump_scenario`, :func:`with_overrides`; the raw text is checked
-  (:mod:`drake_disamb.yaml_safety`) before ``yaml_load_typed`` reads it;
+- :mod:`~drake_disamb.config.yaml_io`: the one loader, layers of YAML merged by Drake's
+  ``yaml_load_typed`` with ``defaults=`` (:class:`Layer`, :func:`load_layers`; a task file, a
+  system preset, ``--scenario-text``, a study trial's draws, a ``--switch``), :func:`load_scenario`
+  (an embedded task name or a YAML path, and layers on top), :func:`dump_scenario`; each layer's
+  raw text is checked (:mod:`drake_disamb.yaml_safety`) before ``yaml_load_typed`` reads it;
+- :mod:`~drake_disamb.config.system_presets`: the named systems, each a layer;
 - :mod:`~drake_disamb.config.checks`: the strict type check of plain data that Drake's loader lacks;
 - :mod:`~drake_disamb.config.validation`: every other check, with messages naming the field path
   and the value;
@@ -54,13 +57,19 @@ from drake_disamb.config.validation import (
 )
 from drake_disamb.config.yaml_io import (
     EMBEDDED_TASKS,
+    Layer,
+    data_layer,
     dump_scenario,
     embedded_scenario_text,
+    load_layers,
     load_scenario,
+    merge_layers,
     scenario_from_dict,
     scenario_from_yaml,
     scenario_to_dict,
-    with_overrides,
+    setting_layer,
+    task_layer,
+    text_layer,
 )
 
 __all__ = [
@@ -79,6 +88,7 @@ __all__ = [
     "DisambiguationSpec",
     "GoalSpec",
     "InferenceSpec",
+    "Layer",
     "ObjectSpec",
     "PotentialFieldSpec",
     "Scenario",
@@ -88,9 +98,12 @@ __all__ = [
     "UserBehaviorSpec",
     "UserSpec",
     "check_start_clearance",
+    "data_layer",
     "dump_scenario",
     "embedded_scenario_text",
+    "load_layers",
     "load_scenario",
+    "merge_layers",
     "min_goal_separation",
     "interface_variant",
     "ordered_variant",
@@ -99,6 +112,8 @@ __all__ = [
     "scenario_from_yaml",
     "scenario_to_dict",
     "scene_objects",
+    "setting_layer",
+    "task_layer",
+    "text_layer",
     "validate_scenario",
-    "with_overrides",
 ]

@@ -16,7 +16,9 @@ What it accepts: a ``float`` is a finite real number (an integer too, never a bo
 an integer (not a bool); a ``bool`` true or false; a ``str`` a string (one of the field's
 ``choices``, when it has them); a ``list`` a list (of one of the field's ``size`` lengths and at
 most ``max_items`` long, when given); ``X | None`` also ``None``; a dataclass or Drake struct a
-mapping with no unknown key and every ``required`` key. Values in messages are cut
+mapping with no unknown key and every ``required`` key; a variant (a union of classes, the
+scenario's ``station``) a mapping whose YAML tag (``!Lcm``; none for the first class, as Drake
+reads it) names one of them, its other keys that class's. Values in messages are cut
 (:func:`~drake_disamb.core.validation.bounded_repr`).
 """
 
@@ -71,6 +73,20 @@ def schema_fields(schema: type) -> list[tuple[str, Any, dict[str, Any]]] | None:
     return None if drake is None else [(f.name, f.type, {}) for f in drake]
 
 
+def variant_types(schema: Any) -> tuple[type, ...] | None:
+    """The alternatives of a variant field (a union of several classes, e.g. ``station: Sim | Lcm``,
+    ``None`` left out), else ``None`` (a plain type or ``X | None``)."""
+    if typing.get_origin(schema) not in (typing.Union, types.UnionType):
+        return None
+    options = tuple(a for a in typing.get_args(schema) if a is not type(None))
+    return options if len(options) > 1 else None
+
+
+def variant_tag(cls: type) -> str:
+    """The YAML tag that chooses ``cls`` in a variant field (Drake's: ``!`` and the class name)."""
+    return f"!{cls.__name__}"
+
+
 def _is_integer(value: Any) -> bool:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
@@ -104,8 +120,12 @@ def check_data(schema: Any, data: Any, path: str, meta: dict[str, Any] | None = 
     """
     meta = meta or {}
     origin = typing.get_origin(schema)
-    if origin in (typing.Union, types.UnionType):  # the schema's unions are all X | None
-        if data is None:
+    if origin in (typing.Union, types.UnionType):  # X | None, or a variant (its tag picks the class)
+        if data is None and type(None) in typing.get_args(schema):
+            return
+        options = variant_types(schema)
+        if options is not None:
+            _check_variant(options, data, path)
             return
         (schema,) = [a for a in typing.get_args(schema) if a is not type(None)]
         origin = typing.get_origin(schema)
@@ -138,12 +158,28 @@ def check_data(schema: Any, data: Any, path: str, meta: dict[str, Any] | None = 
         _check_mapping(schema, data, path)
 
 
+def _check_variant(options: tuple[type, ...], data: Any, path: str) -> None:
+    """A variant's mapping: its tag (``!Lcm``; none is the first alternative) names one of
+    ``options``, whose fields the rest of the mapping must fit."""
+    tags = ", ".join(variant_tag(cls) for cls in options)
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a mapping, tagged with one of {tags}, got {fmt(data)}")
+    tag = data.get("_tag")
+    chosen = options[0] if tag is None else next((c for c in options if variant_tag(c) == tag), None)
+    if chosen is None:
+        raise ValueError(f"{path}: unknown tag {fmt(tag)} (one of {tags})")
+    _check_mapping(chosen, {k: v for k, v in data.items() if k != "_tag"}, path)
+
+
 def _check_mapping(schema: type, data: Any, path: str) -> None:
     fields = schema_fields(schema)
     if fields is None:  # pragma: no cover (a programming error in the schema)
         raise TypeError(f"{path}: unsupported field type {schema!r}")
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a mapping of {schema.__name__} fields, got {fmt(data)}")
+    if "_tag" in data:  # a YAML tag on a mapping that is not a variant's
+        tag = fmt(data["_tag"])
+        raise ValueError(f"{path}: unexpected tag {tag} (a tag chooses a variant, as in station: !Lcm {{}})")
     names = {name for name, _, _ in fields}
     for key in data:
         if key not in names:

@@ -26,7 +26,8 @@ and returns a :class:`TrialConfig`:
   always cycles);
 - the simulated user's config (its seed is the scenario's; in the manual and automatic paradigms
   it never asks for disambiguation), the interface's, the station's (Drake's
-  ``MultibodyPlantConfig``, the start posture and the scene objects) and Drake's ``SimulatorConfig``.
+  ``MultibodyPlantConfig``, the start posture and the scene objects) and its backend (the
+  scenario's ``station``, which builds it), and Drake's ``SimulatorConfig``.
 
 An error from a core config's own checks is raised as a ``ValueError`` that names the scenario
 field first, e.g. ``scenario.inference.dft: DFTParams.tau1 must be a finite positive number, got -1.0``.
@@ -55,9 +56,8 @@ from drake_disamb.core.disambiguation import (
     preset,
 )
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
-from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS, Interface, InterfaceConfig
+from drake_disamb.core.interfaces import INTERFACES, Interface, InterfaceConfig
 from drake_disamb.core.user import UserConfig
-from drake_disamb.core.validation import is_real
 
 T = TypeVar("T")
 
@@ -88,6 +88,8 @@ class TrialConfig:
         interface: The interface's config.
         station: The station's config (plant config, control period, start posture, scene objects).
         simulator: Drake's ``SimulatorConfig`` for ``ApplySimulatorConfig`` (a copy).
+        backend: The station's backend (the scenario's ``station``, its settings checked): what
+            builds the station (:func:`drake_disamb.station.backends.make_station`).
     """
 
     n_goals: int
@@ -101,6 +103,7 @@ class TrialConfig:
     interface: InterfaceConfig
     station: Any
     simulator: Any
+    backend: Any
     disambiguation_method: ModeSelectionMethod
     automatic: AutomaticConfig | None = None
 
@@ -226,22 +229,12 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
             name,
             s.disambiguation.upsilon_normalization,
         )
-    latency = s.disambiguation.request_latency
-    if not (is_real(latency) and latency >= 0):
-        raise ValueError(
-            f"{name}.disambiguation.request_latency: expected a finite number >= 0 (s), got {fmt(latency)}"
-        )
     automatic = None
     if s.paradigm == "automatic":
         automatic = _named(f"{name}.disambiguation.automatic", s.disambiguation.automatic.to_config)
         if automatic.confidence_threshold is None:
             automatic = dataclasses.replace(automatic, confidence_threshold=rhos[0])
     selection = s.interface_mode_selection
-    if selection not in MODE_SELECTIONS:
-        raise ValueError(
-            f"{name}.interface_mode_selection: expected one of {', '.join(MODE_SELECTIONS)}, "
-            f"got {fmt(selection)}"
-        )
     variant = interface_variant(s, name)
     interface = _named(
         f"{name}.initial_mode",
@@ -250,7 +243,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
             kind=s.interface,
             control_period=s.control_period,
             initial_mode=s.initial_mode,
-            request_latency=float(latency),
+            request_latency=float(s.disambiguation.request_latency),
             serve_requests=automatic is None or automatic.request_button,
             # A kind that does not offer the selection (the head array: no stick) cycles.
             mode_selection=selection if selection in INTERFACES[s.interface].mode_selections else "cycle",
@@ -278,6 +271,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         interface=interface,
         station=station,
         simulator=copy.copy(s.simulator_config),
+        backend=s.station,
         disambiguation_method=_named(
             f"{name}.disambiguation.method", lambda: mode_selection_method(s.disambiguation.method)
         ),

@@ -40,7 +40,7 @@ import numpy as np
 from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
-from drake_disamb.config.checks import schema_fields
+from drake_disamb.config.checks import schema_fields, variant_tag, variant_types
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
@@ -51,6 +51,7 @@ from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import MAX_GOALS
 from drake_disamb.station import default_plant_config
+from drake_disamb.station.backends import Sim, StationBackend
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
@@ -391,6 +392,9 @@ class Scenario:
             control period: the arm only receives new set points every control tick, the PD is
             integrated implicitly, and the loop runs several times faster than with a 1 ms plant
             (``benchmarks/bench_loop.py --time-step 0.001`` prints it); 0.001 resolves contact finer.
+        station: The station's backend, a variant chosen by its YAML tag
+            (:mod:`drake_disamb.station.backends`): ``!Sim {}`` (the default: the arm simulated in
+            the trial's diagram) or ``!Lcm {lcm_url: ..., ...}`` (an arm behind an LCM driver).
         duration: Simulated-time limit (s) of a trial.
         success: Success tolerance.
         seed: Seed of every random draw in the trial.
@@ -422,6 +426,7 @@ class Scenario:
     control_period: float = 0.01
     simulator_config: SimulatorConfig = field(default_factory=default_simulator_config)
     plant_config: MultibodyPlantConfig = field(default_factory=default_plant_config)
+    station: StationBackend = field(default_factory=Sim)  # type: ignore[valid-type]
     duration: float = 60.0
     success: SuccessSpec = field(default_factory=SuccessSpec)
     seed: int = 0
@@ -488,16 +493,27 @@ class Scenario:
         return self.success.hold_time if h is None else h
 
 
-def to_plain(value: Any) -> Any:
-    """Plain data (dicts, lists, numbers, strings) of a scenario or any part of it.
+def to_plain(value: Any, schema: Any = None) -> Any:
+    """Plain data (dicts, lists, numbers, strings) of a scenario or any part of it (of type
+    ``schema``, by default its own).
 
-    The same tree :func:`pydrake.common.yaml.yaml_dump_typed` writes, with ``None`` kept.
+    The same tree :func:`pydrake.common.yaml.yaml_dump_typed` writes, with ``None`` kept: a
+    variant's value has the fields of the alternative it is an instance of, and its tag as
+    ``_tag`` unless it is the first (an :class:`~drake_disamb.station.backends.InProcessLcm`
+    station is an ``!Lcm`` one).
     """
+    options = variant_types(schema)
+    if options is not None and value is not None:
+        k = next(i for i, cls in enumerate(options) if isinstance(value, cls))
+        plain = to_plain(value, options[k])
+        return plain if k == 0 else {"_tag": variant_tag(options[k]), **plain}
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, list | tuple):
         return [to_plain(v) for v in value]
-    fields = None if isinstance(value, type) else schema_fields(type(value))
+    if isinstance(value, type):
+        return value
+    fields = schema_fields(schema if isinstance(schema, type) and schema_fields(schema) else type(value))
     if fields is None:
         return value
-    return {name: to_plain(getattr(value, name)) for name, _, _ in fields}
+    return {name: to_plain(getattr(value, name), tp) for name, tp, _ in fields}

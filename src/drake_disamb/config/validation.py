@@ -6,8 +6,9 @@ an unknown key, a wrong type, a NaN or infinite number, a vector of the wrong le
 that is not one of its field's choices). Then:
 
 - a ``control_period`` or ``plant_config.time_step`` outside [1 ms, 100 ms]
-  (:data:`~drake_disamb.core.validation.TIME_STEP_RANGE`), a plant step above the period, or a
-  ``plant_config`` the station cannot use (:func:`drake_disamb.station.check_plant_config`);
+  (:data:`~drake_disamb.core.validation.TIME_STEP_RANGE`), a plant step above the period, a
+  ``plant_config`` the station cannot use (:func:`drake_disamb.station.check_plant_config`), or a
+  ``station`` backend's setting it cannot use (:func:`check_station`);
 - a ``simulator_config`` Drake would refuse, or that does not start at t = 0;
 - no goal, more than :data:`~drake_disamb.core.validation.MAX_GOALS` goals, more stages than goals,
   stages with different numbers of goals;
@@ -85,21 +86,23 @@ def min_goal_separation(success: SuccessSpec) -> float:
     return 2.0 * success.position_tolerance
 
 
-def check_counts(n_goals: int, n_stages: int, name: str = "scenario") -> None:
-    """Reject no goal, no stage, more than :data:`MAX_GOALS` goals or more stages than goals.
+def check_counts(n_goals: int | None, n_stages: int | None, name: str = "scenario") -> None:
+    """Reject no goal, no stage, more than :data:`MAX_GOALS` goals or more stages than goals (a
+    count ``None``: not known, as in a layer that does not write the list).
 
-    Cheap, so the loader runs it on the parsed data before Drake's (slower) loader reads the file.
+    Cheap, so the loader runs it on each layer's parsed data before Drake's (slower) loader reads it.
     """
     if n_stages == 0:
         raise ValueError(f"{name}.stages: expected at least one stage, got []")
     if n_goals == 0:
         raise ValueError(f"{name}.goals: expected at least one goal, got []")
-    if n_goals > MAX_GOALS:
-        raise ValueError(f"{name}.goals: expected at most {MAX_GOALS} goals, got {n_goals}")
-    if n_stages > n_goals:
+    if n_goals is not None and n_goals <= MAX_GOALS and n_stages is not None and n_stages > n_goals:
         raise ValueError(
             f"{name}.stages: every stage needs a goal, got {n_stages} stages for {n_goals} goals"
         )
+    for what, n in (("goals", n_goals), ("stages", n_stages)):
+        if n is not None and n > MAX_GOALS:
+            raise ValueError(f"{name}.{what}: expected at most {MAX_GOALS} {what}, got {n}")
 
 
 def _check_positive(value: float, path: str, allow_zero: bool = False) -> None:
@@ -177,7 +180,14 @@ def _check_belief_integrator(s: Scenario, name: str) -> None:
         )
 
 
-def _check_timing(s: Scenario, name: str) -> None:
+def check_station(s: Scenario, name: str = "scenario") -> None:
+    """The station's part of a scenario (all that ``station-demo`` uses): the control period, the
+    plant config (:func:`drake_disamb.station.check_plant_config`, a plant step at most the period)
+    and the backend's settings (``station``: an ``!Lcm`` station's bus, channels and timeouts).
+
+    Raises:
+        ValueError: naming the field path and the value.
+    """
     from drake_disamb.station import check_plant_config
 
     check_real_range(s.control_period, f"{name}.control_period", *TIME_STEP_RANGE, unit="s")
@@ -187,6 +197,16 @@ def _check_timing(s: Scenario, name: str) -> None:
             f"{name}.plant_config.time_step: expected at most the control period ({s.control_period!r} s), "
             f"got {s.plant_config.time_step!r}"
         )
+    check = getattr(s.station, "check", None)  # a backend with settings checks them
+    if check is not None:
+        try:
+            check()
+        except ValueError as exc:  # its message names station.<field>
+            raise ValueError(f"{name}.{exc}") from None
+
+
+def _check_timing(s: Scenario, name: str) -> None:
+    check_station(s, name)
     _check_simulator_config(s, name)
     check_duration(s.duration, f"{name}.duration")
     check_request_latency(s.disambiguation.request_latency, f"{name}.disambiguation.request_latency")
@@ -439,6 +459,7 @@ __all__ = [
     "MIN_TABLE_CLEARANCE",
     "check_counts",
     "check_scenario",
+    "check_station",
     "check_start_clearance",
     "min_goal_separation",
 ]

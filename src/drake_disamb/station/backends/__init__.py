@@ -2,14 +2,14 @@
 backend choice (Drake's ``MakeHardwareStation(scenario, meshcat, hardware=...)`` pattern).
 
 A backend is a small dataclass (its settings) with a ``name`` and a ``build(config, scene_objects,
-meshcat) -> Station`` method; in YAML it is chosen by its tag, ``station: !Sim {}``. Every backend's
+meshcat) -> Station`` method; it is the scenario's ``station`` field (:class:`StationBackend`), in
+YAML chosen by its tag, ``station: !Sim {}`` or ``station: !Lcm {lcm_url: ...}``. Every backend's
 station offers the ports of :mod:`drake_disamb.station.ports`; code dispatches on the backend's type
 (by calling its ``build``), never on its name.
 """
 
 import typing
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 
 from pydrake.geometry import Meshcat
 
@@ -22,40 +22,7 @@ BACKENDS: dict[str, type] = {cls.name: cls for cls in (Sim, Lcm)}
 """Every registered backend by name (``--station NAME``)."""
 
 StationBackend = typing.Union[tuple(BACKENDS.values())]  # noqa: UP007 (built from the registry)
-"""Any registered backend's settings (a YAML tag picks one)."""
-
-
-@dataclass  # (no postponed annotations in this module: Drake's YAML loader reads the field type)
-class StationChoice:
-    """A station choice as a YAML document: ``station: !Sim {}`` (the tag is the backend's class)."""
-
-    station: StationBackend = field(default_factory=Sim)  # type: ignore[valid-type]
-
-
-def backend_named(name: str) -> StationBackend:  # type: ignore[valid-type]
-    """The backend registered as ``name`` with its default settings.
-
-    Raises:
-        ValueError: an unknown name; the message lists the registered ones.
-    """
-    if name not in BACKENDS:
-        raise ValueError(f"station: unknown backend {name!r}; registered: {', '.join(BACKENDS)}")
-    return BACKENDS[name]()
-
-
-def load_station_choice(text: str) -> StationBackend:  # type: ignore[valid-type]
-    """The backend of a YAML document ``station: !Tag {settings}``.
-
-    Raises:
-        ValueError: an unknown tag (listing the registered backends' tags) or a bad setting.
-    """
-    from pydrake.common.yaml import yaml_load_typed
-
-    try:
-        return yaml_load_typed(schema=StationChoice, data=text).station
-    except RuntimeError as exc:
-        tags = ", ".join(f"!{cls.__name__}" for cls in BACKENDS.values())
-        raise ValueError(f"station: {exc} (registered backends: {tags})") from None
+"""Any registered backend's settings (a YAML tag picks one; the first, :class:`Sim`, without a tag)."""
 
 
 def make_station(
@@ -74,8 +41,5 @@ __all__ = [
     "Lcm",
     "Sim",
     "StationBackend",
-    "StationChoice",
-    "backend_named",
-    "load_station_choice",
     "make_station",
 ]

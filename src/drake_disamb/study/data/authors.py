@@ -72,8 +72,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.config import ordered_variant
-from drake_disamb.config.system_presets import system_preset
+from drake_disamb.config import merge_layers, ordered_variant
+from drake_disamb.config.system_presets import system_layer
 from drake_disamb.core.interfaces import interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
@@ -145,7 +145,7 @@ def study_modes(interface: str) -> tuple[tuple[int, ...], ...]:
     the mode order of the ``tnsre2020_study`` preset (the study's head array steps vx, vy, vz,
     wz, ...), else the interface's registered order; the gripper mode last. (Read once: every
     trial file asks.)"""
-    order = system_preset("tnsre2020_study").get("interface_mode_order", {}).get(interface)
+    order = merge_layers([system_layer("tnsre2020_study")]).interface_mode_order.get(interface)
     if order is None:
         return interface_modes(interface)
     return ordered_variant(interface, order, f"tnsre2020_study.interface_mode_order.{interface}").modes

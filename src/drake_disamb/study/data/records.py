@@ -103,7 +103,10 @@ class TrialRecord:
         wall_time: Wall-clock seconds the trial took to simulate (0 for human trials).
         valid: False for a trial the analysis must leave out (the authors' failed trials).
         source: One of :data:`SOURCES`.
-        extra: Anything else a producer wants to keep (JSON values).
+        extra: Anything else a producer wants to keep (JSON values). A record made from a trial
+            it ran (:func:`~drake_disamb.study.run.outcome.record_from_result`) keeps the trial's
+            scenario there, ``scenario``: its YAML, from which ``study rerun`` runs the trial
+            again (records of an older release, and the authors', have none).
         format: :data:`FORMAT`.
     """
 

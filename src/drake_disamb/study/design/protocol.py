@@ -46,6 +46,7 @@ import yaml
 from pydrake.common.yaml import yaml_load_typed
 
 from drake_disamb.config.checks import check_data, check_duration, check_request_latency, cut, fmt
+from drake_disamb.config.schema import to_plain
 from drake_disamb.config.system_presets import SYSTEM_PRESETS
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
 from drake_disamb.core.interfaces import MODE_SELECTIONS
@@ -370,15 +371,7 @@ def quick_protocol(base: Protocol | None = None) -> Protocol:
 
 def protocol_to_dict(protocol: Protocol) -> dict[str, Any]:
     """Plain data of a protocol (loads back with :func:`protocol_from_dict`)."""
-    return _plain(protocol)
-
-
-def _plain(value: Any) -> Any:
-    if dataclasses.is_dataclass(value):
-        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    return value
+    return to_plain(protocol)
 
 
 # -- expansion -------------------------------------------------------------------------------------

@@ -3,7 +3,9 @@
 :func:`record_from_result` turns a :class:`~drake_disamb.trial.TrialResult` into a
 :class:`~drake_disamb.study.data.records.TrialRecord` (the study runner for simulated subjects,
 ``demo --live --record`` for a person); :func:`trace_arrays` gives the trial's time series in the
-layout of ``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.data.folder` writes them).
+layout of ``DIR/traces/<trial_id>.npz`` (:mod:`drake_disamb.study.data.folder` writes them). Every
+record keeps the scenario its trial ran (``extra.scenario``, :func:`record_scenario` reads it back),
+so a simulated trial runs again from its record alone (``study rerun``).
 
 Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,) s; ``belief``
 (T, n_goals); ``u_h`` and ``u`` (T, 6): spatial velocities in the paper's order
@@ -34,7 +36,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.config import interface_variant
+from drake_disamb.config import dump_scenario, interface_variant, scenario_from_yaml
 from drake_disamb.ik import IkStatus
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 
@@ -44,6 +46,7 @@ __all__ = [
     "ik_held_share",
     "record_condition",
     "record_from_result",
+    "record_scenario",
     "stage_onsets",
     "trace_arrays",
 ]
@@ -157,8 +160,10 @@ def record_from_result(
         trace: Its :func:`trace_arrays` if already computed.
         wall_time: The record's ``wall_time`` (default the simulation's; 0 for a person's trial).
         extra: Merged into the record's ``extra`` (after ``stage_times``, ``intended_goal_names``,
-            ``reached_goal_names``, ``assistance_onsets``, ``disambiguation_switch_times`` and
-            ``interrupted``).
+            ``reached_goal_names``, ``assistance_onsets``, ``disambiguation_switch_times``,
+            ``interrupted``, ``end_reason``, ``progress_age`` and ``ik_held``); the trial's scenario
+            comes last, ``scenario``: its YAML as ``demo --dump-scenario`` writes it, which
+            loads back, alone, to the scenario that ran (:func:`record_scenario`).
     """
     sc = result.scenario
     trace = trace_arrays(result) if trace is None else trace
@@ -181,6 +186,7 @@ def record_from_result(
         "ik_held": ik_held_share(trace),
     }
     info.update(extra or {})
+    info["scenario"] = dump_scenario(sc)
     return TrialRecord(
         trial_id=trial_id,
         subject=subject,
@@ -209,3 +215,19 @@ def record_from_result(
         source=source,
         extra=info,
     )
+
+
+def record_scenario(record: TrialRecord, source: str = "the record") -> Any:
+    """The scenario a record keeps (``extra.scenario``), loaded by the one scenario loader.
+
+    Raises:
+        ValueError: the record keeps no scenario (a record of an older drake-disamb, or of the
+            authors' logs), or it does not load, naming ``source``.
+    """
+    text = record.extra.get("scenario")
+    if not isinstance(text, str):
+        raise ValueError(
+            f"{source}: keeps no scenario (extra.scenario; a record of an older drake-disamb, or of "
+            "the authors' logs)"
+        )
+    return scenario_from_yaml(text, f"{source}: extra.scenario")

@@ -19,15 +19,18 @@ whatever the executor, the worker count and the order of completion. Resume: the
 ``trial_id`` s of ``trials.jsonl`` (read with ``repair=True``: a half-written last line, which a
 kill can leave, is cut and its trial run again) are skipped.
 
-A trial's scenario (:func:`build_scenario`): the embedded task with the protocol's system preset
-(:mod:`drake_disamb.config.system_presets`), then the trial's interface,
-paradigm, intended goals, initial mode, start posture (the task's start posture plus the start
-pose's joint offsets), seed, the protocol's duration, the joystick's mode selection
-(``Scenario.interface_mode_selection``), the mode-selection method and the drawn request
-latency (``Scenario.disambiguation.method`` and ``.request_latency``), the subject's overrides
-of ``Scenario.user.config`` and last the study's overrides (dotted field paths, ``study
-ablate``; never a field of the trial's condition, :data:`CONDITION_FIELDS`). Built through
-:func:`~drake_disamb.config.scenario_from_dict`: every value passes the scenario's checks.
+A trial's scenario (:func:`trial_layers`) is layers loaded by the one scenario loader
+(:func:`~drake_disamb.config.load_layers`), in this order: the embedded task; the protocol's
+system preset (:mod:`drake_disamb.config.system_presets`); the protocol's settings (the
+duration, the experimenter's ``give_up_after``, the joystick's mode selection
+``interface_mode_selection``, the stages whose target the experimenter names, the mode-selection
+method ``disambiguation.method``); the trial's start posture (the task's start posture plus the
+start pose's joint offsets); the trial's draws (interface, paradigm, seed, initial mode,
+intended goals, request latency); the subject's overrides of ``Scenario.user.config``; last the
+study's overrides, one layer each (dotted field paths, ``study ablate --switch``; never a field
+of the trial's condition, :data:`CONDITION_FIELDS`). Every value passes the scenario's checks,
+and an error names its layer. Each record keeps the scenario that ran (``extra.scenario``), from
+which ``study rerun`` runs the trial again.
 
 Subjects come from :func:`drake_disamb.study.design.population.draw_subjects` (``study.yaml`` names the
 population).
@@ -36,7 +39,6 @@ population).
 from __future__ import annotations
 
 import concurrent.futures as cf
-import copy
 import dataclasses
 import functools
 import os
@@ -68,13 +70,15 @@ __all__ = [
     "StudyPlan",
     "StudyResult",
     "TrialOutput",
-    "apply_override",
-    "build_scenario",
     "check_overrides",
     "draw_study_subjects",
+    "override_layers",
     "plan_study",
+    "rerun_trial",
     "run_study",
     "run_trial_job",
+    "trial_layers",
+    "trial_scenario",
 ]
 
 STUDY_FORMAT = 1
@@ -121,49 +125,6 @@ class StudyContext:
     subject_users: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
-@functools.lru_cache(maxsize=8)
-def _task_plain(task: str) -> dict[str, Any]:
-    from drake_disamb.config import load_scenario, scenario_to_dict
-
-    return scenario_to_dict(load_scenario(task))
-
-
-def _field_path_types(path: str) -> Any:
-    """The schema type at the dotted ``path`` of :class:`Scenario` (raises ``ValueError``)."""
-    import typing
-
-    from drake_disamb.config.checks import schema_fields
-    from drake_disamb.config.schema import Scenario
-
-    tp: Any = Scenario
-    walked = "scenario"
-    for part in path.split("."):
-        origin = typing.get_origin(tp)
-        if origin is not None and type(None) in typing.get_args(tp):
-            (tp,) = [a for a in typing.get_args(tp) if a is not type(None)]
-        fields = schema_fields(tp) if isinstance(tp, type) else None
-        if not fields:
-            raise ValueError(f"{path}: {walked} has no fields (only nested settings can be switched)")
-        names = {n: t for n, t, _ in fields}
-        if part not in names:
-            raise ValueError(f"{path}: {walked} has no field {part!r} (known: {', '.join(sorted(names))})")
-        tp = names[part]
-        walked = f"{walked}.{part}"
-    return tp
-
-
-def apply_override(plain: dict[str, Any], path: str, value: Any) -> None:
-    """Set the dotted field ``path`` of plain scenario data to ``value`` (in place)."""
-    _field_path_types(path)
-    node = plain
-    parts = path.split(".")
-    for part in parts[:-1]:
-        if node.get(part) is None:
-            node[part] = {}
-        node = node[part]
-    node[parts[-1]] = copy.deepcopy(value)
-
-
 CONDITION_FIELDS: dict[str, str] = {
     "task": "the trial's task, kept as its record's task (the protocol's tasks)",
     "goals": "the task's goals: the record's task names the embedded task and its goals",
@@ -187,82 +148,101 @@ def _covers(path: str, name: str) -> bool:
     return path == name or name.startswith(f"{path}.")
 
 
-def check_overrides(overrides: dict[str, Any], option: str = "overrides") -> None:
-    """Check that every dotted path names a scenario field that is not a trial's condition
-    (:data:`CONDITION_FIELDS`) and its value passes the scenario's checks on every embedded task
-    (raises ``ValueError`` naming ``option``, the path and the value)."""
-    from drake_disamb.config import scenario_from_dict
+def override_layers(overrides: dict[str, Any], option: str = "overrides") -> list[Any]:
+    """One layer per override ``{dotted path: value}``, named ``<option> <path>=<value>``.
 
+    Raises:
+        ValueError: a path that is a trial's condition (:data:`CONDITION_FIELDS`), or a path or
+            value that does not fit the schema, naming the option, the path and the value.
+    """
+    from drake_disamb.config import setting_layer
+
+    layers = []
     for path, value in overrides.items():
-        try:
-            _field_path_types(path)
-        except ValueError as exc:
-            raise ValueError(f"{option} {exc}") from None
         for name, why in CONDITION_FIELDS.items():
             if _covers(path, name):
                 inside = "" if path == name else f" (it holds {name})"
                 raise ValueError(
                     f"{option} {path}: not switchable{inside}: {why}; the records would not say what ran"
                 )
+        layers.append(setting_layer(path, value, f"{option} {path}={value!r}"))
+    return layers
+
+
+def check_overrides(overrides: dict[str, Any], option: str = "overrides") -> None:
+    """Check that every override is a layer (:func:`override_layers`) that every embedded task
+    takes (raises ``ValueError`` naming ``option``, the path and the value)."""
+    from drake_disamb.config import load_layers, task_layer
+
+    for layer in override_layers(overrides, option):
         for task in ("reaching", "pouring"):
-            plain = copy.deepcopy(_task_plain(task))
-            apply_override(plain, path, value)
-            try:
-                scenario_from_dict(plain, f"{option} {path}={value!r}")
-            except ValueError as exc:
-                raise ValueError(f"{option} {path}={value!r}: {exc}") from None
+            load_layers([task_layer(task), layer])
 
 
-def build_scenario(spec: TrialSpec, context: StudyContext) -> Any:
-    """The validated :class:`~drake_disamb.config.Scenario` of a trial (module docstring)."""
-    from drake_disamb.config import scenario_from_dict
-    from drake_disamb.config.system_presets import apply_system_preset
+@functools.lru_cache(maxsize=8)
+def _system_task(task: str, system: str) -> Any:
+    """The embedded ``task`` with the ``system`` preset (unchecked: a trial's layers complete it)."""
+    from drake_disamb.config import merge_layers, task_layer
+    from drake_disamb.config.system_presets import system_layer
+
+    return merge_layers([task_layer(task), system_layer(system)])
+
+
+def trial_layers(spec: TrialSpec, context: StudyContext) -> list[Any]:
+    """The layers of a trial's scenario (module docstring), each named by its role in messages:
+    the embedded task, the protocol's system preset, the protocol's settings, the trial's start
+    pose (``protocol.tasks[k].start_poses[i].joint_offsets``), the trial's draws, the subject's
+    user and the study's overrides."""
+    from drake_disamb.config import data_layer, task_layer
+    from drake_disamb.config.schema import to_plain
+    from drake_disamb.config.system_presets import system_layer
     from drake_disamb.station.config import MICO_HOME_Q
 
     protocol = context.protocol
-    plain = apply_system_preset(copy.deepcopy(_task_plain(spec.task)), protocol.get("system", "mico"))
-    plain["interface"] = spec.interface
-    plain["paradigm"] = spec.paradigm
-    plain["seed"] = spec.scenario_seed
-    plain["initial_mode"] = spec.initial_mode
-    plain["interface_mode_selection"] = protocol.get("interface_mode_selection", "cycle")
-    plain["user"]["goals"] = list(spec.goals)
-    task = _task_protocol(context, spec.task)
-    for stage in plain.get("stages", []):
-        if stage.get("name", "reach") in task.get("target_stages", []):
-            stage["ends_at_target"] = True  # the experimenter named the target
+    system = protocol.get("system", "mico")
+    base = _system_task(spec.task, system)
+    k = next(i for i, t in enumerate(protocol["tasks"]) if t["task"] == spec.task)
+    task = protocol["tasks"][k]
+    stages = to_plain(base.stages)
+    for stage in stages:
+        stage["ends_at_target"] = stage["ends_at_target"] or stage["name"] in task.get("target_stages", [])
+    settings: dict[str, Any] = {
+        "interface_mode_selection": protocol.get("interface_mode_selection", "cycle"),
+        "stages": stages,
+    }
+    if protocol.get("duration") is not None:
+        settings["duration"] = float(protocol["duration"])
+    if protocol.get("give_up_after") is not None:
+        settings["success"] = {"give_up_after": float(protocol["give_up_after"])}
+    if spec.paradigm != "manual":
+        settings["disambiguation"] = {"method": protocol["disambiguation_method"]}
+    layers = [task_layer(spec.task), system_layer(system), data_layer(settings, "protocol")]
     offsets = task["start_poses"][spec.start_pose].get("joint_offsets")
     if offsets is not None:
-        base = plain.get("start_joint_positions") or [float(q) for q in MICO_HOME_Q]
-        plain["start_joint_positions"] = [round(float(q + d), 10) for q, d in zip(base, offsets, strict=True)]
-    if protocol.get("duration") is not None:
-        plain["duration"] = float(protocol["duration"])
-    if protocol.get("give_up_after") is not None:
-        plain.setdefault("success", {})["give_up_after"] = float(protocol["give_up_after"])
-    if spec.paradigm != "manual":
-        plain["disambiguation"]["method"] = protocol["disambiguation_method"]
-    plain["disambiguation"]["request_latency"] = spec.request_latency or 0.0
+        start = base.start_joint_positions or [float(q) for q in MICO_HOME_Q]
+        joints = [round(float(q + d), 10) for q, d in zip(start, offsets, strict=True)]
+        source = f"protocol.tasks[{k}].start_poses[{spec.start_pose}].joint_offsets"
+        layers.append(data_layer({"start_joint_positions": joints}, source))
+    draws = {
+        "interface": spec.interface,
+        "paradigm": spec.paradigm,
+        "seed": spec.scenario_seed,
+        "initial_mode": spec.initial_mode,
+        "user": {"goals": list(spec.goals)},
+        "disambiguation": {"request_latency": spec.request_latency or 0.0},
+    }
+    layers.append(data_layer(draws, f"trial {spec.trial_id}"))
     user = context.subject_users.get(spec.subject, {})
-    config = plain["user"]["config"]
-    for key, value in user.items():
-        if key not in config:
-            raise ValueError(
-                f"subject {spec.subject}.user.{key}: not a field of Scenario.user.config "
-                f"(known: {', '.join(sorted(config))})"
-            )
-        config[key] = value
-    for path, value in context.overrides.items():
-        apply_override(plain, path, value)
-    try:
-        return scenario_from_dict(plain, f"trial {spec.trial_id}")
-    except ValueError as exc:
-        if offsets is None or not str(exc).startswith("scenario.start_joint_positions"):
-            raise
-        k = next(i for i, t in enumerate(protocol["tasks"]) if t["task"] == spec.task)
-        raise ValueError(
-            f"protocol.tasks[{k}].start_poses[{spec.start_pose}].joint_offsets: {offsets} makes the "
-            f"{spec.task} task's start posture invalid ({exc})"
-        ) from None
+    if user:
+        layers.append(data_layer({"user": {"config": dict(user)}}, f"subject {spec.subject}"))
+    return layers + override_layers(context.overrides)
+
+
+def trial_scenario(spec: TrialSpec, context: StudyContext) -> Any:
+    """The validated :class:`~drake_disamb.config.Scenario` of a trial: its layers loaded."""
+    from drake_disamb.config import load_layers
+
+    return load_layers(trial_layers(spec, context))
 
 
 # -- one trial -------------------------------------------------------------------------------------
@@ -290,7 +270,7 @@ def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
     from drake_disamb.study.run.outcome import record_from_result, trace_arrays
     from drake_disamb.trial import run_trial
 
-    scenario = build_scenario(spec, context)
+    scenario = trial_scenario(spec, context)
     result = run_trial(scenario, progress=False)
     trace = trace_arrays(result)
     task = _task_protocol(context, spec.task)
@@ -316,6 +296,42 @@ def _run_trial(spec: TrialSpec, context: StudyContext) -> TrialOutput:
         extra=extra,
     )
     return TrialOutput(record=record, trace=trace)
+
+
+def rerun_trial(
+    record: TrialRecord, source: str = "the record", progress: bool = False
+) -> tuple[TrialRecord, dict[str, np.ndarray]]:
+    """Run a simulated trial again from its record alone: the scenario it keeps
+    (:func:`~drake_disamb.study.run.outcome.record_scenario`), the record's identity and its
+    producer's ``extra`` (the order, the start pose's name...). Returns the new record and trace;
+    a trial is a pure function of its scenario, so both equal the first run's but ``wall_time``.
+
+    Raises:
+        ValueError: a person's trial (the person's commands are not in the scenario), or a record
+            that keeps no scenario, naming ``source``.
+    """
+    from drake_disamb.study.run.outcome import record_from_result, record_scenario, trace_arrays
+    from drake_disamb.trial import run_trial
+
+    if record.source != "simulated":
+        raise ValueError(
+            f"{source}: a {record.source} trial (source {record.source}) cannot be rerun: the person's "
+            "commands are not in its scenario"
+        )
+    result = run_trial(record_scenario(record, source), progress=progress)
+    trace = trace_arrays(result)
+    fresh = record_from_result(
+        result,
+        trial_id=record.trial_id,
+        subject=record.subject,
+        repetition=record.repetition,
+        seed=record.seed,
+        start_pose=record.start_pose,
+        source=record.source,
+        trace=trace,
+    )
+    producer = {k: v for k, v in record.extra.items() if k not in fresh.extra}
+    return dataclasses.replace(fresh, extra={**fresh.extra, **producer}), trace
 
 
 # -- the study -------------------------------------------------------------------------------------
@@ -484,10 +500,10 @@ def _check_conditions(specs: list[TrialSpec], context: StudyContext) -> None:
             key = (spec.task, spec.interface, spec.paradigm, pose)
             if key not in seen:
                 seen.add(key)
-                build_scenario(dataclasses.replace(spec, start_pose=pose), context)
+                trial_scenario(dataclasses.replace(spec, start_pose=pose), context)
         if spec.subject not in seen:
             seen.add(spec.subject)
-            build_scenario(spec, context)
+            trial_scenario(spec, context)
 
 
 class ExecutorLost(RuntimeError):
