@@ -47,8 +47,10 @@ def cli_process(*argv: str) -> subprocess.Popen:
 
 
 def wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str]:
-    """Lines of ``proc``'s stdout up to the first one holding ``text``. Reads the pipe's bytes
-    directly: ``readline`` on the text wrapper would buffer lines that ``select`` then cannot see."""
+    """Lines of ``proc``'s stdout up to the first whole line (its newline read too) holding ``text``.
+    Reads the pipe's bytes directly: ``readline`` on the text wrapper would buffer lines that
+    ``select`` then cannot see. Unbuffered (``PYTHONUNBUFFERED``), ``print`` writes a line's text
+    and its newline separately: waiting for the newline leaves nothing of the line in the pipe."""
     fd = proc.stdout.fileno()
     data = b""
     end = time.monotonic() + timeout
@@ -60,7 +62,7 @@ def wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str
                 break
             data += chunk
             lines = data.decode(errors="replace").splitlines(keepends=True)
-            if any(text in line for line in lines):
+            if any(text in line and line.endswith("\n") for line in lines):
                 return lines
     proc.kill()
     err = proc.stderr.read()
