@@ -137,9 +137,12 @@ class Station:
         return self.plant.GetMyContextFromRoot(root_context)
 
 
-def _add_objects(
+def add_scene_objects(
     plant: MultibodyPlant, objects: Iterable[SceneObject], ee_frame: Frame, only_attached: bool
 ) -> None:
+    """Add ``objects`` to ``plant`` (not finalized), each a rigid body welded to the world or, when
+    ``attached_to_gripper``, to ``ee_frame``; ``only_attached`` adds the held ones only. Geometry
+    (visual and collision) is registered when ``plant`` is a SceneGraph source."""
     instance = None
     for obj in objects:
         if only_attached and not obj.attached_to_gripper:
@@ -159,11 +162,13 @@ def _add_objects(
         plant.WeldFrames(parent, body.body_frame(), obj.transform())
 
 
-def _make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
+def make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
+    """The arm-only continuous plant (base welded to the world) with the objects of ``objects``
+    held in the gripper, finalized, and the MICO's model instance in it."""
     plant = MultibodyPlant(time_step=0.0)
     (arm,) = model_parser(plant).AddModels(str(mico_urdf()))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(BASE_FRAME, arm))
-    _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
+    add_scene_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
     plant.Finalize()
     return plant, arm
 
@@ -286,7 +291,7 @@ def _build_plant_station(
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
     ee_frame = plant.GetFrameByName(EE_FRAME, arm)
-    _add_objects(plant, objects, ee_frame, only_attached=False)
+    add_scene_objects(plant, objects, ee_frame, only_attached=False)
 
     # The directives set the home posture; the config's values go over it (the same by default).
     for name, q in zip(ARM_JOINTS, config.home_q, strict=True):
@@ -312,7 +317,7 @@ def _build_plant_station(
         CollisionFilterDeclaration().ExcludeWithin(plant.CollectRegisteredGeometries(arm_bodies))
     )
 
-    control_plant, control_arm = _make_control_plant(objects)
+    control_plant, control_arm = make_control_plant(objects)
     _check_same_layout(plant, control_plant)
     arm_joints = [plant.GetJointByName(name, arm).index() for name in ARM_JOINTS]
     finger_joints = [plant.GetJointByName(name, arm).index() for name in FINGER_JOINTS]

@@ -34,7 +34,7 @@ from pydrake.systems.primitives import MatrixGain, Multiplexer
 from pydrake.systems.rendering import MultibodyPositionToGeometryPose
 
 from drake_disamb.paths import mico_directives
-from drake_disamb.station.build import Station, _add_objects, _make_control_plant
+from drake_disamb.station.build import Station, add_scene_objects, make_control_plant
 from drake_disamb.station.config import (
     ARM_JOINTS,
     ARM_MODEL_NAME,
@@ -133,7 +133,7 @@ def build_lcm_station(
     plant.RegisterAsSourceForSceneGraph(scene_graph)
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
-    _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=False)
+    add_scene_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=False)
     plant.Finalize()
     geometry = StationGeometry.from_plant(plant, scene_graph, arm)
     lower, upper = geometry.joint_limits()
@@ -155,7 +155,7 @@ def build_lcm_station(
         )
     link = CommandLink(lcm, settings.command_channel, period, settings.zero_command_repeats)  # type: ignore[attr-defined]
 
-    control_plant, control_arm = _make_control_plant(objects)
+    control_plant, control_arm = make_control_plant(objects)
     seeded = dataclasses.replace(
         config,
         home_q=tuple(first.q.tolist()),
