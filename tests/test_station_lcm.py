@@ -12,6 +12,7 @@ from drake import lcmt_jaco_command
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 
+from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import MICO_HOME_Q, StationConfig, build_station
 from drake_disamb.station.backends import BACKENDS, InProcessLcm, Lcm, load_station_choice
 from drake_disamb.station.lcm import mapping
@@ -136,7 +137,8 @@ def test_the_backends_are_chosen_by_a_yaml_tag() -> None:
 # The in-process form: the station steps the driver on one memq:// bus.
 # ----------------------------------------------------------------------------------------------
 class Wire:
-    """A station on LCM with the simulated driver on one memq:// bus, and a tap on the commands."""
+    """A station on LCM behind its controllers, with the simulated driver on one memq:// bus, and a
+    tap on the commands."""
 
     def __init__(self, extra=None, settings: Lcm | None = None) -> None:  # noqa: ANN001
         self.settings = settings or Lcm(lcm_url="memq://")
@@ -152,7 +154,7 @@ class Wire:
                 self.extra(self)
 
         self.station = build_lcm_station(self.settings, StationConfig(), lcm=self.lcm, pump=pump)
-        d = self.station.diagram
+        self.diagram = d = build_controlled_station(self.station).diagram
         self.simulator = Simulator(d)
         self.ctx = self.simulator.get_mutable_context()
         d.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
@@ -165,10 +167,10 @@ class Wire:
         )
 
     def command(self, V) -> None:  # noqa: ANN001
-        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.asarray(V, float))
+        self.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.asarray(V, float))
 
     def out(self, name: str) -> np.ndarray:
-        return np.asarray(self.station.diagram.GetOutputPort(name).Eval(self.ctx)).copy()
+        return np.asarray(self.diagram.GetOutputPort(name).Eval(self.ctx)).copy()
 
     def receiver(self):  # noqa: ANN201
         return self.station.diagram.GetSubsystemByName("status_receiver")
@@ -180,7 +182,7 @@ class Wire:
 
 def test_the_arm_on_the_wire_moves_as_the_simulated_station_does() -> None:
     wire = Wire()
-    sim = build_station(StationConfig())
+    sim = build_controlled_station(build_station(StationConfig()))
     sim_sim = Simulator(sim.diagram)
     sim_ctx = sim_sim.get_mutable_context()
     sim.diagram.GetInputPort("gripper_command").FixValue(sim_ctx, [0.0])
@@ -852,3 +854,52 @@ def test_a_live_input_on_the_wire_passes_through_the_deadman() -> None:
         load_scenario("reaching"), meshcat=meshcat, input_source=HeldSwitch()
     )
     assert not sim_handles.diagram.HasSubsystemNamed("deadman")  # the simulated arm: unchanged
+
+
+# ----------------------------------------------------------------------------------------------
+# The station's systems on the wire, alone.
+# ----------------------------------------------------------------------------------------------
+def _command(v, fv) -> bytes:  # noqa: ANN001
+    from drake_disamb.station.lcm.messages import make_command
+
+    return make_command(0, np.zeros(6), np.asarray(v, float), np.zeros(2), np.asarray(fv, float)).encode()
+
+
+def test_the_command_sender_sends_the_joint_level_inputs_clamped() -> None:
+    from drake_disamb.station.lcm.bus import CommandLink, StatusInbox
+    from drake_disamb.station.lcm.systems import JacoCommandSender
+
+    lcm = DrakeLcm("memq://")
+    got: list[bytes] = []
+    lcm.Subscribe(DEFAULT_COMMAND_CHANNEL, got.append)
+    vmax = np.array([0.5] * 6)
+    sender = JacoCommandSender(
+        CommandLink(lcm, DEFAULT_COMMAND_CHANNEL, PERIOD, 5), StatusInbox(lcm, "UNUSED"), vmax, 0.1, PERIOD
+    )
+    inputs = {sender.get_input_port(k).get_name(): sender.get_input_port(k).size() for k in range(5)}
+    assert inputs == {
+        "arm_velocity_command": 6,
+        "finger_velocity_command": 2,
+        "arm_joint_state": 12,
+        "finger_state": 4,
+        "fault": 1,
+    }
+    ctx = sender.CreateDefaultContext()
+    sender.GetInputPort("arm_velocity_command").FixValue(ctx, [1.0, 0.5, 0, 0, 0, 0])
+    sender.GetInputPort("finger_velocity_command").FixValue(ctx, [0.3, -0.05])
+    sender.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
+    sender.GetInputPort("finger_state").FixValue(ctx, [0.04, 0.04, 0, 0])
+    sender.GetInputPort("fault").FixValue(ctx, [0.0])
+    # Scaled to the speed limits along the command, the fingers clipped.
+    np.testing.assert_allclose(sender.GetOutputPort("command").Eval(ctx), [0.5, 0.25, 0, 0, 0, 0, 0.1, -0.05])
+    simulator = Simulator(sender, ctx)
+    simulator.Initialize()  # the periodic publish at t = 0
+    lcm.HandleSubscriptions(0)
+    v, fv = read_command(got[-1])[0]
+    np.testing.assert_allclose(v, [0.5, 0.25, 0, 0, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(fv, [0.1, -0.05], atol=1e-12)
+    sender.GetInputPort("fault").FixValue(ctx, [float(Fault.STATUS_TIMEOUT)])
+    assert not sender.GetOutputPort("command").Eval(ctx).any()  # a fault: zero
+    sender.GetInputPort("fault").FixValue(ctx, [0.0])
+    sender.GetInputPort("arm_velocity_command").FixValue(ctx, [np.nan, 0, 0, 0, 0, 0])
+    assert not sender.GetOutputPort("command").Eval(ctx).any()  # not finite: zero

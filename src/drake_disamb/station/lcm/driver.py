@@ -1,9 +1,10 @@
-"""The simulated driver: our MultibodyPlant MICO (today's physics: SAP, joint PD, gravity
-compensation) behind the same messages as a Kinova Gen2 arm's LCM driver.
+"""The simulated driver: the simulated station (:func:`~drake_disamb.station.build.build_station`:
+our MultibodyPlant MICO, SAP, joint PD, gravity compensation, its set points integrated from the
+commanded velocities) behind the same messages as a Kinova Gen2 arm's LCM driver.
 
 It publishes ``lcmt_jaco_status`` every ``period`` (100 Hz; ``utime`` is its simulated time in us)
 and obeys only ``lcmt_jaco_command``, with the real driver's semantics: joint velocities only (the
-positions are ignored), integrated into the PD's set points; when no valid command has arrived for
+positions are ignored), on the station's joint-level inputs; when no valid command has arrived for
 ``command_timeout`` seconds, the arm stops (zero velocity, set points held). It knows nothing of the
 controller: Drake's ``hardware_sim`` "no ground truth" regime.
 
@@ -15,27 +16,15 @@ bus can step it in its own loop (the in-process, deterministic form).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.lcm import DrakeLcm
-from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import (
-    BasicVector,
-    Context,
-    DiagramBuilder,
-    DiscreteValues,
-    EventStatus,
-    LeafSystem,
-    OutputPort,
-)
 
-from drake_disamb.station.build import _build_plant_station, _SetPoints
-from drake_disamb.station.config import FINGER_MAX_OPENING, SceneObject, StationConfig
-from drake_disamb.station.geometry import StationGeometry
+from drake_disamb.station.build import Station, build_station
+from drake_disamb.station.config import StationConfig
 from drake_disamb.station.lcm.loop import prepare_loop
 from drake_disamb.station.lcm.messages import make_status, read_command
 
@@ -43,89 +32,6 @@ DEFAULT_STATUS_CHANNEL = "KINOVA_JACO_STATUS"
 """The status channel of Drake's Kinova Gen2 driver."""
 DEFAULT_COMMAND_CHANNEL = "KINOVA_JACO_COMMAND"
 """The command channel of Drake's Kinova Gen2 driver."""
-
-
-class JointVelocityIntegrator(LeafSystem):
-    """Integrates joint and finger velocity commands into the PD's set points, as a velocity-mode
-    driver does.
-
-    @system
-    name: JointVelocityIntegrator
-    input_ports:
-    - joint_velocity (6): DH joint velocities (rad/s)
-    - finger_velocity (2): finger slide speeds (m/s)
-    output_ports:
-    - desired_state (12): arm set point q_d (rad) then v_d (rad/s)
-    - finger_desired_state (4): finger set points (m) then speeds (m/s)
-    @endsystem
-
-    Every ``period``: ``q_d += v * period``, clamped to the joint limits (finger slides to their
-    travel), and ``v_d = v``.
-    """
-
-    def __init__(
-        self,
-        period: float,
-        home_q: Sequence[float],
-        home_fingers: Sequence[float],
-        lower: np.ndarray,
-        upper: np.ndarray,
-    ) -> None:
-        super().__init__()
-        self._period = float(period)
-        self._lower = np.concatenate([lower, [0.0, 0.0]])
-        self._upper = np.concatenate([upper, [FINGER_MAX_OPENING / 2] * 2])
-        self._v = self.DeclareVectorInputPort("joint_velocity", 6)
-        self._fv = self.DeclareVectorInputPort("finger_velocity", 2)
-        self._state = self.DeclareDiscreteState(np.concatenate([home_q, home_fingers, np.zeros(8)]))
-        ticket = {self.discrete_state_ticket(self._state)}
-        self.DeclareVectorOutputPort("desired_state", 12, self._calc_arm, prerequisites_of_calc=ticket)
-        self.DeclareVectorOutputPort(
-            "finger_desired_state", 4, self._calc_finger, prerequisites_of_calc=ticket
-        )
-        self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
-
-    def _calc_arm(self, context: Context, output: BasicVector) -> None:
-        x = context.get_discrete_state(self._state).get_value()
-        output.SetFromVector(np.concatenate([x[:6], x[8:14]]))
-
-    def _calc_finger(self, context: Context, output: BasicVector) -> None:
-        x = context.get_discrete_state(self._state).get_value()
-        output.SetFromVector(np.concatenate([x[6:8], x[14:16]]))
-
-    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        x = context.get_discrete_state(self._state).get_value()
-        v = np.concatenate([self._v.Eval(context), self._fv.Eval(context)])
-        q = np.minimum(np.maximum(x[:8] + v * self._period, self._lower), self._upper)
-        discrete_state.get_mutable_vector(self._state).SetFromVector(np.concatenate([q, v]))
-        return EventStatus.Succeeded()
-
-
-def _velocity_set_points(
-    builder: DiagramBuilder,
-    config: StationConfig,
-    control_plant: MultibodyPlant,
-    control_arm: ModelInstanceIndex,
-    objects: Sequence[SceneObject],
-    geometry: StationGeometry,
-    arm_state: OutputPort,
-    finger_state: OutputPort,
-) -> _SetPoints:
-    lower, upper = geometry.joint_limits()
-    opening = config.home_gripper_opening / 2
-    integrator = builder.AddNamedSystem(
-        "joint_velocity_integrator",
-        JointVelocityIntegrator(config.control_period, config.home_q, [opening, opening], lower, upper),
-    )
-    return _SetPoints(
-        arm_desired=integrator.GetOutputPort("desired_state"),
-        finger_desired=integrator.GetOutputPort("finger_desired_state"),
-        inputs={
-            "joint_velocity": integrator.GetInputPort("joint_velocity"),
-            "finger_velocity": integrator.GetInputPort("finger_velocity"),
-        },
-        outputs={"finger_state": finger_state},
-    )
 
 
 class SimulatedDriver:
@@ -136,6 +42,7 @@ class SimulatedDriver:
         period: Status period (s); also the plant's control period.
         statuses: Statuses published.
         commands: Valid commands received; ``dropped``: invalid ones (ignored).
+        station: The simulated station it runs.
     """
 
     def __init__(
@@ -152,12 +59,12 @@ class SimulatedDriver:
         self.period = float(config.control_period)
         self._status_channel = status_channel
         self._timeout_steps = max(1, int(round(command_timeout / self.period)))
-        self._station = _build_plant_station(config, (), meshcat, _velocity_set_points)
-        self._simulator = Simulator(self._station.diagram)
+        self.station: Station = build_station(config, (), meshcat)
+        self._simulator = Simulator(self.station.diagram)
         self._context = self._simulator.get_mutable_context()
-        diagram = self._station.diagram
-        self._v_port = diagram.GetInputPort("joint_velocity")
-        self._fv_port = diagram.GetInputPort("finger_velocity")
+        diagram = self.station.diagram
+        self._v_port = diagram.GetInputPort("arm_velocity_command")
+        self._fv_port = diagram.GetInputPort("finger_velocity_command")
         self._arm_port = diagram.GetOutputPort("arm_joint_state")
         self._finger_port = diagram.GetOutputPort("finger_state")
         self._command: tuple[np.ndarray, np.ndarray] = (np.zeros(6), np.zeros(2))
@@ -250,6 +157,5 @@ class SimulatedDriver:
 __all__ = [
     "DEFAULT_COMMAND_CHANNEL",
     "DEFAULT_STATUS_CHANNEL",
-    "JointVelocityIntegrator",
     "SimulatedDriver",
 ]

@@ -4,7 +4,7 @@
   the measurement in its state, and latches a fault (the watchdog, a joint outside the limits);
 - :class:`ModelEndEffectorState`: measured arm angles -> ``ee_pose`` / ``ee_velocity`` from our
   model (paper order ``[vx, vy, vz, wx, wy, wz]`` in W);
-- :class:`JacoCommandSender`: the IK's joint velocities and the gripper's finger speeds -> one
+- :class:`JacoCommandSender`: the station's joint and finger velocity commands -> one
   ``lcmt_jaco_command`` per control tick, zero once a fault is latched, clamped to the speed limits.
 """
 
@@ -283,15 +283,18 @@ class ModelEndEffectorState(LeafSystem):
 
 
 class JacoCommandSender(LeafSystem):
-    """Publishes one ``lcmt_jaco_command`` per control tick: the IK's joint velocities and the
-    gripper's finger speeds, zero once a fault is latched or when a value is not finite, and
-    scaled (all joints alike, so the direction is kept) to the joint speed limits.
+    """Publishes one ``lcmt_jaco_command`` per control tick: the commanded joint velocities and
+    finger speeds, zero once a fault is latched or when a value is not finite, and scaled (all
+    joints alike, so the direction is kept) to the joint speed limits. The message's positions are
+    the measured ones (a driver in velocity mode uses the velocities only).
 
     @system
     name: JacoCommandSender
     input_ports:
-    - desired_state (12): the IK's set point q_d (rad) then v_d (rad/s), DH
-    - finger_desired_state (4): finger slides (m) then speeds (m/s)
+    - arm_velocity_command (6): joint velocities, rad/s (DH)
+    - finger_velocity_command (2): finger slide speeds, m/s
+    - arm_joint_state (12): the measured DH angles (rad) then velocities (rad/s)
+    - finger_state (4): the measured finger slides (m) then speeds (m/s)
     - fault (1): the receiver's latched Fault code
     output_ports:
     - command (8): the last command's DH joint velocities (rad/s) and finger speeds (m/s)
@@ -311,34 +314,34 @@ class JacoCommandSender(LeafSystem):
         self._inbox = inbox
         self._vmax = np.asarray(velocity_limits, dtype=float)
         self._fmax = float(finger_speed_limit)
-        self._desired = self.DeclareVectorInputPort("desired_state", 12)
-        self._finger = self.DeclareVectorInputPort("finger_desired_state", 4)
+        self._velocity = self.DeclareVectorInputPort("arm_velocity_command", 6)
+        self._finger_velocity = self.DeclareVectorInputPort("finger_velocity_command", 2)
+        self._arm = self.DeclareVectorInputPort("arm_joint_state", 12)
+        self._finger = self.DeclareVectorInputPort("finger_state", 4)
         self._fault = self.DeclareVectorInputPort("fault", 1)
         self.DeclareVectorOutputPort("command", 8, self._calc_command)
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
-    def command(
-        self, context: Context
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The set point q_d (6, rad) and the clamped joint and finger velocities of ``context``."""
-        desired = np.asarray(self._desired.Eval(context), dtype=float)
-        finger = np.asarray(self._finger.Eval(context), dtype=float)
-        q, v, fv = desired[:6], desired[6:], finger[2:]
+    def command(self, context: Context) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The clamped joint (6, rad/s) and finger (2, m/s) velocities of ``context``."""
+        v = np.asarray(self._velocity.Eval(context), dtype=float)
+        fv = np.asarray(self._finger_velocity.Eval(context), dtype=float)
         if self._fault.Eval(context)[0] != Fault.NONE or not (
-            np.all(np.isfinite(desired)) and np.all(np.isfinite(fv))
+            np.all(np.isfinite(v)) and np.all(np.isfinite(fv))
         ):
-            return q, np.zeros(6), np.zeros(2)
+            return np.zeros(6), np.zeros(2)
         scale = float(np.min(self._vmax / np.maximum(np.abs(v), 1e-300)))
         if scale < 1.0:
             v = v * scale
-        return q, v, np.clip(fv, -self._fmax, self._fmax)
+        return v, np.clip(fv, -self._fmax, self._fmax)
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
-        _, v, fv = self.command(context)
+        v, fv = self.command(context)
         output.SetFromVector(np.concatenate([v, fv]))
 
     def _publish(self, context: Context) -> EventStatus:
-        q, v, fv = self.command(context)
+        v, fv = self.command(context)
+        q = np.asarray(self._arm.Eval(context), dtype=float)[:6]
         finger_q = np.asarray(self._finger.Eval(context), dtype=float)[:2]
         utime = int(round(context.get_time() * 1e6))
         finger_q = np.where(np.isfinite(finger_q), finger_q, 0.0)
