@@ -85,6 +85,8 @@ class JointVelocityIntegrator(LeafSystem):
         self._lower = np.asarray(lower, dtype=float).copy()
         self._upper = np.asarray(upper, dtype=float).copy()
         self._travel = float(finger_travel)
+        self._low = np.concatenate((self._lower, [0.0, 0.0]))  # the arm's limits, the fingers' travel
+        self._high = np.concatenate((self._upper, [self._travel] * 2))
         self._reseed_tol = float(reseed_tolerance)
         self._set_point = self.DeclareDiscreteState(np.concatenate([home_q, home_fingers]).astype(float))
         self._sanitized = SanitizedInputCounter(self, warn_interval)
@@ -108,21 +110,16 @@ class JointVelocityIntegrator(LeafSystem):
         """Lower and upper arm joint limits (rad) of the set points."""
         return self._lower.copy(), self._upper.copy()
 
-    def _commands(self, context: Context) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The arm's and the fingers' commanded velocities, both zero unless all are finite."""
+    def _calc_desired(self, context: Context, output: BasicVector) -> None:
+        q = context.get_discrete_state(self._set_point).get_value()
         v = self._arm_port.Eval(context)
         fv = self._finger_port.Eval(context)
-        if all_finite(v, fv):
-            return v, fv
-        return np.zeros(6), np.zeros(2)
-
-    def _calc_desired(self, context: Context, output: BasicVector) -> None:
+        w = np.concatenate((v, fv))
+        if not all_finite(w):
+            w = np.zeros(8)
         # The set point one period on (np.clip without its Python-level dispatch: the same values).
-        q = context.get_discrete_state(self._set_point).get_value()
-        v, fv = self._commands(context)
-        arm = np.minimum(np.maximum(q[:6] + v * self._period, self._lower), self._upper)
-        fingers = np.minimum(np.maximum(q[6:] + fv * self._period, 0.0), self._travel)
-        output.SetFromVector(np.concatenate([arm, fingers, v, (fingers - q[6:]) / self._period]))
+        x = np.minimum(np.maximum(q + w * self._period, self._low), self._high)
+        output.SetFromVector(np.concatenate((x, w[:6], (x[6:] - q[6:]) / self._period)))
 
     def _initialize(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         x = discrete_state.get_mutable_vector(self._set_point)
@@ -139,20 +136,24 @@ class JointVelocityIntegrator(LeafSystem):
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         # The set point the plant tracks this period (computed once: the plant has read it).
         desired = self._desired_port.Eval(context)
-        valid = all_finite(self._arm_port.Eval(context), self._finger_port.Eval(context))
-        if not valid:
+        write = desired[8:].any()  # commanded (a non-finite command was read as zero: checked here)
+        if not write and not all_finite(self._arm_port.Eval(context), self._finger_port.Eval(context)):
+            write = True  # (the count)
             self._sanitized.record(
                 context, discrete_state, "non-finite arm or finger velocity command treated as zero"
             )
-        arm = desired[:6]
         meas = self._measured_port.Eval(context)[:6]
         # The largest drift; NaN or inf when the measurement is not finite (then no re-anchoring).
-        drift = float(np.max(np.abs(arm - meas)))
+        drift = float(np.abs(desired[:6] - meas).max())
         if self._reseed_tol < drift < math.inf:
             arm = np.minimum(np.maximum(meas, self._lower), self._upper)
-        elif valid and not desired[8:].any():
+            discrete_state.get_mutable_vector(self._set_point).SetFromVector(
+                np.concatenate((arm, desired[6:8]))
+            )
+        elif write:
+            discrete_state.get_mutable_vector(self._set_point).SetFromVector(desired[:8])
+        else:
             return DID_NOTHING  # at rest (most ticks of a trial): the set point stays where it is
-        discrete_state.get_mutable_vector(self._set_point).SetFromVector(np.concatenate([arm, desired[6:8]]))
         return EventStatus.Succeeded()
 
 
