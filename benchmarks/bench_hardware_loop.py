@@ -23,6 +23,7 @@ import numpy as np
 from _host import HostMeter
 
 from drake_disamb.commands.station_demo import pattern, run_pattern, start_simulation
+from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import StationConfig
 from drake_disamb.station.backends import Lcm
 
@@ -41,7 +42,8 @@ def main() -> None:
     )
     try:
         station = Lcm(lcm_url=args.lcm_url, start_timeout=60.0).build(StationConfig())
-        simulator = start_simulation(station)
+        controlled = build_controlled_station(station)
+        simulator = start_simulation(controlled)
         receiver = station.diagram.GetSubsystemByName("status_receiver")
         counts = receiver.GetOutputPort("status_count")
         rctx = receiver.GetMyContextFromRoot(simulator.get_mutable_context())
@@ -52,11 +54,11 @@ def main() -> None:
         start_utime = receiver.last_utime(rctx)
         with HostMeter() as host:
             wall = time.perf_counter()
-            run_pattern(station, simulator, args.seconds, pattern())
+            run_pattern(controlled, simulator, args.seconds, pattern())
             wall = time.perf_counter() - wall
         used, dropped, missed = counts.Eval(rctx) - used0
         end_utime = receiver.last_utime(rctx)
-        fault = int(station.diagram.GetOutputPort("fault").Eval(simulator.get_context())[0])
+        fault = int(controlled.diagram.GetOutputPort("fault").Eval(simulator.get_context())[0])
         link.stop_arm()
     finally:
         driver.terminate()

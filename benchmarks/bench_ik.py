@@ -43,7 +43,7 @@ def main() -> None:
     plant = station.control_plant
     ctx = plant.CreateDefaultContext()
     frame = plant.GetFrameByName(EE_FRAME)
-    lower, upper = station.diff_ik.joint_position_limits
+    lower, upper = station.geometry.joint_limits()
     vmax = np.array([plant.GetJointByName(f"mico_joint_{i}").velocity_upper_limits()[0] for i in range(1, 7)])
     solver = VelocityIkSolver(JointLimits(lower, upper, vmax, [20.0] * 6), 0.01, q_nominal=MICO_HOME_Q)
 

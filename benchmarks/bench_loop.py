@@ -14,13 +14,14 @@ few seconds, with their median: the figure to compare with the 50 % target. On a
 machine the speed drifts between runs (``_host``), which a ratio of two bests taken minutes apart
 does not cancel.
 
-Each row also measures the *station floor*: the MICO station alone (the same MultibodyPlant, scene
-objects, differential IK and gripper integrator, at the same time step) replaying the blended
-command ``u`` that the loop logged, through a C++ zero-order-hold source, with its ``ee_pose``
-output read every control period (logged), as the loop reads it: the station's job is to take the
-command and report the pose, and computing the pose is its own Python (about 30 us a tick). The
-full loop cannot run faster than its station; the difference is the cost of the shared-control
-systems (user, interface, inference, autonomy, blending, disambiguation, task manager) and their
+Each row also measures the *station floor*: the MICO station alone behind its controllers (the same
+MultibodyPlant, scene objects, differential IK and gripper controller, at the same time step)
+replaying the blended command ``u`` that the loop logged, through a C++ zero-order-hold source,
+with its ``ee_pose`` output read every control period (logged), as the loop reads it: the
+station's job is to take the command and report the pose, and computing the pose is its own
+Python (about 30 us a tick). The full loop cannot run faster than its station; the difference is
+the cost of the shared-control systems (user, interface, inference, autonomy, blending,
+disambiguation, task manager) and their
 loggers. The ratio against a station whose pose is never read is printed too.
 """
 
@@ -44,6 +45,7 @@ from pydrake.trajectories import PiecewisePolynomial
 
 from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import Scenario, load_scenario, resolve_scenario
+from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import build_station
 from drake_disamb.trial import run_trial
 
@@ -57,7 +59,9 @@ def station_floor(
     loop reads it (its pose sampler and logger); False: never read (a station nobody watches).
     """
     builder = DiagramBuilder()
-    station = builder.AddSystem(build_station(resolve_scenario(scenario).station).diagram)
+    station = builder.AddSystem(
+        build_controlled_station(build_station(resolve_scenario(scenario).station)).diagram
+    )
     command = PiecewisePolynomial.ZeroOrderHold(times, u.T)
     source = builder.AddSystem(TrajectorySource(command))
     builder.Connect(source.get_output_port(), station.GetInputPort("ee_velocity_command"))

@@ -72,11 +72,22 @@ class _ExclusiveTimer:
 
 def _project_system_classes() -> list[type]:
     """Every LeafSystem class of the project that the shared-control diagram may contain."""
+    from drake_disamb.controller import systems as controller
     from drake_disamb.station import systems as station
     from drake_disamb.systems import autonomy, blending, disambiguation, inference, interfaces, task, user
 
     classes = []
-    for module in (station, autonomy, blending, disambiguation, inference, interfaces, task, user):
+    for module in (
+        station,
+        controller,
+        autonomy,
+        blending,
+        disambiguation,
+        inference,
+        interfaces,
+        task,
+        user,
+    ):
         for obj in vars(module).values():
             if (
                 isinstance(obj, type)

@@ -1,4 +1,5 @@
-"""Real-time rate of the MICO station (simulated seconds per wall second) under commanded motion.
+"""Real-time rate of the MICO station behind its controllers (simulated seconds per wall second) under
+commanded motion.
 
 Usage: ``python benchmarks/bench_station.py [--seconds 10] [--time-step 0.002 ...]``. No Meshcat.
 Prints one line per plant time step; CPU-time rates are printed too because the machine may be shared.
@@ -14,12 +15,15 @@ import numpy as np
 from _host import HostMeter
 
 from drake_disamb.commands.station_demo import pattern, run_pattern, start_simulation
+from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import StationConfig, build_station, default_plant_config
 
 
 def measure(seconds: float, time_step: float) -> tuple[float, float, float]:
     """(wall s, cpu s, EE path length m) for ``seconds`` of the station-demo pattern."""
-    station = build_station(StationConfig(plant_config=default_plant_config(time_step)))
+    station = build_controlled_station(
+        build_station(StationConfig(plant_config=default_plant_config(time_step)))
+    )
     simulator = start_simulation(station)
     ctx = simulator.get_mutable_context()
     p0 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()

@@ -78,7 +78,11 @@ def test_headless_run_prints_metrics_and_writes_figures(tmp_path: Path, capsys) 
     assert f"{metrics['time']:.2f}" in out and str(metrics["button_presses"]) in out
     png = tmp_path / "goal_probabilities.png"
     assert png.stat().st_size > 10_000 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert (tmp_path / "diagram.dot").read_text().startswith("digraph")
+    dot = (tmp_path / "diagram.dot").read_text()
+    assert dot.startswith("digraph")
+    # The station's inputs are joint-level; the IK and the gripper controller sit in front of it.
+    assert "arm_velocity_command" in dot and "finger_velocity_command" in dot
+    assert "diff_ik" in dot and "gripper_controller" in dot
     assert not (tmp_path / "recording.html").exists()
 
 

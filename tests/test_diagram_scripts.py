@@ -34,6 +34,11 @@ def test_script_writes_its_picture(
     dot = tmp_path / picture
     assert dot.is_file() and dot.read_text().lstrip().startswith("digraph")
     assert f"wrote {dot}" in capsys.readouterr().out
+    if script == "station.py":  # the station's inputs are joint-level; the IK sits in front of it
+        text = dot.read_text()
+        assert "arm_velocity_command" in text and "finger_velocity_command" in text
+        assert "ee_velocity_command" not in text and "diff_ik" not in text
+        assert "diff_ik" in (tmp_path / "controlled_station.dot").read_text()
 
 
 def test_station_script_rejects_a_stray_argument(monkeypatch: pytest.MonkeyPatch) -> None:

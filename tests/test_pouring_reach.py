@@ -2,7 +2,7 @@
 
 Every goal pose of ``tasks/pouring.yaml`` is checked reachable from the scenario's start
 configuration in two ways: statically with Drake's ``InverseKinematics`` (seeded at the start), and
-by driving the station's own :class:`~drake_disamb.station.DifferentialIKIntegrator` (fixed-input
+by driving the controller's :class:`~drake_disamb.controller.DifferentialIKIntegrator` (fixed-input
 context, perfect joint tracking) with a proportional Cartesian controller from the start to each
 pour pose and on to each placing pose. At every goal configuration reached (within the simulated
 user's success tolerance), the arm and the cup are at least 1 mm clear of every scene object (a
@@ -23,11 +23,11 @@ from pydrake.solvers import Solve
 
 from drake_disamb.builder import start_ee_pose
 from drake_disamb.config import Scenario, load_scenario, scene_objects
+from drake_disamb.controller import DifferentialIKIntegrator
 from drake_disamb.core.geometry import orientation_error, quat_to_matrix
 from drake_disamb.station import (
     ARM_JOINTS,
     EE_FRAME,
-    DifferentialIKIntegrator,
     Station,
     StationConfig,
     build_station,
@@ -48,7 +48,7 @@ def _setup() -> tuple[Scenario, Station]:
 
 
 class _Driver:
-    """The station's DifferentialIKIntegrator alone, driven by a proportional Cartesian controller."""
+    """The DifferentialIKIntegrator alone, driven by a proportional Cartesian controller."""
 
     def __init__(self, station: Station, config: StationConfig) -> None:
         self.plant = station.control_plant
@@ -70,9 +70,8 @@ class _Driver:
         self, q0: np.ndarray, goal: np.ndarray, pos_tol: float, ori_tol: float
     ) -> tuple[bool, np.ndarray]:
         """Drive from joint angles ``q0`` toward ``goal``; True once within both tolerances."""
-        x = np.concatenate((q0, np.zeros(6)))  # the integrator's set point [q_d, v_d]
+        q, v = q0.copy(), np.zeros(6)  # the IK's set point q_d and joint velocity
         for _ in range(int(MAX_TIME / self.period)):
-            q = x[:6]
             pose = self.pose(q)
             err = np.concatenate((goal[:3] - pose[:3], orientation_error(pose[3:], goal[3:])))
             if np.linalg.norm(err[:3]) <= pos_tol and np.linalg.norm(err[3:]) <= ori_tol:
@@ -80,11 +79,13 @@ class _Driver:
             V = GAIN * err
             V[:3] *= min(1.0, LINEAR_SPEED / max(np.linalg.norm(V[:3]), 1e-12))
             V[3:] *= min(1.0, ANGULAR_SPEED / max(np.linalg.norm(V[3:]), 1e-12))
-            self.ik_ctx.SetDiscreteState(0, x)
-            self.ik.GetInputPort("arm_joint_state").FixValue(self.ik_ctx, np.concatenate((q, x[6:12])))
+            self.ik_ctx.SetDiscreteState(0, q)
+            self.ik_ctx.SetDiscreteState(1, v)
+            self.ik.GetInputPort("arm_joint_state").FixValue(self.ik_ctx, np.concatenate((q, v)))
             self.ik.GetInputPort("ee_velocity_command").FixValue(self.ik_ctx, V)
-            x = self.ik.EvalUniquePeriodicDiscreteUpdate(self.ik_ctx).get_vector(0).get_value().copy()
-        return False, x[:6]
+            update = self.ik.EvalUniquePeriodicDiscreteUpdate(self.ik_ctx)
+            q, v = update.get_vector(0).CopyToVector(), update.get_vector(1).CopyToVector()
+        return False, q
 
 
 @functools.cache

@@ -1,4 +1,5 @@
-"""Tests of the MICO station (drake_disamb.station). No Meshcat."""
+"""Tests of the MICO station (drake_disamb.station), alone with its joint-level inputs and behind its
+controllers (drake_disamb.controller: the differential IK, the gripper's). No Meshcat."""
 
 from __future__ import annotations
 
@@ -16,22 +17,17 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
+from drake_disamb.controller import IkStatus, add_station_controller, build_controlled_station
 from drake_disamb.station import (
     ARM_JOINTS,
     FINGER_JOINTS,
     FINGER_MAX_OPENING,
-    IK_Q_D,
-    IK_V_D,
     MICO_HOME_GRIPPER_OPENING,
     MICO_HOME_Q,
     STATION_INPUTS,
     STATION_OUTPUTS,
-    DifferentialIKIntegrator,
     EndEffectorState,
-    GripperIntegratorState,
-    GripperOpeningIntegrator,
-    IkIntegratorState,
-    IkStatus,
+    JointVelocityIntegrator,
     SceneObject,
     StationConfig,
     build_station,
@@ -50,11 +46,13 @@ def _rotation_vector(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
 
 
 class Rig:
-    """One station + simulator, reset to the home state for each test."""
+    """One station behind its controllers + simulator, reset to the home state for each test."""
 
     def __init__(self, config: StationConfig | None = None, objects=()) -> None:
         self.station = build_station(config, objects)
-        self.sim = Simulator(self.station.diagram)
+        self.controlled = build_controlled_station(self.station)
+        self.diagram = self.controlled.diagram
+        self.sim = Simulator(self.diagram)
         self.ctx = self.sim.get_mutable_context()
         self.command(np.zeros(6))
         self.gripper(0.0)
@@ -68,18 +66,20 @@ class Rig:
         self.sim.Initialize()
 
     def command(self, V) -> None:
-        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(
-            self.ctx, np.asarray(V, dtype=float)
-        )
+        self.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.asarray(V, dtype=float))
 
     def gripper(self, speed: float) -> None:
-        self.station.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [speed])
+        self.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [speed])
 
     def advance(self, dt: float) -> None:
         self.sim.AdvanceTo(self.ctx.get_time() + dt)
 
     def out(self, name: str) -> np.ndarray:
-        return np.array(self.station.diagram.GetOutputPort(name).Eval(self.ctx), copy=True)
+        return np.array(self.diagram.GetOutputPort(name).Eval(self.ctx), copy=True)
+
+    def sub(self, system, port: str) -> np.ndarray:  # noqa: ANN001
+        """The output ``port`` of subsystem ``system`` in the rig's context."""
+        return np.array(system.GetOutputPort(port).Eval(system.GetMyContextFromRoot(self.ctx)), copy=True)
 
     def status(self) -> IkStatus:
         return IkStatus(int(self.out("ik_status")[0]))
@@ -98,15 +98,19 @@ def home(rig: Rig) -> Rig:
 
 def test_ports_and_home(home: Rig) -> None:
     d = home.station.diagram
-    assert sorted(d.GetInputPort(n).get_name() for n in STATION_INPUTS) == sorted(STATION_INPUTS)
+    inputs = {d.get_input_port(k).get_name(): d.get_input_port(k).size() for k in range(d.num_input_ports())}
+    assert inputs == {"arm_velocity_command": 6, "finger_velocity_command": 2}  # joint level
+    assert set(STATION_INPUTS) == set(inputs)
     sizes = {n: d.GetOutputPort(n).size() for n in STATION_OUTPUTS if n != "query_object"}
     assert sizes == {
         "ee_pose": 7,
         "ee_velocity": 6,
         "arm_joint_state": 12,
+        "finger_state": 4,
         "gripper_opening": 1,
-        "ik_status": 1,
     }
+    assert not d.HasOutputPort("ik_status")  # the controller's, not the hardware's
+    assert home.diagram.GetOutputPort("ik_status").size() == 1
     pose = home.out("ee_pose")
     assert np.allclose(pose[:3], [0.0, -0.35, 0.30], atol=2e-3)
     assert np.allclose(_R(pose).matrix()[:, 2], [0, 0, -1], atol=1e-3)  # gripper points down
@@ -178,7 +182,7 @@ def test_gripper_opens_and_closes(home: Rig) -> None:
 
 
 def _limits(rig: Rig) -> tuple[np.ndarray, np.ndarray]:
-    return rig.station.diff_ik.joint_position_limits
+    return rig.controlled.diff_ik.joint_position_limits
 
 
 def _arm_jacobian(rig: Rig, q_arm) -> np.ndarray:  # noqa: ANN001
@@ -293,7 +297,13 @@ def test_wrong_length_command_is_rejected(home: Rig) -> None:
     with pytest.raises(RuntimeError, match="size=6"):
         home.command(np.zeros(5))
     with pytest.raises(RuntimeError, match="size=1"):
-        home.station.diagram.GetInputPort("gripper_command").FixValue(home.ctx, [0.0, 0.0])
+        home.diagram.GetInputPort("gripper_command").FixValue(home.ctx, [0.0, 0.0])
+    station = build_station()
+    station_ctx = station.diagram.CreateDefaultContext()
+    with pytest.raises(RuntimeError, match="size=6"):
+        station.diagram.GetInputPort("arm_velocity_command").FixValue(station_ctx, np.zeros(7))
+    with pytest.raises(RuntimeError, match="size=2"):
+        station.diagram.GetInputPort("finger_velocity_command").FixValue(station_ctx, [0.0])
     home.advance(0.2)  # the previous (zero) commands are still in place
     assert np.allclose(home.out("arm_joint_state"), x0, atol=1e-4)
     assert home.status() == IkStatus.OK
@@ -308,7 +318,8 @@ def test_non_finite_gripper_command(home: Rig) -> None:
 
 
 def test_tracking_error_reseeds() -> None:
-    """If the plant is moved away from the set point (e.g. blocked), the set point follows it."""
+    """If the plant is moved away from the set point (e.g. blocked), the set point follows it: the
+    IK's and the simulated arm's own, at the same tick."""
     rig = Rig()
     pc = rig.station.plant_context(rig.ctx)
     q = rig.station.plant.GetPositions(pc, rig.station.arm)
@@ -316,9 +327,35 @@ def test_tracking_error_reseeds() -> None:
     rig.station.plant.SetPositions(pc, rig.station.arm, q)
     rig.advance(0.005)  # one control step (at t = 0)
     assert rig.status() == IkStatus.RESEEDED
+    np.testing.assert_array_equal(rig.sub(rig.controlled.diff_ik, "set_point"), q[:6])
+    np.testing.assert_array_equal(rig.sub(rig.station.integrator, "desired_state")[:6], q[:6])
     rig.advance(0.5)
     assert rig.status() == IkStatus.OK
     assert rig.out("arm_joint_state")[0] == pytest.approx(q[0], abs=0.02)
+
+
+def test_the_arms_set_point_is_the_iks_at_every_tick() -> None:
+    """The simulated arm integrates the joint velocities the IK outputs as the IK integrates its own
+    set point: the set point the plant tracks is the IK's, bit for bit, moving, at a joint limit,
+    across a reseed and between ticks (a plant step finer than the control period)."""
+    rig = Rig(StationConfig(plant_config=default_plant_config(0.005)))
+    ik, integrator = rig.controlled.diff_ik, rig.station.integrator
+    pc = rig.station.plant_context(rig.ctx)
+    seen = set()
+    for k, V in enumerate(([0.05, 0, 0.03, 0, 0, 0.2], [0, 0, 0.1, 0, 0, 0], [0, -0.1, 0, 0.3, 0, 0])):
+        rig.command(V)
+        for _ in range(60):
+            rig.advance(0.005)
+            np.testing.assert_array_equal(rig.sub(integrator, "desired_state")[:6], rig.sub(ik, "set_point"))
+            np.testing.assert_array_equal(
+                rig.sub(integrator, "desired_state")[8:14], rig.sub(ik, "arm_velocity_command")
+            )
+            seen.add(rig.status())
+        if k == 0:  # push the arm away: both reseed
+            q = rig.station.plant.GetPositions(pc, rig.station.arm)
+            q[1] += 0.3
+            rig.station.plant.SetPositions(pc, rig.station.arm, q)
+    assert {IkStatus.OK, IkStatus.RESEEDED} <= seen and seen - {IkStatus.OK, IkStatus.RESEEDED}
 
 
 def test_scene_objects_and_attached_cup() -> None:
@@ -346,7 +383,7 @@ def test_scene_objects_and_attached_cup() -> None:
     X_WC = st.plant.GetBodyByName("cup").EvalPoseInWorld(pc)
     assert np.allclose((X_WE.inverse() @ X_WC).translation(), [0, 0, -0.01], atol=1e-9)
     assert rig.out("ee_pose")[0] - p0[0] == pytest.approx(0.05, abs=3e-3)
-    query = st.diagram.GetOutputPort("query_object").Eval(rig.ctx)
+    query = rig.diagram.GetOutputPort("query_object").Eval(rig.ctx)
     names = {query.inspector().GetName(g) for g in query.inspector().GetAllGeometryIds()}
     assert any("cup" in n for n in names) and any("shelf" in n for n in names)
 
@@ -355,12 +392,13 @@ def test_embedded_in_a_bigger_diagram() -> None:
     builder = DiagramBuilder()
     st = build_station()
     station = builder.AddSystem(st.diagram)
-    assert station.GetSubsystemByName("diff_ik") is st.diff_ik  # the documented names reach inside
+    assert station.GetSubsystemByName("joint_velocity_integrator") is st.integrator  # documented names
     assert station.GetSubsystemByName("plant") is st.plant
+    controller = add_station_controller(builder, st)
     src = builder.AddSystem(ConstantVectorSource([0.0, 0.0, 0.05, 0.0, 0.0, 0.0]))
     grip = builder.AddSystem(ConstantVectorSource([0.0]))
-    builder.Connect(src.get_output_port(), station.GetInputPort("ee_velocity_command"))
-    builder.Connect(grip.get_output_port(), station.GetInputPort("gripper_command"))
+    builder.Connect(src.get_output_port(), controller.diff_ik.GetInputPort("ee_velocity_command"))
+    builder.Connect(grip.get_output_port(), controller.gripper.GetInputPort("gripper_command"))
     builder.ExportOutput(station.GetOutputPort("ee_pose"), "pose")
     diagram = builder.Build()
     sim = Simulator(diagram)
@@ -376,47 +414,100 @@ def test_embedded_in_a_bigger_diagram() -> None:
 # ----------------------------------------------------------------------------------------------
 # The leaf systems in isolation, with fixed inputs.
 # ----------------------------------------------------------------------------------------------
-def test_diff_ik_integrator_alone(rig: Rig) -> None:
-    config = StationConfig()
-    sys = DifferentialIKIntegrator(rig.station.control_plant, config, geometry=rig.station.geometry)
-    ctx = sys.CreateDefaultContext()
-    sys.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
-    # Small enough that the first step from rest meets the acceleration limits at full speed.
-    sys.GetInputPort("ee_velocity_command").FixValue(ctx, [0.0, 0.0, 0.0, 0.0, 0.0, 0.02])
-    update = sys.EvalUniquePeriodicDiscreteUpdate(ctx)
-    x = np.concatenate([update.get_vector(0).get_value(), update.get_vector(1).get_value()])
-    q1, v1, status = x[:6], x[6:12], x[12]
-    assert status == IkStatus.OK
-    assert np.allclose(q1, MICO_HOME_Q + v1 * config.control_period)
-    # The joint velocity produces the commanded spatial velocity (paper order -> Drake order).
-    J = _arm_jacobian(rig, MICO_HOME_Q)
-    assert np.allclose(J @ v1, [0, 0, 0.02, 0, 0, 0], atol=1e-6)  # Drake order [w; v]
-    # The output ports expose the state.
-    ctx.SetDiscreteState(0, x[:12])
-    ctx.SetDiscreteState(1, x[12:])
-    assert np.allclose(sys.GetOutputPort("desired_state").Eval(ctx), x[:12])
-    assert sys.GetOutputPort("ik_status").Eval(ctx)[0] == 0
-    # Invalid command: zero velocity, status 2.
-    sys.GetInputPort("ee_velocity_command").FixValue(ctx, [np.inf, 0, 0, 0, 0, 0])
-    with pytest.warns(RuntimeWarning):
-        update = sys.EvalUniquePeriodicDiscreteUpdate(ctx)
-        x2 = np.concatenate([update.get_vector(0).get_value(), update.get_vector(1).get_value()])
-    assert np.allclose(x2[:6], x[:6]) and np.all(x2[6:12] == 0) and x2[12] == IkStatus.INVALID_COMMAND
+def _integrator(rig: Rig, **kwargs) -> tuple[JointVelocityIntegrator, object]:  # noqa: ANN003
+    lower, upper = rig.station.geometry.joint_limits()
+    options = {"reseed_tolerance": 0.15, **kwargs}
+    system = JointVelocityIntegrator(0.01, lower, upper, 0.06, MICO_HOME_Q, (0.04, 0.04), **options)
+    ctx = system.CreateDefaultContext()
+    system.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
+    system.GetInputPort("finger_state").FixValue(ctx, [0.04, 0.04, 0.0, 0.0])
+    return system, ctx
+
+
+def test_joint_velocity_integrator_alone(rig: Rig) -> None:
+    """The simulated arm's velocity mode: rad/s and m/s in, the set point [q; v] (rad, m, rad/s,
+    m/s) for the end of the period out, at once; the state advances at the tick."""
+    system, ctx = _integrator(rig)
+    assert {system.get_input_port(k).get_name(): system.get_input_port(k).size() for k in range(4)} == {
+        "arm_velocity_command": 6,
+        "finger_velocity_command": 2,
+        "arm_joint_state": 12,
+        "finger_state": 4,
+    }
+    v = np.array([0.1, -0.2, 0.0, 0.0, 0.3, 0.0])
+    system.GetInputPort("arm_velocity_command").FixValue(ctx, v)
+    system.GetInputPort("finger_velocity_command").FixValue(ctx, [0.01, 0.01])
+    desired = system.GetOutputPort("desired_state").Eval(ctx)
+    np.testing.assert_allclose(desired[:6], np.asarray(MICO_HOME_Q) + v * 0.01, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(desired[6:8], [0.0401, 0.0401], atol=1e-15)
+    np.testing.assert_array_equal(desired[8:14], v)  # the arm's: the command
+    np.testing.assert_allclose(desired[14:], [0.01, 0.01], rtol=1e-9)  # the fingers': their rate
+    update = system.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).CopyToVector()
+    np.testing.assert_array_equal(update, desired[:8])  # the tick takes the set point there
+    # The fingers stop at their travel and their set point's velocity is then zero.
+    ctx.SetDiscreteState(0, np.concatenate([MICO_HOME_Q, [0.0599, 0.0]]))
+    system.GetInputPort("finger_velocity_command").FixValue(ctx, [0.05, -0.05])
+    desired = system.GetOutputPort("desired_state").Eval(ctx)
+    np.testing.assert_allclose(desired[6:8], [0.06, 0.0], atol=1e-15)
+    np.testing.assert_allclose(desired[14:], [0.01, 0.0], rtol=1e-9)
+    # A joint at its limit is held there.
+    lower, _ = system.joint_position_limits
+    q = np.array(MICO_HOME_Q)
+    q[2] = lower[2]
+    ctx.SetDiscreteState(0, np.concatenate([q, [0.04, 0.04]]))
+    system.GetInputPort("arm_velocity_command").FixValue(ctx, [0, 0, -0.5, 0, 0, 0])
+    assert system.GetOutputPort("desired_state").Eval(ctx)[2] == lower[2]
+
+
+def test_joint_velocity_integrator_re_anchors_reads_bad_commands_as_zero_and_rests(rig: Rig) -> None:
+    system, ctx = _integrator(rig)
+    system.GetInputPort("finger_velocity_command").FixValue(ctx, [0.0, 0.0])
+    system.GetInputPort("arm_velocity_command").FixValue(ctx, np.zeros(6))
+    # At rest nothing is written.
+    from pydrake.systems.framework import EventStatus
+
+    state = ctx.get_mutable_state()
+    status = system._update(ctx, state.get_mutable_discrete_state())
+    assert status.severity() == EventStatus.Severity.kDidNothing
+    # A measurement more than reseed_tolerance away: the set point re-anchors there (clamped).
+    far = np.array(MICO_HOME_Q)
+    far[0] += 0.2
+    system.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([far, np.zeros(6)]))
+    np.testing.assert_array_equal(
+        system.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).CopyToVector()[:6], far
+    )
+    near = np.array(MICO_HOME_Q)
+    near[0] += 0.1  # within the tolerance: kept
+    system.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([near, np.zeros(6)]))
+    system.GetInputPort("arm_velocity_command").FixValue(ctx, [0.1, 0, 0, 0, 0, 0])
+    q = system.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).CopyToVector()
+    assert q[0] == pytest.approx(MICO_HOME_Q[0] + 0.001, abs=1e-15)
+    # A NaN anywhere: a zero command, with a warning and the count.
+    system.GetInputPort("finger_velocity_command").FixValue(ctx, [np.nan, 0.0])
+    with pytest.warns(RuntimeWarning, match="non-finite arm or finger velocity command"):
+        update = system.EvalUniquePeriodicDiscreteUpdate(ctx)
+    np.testing.assert_array_equal(
+        update.get_vector(0).CopyToVector(), np.concatenate([MICO_HOME_Q, [0.04, 0.04]])
+    )
+    assert update.get_vector(1).CopyToVector()[0] == 1  # sanitized_input_count
+    desired = system.GetOutputPort("desired_state").Eval(ctx)
+    assert not desired[8:].any() and np.all(np.isfinite(desired))
+    # Initialisation takes the measured joints and fingers, clamped.
+    system.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([near, np.zeros(6)]))
+    system.GetInputPort("finger_state").FixValue(ctx, [0.07, 0.02, 0.0, 0.0])
+    system.ExecuteInitializationEvents(ctx)
+    np.testing.assert_array_equal(
+        ctx.get_discrete_state(0).CopyToVector(), np.concatenate([near, [0.06, 0.02]])
+    )
 
 
 def test_integrator_state_layouts(rig: Rig) -> None:
-    ik_context = rig.station.diff_ik.CreateDefaultContext()
-    x = ik_context.get_discrete_state(0).CopyToVector()
-    view = IkIntegratorState(x)
-    assert len(IkIntegratorState.get_fields()) == x.size == 12
-    assert np.array_equal(view[IK_Q_D], MICO_HOME_Q) and not view[IK_V_D].any()
-    assert view.mico_joint_1_q_d == MICO_HOME_Q[0]
-    assert ik_context.get_discrete_state(1).CopyToVector().tolist() == [IkStatus.OK]
-    y = rig.station.gripper.CreateDefaultContext().get_discrete_state(0).CopyToVector()
-    assert (
-        GripperIntegratorState(y).opening == MICO_HOME_GRIPPER_OPENING
-        and GripperIntegratorState(y).speed == 0
-    )
+    ik_context = rig.controlled.diff_ik.CreateDefaultContext()
+    assert np.array_equal(ik_context.get_discrete_state(0).CopyToVector(), MICO_HOME_Q)  # q_d
+    assert not ik_context.get_discrete_state(1).CopyToVector().any()  # v
+    assert ik_context.get_discrete_state(2).CopyToVector().tolist() == [IkStatus.OK]
+    x = rig.station.integrator.CreateDefaultContext().get_discrete_state(0).CopyToVector()
+    np.testing.assert_array_equal(x, np.concatenate([MICO_HOME_Q, [MICO_HOME_GRIPPER_OPENING / 2] * 2]))
 
 
 def test_home_posture_is_the_model_directives() -> None:
@@ -435,23 +526,6 @@ def test_home_posture_is_the_model_directives() -> None:
     assert np.array_equal([q[n] for n in ARM_JOINTS], MICO_HOME_Q)
     assert sum(q[n] for n in FINGER_JOINTS) == pytest.approx(MICO_HOME_GRIPPER_OPENING)
     assert StationConfig().home_q == tuple(MICO_HOME_Q)
-
-
-def test_gripper_integrator_alone() -> None:
-    sys = GripperOpeningIntegrator(0.01, 0.12, 0.05)
-    ctx = sys.CreateDefaultContext()
-    sys.GetInputPort("finger_state").FixValue(ctx, [0.025, 0.025, 0, 0])
-    sys.GetInputPort("gripper_command").FixValue(ctx, [0.1])
-    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).get_value()
-    assert np.allclose(x, [0.051, 0.1])
-    ctx.SetDiscreteState(0, [0.1195, 0.0])
-    x = sys.EvalUniquePeriodicDiscreteUpdate(ctx).get_vector(0).get_value()
-    assert np.allclose(x, [0.12, 0.05])  # clamped at the limit, speed is what was achieved
-    ctx.SetDiscreteState(0, x)
-    assert np.allclose(sys.GetOutputPort("finger_desired_state").Eval(ctx), [0.06, 0.06, 0.025, 0.025])
-    assert sys.GetOutputPort("desired_opening").Eval(ctx)[0] == pytest.approx(0.12)
-    with pytest.raises(ValueError, match="initial_opening"):
-        GripperOpeningIntegrator(0.01, 0.12, 0.2)
 
 
 def test_end_effector_state_alone() -> None:

@@ -13,6 +13,7 @@ from drake import lcmt_jaco_command
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 
+from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import MICO_HOME_Q, StationConfig, build_station
 from drake_disamb.station.backends import BACKENDS, InProcessLcm, Lcm
 from drake_disamb.station.lcm import mapping
@@ -139,7 +140,8 @@ def test_the_backends_are_chosen_by_a_yaml_tag() -> None:
 # The in-process form: the station steps the driver on one memq:// bus.
 # ----------------------------------------------------------------------------------------------
 class Wire:
-    """A station on LCM with the simulated driver on one memq:// bus, and a tap on the commands."""
+    """A station on LCM behind its controllers, with the simulated driver on one memq:// bus, and a
+    tap on the commands."""
 
     def __init__(self, extra=None, settings: Lcm | None = None) -> None:  # noqa: ANN001
         self.settings = settings or Lcm(lcm_url="memq://")
@@ -155,7 +157,7 @@ class Wire:
                 self.extra(self)
 
         self.station = build_lcm_station(self.settings, StationConfig(), lcm=self.lcm, pump=pump)
-        d = self.station.diagram
+        self.diagram = d = build_controlled_station(self.station).diagram
         self.simulator = Simulator(d)
         self.ctx = self.simulator.get_mutable_context()
         d.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
@@ -168,10 +170,10 @@ class Wire:
         )
 
     def command(self, V) -> None:  # noqa: ANN001
-        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.asarray(V, float))
+        self.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.asarray(V, float))
 
     def out(self, name: str) -> np.ndarray:
-        return np.asarray(self.station.diagram.GetOutputPort(name).Eval(self.ctx)).copy()
+        return np.asarray(self.diagram.GetOutputPort(name).Eval(self.ctx)).copy()
 
     def receiver(self):  # noqa: ANN201
         return self.station.diagram.GetSubsystemByName("status_receiver")
@@ -183,7 +185,7 @@ class Wire:
 
 def test_the_arm_on_the_wire_moves_as_the_simulated_station_does() -> None:
     wire = Wire()
-    sim = build_station(StationConfig())
+    sim = build_controlled_station(build_station(StationConfig()))
     sim_sim = Simulator(sim.diagram)
     sim_ctx = sim_sim.get_mutable_context()
     sim.diagram.GetInputPort("gripper_command").FixValue(sim_ctx, [0.0])
@@ -856,3 +858,141 @@ def test_a_live_input_on_the_wire_passes_through_the_deadman() -> None:
         load_scenario("reaching"), meshcat=meshcat, input_source=HeldSwitch()
     )
     assert not sim_handles.diagram.HasSubsystemNamed("deadman")  # the simulated arm: unchanged
+
+
+# ----------------------------------------------------------------------------------------------
+# The systems on either end of the wire, alone, and the driver's one diagram.
+# ----------------------------------------------------------------------------------------------
+def _command(v, fv) -> bytes:  # noqa: ANN001
+    from drake_disamb.station.lcm.messages import make_command
+
+    return make_command(0, np.zeros(6), np.asarray(v, float), np.zeros(2), np.asarray(fv, float)).encode()
+
+
+def test_the_command_receiver_applies_the_latest_command_and_zero_once_they_stop() -> None:
+    from drake_disamb.station.lcm.bus import CommandInbox
+    from drake_disamb.station.lcm.systems import JacoCommandReceiver
+
+    lcm = DrakeLcm("memq://")
+    inbox = CommandInbox(lcm, DEFAULT_COMMAND_CHANNEL)
+    receiver = JacoCommandReceiver(inbox, PERIOD, timeout_ticks=3)
+    ports = {receiver.get_output_port(k).get_name(): receiver.get_output_port(k).size() for k in range(2)}
+    assert receiver.num_input_ports() == 0 and ports == {
+        "arm_velocity_command": 6,
+        "finger_velocity_command": 2,
+    }
+    ctx = receiver.CreateDefaultContext()
+    simulator = Simulator(receiver, ctx)
+
+    def applied() -> np.ndarray:
+        return np.concatenate(
+            [receiver.GetOutputPort(n).Eval(ctx) for n in ("arm_velocity_command", "finger_velocity_command")]
+        )
+
+    v, fv = [0.1, -0.2, 0.0, 0.0, 0.3, 0.0], [0.01, 0.02]
+    lcm.Publish(DEFAULT_COMMAND_CHANNEL, _command([0.5] * 6, [0.0, 0.0]))
+    lcm.Publish(DEFAULT_COMMAND_CHANNEL, b"garbage")
+    lcm.Publish(DEFAULT_COMMAND_CHANNEL, _command(v, fv))  # a burst: the latest counts
+    while lcm.HandleSubscriptions(0) > 0:
+        pass
+    assert (inbox.received, inbox.dropped) == (2, 1)
+    assert not applied().any()  # nothing before the tick
+    simulator.AdvanceTo(0.005)  # the tick at t = 0 takes them
+    np.testing.assert_allclose(applied(), v + fv, rtol=1e-12, atol=1e-15)  # DH rad/s, slides m/s
+    simulator.AdvanceTo(0.025)  # ticks 1 and 2 without a command: still applied
+    np.testing.assert_allclose(applied(), v + fv, rtol=1e-12, atol=1e-15)
+    simulator.AdvanceTo(0.035)  # the third: zero, the arm stops
+    assert not applied().any()
+
+
+def test_the_status_sender_publishes_the_measurement_when_asked() -> None:
+    from drake_disamb.station.lcm.bus import StatusLink
+    from drake_disamb.station.lcm.systems import JacoStatusSender
+
+    lcm = DrakeLcm("memq://")
+    got: list[bytes] = []
+    lcm.Subscribe(DEFAULT_STATUS_CHANNEL, got.append)
+    link = StatusLink(lcm, DEFAULT_STATUS_CHANNEL)
+    sender = JacoStatusSender(link)
+    ports = {sender.get_input_port(k).get_name(): sender.get_input_port(k).size() for k in range(2)}
+    assert ports == {"arm_joint_state": 12, "finger_state": 4} and sender.num_output_ports() == 0
+    ctx = sender.CreateDefaultContext()
+    q = np.array(MICO_HOME_Q) + 0.1
+    sender.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([q, np.full(6, 0.2)]))
+    sender.GetInputPort("finger_state").FixValue(ctx, [0.03, 0.035, 0.01, -0.01])
+    ctx.SetTime(1.23)
+    sender.ForcedPublish(ctx)
+    lcm.HandleSubscriptions(0)
+    assert link.sent == 1 and len(got) == 1
+    reading, why = read_status(got[0], None, q)
+    assert why == "" and reading.utime == 1_230_000
+    np.testing.assert_allclose(reading.q, q, atol=1e-12)
+    np.testing.assert_allclose(reading.v, np.full(6, 0.2), atol=1e-12)
+    np.testing.assert_allclose(reading.finger_q, [0.03, 0.035], atol=1e-12)
+    np.testing.assert_allclose(reading.finger_v, [0.01, -0.01], atol=1e-12)
+
+
+def test_the_command_sender_sends_the_joint_level_inputs_clamped() -> None:
+    from drake_disamb.station.lcm.bus import CommandLink, StatusInbox
+    from drake_disamb.station.lcm.systems import JacoCommandSender
+
+    lcm = DrakeLcm("memq://")
+    got: list[bytes] = []
+    lcm.Subscribe(DEFAULT_COMMAND_CHANNEL, got.append)
+    vmax = np.array([0.5] * 6)
+    sender = JacoCommandSender(
+        CommandLink(lcm, DEFAULT_COMMAND_CHANNEL, PERIOD, 5), StatusInbox(lcm, "UNUSED"), vmax, 0.1, PERIOD
+    )
+    inputs = {sender.get_input_port(k).get_name(): sender.get_input_port(k).size() for k in range(5)}
+    assert inputs == {
+        "arm_velocity_command": 6,
+        "finger_velocity_command": 2,
+        "arm_joint_state": 12,
+        "finger_state": 4,
+        "fault": 1,
+    }
+    ctx = sender.CreateDefaultContext()
+    sender.GetInputPort("arm_velocity_command").FixValue(ctx, [1.0, 0.5, 0, 0, 0, 0])
+    sender.GetInputPort("finger_velocity_command").FixValue(ctx, [0.3, -0.05])
+    sender.GetInputPort("arm_joint_state").FixValue(ctx, np.concatenate([MICO_HOME_Q, np.zeros(6)]))
+    sender.GetInputPort("finger_state").FixValue(ctx, [0.04, 0.04, 0, 0])
+    sender.GetInputPort("fault").FixValue(ctx, [0.0])
+    # Scaled to the speed limits along the command, the fingers clipped.
+    np.testing.assert_allclose(sender.GetOutputPort("command").Eval(ctx), [0.5, 0.25, 0, 0, 0, 0, 0.1, -0.05])
+    simulator = Simulator(sender, ctx)
+    simulator.Initialize()  # the periodic publish at t = 0
+    lcm.HandleSubscriptions(0)
+    v, fv = read_command(got[-1])[0]
+    np.testing.assert_allclose(v, [0.5, 0.25, 0, 0, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(fv, [0.1, -0.05], atol=1e-12)
+    sender.GetInputPort("fault").FixValue(ctx, [float(Fault.STATUS_TIMEOUT)])
+    assert not sender.GetOutputPort("command").Eval(ctx).any()  # a fault: zero
+    sender.GetInputPort("fault").FixValue(ctx, [0.0])
+    sender.GetInputPort("arm_velocity_command").FixValue(ctx, [np.nan, 0, 0, 0, 0, 0])
+    assert not sender.GetOutputPort("command").Eval(ctx).any()  # not finite: zero
+
+
+def test_the_drivers_diagram_is_the_simulated_station() -> None:
+    """One diagram: the station that build_station makes, its joint-level inputs fed by the
+    command receiver, its measurement read by the status sender; nothing else."""
+    driver = SimulatedDriver(DrakeLcm("memq://"), StationConfig())
+    d = driver.diagram
+    station = d.GetSubsystemByName("station")
+    assert station is driver.station.diagram
+    names = {s.get_name() for s in d.GetSystems()}
+    assert names == {"station", "command_receiver", "status_sender"}
+    reference = build_station(StationConfig()).diagram
+    assert {s.get_name() for s in station.GetSystems()} == {s.get_name() for s in reference.GetSystems()}
+    sources = {
+        (dst.get_name(), station.get_input_port(i).get_name()): (
+            src.get_name(),
+            src.get_output_port(o).get_name(),
+        )
+        for (dst, i), (src, o) in d.connection_map().items()
+        if dst is station
+    }
+    assert sources == {
+        ("station", "arm_velocity_command"): ("command_receiver", "arm_velocity_command"),
+        ("station", "finger_velocity_command"): ("command_receiver", "finger_velocity_command"),
+    }
+    assert d.num_input_ports() == 0  # nothing left to fix: the receiver drives the station

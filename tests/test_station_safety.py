@@ -17,9 +17,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from drake_disamb.controller import IkStatus
 from drake_disamb.safety import CommandHold as Hold
 from drake_disamb.safety import HoldResult
-from drake_disamb.station import MICO_HOME_Q, IkStatus
+from drake_disamb.station import MICO_HOME_Q
 
 DT = 0.01
 OFF_TOTAL = 0.02  # m, motion outside the commanded direction over the whole hold
@@ -101,7 +102,7 @@ def test_pure_rotation_does_not_translate() -> None:
 def test_floor_stops_a_downward_command() -> None:
     rig = Hold(POSTURES["home"])
     result = rig.run(np.array([0, 0, -0.1, 0, 0, 0.0]), 6.0)
-    pose = rig.station.diagram.GetOutputPort("ee_pose").Eval(rig.ctx)
+    pose = rig.controlled.diagram.GetOutputPort("ee_pose").Eval(rig.ctx)
     lowest = rig.station.geometry.gripper_lowest_point(pose)[0]
     assert 0.0 < lowest <= rig.station.config.table_clearance + 0.01
     assert result.statuses[-1] == IkStatus.WORKSPACE

@@ -11,8 +11,11 @@
     interface.paused ----------------------> inference, blender, user .paused  (hold_while_computing)
     inference.belief, interface.u_h, mode -> automatic_trigger              (automatic paradigm)
     automatic_trigger.automatic_request_count -> interface.automatic_request_count
-    blender.u -----------------------------> station.ee_velocity_command
-    interface.gripper_command -------------> station.gripper_command
+    blender.u -----------------------------> diff_ik.ee_velocity_command   (the IK: end-effector
+    diff_ik.arm_velocity_command ----------> station.arm_velocity_command   velocity -> joints)
+    interface.gripper_command -------------> gripper_controller.gripper_command
+    gripper_controller.finger_velocity_command -> station.finger_velocity_command
+    station.arm_joint_state ---------------> diff_ik.arm_joint_state
     station.ee_pose -----------------------> everyone (the interface latches it, and the belief and
                                              goal poses, into a request at a press)
     station.gripper_opening ---------------> task.gripper_opening      (stages that end with a release)
@@ -60,12 +63,10 @@ LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
     ("ee_pose", "station", "ee_pose"),
     ("mode", "interface", "mode"),
     ("stage", "task", "stage"),
+    ("ik_status", "diff_ik", "ik_status"),
 )
-"""``(log name, subsystem, output port)`` of every VectorLogSink the builder adds."""
-
-OPTIONAL_LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (("ik_status", "station", "ik_status"),)
-"""Logged too when the station has the port: the in-process simulation's ``ik_status`` (an
-:class:`~drake_disamb.ik.IkStatus` code per control step; a station on a wire has none)."""
+"""``(log name, subsystem, output port)`` of every VectorLogSink the builder adds (``ik_status``:
+an :class:`~drake_disamb.ik.IkStatus` code per control step, whatever the station's backend)."""
 
 
 @dataclass
@@ -82,9 +83,10 @@ class SharedControlDiagram:
         systems: Named subsystems: ``user`` (or the given input source), ``interface``,
             ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation and
             automatic paradigms), ``automatic_trigger`` (automatic paradigm only), ``task``,
-            ``ee_pose_sampler``, ``diff_ik`` (the station's), ``visualizer`` (with Meshcat only).
-        loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS` and
-            :data:`OPTIONAL_LOGGED_SIGNALS`).
+            ``ee_pose_sampler``, ``diff_ik`` and ``gripper_controller`` (the controllers between
+            the blender and interface and the station's joint-level inputs), ``visualizer`` (with
+            Meshcat only).
+        loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS`).
         modes: The interface's control modes (dimension lists; gripper mode last).
         meshcat: The Meshcat instance, or ``None``.
     """
@@ -156,6 +158,7 @@ def build_shared_control_diagram(
     Raises:
         ValueError: an invalid scenario, or a goal on top of the gripper's start position.
     """
+    from drake_disamb.controller import add_station_controller
     from drake_disamb.station.backends import make_station
 
     config = resolve_scenario(scenario)
@@ -242,9 +245,10 @@ def build_shared_control_diagram(
     builder.Connect(autonomy.GetOutputPort("u_a"), inference.GetInputPort("u_a"))
     builder.Connect(autonomy.GetOutputPort("u_a"), blender.GetInputPort("u_a"))
     builder.Connect(inference.GetOutputPort("belief"), blender.GetInputPort("belief"))
-    builder.Connect(blender.GetOutputPort("u"), station.diagram.GetInputPort("ee_velocity_command"))
+    controller = add_station_controller(builder, station)  # the IK and the gripper's, joint-level out
+    builder.Connect(blender.GetOutputPort("u"), controller.diff_ik.GetInputPort("ee_velocity_command"))
     builder.Connect(
-        interface.GetOutputPort("gripper_command"), station.diagram.GetInputPort("gripper_command")
+        interface.GetOutputPort("gripper_command"), controller.gripper.GetInputPort("gripper_command")
     )
 
     systems: dict[str, System] = {
@@ -254,7 +258,8 @@ def build_shared_control_diagram(
         "inference": inference,
         "blender": blender,
         "task": task,
-        "diff_ik": station.diff_ik,
+        "diff_ik": controller.diff_ik,
+        "gripper_controller": controller.gripper,
         "ee_pose_sampler": sampler,
     }
     if config.disambiguation is not None:  # the preset's probing, the live inference's update
@@ -313,8 +318,7 @@ def build_shared_control_diagram(
         systems["visualizer"] = vis
 
     loggers: dict[str, VectorLogSink] = {}
-    optional = [s for s in OPTIONAL_LOGGED_SIGNALS if s[1] != "station" or s[2] in station.outputs]
-    for name, sys_name, port in (*LOGGED_SIGNALS, *optional):
+    for name, sys_name, port in LOGGED_SIGNALS:
         system = station.diagram if sys_name == "station" else systems[sys_name]
         source = system.GetOutputPort(port)
         logger = LogVectorOutput(source, builder, scenario.control_period)

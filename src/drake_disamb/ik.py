@@ -3,9 +3,9 @@
 Joint velocities for a commanded end-effector twist that move the end effector along that twist and
 nowhere else (pure numpy, no pydrake).
 
-The station's :class:`~drake_disamb.station.DifferentialIKIntegrator` calls
+The controller's :class:`~drake_disamb.controller.DifferentialIKIntegrator` calls
 :meth:`VelocityIkSolver.solve` once per control tick with the Jacobian at the integrated set point.
-Everything here works on plain arrays: ``J`` is any ``(m, n)`` Jacobian (the station passes the
+Everything here works on plain arrays: ``J`` is any ``(m, n)`` Jacobian (the controller passes the
 6 x 6 MICO Jacobian in the paper's row order ``[v; w]``) and ``V`` the commanded twist in the same
 row order and units (m/s, rad/s).
 
@@ -74,9 +74,9 @@ above needs behaviour that program does not have:
   and keeps the arm out of the singularity's depth (the barrier);
 - it keeps the **direction when the acceleration bounds cannot be met** (a sudden turn while
   moving fast): Drake's program is then infeasible and returns no step at all;
-- it applies **task-space bounds** (the station's floor above the table) along the same line;
+- it applies **task-space bounds** (the floor above the table) along the same line;
 - it says **why** a step was slowed (:class:`IkStatus`: joint limit, singularity, workspace,
-  refused direction), which the station reports on ``ik_status``;
+  refused direction), which the controller reports on ``ik_status``;
 - it is plain numpy, so every rule above is tested in isolation without building a plant.
 """
 
@@ -97,7 +97,7 @@ _RANGE_TOL = 1e-6
 
 
 class IkStatus(IntEnum):
-    """Outcome codes of a differential-IK step (also the station's ``ik_status`` port)."""
+    """Outcome codes of a differential-IK step (also the controller's ``ik_status`` port)."""
 
     OK = 0
     """The command was tracked at (at least ``limited_alpha`` of) full speed; a zero command holds

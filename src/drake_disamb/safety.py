@@ -1,13 +1,15 @@
 """How far the station's end effector strays from a held command: the measurement behind the
 safety contract of :mod:`drake_disamb.ik` (motion only along the commanded twist).
 
-:class:`CommandHold` builds a station at a start posture, holds one end-effector velocity command
-for a while and measures, at every control step, the end effector's motion outside the commanded
-direction: for the translation, the displacement minus its (non-negative) part along the command's
-linear velocity (all of it for a pure rotation command); for the orientation, likewise about the
-command's angular velocity. ``tests/test_station_safety.py`` asserts the limits on it and
-``benchmarks/bench_safety.py`` prints the figures, on the simulated station or over the LCM path
-(the station on a ``memq://`` bus with the simulated driver behind the messages).
+:class:`CommandHold` builds a station at a start posture behind its controllers (the differential
+IK and the gripper's, :func:`~drake_disamb.controller.build_controlled_station`), holds one
+end-effector velocity command for a while and measures, at every control step, the end effector's
+motion outside the commanded direction: for the translation, the displacement minus its
+(non-negative) part along the command's linear velocity (all of it for a pure rotation command);
+for the orientation, likewise about the command's angular velocity. ``tests/test_station_safety.py``
+asserts the limits on it and ``benchmarks/bench_safety.py`` prints the figures, on the simulated
+station or over the LCM path (the station on a ``memq://`` bus with the simulated driver behind the
+messages).
 """
 
 from __future__ import annotations
@@ -20,8 +22,8 @@ from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.systems.analysis import Simulator
 
-from drake_disamb.station import IkStatus, StationConfig, build_station
-from drake_disamb.station.build import Station
+from drake_disamb.controller import ControlledStation, IkStatus, build_controlled_station
+from drake_disamb.station import Station, StationConfig, build_station
 
 __all__ = ["CommandHold", "HoldResult"]
 
@@ -38,7 +40,7 @@ class HoldResult:
             angular part for a pure rotation.
         progress_1s: The same after the first second.
         displacement: Straight-line distance (m) from the start to the end position.
-        statuses: The station's ``ik_status`` at every control step.
+        statuses: The IK's ``ik_status`` at every control step.
     """
 
     off_total: float = 0.0
@@ -55,7 +57,9 @@ def _rotation(p: NDArray[np.float64]) -> RotationMatrix:
 
 
 class CommandHold:
-    """A station at ``home_q`` (other settings from ``config``), reset before every :meth:`run`.
+    """A station at ``home_q`` (other settings from ``config``) behind its controllers, reset
+    before every :meth:`run`: ``station`` is the station, ``controlled`` the
+    :class:`~drake_disamb.controller.ControlledStation` whose diagram ``sim`` simulates.
 
     Args:
         home_q: Start joint angles (rad, DH).
@@ -87,10 +91,11 @@ class CommandHold:
             self.station: Station = InProcessLcm(lcm_url="memq://").build(self.config)
         else:
             self.station = build_station(self.config)
-        self.sim = Simulator(self.station.diagram)
+        self.controlled: ControlledStation = build_controlled_station(self.station)
+        self.sim = Simulator(self.controlled.diagram)
         self.ctx = self.sim.get_mutable_context()
-        self.station.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [0.0])
-        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
+        self.controlled.diagram.GetInputPort("gripper_command").FixValue(self.ctx, [0.0])
+        self.controlled.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, np.zeros(6))
         self.sim.Initialize()
         self._start = self.ctx.Clone()
 
@@ -102,11 +107,9 @@ class CommandHold:
             self.ctx.SetTimeStateAndParametersFrom(self._start)
             self.sim.Initialize()
         V = np.asarray(V, dtype=float)
-        self.station.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, V)
-        pose = self.station.diagram.GetOutputPort("ee_pose")
-        diff_ik = self.station.diff_ik
-        status = diff_ik.GetOutputPort("ik_status")
-        status_ctx = diff_ik.GetMyContextFromRoot(self.ctx)
+        self.controlled.diagram.GetInputPort("ee_velocity_command").FixValue(self.ctx, V)
+        pose = self.controlled.diagram.GetOutputPort("ee_pose")
+        status = self.controlled.diagram.GetOutputPort("ik_status")
         scale = float(np.max(np.abs(V))) or 1.0
         v, w = V[:3] / scale, V[3:] / scale  # directions only: no overflow for a huge command
         e_v = v / np.linalg.norm(v) if v.any() else np.zeros(3)
@@ -131,7 +134,7 @@ class CommandHold:
             r.progress += along if v.any() else turn
             if k < first_second:
                 r.progress_1s = r.progress
-            r.statuses.append(IkStatus(int(status.Eval(status_ctx)[0])))
+            r.statuses.append(IkStatus(int(status.Eval(self.ctx)[0])))
             p_prev = p
         r.displacement = float(np.linalg.norm(p_prev[:3] - p0[:3]))
         return r

@@ -1,4 +1,5 @@
-"""``drake-disamb station-demo``: the MICO station tracing a scripted end-effector velocity pattern.
+"""``drake-disamb station-demo``: the MICO station, behind its controllers (the differential IK and
+the gripper's), tracing a scripted end-effector velocity pattern.
 
 With Meshcat it runs at real time when started from a terminal, and as fast as it can from a script
 (standard input not a terminal).
@@ -74,7 +75,9 @@ def pattern(speed: float = 0.05, roll_rate: float = 0.3) -> list[Segment]:
 
 
 def start_simulation(station: Any, realtime_rate: float = 0.0) -> Any:
-    """A Simulator of ``station.diagram``, initialised at rest (zero commands on both inputs)."""
+    """A Simulator of ``station.diagram`` (a station behind its controllers,
+    :class:`~drake_disamb.controller.ControlledStation`), initialised at rest (zero commands on
+    both inputs)."""
     from pydrake.systems.analysis import Simulator
 
     simulator = Simulator(station.diagram)
@@ -93,8 +96,10 @@ def run_pattern(
     segments: list[Segment],
     stop_requested: Callable[[], bool] | None = None,
 ) -> bool:
-    """Advance ``simulator`` (whose root system is ``station.diagram``) for ``duration`` s through
-    ``segments``, repeating them as needed; the commands are fixed on the station's input ports.
+    """Advance ``simulator`` (whose root system is ``station.diagram``, a
+    :class:`~drake_disamb.controller.ControlledStation`'s) for ``duration`` s through ``segments``,
+    repeating them as needed; the commands are fixed on its ``ee_velocity_command`` and
+    ``gripper_command`` inputs.
 
     ``stop_requested`` is checked after every simulator step (through the simulator's monitor,
     which this replaces); once it returns True the pattern ends there. Returns True if it was
@@ -211,6 +216,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     except ValueError as exc:
         return _error(exc)
 
+    from drake_disamb.controller import build_controlled_station
     from drake_disamb.diagram_io import write_diagram_graph
     from drake_disamb.station import StationConfig
     from drake_disamb.station.backends import make_station
@@ -227,6 +233,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         station = make_station(scenario.station, config, meshcat=meshcat)
     except RuntimeError as exc:
         return _error(exc)
+    controlled = build_controlled_station(station)
     if meshcat is not None:
         from drake_disamb.systems.visualization import frame_workspace, illustration_bounds
 
@@ -236,19 +243,20 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
             work_height=station.geometry.table_top,
         )
     try:
-        written = write_diagram_graph(station.diagram, out / "station")
+        written = write_diagram_graph(controlled.diagram, out / "station")
     except OSError as exc:
         return _error(f"--out: writing into {out} failed ({exc})")
     print("diagram: " + ", ".join(str(p) for p in written), flush=True)
 
     # Real time when someone may watch (Meshcat, from a terminal); from a script, as fast as it can.
-    simulator = start_simulation(station, realtime_rate=1.0 if meshcat is not None and attended() else 0.0)
+    simulator = start_simulation(controlled, realtime_rate=1.0 if meshcat is not None and attended() else 0.0)
+    diagram = controlled.diagram
     ctx = simulator.get_mutable_context()
-    p0 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
+    p0 = diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
     t0 = ctx.get_time()
     wall = time.perf_counter()
     try:
-        stopped = run_pattern(station, simulator, args.duration, segments, stop_requested=stop)
+        stopped = run_pattern(controlled, simulator, args.duration, segments, stop_requested=stop)
     except KeyboardInterrupt:
         stopped = True
     finally:
@@ -258,24 +266,23 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     simulated = ctx.get_time() - t0
     if stopped:
         print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {simulated:.2f} s", flush=True)
-    p1 = station.diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
-    diff_ik = station.diff_ik
-    status = int(diff_ik.GetOutputPort("ik_status").Eval(diff_ik.GetMyContextFromRoot(ctx))[0])
+    p1 = diagram.GetOutputPort("ee_pose").Eval(ctx).copy()
+    status = int(diagram.GetOutputPort("ik_status").Eval(ctx)[0])
     np.set_printoptions(precision=4, suppress=True)
     print(f"start EE position  {p0[:3]} m, final {p1[:3]} m")
     print(
         f"final EE displacement {p1[:3] - p0[:3]} m (|d| = {np.linalg.norm(p1[:3] - p0[:3]) * 1000:.1f} mm)"
     )
     print(
-        f"gripper opening {station.diagram.GetOutputPort('gripper_opening').Eval(ctx)[0] * 1000:.1f} mm, "
+        f"gripper opening {diagram.GetOutputPort('gripper_opening').Eval(ctx)[0] * 1000:.1f} mm, "
         f"ik_status {status}"
     )
     rate = f"{simulated / wall:.2f}" if wall > 0 else "inf"
     print(f"simulated {simulated:.2f} s in {wall:.2f} s wall: real-time rate {rate}")
-    if "fault" in station.outputs and station.diagram.GetOutputPort("fault").Eval(ctx)[0]:
+    if "fault" in station.outputs and diagram.GetOutputPort("fault").Eval(ctx)[0]:
         from drake_disamb.station.lcm.faults import Fault
 
-        fault = Fault(int(station.diagram.GetOutputPort("fault").Eval(ctx)[0]))
+        fault = Fault(int(diagram.GetOutputPort("fault").Eval(ctx)[0]))
         print(f"station fault: {fault.reason}", file=sys.stderr, flush=True)
         return EXIT_STATION_FAULT
     if stopped:

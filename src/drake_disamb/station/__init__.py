@@ -1,30 +1,39 @@
-"""The MICO station: one Diagram with named exported ports that turns the paper's end-effector
-velocity command into arm motion through a differential-IK integrator, built from a backend
+"""The MICO station: the hardware, as one Diagram with named exported ports, built from a backend
 choice (Drake's ``MakeHardwareStation(scenario, meshcat, hardware=...)`` pattern): the in-process
-simulation (a MultibodyPlant arm on a table, joint PD plus gravity compensation) or a real or
-simulated arm behind LCM.
+simulation (a MultibodyPlant arm on a table, joint PD plus gravity compensation, its set points
+integrated from the commanded velocities) or a real or simulated arm behind LCM. Every backend
+takes joint-level commands (the arm's joint velocities, the fingers' velocities: what a Kinova Gen2
+arm's driver accepts) and gives the measured joint state and fingers; the controllers that turn the
+shared-control commands into joint velocities are :mod:`drake_disamb.controller`'s.
 
 Modules:
 
 - :mod:`~drake_disamb.station.backends`: the registry of backends (one module each) and
   :func:`~drake_disamb.station.backends.make_station`, the one entry point.
 - :mod:`~drake_disamb.station.ports`: the ports every backend provides, and the ones only the
-  simulation (or only a wire) has.
+  simulation (or only a wire) has, with their units.
 - :mod:`~drake_disamb.station.geometry`: the clearance geometry read from a station's own plant.
 
 - :mod:`~drake_disamb.station.config`: joint and frame names, the home posture (read from the
   model directives), :class:`SceneObject` and :class:`StationConfig`.
-- :mod:`~drake_disamb.station.systems`: the three LeafSystems (:class:`DifferentialIKIntegrator`,
-  :class:`GripperOpeningIntegrator`, :class:`EndEffectorState`) and their state layouts.
+- :mod:`~drake_disamb.station.systems`: the simulation's LeafSystems
+  (:class:`JointVelocityIntegrator`, :class:`EndEffectorState`).
 - :mod:`~drake_disamb.station.build`: :func:`build_station`, which returns a :class:`Station`
-  (the Diagram and typed handles on the plant, control plant and integrators); its docstring
+  (the Diagram and typed handles on the plant, control plant and integrator); its docstring
   lists the ports, the subsystem names and how to use it.
+- :mod:`~drake_disamb.station.lcm`: the station on LCM and the simulated driver behind it.
 
 Every public name is re-exported here: ``from drake_disamb.station import build_station``.
 """
 
-from drake_disamb.ik import IkStatus
-from drake_disamb.station.build import STATION_INPUTS, STATION_OUTPUTS, Station, build_station
+from drake_disamb.station.build import (
+    STATION_INPUTS,
+    STATION_OUTPUTS,
+    Station,
+    add_scene_objects,
+    build_station,
+    make_control_plant,
+)
 from drake_disamb.station.config import (
     ARM_JOINTS,
     ARM_MODEL_NAME,
@@ -37,18 +46,12 @@ from drake_disamb.station.config import (
     PLANT_CONFIG_CHOICES,
     SceneObject,
     StationConfig,
+    arm_velocity_limits,
+    check_home_q,
     check_plant_config,
     default_plant_config,
 )
-from drake_disamb.station.systems import (
-    IK_Q_D,
-    IK_V_D,
-    DifferentialIKIntegrator,
-    EndEffectorState,
-    GripperIntegratorState,
-    GripperOpeningIntegrator,
-    IkIntegratorState,
-)
+from drake_disamb.station.systems import EndEffectorState, JointVelocityIntegrator
 
 __all__ = [
     "ARM_JOINTS",
@@ -57,23 +60,21 @@ __all__ = [
     "EE_FRAME",
     "FINGER_JOINTS",
     "FINGER_MAX_OPENING",
-    "IK_Q_D",
-    "IK_V_D",
     "MICO_HOME_GRIPPER_OPENING",
     "MICO_HOME_Q",
     "PLANT_CONFIG_CHOICES",
     "STATION_INPUTS",
     "STATION_OUTPUTS",
-    "DifferentialIKIntegrator",
     "EndEffectorState",
-    "GripperIntegratorState",
-    "GripperOpeningIntegrator",
-    "IkIntegratorState",
-    "IkStatus",
+    "JointVelocityIntegrator",
     "SceneObject",
     "Station",
     "StationConfig",
+    "add_scene_objects",
+    "arm_velocity_limits",
+    "build_station",
+    "check_home_q",
     "check_plant_config",
     "default_plant_config",
-    "build_station",
+    "make_control_plant",
 ]

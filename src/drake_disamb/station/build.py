@@ -1,22 +1,26 @@
-"""Assembly of the MICO station: :func:`build_station` returns one Diagram with named exported ports
-(Drake's ``MakeHardwareStation(scenario, meshcat)`` pattern) and a :class:`Station` handle on it.
+"""Assembly of the simulated MICO station: :func:`build_station` returns one Diagram with named
+exported ports (Drake's ``MakeHardwareStation(scenario, meshcat)`` pattern) and a :class:`Station`
+handle on it. The station is the hardware: its inputs are the joint-level velocities a Kinova Gen2
+arm's driver accepts in velocity mode, its outputs what the arm measures; the controllers that turn
+the shared-control commands into joint velocities sit outside it (:mod:`drake_disamb.controller`).
 
 Inside the diagram (subsystem names in quotes; see ``diagrams/station.py`` for the picture)::
 
-    ee_velocity_command ─▶ "diff_ik" ──────────────▶ "arm_set_point_demux" ──┐  q_d, v_d (6 + 6)
-    gripper_command ─────▶ "gripper_integrator" ──▶ "finger_set_point_demux" ┤  q_d, v_d (2 + 2)
-                                                                            ▼
-                             "desired_state_mux" [q_d; v_d] (joint order) ─▶ "desired_state_to_actuators"
-                                                                            ▼  desired state
+    arm_velocity_command ────┐
+    finger_velocity_command ─┴▶ "joint_velocity_integrator" ─▶ desired state [q_d; v_d] (joint order)
+                                   ▲ measured state (initialise,      ▼
+                                   │ re-anchor)              "desired_state_to_actuators"
+                                   │                                  ▼  desired state
     "gravity_compensation" ─▶ "gravity_to_actuation" ─▶ "plant" (discrete, SAP, gravity on;
      (InverseDynamics on the          actuation             joint-actuator PD tracks the
       control plant) ▲                                      desired state) ──▶ "scene_graph"
                      └──────────────── state ◀────────────────┘
     "plant" state ─▶ "arm_joint_state", "finger_state" ─▶ "gripper_opening"; body poses ─▶ "ee_state"
 
-The selector gains come from Drake (``MultibodyPlant.MakeStateSelectorMatrix``,
-``MakeActuatorSelectorMatrix``, ``MakeActuationMatrixPseudoinverse``); the set points are split and
-regrouped by ``Demultiplexer`` / ``Multiplexer``. The home posture is the model directives'
+The set points come from integrating the commanded velocities, as a real arm in velocity mode does
+(:class:`~drake_disamb.station.systems.JointVelocityIntegrator`). The selector gains come from Drake
+(``MultibodyPlant.MakeStateSelectorMatrix``, ``MakeActuatorSelectorMatrix``,
+``MakeActuationMatrixPseudoinverse``). The home posture is the model directives'
 ``default_joint_positions``; ``StationConfig.home_q`` / ``home_gripper_opening`` are applied over it
 with ``Joint.set_default_positions`` (a no-op with the defaults, which are read from the directives).
 
@@ -24,40 +28,40 @@ How to use it::
 
     station = build_station(config, scene_objects, meshcat)
     builder.AddSystem(station.diagram)                  # or Simulator(station.diagram) on its own
-    builder.Connect(blender.GetOutputPort("u"), station.diagram.GetInputPort("ee_velocity_command"))
+    controller = add_station_controller(builder, station)   # drake_disamb.controller: IK, gripper
+    builder.Connect(blender.GetOutputPort("u"), controller.diff_ik.GetInputPort("ee_velocity_command"))
 
 Reaching inside: the :class:`Station` handle holds the plant, the scene graph, the control plant
-and the integrators; from the diagram alone, ``GetSubsystemByName`` with the names above gives the
-same systems (``"plant"``, ``"scene_graph"``, ``"diff_ik"``, ``"gripper_integrator"``, and
-``diff_ik.control_plant()``). A subsystem's context inside any enclosing root context is
-``system.GetMyContextFromRoot(root_context)`` (:meth:`Station.plant_context` for the plant).
+and the integrator; from the diagram alone, ``GetSubsystemByName`` with the names above gives the
+same systems (``"plant"``, ``"scene_graph"``, ``"joint_velocity_integrator"``). A subsystem's
+context inside any enclosing root context is ``system.GetMyContextFromRoot(root_context)``
+(:meth:`Station.plant_context` for the plant).
 
 Station ports, those every backend provides (:mod:`~drake_disamb.station.ports`) and the
-simulation's own ``ik_status`` and ``query_object`` (velocities are in the paper's order
-``[vx, vy, vz, wx, wy, wz]``, not Drake's ``[w; v]``; W is the world frame, which coincides with
-``mico_link_base``):
+simulation's own ``query_object`` (velocities are in the paper's order ``[vx, vy, vz, wx, wy,
+wz]``, not Drake's ``[w; v]``; W is the world frame, which coincides with ``mico_link_base``):
 
-- input ``ee_velocity_command`` (6): desired spatial velocity of ``mico_end_effector``, m/s and
-  rad/s, expressed in W, taken at the end-effector origin.
-- input ``gripper_command`` (1): finger opening speed, m/s; positive opens.
+- input ``arm_velocity_command`` (6): the arm's joint velocities, rad/s, in ``ARM_JOINTS`` order
+  (Kinova's classic-DH angles).
+- input ``finger_velocity_command`` (2): the finger slides' velocities, m/s (``FINGER_JOINTS``
+  order; positive opens).
 - output ``ee_pose`` (7): ``[x, y, z, qw, qx, qy, qz]`` of ``mico_end_effector`` in W (m).
 - output ``ee_velocity`` (6): measured spatial velocity of ``mico_end_effector`` (paper order, W, m/s, rad/s).
 - output ``arm_joint_state`` (12): measured arm joint positions (rad, the DH angles) then velocities (rad/s).
+- output ``finger_state`` (4): measured finger slides (m) then their velocities (m/s).
 - output ``gripper_opening`` (1): distance between the fingertip pads, m.
-- output ``ik_status`` (1): an :class:`~drake_disamb.ik.IkStatus` code of the last control step.
 - output ``query_object``: the SceneGraph query object (abstract).
 
 Both inputs must be connected (or fixed) before simulating. Bad run-time commands: a NaN or
-infinite entry in ``ee_velocity_command`` or ``gripper_command`` is treated as a zero command, with
-a ``RuntimeWarning`` at most once per ``StationConfig.warn_interval`` seconds of simulated time;
-``ik_status`` reports ``INVALID_COMMAND`` (2) for the arm. A vector of the wrong length cannot reach
-the station: Drake rejects it where it enters (``FixValue`` or ``DiagramBuilder.Connect`` raise), so
-the station's state is untouched.
+infinite entry in either input is treated as a zero command, with a ``RuntimeWarning`` at most once
+per ``StationConfig.warn_interval`` seconds of simulated time. A vector of the wrong length cannot
+reach the station: Drake rejects it where it enters (``FixValue`` or ``DiagramBuilder.Connect``
+raise), so the station's state is untouched.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -68,8 +72,8 @@ from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirective
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import Frame, JointActuatorIndex, ModelInstanceIndex, PdControllerGains
 from pydrake.systems.controllers import InverseDynamics
-from pydrake.systems.framework import Context, Diagram, DiagramBuilder, InputPort, OutputPort
-from pydrake.systems.primitives import Demultiplexer, MatrixGain, Multiplexer
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder
+from pydrake.systems.primitives import MatrixGain
 
 from drake_disamb.paths import mico_directives, mico_urdf
 from drake_disamb.station.config import (
@@ -81,11 +85,12 @@ from drake_disamb.station.config import (
     FINGER_MAX_OPENING,
     SceneObject,
     StationConfig,
+    check_home_q,
     model_parser,
 )
 from drake_disamb.station.geometry import StationGeometry
 from drake_disamb.station.ports import SHARED_INPUTS, SHARED_OUTPUTS, SIMULATION_OUTPUTS
-from drake_disamb.station.systems import DifferentialIKIntegrator, EndEffectorState, GripperOpeningIntegrator
+from drake_disamb.station.systems import EndEffectorState, JointVelocityIntegrator
 
 STATION_INPUTS: tuple[str, ...] = SHARED_INPUTS
 """Names of the simulated station diagram's exported input ports."""
@@ -106,14 +111,16 @@ class Station:
         scene_graph: Its SceneGraph (subsystem ``"scene_graph"``).
         arm: Model instance of the MICO (arm and gripper) in ``plant``.
         control_plant: Arm-only continuous plant (plus objects held in the gripper) that the
-            differential IK and the gravity compensation compute on; not a subsystem.
-        diff_ik: The :class:`DifferentialIKIntegrator` (subsystem ``"diff_ik"``).
-        gripper: The :class:`GripperOpeningIntegrator` (subsystem ``"gripper_integrator"``).
-        config: The configuration used.
+            gravity compensation (and, outside the station, the differential IK) computes on;
+            not a subsystem.
+        config: The configuration used (on a wire, ``home_q`` is the arm's measured start posture).
         scene_objects: All scene objects added (the config's first).
         meshcat: The Meshcat instance the station draws into, if any.
         geometry: The clearance geometry of ``plant`` (the IK's floor uses it).
         outputs: Names of the exported output ports (:data:`STATION_OUTPUTS` for the simulation).
+        integrator: The simulated arm's
+            :class:`~drake_disamb.station.systems.JointVelocityIntegrator` (subsystem
+            ``"joint_velocity_integrator"``); ``None`` on a wire.
         link: On a wire, the :class:`~drake_disamb.station.lcm.bus.CommandLink` (its
             ``stop_arm()`` sends the zero command several times); ``None`` in simulation.
     """
@@ -123,13 +130,12 @@ class Station:
     scene_graph: SceneGraph
     arm: ModelInstanceIndex
     control_plant: MultibodyPlant
-    diff_ik: DifferentialIKIntegrator | None
-    gripper: GripperOpeningIntegrator | None
     config: StationConfig
     scene_objects: tuple[SceneObject, ...]
     meshcat: Meshcat | None = None
     geometry: StationGeometry | None = None
     outputs: tuple[str, ...] = STATION_OUTPUTS
+    integrator: JointVelocityIntegrator | None = None
     link: Any = None
 
     def plant_context(self, root_context: Context) -> Context:
@@ -137,9 +143,12 @@ class Station:
         return self.plant.GetMyContextFromRoot(root_context)
 
 
-def _add_objects(
+def add_scene_objects(
     plant: MultibodyPlant, objects: Iterable[SceneObject], ee_frame: Frame, only_attached: bool
 ) -> None:
+    """Add ``objects`` to ``plant`` (not finalized), each a rigid body welded to the world or, when
+    ``attached_to_gripper``, to ``ee_frame``; ``only_attached`` adds the held ones only. Geometry
+    (visual and collision) is registered when ``plant`` is a SceneGraph source."""
     instance = None
     for obj in objects:
         if only_attached and not obj.attached_to_gripper:
@@ -159,11 +168,13 @@ def _add_objects(
         plant.WeldFrames(parent, body.body_frame(), obj.transform())
 
 
-def _make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
+def make_control_plant(objects: Sequence[SceneObject]) -> tuple[MultibodyPlant, ModelInstanceIndex]:
+    """The arm-only continuous plant (base welded to the world) with the objects of ``objects``
+    held in the gripper, finalized, and the MICO's model instance in it."""
     plant = MultibodyPlant(time_step=0.0)
     (arm,) = model_parser(plant).AddModels(str(mico_urdf()))
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(BASE_FRAME, arm))
-    _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
+    add_scene_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=True)
     plant.Finalize()
     return plant, arm
 
@@ -198,7 +209,7 @@ def build_station(
     scene_objects: Iterable[SceneObject] = (),
     meshcat: Meshcat | None = None,
 ) -> Station:
-    """Build the MICO station Diagram (see the module docstring for its ports and subsystems).
+    """Build the simulated MICO station Diagram (see the module docstring for its ports and subsystems).
 
     Args:
         config: Station settings; ``None`` uses the defaults.
@@ -214,65 +225,6 @@ def build_station(
             ``config.home_q`` outside the joint limits.
     """
     config = config or StationConfig()
-    return _build_plant_station(config, scene_objects, meshcat, _ik_set_points)
-
-
-@dataclass(frozen=True)
-class _SetPoints:
-    """What a set-point source adds to the plant station: the arm's and the fingers' desired
-    states (12 and 4 ports) and the ports it exports."""
-
-    arm_desired: OutputPort
-    finger_desired: OutputPort
-    inputs: dict[str, InputPort]
-    outputs: dict[str, OutputPort]
-    diff_ik: DifferentialIKIntegrator | None = None
-    gripper: GripperOpeningIntegrator | None = None
-
-
-def _ik_set_points(
-    builder: DiagramBuilder,
-    config: StationConfig,
-    control_plant: MultibodyPlant,
-    control_arm: ModelInstanceIndex,
-    objects: Sequence[SceneObject],
-    geometry: StationGeometry,
-    arm_state: OutputPort,
-    finger_state: OutputPort,
-) -> _SetPoints:
-    """The simulated station's set points: the differential IK and the gripper integrator."""
-    diff_ik = builder.AddNamedSystem(
-        "diff_ik",
-        DifferentialIKIntegrator(control_plant, config, control_arm, held_objects=objects, geometry=geometry),
-    )
-    gripper = builder.AddNamedSystem(
-        "gripper_integrator",
-        GripperOpeningIntegrator(
-            config.control_period, FINGER_MAX_OPENING, config.home_gripper_opening, config.warn_interval
-        ),
-    )
-    builder.Connect(arm_state, diff_ik.GetInputPort("arm_joint_state"))
-    builder.Connect(finger_state, gripper.GetInputPort("finger_state"))
-    return _SetPoints(
-        arm_desired=diff_ik.GetOutputPort("desired_state"),
-        finger_desired=gripper.GetOutputPort("finger_desired_state"),
-        inputs={
-            "ee_velocity_command": diff_ik.GetInputPort("ee_velocity_command"),
-            "gripper_command": gripper.GetInputPort("gripper_command"),
-        },
-        outputs={"ik_status": diff_ik.GetOutputPort("ik_status")},
-        diff_ik=diff_ik,
-        gripper=gripper,
-    )
-
-
-def _build_plant_station(
-    config: StationConfig,
-    scene_objects: Iterable[SceneObject],
-    meshcat: Meshcat | None,
-    set_points: Callable[..., _SetPoints],
-) -> Station:
-    """The plant, its PD and gravity compensation, with the set points ``set_points`` adds."""
     objects = tuple(config.scene_objects) + tuple(scene_objects)
     names = [o.name for o in objects]
     for k, obj in enumerate(objects):
@@ -286,7 +238,7 @@ def _build_plant_station(
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
     ee_frame = plant.GetFrameByName(EE_FRAME, arm)
-    _add_objects(plant, objects, ee_frame, only_attached=False)
+    add_scene_objects(plant, objects, ee_frame, only_attached=False)
 
     # The directives set the home posture; the config's values go over it (the same by default).
     for name, q in zip(ARM_JOINTS, config.home_q, strict=True):
@@ -312,7 +264,7 @@ def _build_plant_station(
         CollisionFilterDeclaration().ExcludeWithin(plant.CollectRegisteredGeometries(arm_bodies))
     )
 
-    control_plant, control_arm = _make_control_plant(objects)
+    control_plant, _ = make_control_plant(objects)
     _check_same_layout(plant, control_plant)
     arm_joints = [plant.GetJointByName(name, arm).index() for name in ARM_JOINTS]
     finger_joints = [plant.GetJointByName(name, arm).index() for name in FINGER_JOINTS]
@@ -331,29 +283,27 @@ def _build_plant_station(
     builder.Connect(finger_state.get_output_port(), gripper_opening.get_input_port())
 
     geometry = StationGeometry.from_plant(plant, scene_graph, arm)
-    points = set_points(
-        builder,
-        config,
-        control_plant,
-        control_arm,
-        objects,
-        geometry,
-        arm_state.get_output_port(),
-        finger_state.get_output_port(),
-    )
+    lower, upper = geometry.joint_limits()
+    check_home_q(config, lower, upper)
 
-    # Desired state: the set points regrouped as [q_d; v_d] in ARM_JOINTS + FINGER_JOINTS order,
-    # then mapped to the plant's actuator order (each actuator drives one of those joints).
-    arm_split = builder.AddNamedSystem("arm_set_point_demux", Demultiplexer([6, 6]))
-    finger_split = builder.AddNamedSystem("finger_set_point_demux", Demultiplexer([2, 2]))
-    mux = builder.AddNamedSystem("desired_state_mux", Multiplexer([6, 2, 6, 2]))
-    builder.Connect(points.arm_desired, arm_split.get_input_port())
-    builder.Connect(points.finger_desired, finger_split.get_input_port())
-    for k, port in enumerate(
-        (arm_split.get_output_port(0), finger_split.get_output_port(0))
-        + (arm_split.get_output_port(1), finger_split.get_output_port(1))
-    ):
-        builder.Connect(port, mux.get_input_port(k))
+    # The set points, [q_d; v_d] in ARM_JOINTS + FINGER_JOINTS order, integrated from the commanded
+    # velocities, then mapped to the plant's actuator order (each actuator drives one of those joints).
+    half = config.home_gripper_opening / 2
+    integrator = builder.AddNamedSystem(
+        "joint_velocity_integrator",
+        JointVelocityIntegrator(
+            config.control_period,
+            lower,
+            upper,
+            FINGER_MAX_OPENING / 2,
+            config.home_q,
+            (half, half),
+            config.reseed_tolerance,
+            config.warn_interval,
+        ),
+    )
+    builder.Connect(arm_state.get_output_port(), integrator.GetInputPort("arm_joint_state"))
+    builder.Connect(finger_state.get_output_port(), integrator.GetInputPort("finger_state"))
     if plant.num_actuators() != plant.num_actuators(arm):  # pragma: no cover (objects are welded)
         raise RuntimeError("station: only the MICO may have actuators")
     S = plant.MakeActuatorSelectorMatrix(arm_joints + finger_joints)  # u = S u_joints
@@ -361,7 +311,7 @@ def _build_plant_station(
     to_actuators = builder.AddNamedSystem(
         "desired_state_to_actuators", MatrixGain(np.block([[S, zeros], [zeros, S]]))
     )
-    builder.Connect(mux.get_output_port(), to_actuators.get_input_port())
+    builder.Connect(integrator.GetOutputPort("desired_state"), to_actuators.get_input_port())
     builder.Connect(to_actuators.get_output_port(), plant.get_desired_state_input_port(arm))
 
     # Gravity compensation feed-forward, computed on the control plant from the measured state.
@@ -389,14 +339,14 @@ def _build_plant_station(
             builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration, prefix="station")
         )
 
-    for name, port in points.inputs.items():
-        builder.ExportInput(port, name)
+    for name in SHARED_INPUTS:
+        builder.ExportInput(integrator.GetInputPort(name), name)
     outputs = {
         "ee_pose": ee_state.GetOutputPort("ee_pose"),
         "ee_velocity": ee_state.GetOutputPort("ee_velocity"),
         "arm_joint_state": arm_state.get_output_port(),
+        "finger_state": finger_state.get_output_port(),
         "gripper_opening": gripper_opening.get_output_port(),
-        **points.outputs,
         "query_object": scene_graph.get_query_output_port(),
     }
     for name, port in outputs.items():
@@ -410,11 +360,10 @@ def _build_plant_station(
         scene_graph=scene_graph,
         arm=arm,
         control_plant=control_plant,
-        diff_ik=points.diff_ik,
-        gripper=points.gripper,
         config=config,
         scene_objects=objects,
         meshcat=meshcat,
         geometry=geometry,
         outputs=tuple(outputs),
+        integrator=integrator,
     )

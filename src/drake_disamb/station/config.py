@@ -23,7 +23,7 @@ from pydrake.geometry import Box, Cylinder, Sphere
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import LoadModelDirectives, Parser
 from pydrake.multibody.plant import MultibodyPlant, MultibodyPlantConfig
-from pydrake.multibody.tree import SpatialInertia
+from pydrake.multibody.tree import ModelInstanceIndex, SpatialInertia
 
 from drake_disamb.core.layout import SHAPE_SIZES
 from drake_disamb.core.validation import TIME_STEP_RANGE, check_real_range
@@ -233,15 +233,17 @@ class StationConfig:
             points as well as finer steps do (the station's tests pass unchanged at 2, 5 and 10 ms)
             while costing a fifth of a 2 ms plant. Choose a smaller step (e.g. 0.001) to resolve
             contact with the table or objects more finely.
-        control_period: Period of the differential IK and gripper integrators (s), 0.01 = 100 Hz.
+        control_period: Period of the controllers (the differential IK, the gripper's) and of the
+            simulated arm's set-point integrator (s), 0.01 = 100 Hz.
             Both it and ``plant_config.time_step`` must lie in [1 ms, 100 ms] (``TIME_STEP_RANGE``).
         home_q: Initial arm joint angles (rad, DH); must be inside the joint limits. The default,
             :data:`MICO_HOME_Q`, is the model directives' ``default_joint_positions``; another value
             overrides them.
         home_gripper_opening: Initial distance between the fingertips (m); the default,
             :data:`MICO_HOME_GRIPPER_OPENING`, is the directives' (0.08 m).
-        joint_velocity_limits: Per-joint speed limits for the IK (rad/s); ``None`` takes the
-            model's limits (36 deg/s for joints 1-3, 48 deg/s for 4-6).
+        joint_velocity_limits: Per-joint speed limits (rad/s) for the IK and for the commands the
+            station on LCM sends; ``None`` takes the model's limits (36 deg/s for joints 1-3, 48
+            deg/s for 4-6).
         joint_acceleration_limits: Per-joint acceleration limits for the IK (rad/s^2). A change of
             command ramps the joints at their limit along the new command's direction, and a joint
             approaching a position limit brakes at it. They give way only to the command's
@@ -262,7 +264,8 @@ class StationConfig:
         kp, kd: Arm joint PD gains (N m/rad, N m s/rad) of the plant's joint actuators.
         finger_kp, finger_kd: Finger PD gains (N/m, N s/m).
         reseed_tolerance: When the integrated set point is farther than this (rad, any joint) from the
-            measured joint angles, it is reset to them (status ``RESEEDED``).
+            measured joint angles, it is reset to them: the IK's (status ``RESEEDED``), and the
+            simulated arm's own, which integrates the same joint velocities.
         limited_alpha: Report ``LIMITED`` (or ``SINGULAR``) when the IK achieves less than this
             fraction of the command along it, or misses it by more than ``1 - limited_alpha``.
         warn_interval: Minimum simulated time (s) between two warnings about bad commands.
@@ -345,3 +348,23 @@ class StationConfig:
             if not isinstance(obj, SceneObject):
                 raise ValueError(f"{o}.scene_objects[{k}]: expected a SceneObject, got {obj!r}")
         object.__setattr__(self, "scene_objects", objs)
+
+
+def check_home_q(config: StationConfig, lower: NDArray[np.float64], upper: NDArray[np.float64]) -> None:
+    """Raise ``ValueError`` naming ``StationConfig.home_q`` unless it lies inside the joint limits
+    ``[lower, upper]`` (rad, six each)."""
+    home = np.asarray(config.home_q)
+    if np.any(home < lower) or np.any(home > upper):
+        raise ValueError(
+            f"StationConfig.home_q: outside the joint limits [{lower}, {upper}], got {home.tolist()}"
+        )
+
+
+def arm_velocity_limits(
+    config: StationConfig, plant: MultibodyPlant, instance: ModelInstanceIndex
+) -> NDArray[np.float64]:
+    """The arm's joint speed limits (rad/s, six, base to wrist): ``config.joint_velocity_limits``,
+    or the model's (the joints of ``instance`` in ``plant``) when it is ``None``."""
+    if config.joint_velocity_limits is not None:
+        return np.array(config.joint_velocity_limits)
+    return np.array([plant.GetJointByName(n, instance).velocity_upper_limits()[0] for n in ARM_JOINTS])

@@ -1,13 +1,13 @@
-"""The station's three LeafSystems, each usable on its own with a fixed context:
+"""The simulated station's two LeafSystems, each usable on its own with a fixed context:
 
-- :class:`DifferentialIKIntegrator`: end-effector velocity command -> arm joint set points (100 Hz);
-- :class:`GripperOpeningIntegrator`: finger opening-speed command -> finger set points;
+- :class:`JointVelocityIntegrator`: the arm in velocity mode, as a Kinova Gen2 arm's driver runs it:
+  the commanded joint and finger velocities -> the set points the plant's joint PD tracks;
 - :class:`EndEffectorState`: the plant's body poses and velocities -> ``ee_pose`` / ``ee_velocity``
   in the project's conventions (quaternion ``[qw, qx, qy, qz]``, velocities in the paper's order
   ``[vx, vy, vz, wx, wy, wz]``, not Drake's ``[w; v]``).
 
-Their discrete states have named layouts (:data:`IkIntegratorState`, :data:`GripperIntegratorState`,
-``pydrake.common.containers.namedview`` classes) for reading a state vector by field.
+The controllers that turn the shared-control commands into these joint velocities are
+:mod:`drake_disamb.controller`'s.
 """
 
 from __future__ import annotations
@@ -17,344 +17,143 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from pydrake.common.containers import namedview
 from pydrake.common.value import Value
 from pydrake.math import RigidTransform
 from pydrake.multibody.math import SpatialVelocity
-from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import JacobianWrtVariable, ModelInstanceIndex
 from pydrake.systems.framework import (
     BasicVector,
     Context,
     DiscreteValues,
     EventStatus,
-    InputPort,
     LeafSystem,
 )
 
-from drake_disamb.clearance import Solid
 from drake_disamb.core.validation import all_finite
-from drake_disamb.ik import IkParams, IkStatus, VelocityIkSolver
-from drake_disamb.joint_limits import JointLimits
-from drake_disamb.station.config import ARM_JOINTS, ARM_MODEL_NAME, EE_FRAME, SceneObject, StationConfig
-from drake_disamb.station.geometry import StationGeometry
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 from drake_disamb.system_helpers.status import DID_NOTHING
 
-IkIntegratorState = namedview(
-    "IkIntegratorState", [f"{j}_q_d" for j in ARM_JOINTS] + [f"{j}_v_d" for j in ARM_JOINTS]
-)
-"""Layout of :class:`DifferentialIKIntegrator`'s set-point state group (12), its ``desired_state``
-output: the set point ``q_d`` (rad, fields ``mico_joint_1_q_d`` ...) and its velocity ``v_d``
-(rad/s, ``mico_joint_1_v_d`` ...); the slices :data:`IK_Q_D` and :data:`IK_V_D` take the vectors.
-The :class:`~drake_disamb.ik.IkStatus` code of the last step is a second group of its own."""
-IK_Q_D = slice(0, 6)
-IK_V_D = slice(6, 12)
 
-GripperIntegratorState = namedview("GripperIntegratorState", ["opening", "speed"])
-"""Layout of :class:`GripperOpeningIntegrator`'s discrete state: desired opening (m) and its rate (m/s)."""
+class JointVelocityIntegrator(LeafSystem):
+    """The simulated arm's velocity mode: integrates the commanded joint and finger velocities into
+    the set points its joint PD tracks, inside the joint limits and the fingers' travel.
 
-
-def _read_command(port: InputPort, context: Context, size: int) -> tuple[NDArray[np.float64], bool]:
-    """The command on ``port`` and whether it is valid (finite, right size); invalid -> zeros."""
-    value = np.asarray(port.Eval(context), dtype=float).reshape(-1)
-    if value.size != size or not all_finite(value):
-        return np.zeros(size), False
-    return value, True
-
-
-def _set_point(q: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The :data:`IkIntegratorState` vector of set point ``q`` and velocity ``v``."""
-    x = np.empty(len(IkIntegratorState.get_fields()))
-    view = IkIntegratorState(x)
-    view[IK_Q_D] = q
-    view[IK_V_D] = v
-    return x
-
-
-class DifferentialIKIntegrator(LeafSystem):
-    """Turns a commanded end-effector spatial velocity into arm joint set points, at a fixed rate.
-
-    Every ``control_period`` it (1) reads ``ee_velocity_command`` (paper order), (2) computes the
-    Jacobian of ``mico_end_effector`` at the integrated set point q_d (rows in the paper's order)
-    and solves :meth:`drake_disamb.ik.VelocityIkSolver.solve` there, with the joint position,
-    velocity and acceleration limits and the floor ``StationConfig.table_clearance`` under every
-    point of the gripper, (3) sets
-    ``v_d`` to the solution and integrates ``q_d += v_d * period`` (inside the joint limits by
-    construction; clamped against rounding).
-
-    **Motion only where commanded.** The set point's end effector moves along the commanded twist
-    and nowhere else: where the command cannot be met in full (a joint limit, a singularity, the
-    floor) it is slowed along its own direction or stopped, never bent, and ``ik_status`` says
-    why (``LIMITED``, ``SINGULAR``, ``WORKSPACE``, ``STOPPED``); :mod:`drake_disamb.ik` states the
-    bound (rounding plus a null-space pull under 0.2 mm/s). On the simulated arm, which tracks
-    the set points through its PD, every single-axis command held 10 s from the tested postures
-    (home, near the wrist singularity, a joint on its limit, ...) moves the end effector off the
-    command by at most 2 cm in total and 1 cm/s (``tests/test_station_safety.py``). The integrator
-    is initialised from ``arm_joint_state`` when the simulator initialises and re-seeded from it
-    when the set point drifts more than ``reseed_tolerance`` away.
+    Every ``period`` the set point ``q`` advances by the command over that period: the
+    ``desired_state`` the plant tracks is ``q_d = clip(q + v * period)`` with velocity ``v`` for the
+    arm (the limits clamp only rounding there: the IK never commands past them) and, for the
+    fingers, the rate at which their set point moves (zero against a stop: a gripper command may
+    push past it), and at each tick ``q_d`` becomes the new ``q``. ``desired_state`` thus follows
+    the command held on the inputs at once, which the controllers change only at their ticks: it is
+    the set point for the end of the current period. Like a drive's following-error guard, an arm
+    set point further than ``reseed_tolerance`` (any joint) from the measured angles is re-anchored
+    at them (clamped to the limits), so that an arm held back (blocked by contact) does not wind up
+    its set point; the differential IK re-seeds its own integrated set point, computed the same
+    way from the same joint velocities, at the same tick.
 
     @system
-    name: DifferentialIKIntegrator
+    name: JointVelocityIntegrator
     input_ports:
-    - ee_velocity_command (6): desired V_WE, [vx, vy, vz, wx, wy, wz] (m/s, rad/s; paper order,
-      NOT Drake's [w; v]), expressed in W at the origin of mico_end_effector
+    - arm_velocity_command (6): joint velocities, rad/s (DH joint order); NaN/inf -> 0 with a warning
+    - finger_velocity_command (2): finger slide velocities, m/s (positive opens); NaN/inf -> 0
     - arm_joint_state (12): measured arm q (rad) then v (rad/s)
+    - finger_state (4): measured finger slides (m) then velocities (m/s)
     output_ports:
-    - desired_state (12): set point q_d (rad) then v_d (rad/s), held between control steps
-    - ik_status (1): IkStatus code of the last control step
-    - sanitized_input_count (1): control steps whose command had a NaN/inf entry (read as zero)
+    - desired_state (16): set points [arm q (6, rad), finger q (2, m), arm v (6, rad/s), finger v
+      (2, m/s)], joints in ARM_JOINTS + FINGER_JOINTS order
+    - sanitized_input_count (1): control ticks whose command had a NaN/inf entry (read as zero)
     @endsystem
 
-    Discrete state: the set point ``[q_d (6), v_d (6)]`` (:data:`IkIntegratorState`), ``[status
-    (1)]`` and the sanitised-input count with its warning time
-    (:class:`~drake_disamb.system_helpers.sanitized.SanitizedInputCounter`); the outputs are state
-    output ports (no Python callback to read them). The floor's table top and the gripper's points
-    come from ``geometry``, the station's own :class:`~drake_disamb.station.geometry.StationGeometry`.
+    Discrete state: the set point ``[arm q (6), finger q (2)]`` at the last tick, initialised from
+    the measured state when the simulator initialises (``home_q`` and ``home_fingers`` before), and
+    the sanitised-input count (:class:`~drake_disamb.system_helpers.sanitized.SanitizedInputCounter`).
     """
 
     def __init__(
         self,
-        control_plant: MultibodyPlant,
-        config: StationConfig,
-        arm_instance: ModelInstanceIndex | None = None,
-        held_objects: Sequence[SceneObject] = (),
-        *,
-        geometry: StationGeometry,
+        period: float,
+        lower: NDArray[np.float64],
+        upper: NDArray[np.float64],
+        finger_travel: float,
+        home_q: Sequence[float],
+        home_fingers: Sequence[float],
+        reseed_tolerance: float = math.inf,
+        warn_interval: float = 1.0,
     ) -> None:
         super().__init__()
-        self._plant = control_plant
-        self._context = control_plant.CreateDefaultContext()
-        instance = (
-            arm_instance if arm_instance is not None else control_plant.GetModelInstanceByName(ARM_MODEL_NAME)
-        )
-        joints = [control_plant.GetJointByName(n, instance) for n in ARM_JOINTS]
-        self._q_idx = [j.position_start() for j in joints]
-        self._v_idx = [j.velocity_start() for j in joints]
-        self._frame_E = control_plant.GetFrameByName(EE_FRAME, instance)
-        self._world = control_plant.world_frame()
-        self._period = float(config.control_period)
-        self._reseed_tol = float(config.reseed_tolerance)
-        self._limited_alpha = float(config.limited_alpha)
-
-        lower = np.array([j.position_lower_limits()[0] for j in joints])
-        upper = np.array([j.position_upper_limits()[0] for j in joints])
-        vmax = (
-            np.array(config.joint_velocity_limits)
-            if config.joint_velocity_limits is not None
-            else np.array([j.velocity_upper_limits()[0] for j in joints])
-        )
-        amax = np.array(config.joint_acceleration_limits)
-        self._lower, self._upper = lower, upper
-        self._vmax, self._amax = vmax, amax
-        home = np.array(config.home_q)
-        if np.any(home < lower) or np.any(home > upper):
-            raise ValueError(
-                f"StationConfig.home_q: outside the joint limits [{lower}, {upper}], got {home.tolist()}"
-            )
-        nominal = np.array(config.nominal_posture) if config.nominal_posture is not None else home
-
-        self._floor = None if config.table_clearance is None else geometry.table_top + config.table_clearance
-        self._floor_time_constant = max(0.1, self._period)
-        held = [
-            Solid(o.name, o.shape, tuple(o.size), o.transform().GetAsMatrix4())
-            for o in held_objects
-            if o.attached_to_gripper
-        ]
-        self._gripper_points = geometry.gripper_points_in_ee(held)
-        self._ik = VelocityIkSolver(
-            JointLimits(lower, upper, vmax, amax),
-            self._period,
-            IkParams(nominal_gain=config.nominal_posture_gain, limited_alpha=self._limited_alpha),
-            nominal,
-        )
-
-        self._state = self.DeclareDiscreteState(_set_point(home, np.zeros(6)))
-        self._status = self.DeclareDiscreteState([float(IkStatus.OK)])
-        self._sanitized = SanitizedInputCounter(self, config.warn_interval)
-        self._command_port = self.DeclareVectorInputPort("ee_velocity_command", 6)
+        if not (math.isfinite(period) and period > 0):
+            raise ValueError(f"JointVelocityIntegrator.period: expected > 0, got {period!r}")
+        self._period = float(period)
+        self._lower = np.asarray(lower, dtype=float).copy()
+        self._upper = np.asarray(upper, dtype=float).copy()
+        self._travel = float(finger_travel)
+        self._low = np.concatenate((self._lower, [0.0, 0.0]))  # the arm's limits, the fingers' travel
+        self._high = np.concatenate((self._upper, [self._travel] * 2))
+        self._reseed_tol = float(reseed_tolerance)
+        self._set_point = self.DeclareDiscreteState(np.concatenate([home_q, home_fingers]).astype(float))
+        self._sanitized = SanitizedInputCounter(self, warn_interval)
+        self._arm_port = self.DeclareVectorInputPort("arm_velocity_command", 6)
+        self._finger_port = self.DeclareVectorInputPort("finger_velocity_command", 2)
         self._measured_port = self.DeclareVectorInputPort("arm_joint_state", 12)
-        self.DeclareStateOutputPort("desired_state", self._state)
-        self.DeclareStateOutputPort("ik_status", self._status)
+        self._fingers_port = self.DeclareVectorInputPort("finger_state", 4)
+        prerequisites = {
+            self.discrete_state_ticket(self._set_point),
+            self._arm_port.ticket(),
+            self._finger_port.ticket(),
+        }
+        self._desired_port = self.DeclareVectorOutputPort(
+            "desired_state", 16, self._calc_desired, prerequisites_of_calc=prerequisites
+        )
         self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
-
-    def control_plant(self) -> MultibodyPlant:
-        """The arm-only plant the integrator computes its Jacobian on (owned by the caller)."""
-        return self._plant
-
-    @property
-    def velocity_limits(self) -> NDArray[np.float64]:
-        """Joint speed limits (rad/s) the integrator respects."""
-        return self._vmax.copy()
 
     @property
     def joint_position_limits(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Lower and upper joint limits (rad) the integrator respects."""
+        """Lower and upper arm joint limits (rad) of the set points."""
         return self._lower.copy(), self._upper.copy()
 
-    def _initialize(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        meas = np.asarray(self._measured_port.Eval(context), dtype=float)
-        x = discrete_state.get_mutable_vector(self._state)
-        if meas.size == 12 and np.all(np.isfinite(meas[:6])):
-            q = np.clip(meas[:6], self._lower, self._upper)
-            x.SetFromVector(_set_point(q, np.zeros(6)))
-            discrete_state.get_mutable_vector(self._status).SetAtIndex(0, float(IkStatus.OK))
-        return EventStatus.Succeeded()
-
-    def _jacobian_at(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The arm's end-effector Jacobian (Drake's order ``[w; v]``) at ``q``; leaves the control
-        plant's context at ``q``."""
-        plant, ctx = self._plant, self._context
-        q_full = plant.GetPositions(ctx)
-        q_full[self._q_idx] = q
-        plant.SetPositions(ctx, q_full)
-        return plant.CalcJacobianSpatialVelocity(
-            ctx, JacobianWrtVariable.kV, self._frame_E, np.zeros(3), self._world, self._world
-        )[:, self._v_idx]
-
-    def _sigma_min_at(self, q: NDArray[np.float64]) -> float:
-        """The Jacobian's smallest singular value at ``q`` (the IK's singular barrier asks for it at
-        a step's end; the row order does not change it)."""
-        return float(np.linalg.svd(self._jacobian_at(q), compute_uv=False)[-1])
-
-    def _solve(self, q: NDArray[np.float64], v_prev: NDArray[np.float64], V: NDArray[np.float64]):
-        """Joint velocities for the paper-order command V at q, and the status code."""
-        J = self._jacobian_at(q)
-        ctx = self._context
-        rows = lower = None
-        if self._floor is not None:
-            X_WE = self._frame_E.CalcPoseInWorld(ctx)
-            r_W = self._gripper_points @ X_WE.rotation().matrix().T  # from the EE origin, in W
-            height = X_WE.translation()[2] + r_W[:, 2] - self._floor
-            near = height < 0.2  # the points that could reach the floor within this step
-            if near.any():
-                # Vertical speed of point i: vz + wx r_y - wy r_x (paper order [v; w]); it may not
-                # be below -height / tau: the floor is approached exponentially and never crossed.
-                r = r_W[near]
-                rows = np.zeros((r.shape[0], 6))
-                rows[:, 2] = 1.0
-                rows[:, 3] = r[:, 1]
-                rows[:, 4] = -r[:, 0]
-                lower = -np.maximum(height[near], 0.0) / self._floor_time_constant
-        J_paper = J[[3, 4, 5, 0, 1, 2]]  # paper order [v; w]
-        solution = self._ik.solve(J_paper, V, q, v_prev, rows, lower, self._sigma_min_at)
-        return solution.v, solution.status
-
-    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        x = IkIntegratorState(context.get_discrete_state(self._state).get_value())
-        q, v_prev = x[IK_Q_D].copy(), x[IK_V_D].copy()
-        V, valid = _read_command(self._command_port, context, 6)
-        status = IkStatus.OK
-        if not valid:
-            status = IkStatus.INVALID_COMMAND
-            self._sanitized.record(
-                context,
-                discrete_state,
-                "non-finite ee_velocity_command treated as zero (ik_status = INVALID_COMMAND)",
-            )
-        meas = np.asarray(self._measured_port.Eval(context), dtype=float)[:6]
-        # The largest drift; NaN or inf when the measurement is not finite (then no reseed).
-        drift = float(np.max(np.abs(q - meas)))
-        if self._reseed_tol < drift < math.inf:
-            q = np.clip(meas, self._lower, self._upper)
-            v = np.zeros(6)
-            if status == IkStatus.OK:
-                status = IkStatus.RESEEDED
-        elif not V.any():
-            v = np.zeros(6)
-            if (
-                valid  # (an invalid command's count is written to the state: not this path)
-                and not v_prev.any()
-                and context.get_discrete_state(self._status).GetAtIndex(0) == float(status)
-            ):
-                # At rest with no command (most ticks of a trial): the set point stays where it is
-                # (it is within the limits); the update returns before building and writing it.
-                return DID_NOTHING
-        else:
-            v, status = self._solve(q, v_prev, V)
-        # np.clip without its Python-level dispatch (the same values, NaN propagating alike).
-        q_next = np.minimum(np.maximum(q + v * self._period, self._lower), self._upper)
-        discrete_state.get_mutable_vector(self._state).SetFromVector(_set_point(q_next, v))
-        discrete_state.get_mutable_vector(self._status).SetAtIndex(0, float(status))
-        return EventStatus.Succeeded()
-
-
-class GripperOpeningIntegrator(LeafSystem):
-    """Integrates the finger opening-speed command into symmetric finger set points.
-
-    @system
-    name: GripperOpeningIntegrator
-    input_ports:
-    - gripper_command (1): opening speed, m/s (positive opens); NaN/inf is treated as 0 with a warning
-    - finger_state (4): measured finger q_left, q_right (m) then v_left, v_right (m/s)
-    output_ports:
-    - finger_desired_state (4): q_left, q_right (m) then v_left, v_right (m/s); each finger is at
-      half the desired opening
-    - desired_opening (1): desired distance between the fingertips, m
-    - sanitized_input_count (1): control steps whose command was NaN/inf (read as zero)
-    @endsystem
-
-    Discrete state ``[opening_d (m), speed_d (m/s)]`` (:data:`GripperIntegratorState`), plus the
-    sanitised-input count (:class:`~drake_disamb.system_helpers.sanitized.SanitizedInputCounter`); the opening
-    is clamped to ``[0, max_opening]``, initialised from ``finger_state`` when the simulator
-    initialises.
-    """
-
-    def __init__(
-        self, control_period: float, max_opening: float, initial_opening: float, warn_interval: float = 1.0
-    ):
-        super().__init__()
-        if not (math.isfinite(control_period) and control_period > 0):
-            raise ValueError(f"GripperOpeningIntegrator.control_period: expected > 0, got {control_period!r}")
-        if not (math.isfinite(max_opening) and max_opening > 0):
-            raise ValueError(f"GripperOpeningIntegrator.max_opening: expected > 0, got {max_opening!r}")
-        if not (0 <= initial_opening <= max_opening):
-            raise ValueError(
-                f"GripperOpeningIntegrator.initial_opening: expected a number in [0, {max_opening}], "
-                f"got {initial_opening!r}"
-            )
-        self._period = float(control_period)
-        self._max = float(max_opening)
-        self._state = self.DeclareDiscreteState(np.array([initial_opening, 0.0]))
-        self._sanitized = SanitizedInputCounter(self, warn_interval)
-        self._command_port = self.DeclareVectorInputPort("gripper_command", 1)
-        self._finger_port = self.DeclareVectorInputPort("finger_state", 4)
-        ticket = {self.discrete_state_ticket(self._state)}
-        self.DeclareVectorOutputPort(
-            "finger_desired_state", 4, self._calc_desired, prerequisites_of_calc=ticket
-        )
-        self.DeclareVectorOutputPort("desired_opening", 1, self._calc_opening, prerequisites_of_calc=ticket)
-        self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
-        self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
-
     def _calc_desired(self, context: Context, output: BasicVector) -> None:
-        x = GripperIntegratorState(context.get_discrete_state(self._state).get_value())
-        output.SetFromVector([x.opening / 2, x.opening / 2, x.speed / 2, x.speed / 2])
-
-    def _calc_opening(self, context: Context, output: BasicVector) -> None:
-        output.SetAtIndex(
-            0, GripperIntegratorState(context.get_discrete_state(self._state).get_value()).opening
-        )
+        q = context.get_discrete_state(self._set_point).get_value()
+        v = self._arm_port.Eval(context)
+        fv = self._finger_port.Eval(context)
+        w = np.concatenate((v, fv))
+        if not all_finite(w):
+            w = np.zeros(8)
+        # The set point one period on (np.clip without its Python-level dispatch: the same values).
+        x = np.minimum(np.maximum(q + w * self._period, self._low), self._high)
+        output.SetFromVector(np.concatenate((x, w[:6], (x[6:] - q[6:]) / self._period)))
 
     def _initialize(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        meas = np.asarray(self._finger_port.Eval(context), dtype=float)
-        if np.all(np.isfinite(meas[:2])):
-            opening = float(np.clip(meas[0] + meas[1], 0.0, self._max))
-            discrete_state.get_mutable_vector(self._state).SetFromVector([opening, 0.0])
+        x = discrete_state.get_mutable_vector(self._set_point)
+        q = x.CopyToVector()
+        arm = np.asarray(self._measured_port.Eval(context), dtype=float)[:6]
+        if all_finite(arm):
+            q[:6] = np.minimum(np.maximum(arm, self._lower), self._upper)
+        fingers = np.asarray(self._fingers_port.Eval(context), dtype=float)[:2]
+        if all_finite(fingers):
+            q[6:] = np.minimum(np.maximum(fingers, 0.0), self._travel)
+        x.SetFromVector(q)
         return EventStatus.Succeeded()
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        state = GripperIntegratorState(context.get_discrete_state(self._state).get_value())
-        cmd = self._command_port.Eval(context)[0].item()
-        if cmd == 0.0 and state.speed == 0.0:
-            return DID_NOTHING  # at rest and not commanded (most ticks): nothing changes
-        opening = float(state.opening)
-        if not math.isfinite(cmd):
-            cmd = 0.0
-            self._sanitized.record(context, discrete_state, "non-finite gripper_command treated as zero")
-        new = min(max(opening + cmd * self._period, 0.0), self._max)  # np.clip of a finite number
-        discrete_state.get_mutable_vector(self._state).SetFromVector([new, (new - opening) / self._period])
+        # The set point the plant tracks this period (computed once: the plant has read it).
+        desired = self._desired_port.Eval(context)
+        write = desired[8:].any()  # commanded (a non-finite command was read as zero: checked here)
+        if not write and not all_finite(self._arm_port.Eval(context), self._finger_port.Eval(context)):
+            write = True  # (the count)
+            self._sanitized.record(
+                context, discrete_state, "non-finite arm or finger velocity command treated as zero"
+            )
+        meas = self._measured_port.Eval(context)[:6]
+        # The largest drift; NaN or inf when the measurement is not finite (then no re-anchoring).
+        drift = float(np.abs(desired[:6] - meas).max())
+        if self._reseed_tol < drift < math.inf:
+            arm = np.minimum(np.maximum(meas, self._lower), self._upper)
+            discrete_state.get_mutable_vector(self._set_point).SetFromVector(
+                np.concatenate((arm, desired[6:8]))
+            )
+        elif write:
+            discrete_state.get_mutable_vector(self._set_point).SetFromVector(desired[:8])
+        else:
+            return DID_NOTHING  # at rest (most ticks of a trial): the set point stays where it is
         return EventStatus.Succeeded()
 
 

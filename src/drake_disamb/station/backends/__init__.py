@@ -4,8 +4,9 @@ backend choice (Drake's ``MakeHardwareStation(scenario, meshcat, hardware=...)``
 A backend is a small dataclass (its settings) with a ``name`` and a ``build(config, scene_objects,
 meshcat) -> Station`` method; it is the scenario's ``station`` field (:class:`StationBackend`), in
 YAML chosen by its tag, ``station: !Sim {}`` or ``station: !Lcm {lcm_url: ...}``. Every backend's
-station offers the ports of :mod:`drake_disamb.station.ports`; code dispatches on the backend's type
-(by calling its ``build``), never on its name.
+station offers the ports of :mod:`drake_disamb.station.ports` (joint-level commands in, the
+measurement out); code dispatches on the backend's type (by calling its ``build``), never on its
+name.
 """
 
 import typing

@@ -15,8 +15,8 @@ from drake_disamb.station.config import SceneObject, StationConfig
 @dataclass
 class Sim:
     """The station simulated in the same diagram: a MultibodyPlant MICO with joint PD and gravity
-    compensation behind the differential IK (YAML ``station: !Sim {}``; no settings of its own:
-    the arm's are the scenario's)."""
+    compensation, its set points integrated from the commanded joint and finger velocities (YAML
+    ``station: !Sim {}``; no settings of its own: the arm's are the scenario's)."""
 
     name: ClassVar[str] = "sim"
 

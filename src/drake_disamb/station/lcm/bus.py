@@ -1,10 +1,13 @@
-"""The two ends of the wire a station on LCM holds: the status inbox (every status received, with
-its wall-clock receipt time) and the command link (publishing commands, and the zero command sent
-several times when the controller stops).
+"""The ends of the wire: the station on LCM holds the status inbox (every status received, with its
+wall-clock receipt time) and the command link (publishing commands, and the zero command sent
+several times when the controller stops); the simulated driver holds the command inbox (the valid
+commands received) and the status link (publishing statuses).
 
-These hold I/O, not simulation state: like Drake's ``LcmSubscriberSystem``, the inbox buffers what
-arrives between two control ticks; the :class:`~drake_disamb.station.lcm.systems.JacoStatusReceiver`
-moves it into its context's discrete state at each tick.
+These hold I/O, not simulation state: like Drake's ``LcmSubscriberSystem``, an inbox buffers what
+arrives between two control ticks; the receiving LeafSystem
+(:class:`~drake_disamb.station.lcm.systems.JacoStatusReceiver`,
+:class:`~drake_disamb.station.lcm.systems.JacoCommandReceiver`) moves it into its context's
+discrete state at each tick.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 from pydrake.lcm import DrakeLcm
 
-from drake_disamb.station.lcm.messages import make_command
+from drake_disamb.station.lcm.messages import make_command, read_command
 
 Pump = Callable[[], None]
 """Called before each poll of the bus (the in-process driver steps there; ``None`` on a real wire)."""
@@ -117,3 +120,51 @@ class CommandLink:
             self._lcm.Publish(self.channel, make_command(utime, zero6, zero6, zero2, zero2).encode())
             if k + 1 < self._zero_repeats:
                 time.sleep(self._period)
+
+
+class CommandInbox:
+    """Subscribes to the command channel and keeps each valid command (decoded and checked by
+    :func:`~drake_disamb.station.lcm.messages.read_command`: DH joint velocities, rad/s, and finger
+    slide speeds, m/s) until it is taken; an invalid one is dropped.
+
+    Attributes:
+        received: Valid commands received.
+        dropped: Commands dropped (undecodable, wrong sizes, not finite).
+    """
+
+    def __init__(self, lcm: DrakeLcm, channel: str) -> None:
+        self._pending: list[tuple[np.ndarray, np.ndarray]] = []
+        self.channel = channel
+        self.received = self.dropped = 0
+        lcm.Subscribe(channel, self._on_message)
+
+    def _on_message(self, data: bytes) -> None:
+        command, _ = read_command(bytes(data))
+        if command is None:
+            self.dropped += 1
+            return
+        self.received += 1
+        self._pending.append(command)
+
+    def take(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Every valid command received since the last take, oldest first."""
+        out, self._pending = self._pending, []
+        return out
+
+
+class StatusLink:
+    """Publishes statuses on the status channel.
+
+    Attributes:
+        sent: Statuses published.
+    """
+
+    def __init__(self, lcm: DrakeLcm, channel: str) -> None:
+        self._lcm = lcm
+        self.channel = channel
+        self.sent = 0
+
+    def publish(self, msg: object) -> None:
+        """Publish one status."""
+        self._lcm.Publish(self.channel, msg.encode())  # type: ignore[attr-defined]
+        self.sent += 1

@@ -1,11 +1,15 @@
-"""The simulated driver: our MultibodyPlant MICO (today's physics: SAP, joint PD, gravity
-compensation) behind the same messages as a Kinova Gen2 arm's LCM driver.
+"""The simulated driver: the simulated station (:func:`~drake_disamb.station.build.build_station`:
+our MultibodyPlant MICO, SAP, joint PD, gravity compensation, its set points integrated from the
+commanded velocities) behind the same messages as a Kinova Gen2 arm's LCM driver, in one diagram::
+
+    lcmt_jaco_command ─▶ "command_receiver" ─ arm_velocity_command, finger_velocity_command ─▶ "station"
+    "station" ─ arm_joint_state, finger_state ─▶ "status_sender" ─▶ lcmt_jaco_status
 
 It publishes ``lcmt_jaco_status`` every ``period`` (100 Hz; ``utime`` is its simulated time in us)
 and obeys only ``lcmt_jaco_command``, with the real driver's semantics: joint velocities only (the
-positions are ignored), integrated into the PD's set points; when no valid command has arrived for
-``command_timeout`` seconds, the arm stops (zero velocity, set points held). It knows nothing of the
-controller: Drake's ``hardware_sim`` "no ground truth" regime.
+positions are ignored), integrated into the PD's set points by the simulated station; when no valid
+command has arrived for ``command_timeout`` seconds, the arm stops (zero velocity, set points
+held). It knows nothing of the controller: Drake's ``hardware_sim`` "no ground truth" regime.
 
 Two forms: :meth:`SimulatedDriver.run` paces itself at real time (the ``mico-driver`` process);
 :meth:`SimulatedDriver.step` advances one period on demand, so a station on the same ``memq://``
@@ -15,29 +19,20 @@ bus can step it in its own loop (the in-process, deterministic form).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.lcm import DrakeLcm
-from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import ModelInstanceIndex
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import (
-    BasicVector,
-    Context,
-    DiagramBuilder,
-    DiscreteValues,
-    EventStatus,
-    LeafSystem,
-    OutputPort,
-)
+from pydrake.systems.framework import Diagram, DiagramBuilder
 
-from drake_disamb.station.build import _build_plant_station, _SetPoints
-from drake_disamb.station.config import FINGER_MAX_OPENING, SceneObject, StationConfig
-from drake_disamb.station.geometry import StationGeometry
+from drake_disamb.station.build import Station, build_station
+from drake_disamb.station.config import StationConfig
+from drake_disamb.station.lcm.bus import CommandInbox, StatusLink
 from drake_disamb.station.lcm.loop import prepare_loop
-from drake_disamb.station.lcm.messages import make_status, read_command
+from drake_disamb.station.lcm.systems import JacoCommandReceiver, JacoStatusSender
+from drake_disamb.station.ports import SHARED_INPUTS
 
 DEFAULT_STATUS_CHANNEL = "KINOVA_JACO_STATUS"
 """The status channel of Drake's Kinova Gen2 driver."""
@@ -45,97 +40,15 @@ DEFAULT_COMMAND_CHANNEL = "KINOVA_JACO_COMMAND"
 """The command channel of Drake's Kinova Gen2 driver."""
 
 
-class JointVelocityIntegrator(LeafSystem):
-    """Integrates joint and finger velocity commands into the PD's set points, as a velocity-mode
-    driver does.
-
-    @system
-    name: JointVelocityIntegrator
-    input_ports:
-    - joint_velocity (6): DH joint velocities (rad/s)
-    - finger_velocity (2): finger slide speeds (m/s)
-    output_ports:
-    - desired_state (12): arm set point q_d (rad) then v_d (rad/s)
-    - finger_desired_state (4): finger set points (m) then speeds (m/s)
-    @endsystem
-
-    Every ``period``: ``q_d += v * period``, clamped to the joint limits (finger slides to their
-    travel), and ``v_d = v``.
-    """
-
-    def __init__(
-        self,
-        period: float,
-        home_q: Sequence[float],
-        home_fingers: Sequence[float],
-        lower: np.ndarray,
-        upper: np.ndarray,
-    ) -> None:
-        super().__init__()
-        self._period = float(period)
-        self._lower = np.concatenate([lower, [0.0, 0.0]])
-        self._upper = np.concatenate([upper, [FINGER_MAX_OPENING / 2] * 2])
-        self._v = self.DeclareVectorInputPort("joint_velocity", 6)
-        self._fv = self.DeclareVectorInputPort("finger_velocity", 2)
-        self._state = self.DeclareDiscreteState(np.concatenate([home_q, home_fingers, np.zeros(8)]))
-        ticket = {self.discrete_state_ticket(self._state)}
-        self.DeclareVectorOutputPort("desired_state", 12, self._calc_arm, prerequisites_of_calc=ticket)
-        self.DeclareVectorOutputPort(
-            "finger_desired_state", 4, self._calc_finger, prerequisites_of_calc=ticket
-        )
-        self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._update)
-
-    def _calc_arm(self, context: Context, output: BasicVector) -> None:
-        x = context.get_discrete_state(self._state).get_value()
-        output.SetFromVector(np.concatenate([x[:6], x[8:14]]))
-
-    def _calc_finger(self, context: Context, output: BasicVector) -> None:
-        x = context.get_discrete_state(self._state).get_value()
-        output.SetFromVector(np.concatenate([x[6:8], x[14:16]]))
-
-    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
-        x = context.get_discrete_state(self._state).get_value()
-        v = np.concatenate([self._v.Eval(context), self._fv.Eval(context)])
-        q = np.minimum(np.maximum(x[:8] + v * self._period, self._lower), self._upper)
-        discrete_state.get_mutable_vector(self._state).SetFromVector(np.concatenate([q, v]))
-        return EventStatus.Succeeded()
-
-
-def _velocity_set_points(
-    builder: DiagramBuilder,
-    config: StationConfig,
-    control_plant: MultibodyPlant,
-    control_arm: ModelInstanceIndex,
-    objects: Sequence[SceneObject],
-    geometry: StationGeometry,
-    arm_state: OutputPort,
-    finger_state: OutputPort,
-) -> _SetPoints:
-    lower, upper = geometry.joint_limits()
-    opening = config.home_gripper_opening / 2
-    integrator = builder.AddNamedSystem(
-        "joint_velocity_integrator",
-        JointVelocityIntegrator(config.control_period, config.home_q, [opening, opening], lower, upper),
-    )
-    return _SetPoints(
-        arm_desired=integrator.GetOutputPort("desired_state"),
-        finger_desired=integrator.GetOutputPort("finger_desired_state"),
-        inputs={
-            "joint_velocity": integrator.GetInputPort("joint_velocity"),
-            "finger_velocity": integrator.GetInputPort("finger_velocity"),
-        },
-        outputs={"finger_state": finger_state},
-    )
-
-
 class SimulatedDriver:
     """Our simulated MICO behind ``lcmt_jaco_status`` / ``lcmt_jaco_command`` (module docstring).
 
     Attributes:
         lcm: The bus.
-        period: Status period (s); also the plant's control period.
-        statuses: Statuses published.
-        commands: Valid commands received; ``dropped``: invalid ones (ignored).
+        period: Status period (s); also the station's control period.
+        station: The simulated station (subsystem ``"station"`` of ``diagram``).
+        diagram: The driver's one diagram (named ``"mico_driver"``): the station, the command
+            receiver and the status sender.
     """
 
     def __init__(
@@ -150,62 +63,54 @@ class SimulatedDriver:
         config = config or StationConfig()
         self.lcm = lcm
         self.period = float(config.control_period)
-        self._status_channel = status_channel
-        self._timeout_steps = max(1, int(round(command_timeout / self.period)))
-        self._station = _build_plant_station(config, (), meshcat, _velocity_set_points)
-        self._simulator = Simulator(self._station.diagram)
+        builder = DiagramBuilder()
+        self.station: Station = build_station(config, (), meshcat)
+        builder.AddSystem(self.station.diagram)
+        self._inbox = CommandInbox(lcm, command_channel)
+        self._link = StatusLink(lcm, status_channel)
+        timeout_ticks = max(1, int(round(command_timeout / self.period)))
+        receiver = builder.AddNamedSystem(
+            "command_receiver", JacoCommandReceiver(self._inbox, self.period, timeout_ticks)
+        )
+        self._sender = builder.AddNamedSystem("status_sender", JacoStatusSender(self._link))
+        for name in SHARED_INPUTS:
+            builder.Connect(receiver.GetOutputPort(name), self.station.diagram.GetInputPort(name))
+        for name in ("arm_joint_state", "finger_state"):
+            builder.Connect(self.station.diagram.GetOutputPort(name), self._sender.GetInputPort(name))
+        self.diagram: Diagram = builder.Build()
+        self.diagram.set_name("mico_driver")
+        self._simulator = Simulator(self.diagram)
         self._context = self._simulator.get_mutable_context()
-        diagram = self._station.diagram
-        self._v_port = diagram.GetInputPort("joint_velocity")
-        self._fv_port = diagram.GetInputPort("finger_velocity")
-        self._arm_port = diagram.GetOutputPort("arm_joint_state")
-        self._finger_port = diagram.GetOutputPort("finger_state")
-        self._command: tuple[np.ndarray, np.ndarray] = (np.zeros(6), np.zeros(2))
-        self._steps_since_command = self._timeout_steps + 1
-        self._fresh = False
-        self.statuses = self.commands = self.dropped = 0
         self._steps = 0  # periods advanced: the time is steps * period (no drift from a running sum)
         self.alive = True
-        self._set_velocity(np.zeros(6), np.zeros(2))
         self._simulator.Initialize()
-        lcm.Subscribe(command_channel, self._on_command)
 
-    def _on_command(self, data: bytes) -> None:
-        command, _ = read_command(bytes(data))
-        if command is None:
-            self.dropped += 1
-            return
-        self.commands += 1
-        self._command = command
-        self._fresh = True
+    @property
+    def statuses(self) -> int:
+        """Statuses published."""
+        return self._link.sent
 
-    def _set_velocity(self, v: np.ndarray, fv: np.ndarray) -> None:
-        self._v_port.FixValue(self._context, v)
-        self._fv_port.FixValue(self._context, fv)
+    @property
+    def commands(self) -> int:
+        """Valid commands received."""
+        return self._inbox.received
+
+    @property
+    def dropped(self) -> int:
+        """Invalid commands received (ignored)."""
+        return self._inbox.dropped
 
     def publish_status(self) -> None:
         """Publish the arm's state now (``utime`` = simulated time, us)."""
-        arm = self._arm_port.Eval(self._context)
-        finger = self._finger_port.Eval(self._context)
-        utime = int(round(self._context.get_time() * 1e6))
-        msg = make_status(utime, arm[:6], arm[6:], finger[:2], finger[2:])
-        self.lcm.Publish(self._status_channel, msg.encode())
-        self.statuses += 1
+        self._sender.ForcedPublish(self._sender.GetMyContextFromRoot(self._context))
 
     def step(self) -> None:
-        """One period: take the latest command (zero after ``command_timeout`` without one),
-        advance the plant, publish the status. Does nothing once :meth:`kill` was called."""
+        """One period: receive what is on the bus, advance the diagram (the receiver takes the
+        latest command, zero after ``command_timeout`` without one; the station integrates it and
+        steps the plant), publish the status. Does nothing once :meth:`kill` was called."""
         if not self.alive:
             return
         self.lcm.HandleSubscriptions(0)
-        if self._fresh:
-            self._steps_since_command, self._fresh = 0, False
-        else:
-            self._steps_since_command += 1
-        if self._steps_since_command < self._timeout_steps:
-            self._set_velocity(*self._command)
-        else:
-            self._set_velocity(np.zeros(6), np.zeros(2))
         self._steps += 1
         self._simulator.AdvanceTo(self._steps * self.period)
         self.publish_status()
@@ -244,12 +149,13 @@ class SimulatedDriver:
 
     def joint_positions(self) -> np.ndarray:
         """The arm's DH angles now (rad)."""
-        return np.asarray(self._arm_port.Eval(self._context))[:6].copy()
+        station = self.station.diagram
+        arm = station.GetOutputPort("arm_joint_state").Eval(station.GetMyContextFromRoot(self._context))
+        return np.asarray(arm)[:6].copy()
 
 
 __all__ = [
     "DEFAULT_COMMAND_CHANNEL",
     "DEFAULT_STATUS_CHANNEL",
-    "JointVelocityIntegrator",
     "SimulatedDriver",
 ]

@@ -3,18 +3,20 @@ arm's status and commands (Drake's ``MakeHardwareStation(..., hardware=True)`` p
 
     "status_receiver" (waits for each lcmt_jaco_status) ─▶ arm_joint_state, finger_state, fault
         arm_joint_state ─▶ "ee_state" (our model's kinematics) ─▶ ee_pose, ee_velocity
-        arm_joint_state ─▶ "diff_ik" ◀── ee_velocity_command      (the same differential IK)
-        finger_state ─▶ "gripper_integrator" ◀── gripper_command
-    "diff_ik".desired_state, "gripper_integrator".finger_desired_state, fault
+        finger_state ─▶ "gripper_opening"
+    arm_velocity_command, finger_velocity_command, fault, measured state
         ─▶ "command_sender" ─▶ one lcmt_jaco_command per status
     arm and finger angles ─▶ "model_positions" ─▶ "to_geometry_pose" ─▶ "scene_graph" (Meshcat)
 
-The controller is clocked by the status messages: every control tick the receiver waits for a
-fresh status (as Drake's Jaco controller waits for each status), then the tick's systems run and
-one command answers it. Start checks (:func:`first_status`): a status must arrive within
-``start_timeout``, with 6 joints and 2 fingers, finite, and every joint inside the model's limits
-(each angle the 2 pi equivalent inside them nearest the task's start posture); the IK, the gripper
-and the model's default posture are seeded from it.
+Its inputs are what ``lcmt_jaco_command`` carries (the joint and finger velocities); the
+controllers (:mod:`drake_disamb.controller`: the differential IK, the gripper's) sit outside it, as
+they do in front of the simulated station. The controller is clocked by the status messages: every
+control tick the receiver waits for a fresh status (as Drake's Jaco controller waits for each
+status), then the tick's systems run and one command answers it. Start checks
+(:func:`first_status`): a status must arrive within ``start_timeout``, with 6 joints and 2 fingers,
+finite, and every joint inside the model's limits (each angle the 2 pi equivalent inside them
+nearest the task's start posture); the model's default posture and the returned configuration's
+``home_q`` (which seeds the IK) are the measured ones.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from pydrake.systems.primitives import MatrixGain, Multiplexer
 from pydrake.systems.rendering import MultibodyPositionToGeometryPose
 
 from drake_disamb.paths import mico_directives
-from drake_disamb.station.build import Station, _add_objects, _make_control_plant
+from drake_disamb.station.build import Station, add_scene_objects, make_control_plant
 from drake_disamb.station.config import (
     ARM_JOINTS,
     ARM_MODEL_NAME,
@@ -43,6 +45,7 @@ from drake_disamb.station.config import (
     FINGER_MAX_OPENING,
     SceneObject,
     StationConfig,
+    arm_velocity_limits,
     model_parser,
 )
 from drake_disamb.station.geometry import StationGeometry
@@ -54,8 +57,7 @@ from drake_disamb.station.lcm.systems import (
     JacoStatusReceiver,
     ModelEndEffectorState,
 )
-from drake_disamb.station.ports import HARDWARE_OUTPUTS, SHARED_OUTPUTS
-from drake_disamb.station.systems import DifferentialIKIntegrator, GripperOpeningIntegrator
+from drake_disamb.station.ports import HARDWARE_OUTPUTS, SHARED_INPUTS, SHARED_OUTPUTS
 
 LCM_STATION_OUTPUTS: tuple[str, ...] = SHARED_OUTPUTS + HARDWARE_OUTPUTS
 """Names of the LCM station's exported output ports."""
@@ -115,7 +117,8 @@ def build_lcm_station(
 
     Args:
         settings: The backend's settings (URL, channels, timeouts, repeats, finger speed).
-        config: The station settings (control period, IK limits, floor).
+        config: The station settings (control period, joint speed limits; the IK's, which
+            the returned station's configuration carries with ``home_q`` the measured posture).
         scene_objects: Drawn in Meshcat and, when held, part of the gripper for the floor.
         meshcat: Draws the arm posed by the statuses.
         lcm: The bus (default: a ``DrakeLcm`` of ``settings.lcm_url``).
@@ -133,7 +136,7 @@ def build_lcm_station(
     plant.RegisterAsSourceForSceneGraph(scene_graph)
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
-    _add_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=False)
+    add_scene_objects(plant, objects, plant.GetFrameByName(EE_FRAME, arm), only_attached=False)
     plant.Finalize()
     geometry = StationGeometry.from_plant(plant, scene_graph, arm)
     lower, upper = geometry.joint_limits()
@@ -155,7 +158,7 @@ def build_lcm_station(
         )
     link = CommandLink(lcm, settings.command_channel, period, settings.zero_command_repeats)  # type: ignore[attr-defined]
 
-    control_plant, control_arm = _make_control_plant(objects)
+    control_plant, control_arm = make_control_plant(objects)
     seeded = dataclasses.replace(
         config,
         home_q=tuple(first.q.tolist()),
@@ -175,29 +178,21 @@ def build_lcm_station(
         ),
     )
     ee_state = builder.AddNamedSystem("ee_state", ModelEndEffectorState(control_plant, control_arm))
-    diff_ik = builder.AddNamedSystem(
-        "diff_ik",
-        DifferentialIKIntegrator(control_plant, seeded, control_arm, held_objects=objects, geometry=geometry),
-    )
-    opening = float(np.clip(np.sum(first.finger_q), 0.0, FINGER_MAX_OPENING))
-    gripper = builder.AddNamedSystem(
-        "gripper_integrator",
-        GripperOpeningIntegrator(period, FINGER_MAX_OPENING, opening, config.warn_interval),
-    )
-    vmax = diff_ik.velocity_limits
     sender = builder.AddNamedSystem(
         "command_sender",
-        JacoCommandSender(link, inbox, vmax, settings.finger_speed_limit, period),  # type: ignore[attr-defined]
+        JacoCommandSender(
+            link,
+            inbox,
+            arm_velocity_limits(config, plant, arm),
+            settings.finger_speed_limit,  # type: ignore[attr-defined]
+            period,
+        ),
     )
     arm_state = receiver.GetOutputPort("arm_joint_state")
     finger_state = receiver.GetOutputPort("finger_state")
     builder.Connect(arm_state, ee_state.GetInputPort("arm_joint_state"))
-    builder.Connect(arm_state, diff_ik.GetInputPort("arm_joint_state"))
-    builder.Connect(finger_state, gripper.GetInputPort("finger_state"))
-    builder.Connect(diff_ik.GetOutputPort("desired_state"), sender.GetInputPort("desired_state"))
-    builder.Connect(
-        gripper.GetOutputPort("finger_desired_state"), sender.GetInputPort("finger_desired_state")
-    )
+    builder.Connect(arm_state, sender.GetInputPort("arm_joint_state"))
+    builder.Connect(finger_state, sender.GetInputPort("finger_state"))
     builder.Connect(receiver.GetOutputPort("fault"), sender.GetInputPort("fault"))
     gripper_opening = builder.AddNamedSystem("gripper_opening", MatrixGain(np.array([[1.0, 1.0, 0.0, 0.0]])))
     builder.Connect(finger_state, gripper_opening.get_input_port())
@@ -222,12 +217,13 @@ def build_lcm_station(
             builder, scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration, prefix="station")
         )
 
-    builder.ExportInput(diff_ik.GetInputPort("ee_velocity_command"), "ee_velocity_command")
-    builder.ExportInput(gripper.GetInputPort("gripper_command"), "gripper_command")
+    for name in SHARED_INPUTS:
+        builder.ExportInput(sender.GetInputPort(name), name)
     outputs = {
         "ee_pose": ee_state.GetOutputPort("ee_pose"),
         "ee_velocity": ee_state.GetOutputPort("ee_velocity"),
         "arm_joint_state": arm_state,
+        "finger_state": finger_state,
         "gripper_opening": gripper_opening.get_output_port(),
         "fault": receiver.GetOutputPort("fault"),
     }
@@ -242,8 +238,6 @@ def build_lcm_station(
         scene_graph=scene_graph,
         arm=arm,
         control_plant=control_plant,
-        diff_ik=diff_ik,
-        gripper=gripper,
         config=seeded,
         scene_objects=objects,
         meshcat=meshcat,

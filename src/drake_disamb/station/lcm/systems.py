@@ -1,11 +1,20 @@
-"""The LeafSystems of a station on LCM, each usable on its own with a fixed context:
+"""The LeafSystems on either end of the wire, each usable on its own with a fixed context.
+
+The station on LCM (the controller's side):
 
 - :class:`JacoStatusReceiver`: waits for each status (the controller's clock), checks it, keeps
   the measurement in its state, and latches a fault (the watchdog, a joint outside the limits);
 - :class:`ModelEndEffectorState`: measured arm angles -> ``ee_pose`` / ``ee_velocity`` from our
   model (paper order ``[vx, vy, vz, wx, wy, wz]`` in W);
-- :class:`JacoCommandSender`: the IK's joint velocities and the gripper's finger speeds -> one
+- :class:`JacoCommandSender`: the station's joint and finger velocity commands -> one
   ``lcmt_jaco_command`` per control tick, zero once a fault is latched, clamped to the speed limits.
+
+The simulated driver (the arm's side):
+
+- :class:`JacoCommandReceiver`: the latest valid command -> the simulated station's joint and finger
+  velocity commands, zero once commands stopped coming;
+- :class:`JacoStatusSender`: the simulated station's measured joints and fingers -> one
+  ``lcmt_jaco_status`` each time it is asked (a forced publish).
 """
 
 from __future__ import annotations
@@ -20,10 +29,16 @@ from pydrake.multibody.tree import JacobianWrtVariable, ModelInstanceIndex
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
 
 from drake_disamb.station.config import ARM_JOINTS, EE_FRAME
-from drake_disamb.station.lcm.bus import CommandLink, StatusInbox
+from drake_disamb.station.lcm.bus import CommandInbox, CommandLink, StatusInbox, StatusLink
 from drake_disamb.station.lcm.faults import Fault
 from drake_disamb.station.lcm.loop import prepare_loop
-from drake_disamb.station.lcm.messages import StatusReading, make_command, out_of_order, read_status
+from drake_disamb.station.lcm.messages import (
+    StatusReading,
+    make_command,
+    make_status,
+    out_of_order,
+    read_status,
+)
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 
 LIMIT_TOLERANCE = 1e-6
@@ -283,15 +298,18 @@ class ModelEndEffectorState(LeafSystem):
 
 
 class JacoCommandSender(LeafSystem):
-    """Publishes one ``lcmt_jaco_command`` per control tick: the IK's joint velocities and the
-    gripper's finger speeds, zero once a fault is latched or when a value is not finite, and
-    scaled (all joints alike, so the direction is kept) to the joint speed limits.
+    """Publishes one ``lcmt_jaco_command`` per control tick: the commanded joint velocities and
+    finger speeds, zero once a fault is latched or when a value is not finite, and scaled (all
+    joints alike, so the direction is kept) to the joint speed limits. The message's positions are
+    the measured ones (a driver in velocity mode uses the velocities only).
 
     @system
     name: JacoCommandSender
     input_ports:
-    - desired_state (12): the IK's set point q_d (rad) then v_d (rad/s), DH
-    - finger_desired_state (4): finger slides (m) then speeds (m/s)
+    - arm_velocity_command (6): joint velocities, rad/s (DH)
+    - finger_velocity_command (2): finger slide speeds, m/s
+    - arm_joint_state (12): the measured DH angles (rad) then velocities (rad/s)
+    - finger_state (4): the measured finger slides (m) then speeds (m/s)
     - fault (1): the receiver's latched Fault code
     output_ports:
     - command (8): the last command's DH joint velocities (rad/s) and finger speeds (m/s)
@@ -311,39 +329,113 @@ class JacoCommandSender(LeafSystem):
         self._inbox = inbox
         self._vmax = np.asarray(velocity_limits, dtype=float)
         self._fmax = float(finger_speed_limit)
-        self._desired = self.DeclareVectorInputPort("desired_state", 12)
-        self._finger = self.DeclareVectorInputPort("finger_desired_state", 4)
+        self._velocity = self.DeclareVectorInputPort("arm_velocity_command", 6)
+        self._finger_velocity = self.DeclareVectorInputPort("finger_velocity_command", 2)
+        self._arm = self.DeclareVectorInputPort("arm_joint_state", 12)
+        self._finger = self.DeclareVectorInputPort("finger_state", 4)
         self._fault = self.DeclareVectorInputPort("fault", 1)
         self.DeclareVectorOutputPort("command", 8, self._calc_command)
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
-    def command(
-        self, context: Context
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The set point q_d (6, rad) and the clamped joint and finger velocities of ``context``."""
-        desired = np.asarray(self._desired.Eval(context), dtype=float)
-        finger = np.asarray(self._finger.Eval(context), dtype=float)
-        q, v, fv = desired[:6], desired[6:], finger[2:]
+    def command(self, context: Context) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The clamped joint (6, rad/s) and finger (2, m/s) velocities of ``context``."""
+        v = np.asarray(self._velocity.Eval(context), dtype=float)
+        fv = np.asarray(self._finger_velocity.Eval(context), dtype=float)
         if self._fault.Eval(context)[0] != Fault.NONE or not (
-            np.all(np.isfinite(desired)) and np.all(np.isfinite(fv))
+            np.all(np.isfinite(v)) and np.all(np.isfinite(fv))
         ):
-            return q, np.zeros(6), np.zeros(2)
+            return np.zeros(6), np.zeros(2)
         scale = float(np.min(self._vmax / np.maximum(np.abs(v), 1e-300)))
         if scale < 1.0:
             v = v * scale
-        return q, v, np.clip(fv, -self._fmax, self._fmax)
+        return v, np.clip(fv, -self._fmax, self._fmax)
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
-        _, v, fv = self.command(context)
+        v, fv = self.command(context)
         output.SetFromVector(np.concatenate([v, fv]))
 
     def _publish(self, context: Context) -> EventStatus:
-        q, v, fv = self.command(context)
+        v, fv = self.command(context)
+        q = np.asarray(self._arm.Eval(context), dtype=float)[:6]
         finger_q = np.asarray(self._finger.Eval(context), dtype=float)[:2]
         utime = int(round(context.get_time() * 1e6))
         finger_q = np.where(np.isfinite(finger_q), finger_q, 0.0)
         q = np.where(np.isfinite(q), q, 0.0)
         self._link.publish(make_command(utime, q, v, finger_q, fv), answered_at=self._inbox.last_good)
+        return EventStatus.Succeeded()
+
+
+class JacoCommandReceiver(LeafSystem):
+    """The simulated driver's side of the commands: at every tick, the latest valid command becomes
+    the joint and finger velocities it applies, with a real Kinova driver's semantics (velocities
+    only); when no valid command arrived for ``timeout_ticks`` ticks, zero (the arm stops).
+
+    @system
+    name: JacoCommandReceiver
+    output_ports:
+    - arm_velocity_command (6): the DH joint velocities applied (rad/s)
+    - finger_velocity_command (2): the finger slide speeds applied (m/s)
+    @endsystem
+
+    Every ``period`` it takes what ``inbox`` (a :class:`~drake_disamb.station.lcm.bus.CommandInbox`)
+    received since the last tick. Discrete state: the latest valid command ``[v (6), finger v
+    (2)]``, the ticks since it arrived (one more than ``timeout_ticks`` before any), and the two
+    outputs (state output ports: they change only at ticks).
+    """
+
+    def __init__(self, inbox: CommandInbox, period: float, timeout_ticks: int) -> None:
+        super().__init__()
+        self._inbox = inbox
+        self._timeout = int(timeout_ticks)
+        self._latest = self.DeclareDiscreteState(np.zeros(8))
+        self._age = self.DeclareDiscreteState([float(self._timeout + 1)])
+        self._arm = self.DeclareDiscreteState(np.zeros(6))
+        self._finger = self.DeclareDiscreteState(np.zeros(2))
+        self.DeclareStateOutputPort("arm_velocity_command", self._arm)
+        self.DeclareStateOutputPort("finger_velocity_command", self._finger)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        received = self._inbox.take()
+        if received:
+            v, fv = received[-1]
+            latest, age = np.concatenate([v, fv]), 0.0
+            discrete_state.get_mutable_vector(self._latest).SetFromVector(latest)
+        else:
+            latest = context.get_discrete_state(self._latest).get_value()
+            age = context.get_discrete_state(self._age).GetAtIndex(0) + 1.0
+        discrete_state.get_mutable_vector(self._age).SetAtIndex(0, age)
+        applied = latest if age < self._timeout else np.zeros(8)
+        discrete_state.get_mutable_vector(self._arm).SetFromVector(applied[:6])
+        discrete_state.get_mutable_vector(self._finger).SetFromVector(applied[6:])
+        return EventStatus.Succeeded()
+
+
+class JacoStatusSender(LeafSystem):
+    """The simulated driver's side of the statuses: publishes the measured joints and fingers as one
+    ``lcmt_jaco_status`` (``utime`` = the context's time, us) when its forced publish event is run
+    (``ForcedPublish``: the driver's loop asks once per period, after the arm's step).
+
+    @system
+    name: JacoStatusSender
+    input_ports:
+    - arm_joint_state (12): DH angles (rad) then velocities (rad/s)
+    - finger_state (4): finger slides (m) then speeds (m/s)
+    @endsystem
+    """
+
+    def __init__(self, link: StatusLink) -> None:
+        super().__init__()
+        self._link = link
+        self._arm = self.DeclareVectorInputPort("arm_joint_state", 12)
+        self._finger = self.DeclareVectorInputPort("finger_state", 4)
+        self.DeclareForcedPublishEvent(self._publish)
+
+    def _publish(self, context: Context) -> EventStatus:
+        arm = self._arm.Eval(context)
+        finger = self._finger.Eval(context)
+        utime = int(round(context.get_time() * 1e6))
+        self._link.publish(make_status(utime, arm[:6], arm[6:], finger[:2], finger[2:]))
         return EventStatus.Succeeded()
 
 
@@ -353,8 +445,10 @@ __all__ = [
     "MAX_JOINT_SPEED",
     "STRAYS_TO_FAULT",
     "STRAY_WINDOW",
+    "JacoCommandReceiver",
     "JacoCommandSender",
     "JacoStatusReceiver",
+    "JacoStatusSender",
     "ModelEndEffectorState",
     "posture_jump",
 ]

@@ -35,7 +35,7 @@ and simulated users alike). Arrays, one row per sample unless said: ``t`` (T,) s
 ``belief`` (T, n_goals); ``alpha`` (T,); ``u`` (T, 6) the blended command and ``u_h`` the user's
 command, spatial velocities ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, world frame W); ``mode``
 (T,) the index of the mode in force; optional ``ee_pose`` (T, 7) ``[x, y, z, qw, qx, qy, qz]`` of the
-end effector in W, ``stage`` (T,) and ``ik_status`` (T,) the station's IK status code. A trace
+end effector in W, ``stage`` (T,) and ``ik_status`` (T,) the differential IK's status code. A trace
 whose ``u_h`` was logged without time stamps (the authors' logs) has ``t_u_h`` (M,) with ``u_h``
 (M, 6). :func:`check_trace` is the one check every
 reader applies (finite numbers, these shapes); :meth:`StudyFolder.read_trials` skips a trace that

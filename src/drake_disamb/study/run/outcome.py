@@ -11,8 +11,8 @@ Trace arrays (one row per control tick, all on the same sample times): ``t`` (T,
 (T, n_goals); ``u_h`` and ``u`` (T, 6): spatial velocities in the paper's order
 ``[vx, vy, vz, wx, wy, wz]`` (m/s, rad/s, world frame W); ``alpha`` (T,); ``mode`` (T,) mode
 index; ``ee_pose`` (T, 7) ``[x, y, z, qw, qx, qy, qz]`` of the end effector in W; ``stage`` (T,)
-the task's stage index; with the in-process simulation also ``ik_status`` (T,), the station's
-:class:`~drake_disamb.ik.IkStatus` code.
+the task's stage index; from a simulated trial also ``ik_status`` (T,), the differential IK's
+:class:`~drake_disamb.ik.IkStatus` code (logged whatever the station's backend).
 
 **Held by the IK** (:func:`ik_held_share`, the record's ``extra["ik_held"]``): of the samples in
 the trial's last :data:`IK_HELD_WINDOW` seconds where the user commands, the share at which the
