@@ -14,6 +14,7 @@ MAX_LINES = 120
 
 MODULES = (
     "drake_disamb/plotting.py",
+    "drake_disamb/study/data/authors.py",
     "drake_disamb/study/report/figures.py",
 )
 """The modules held to :data:`MAX_LINES` (relative to ``src``)."""
