@@ -14,6 +14,7 @@ MAX_LINES = 120
 
 MODULES = (
     "drake_disamb/plotting.py",
+    "drake_disamb/study/analysis/findings.py",
     "drake_disamb/study/data/authors.py",
     "drake_disamb/study/report/figures.py",
 )
