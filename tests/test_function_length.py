@@ -17,6 +17,7 @@ MODULES = (
     "drake_disamb/study/analysis/findings.py",
     "drake_disamb/study/data/authors.py",
     "drake_disamb/study/report/figures.py",
+    "drake_disamb/study/report/page.py",
 )
 """The modules held to :data:`MAX_LINES` (relative to ``src``)."""
 
