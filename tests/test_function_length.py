@@ -16,6 +16,7 @@ MODULES = (
     "drake_disamb/plotting.py",
     "drake_disamb/study/analysis/findings.py",
     "drake_disamb/study/data/authors.py",
+    "drake_disamb/study/measures/calibration.py",
     "drake_disamb/study/report/figures.py",
     "drake_disamb/study/report/page.py",
 )
