@@ -311,7 +311,7 @@ def test_an_estimate_is_one_function_and_one_row_of_the_table(monkeypatch: pytes
     names = [m.name for m in calibration.MEASURES]
     assert list(est) == names and len(set(names)) == len(names) == 46
     assert est["tail"] is est.tail and est.n_trials == 1
-    with pytest.raises(AttributeError, match="no estimate 'no_such'"):
+    with pytest.raises(AttributeError, match="BehaviourEstimates has no measure 'no_such'"):
         _ = est.no_such
     lines = format_estimates(est).splitlines()
     # one line per estimate with a text, two of the gripper and of the commanding

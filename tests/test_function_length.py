@@ -17,6 +17,8 @@ MODULES = (
     "drake_disamb/study/analysis/findings.py",
     "drake_disamb/study/data/authors.py",
     "drake_disamb/study/measures/calibration.py",
+    "drake_disamb/study/measures/identify.py",
+    "drake_disamb/study/measures/table.py",
     "drake_disamb/study/report/figures.py",
     "drake_disamb/study/report/page.py",
 )

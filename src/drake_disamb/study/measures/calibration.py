@@ -95,7 +95,7 @@ function and its line of :func:`format_estimates`), which :func:`estimate_behavi
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, TypeVar
@@ -138,6 +138,7 @@ from drake_disamb.study.measures.fits import (
     von_mises_kappa,
 )
 from drake_disamb.study.measures.metrics import clean_requests, is_analysed
+from drake_disamb.study.measures.table import Measured, text_lines
 
 __all__ = [
     "BURST_GAP",
@@ -1183,33 +1184,10 @@ def _text_commanding(by_belief: dict[str, CommandingByBelief], est: BehaviourEst
     return format_commanding(by_belief, est.rotation_dwells)
 
 
-class BehaviourEstimates(Mapping[str, Any]):
+class BehaviourEstimates(Measured):
     """What :func:`estimate_behaviour` measured: the value of each of :data:`MEASURES` (times in s;
     the per-subject values feed the fits), by its name as a key (``est["tail"]``) or an attribute
     (``est.tail``); each measure's function documents its value."""
-
-    def __init__(self, values: Mapping[str, Any]) -> None:
-        self._values = dict(values)
-
-    def __getitem__(self, name: str) -> Any:
-        return self._values[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._values)
-
-    def __len__(self) -> int:
-        return len(self._values)
-
-    def __getattr__(self, name: str) -> Any:
-        if name.startswith("_"):
-            raise AttributeError(name)
-        try:
-            return self._values[name]
-        except KeyError:
-            raise AttributeError(f"{type(self).__name__} has no estimate {name!r}") from None
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self._values!r})"
 
 
 Text = Callable[[Any, BehaviourEstimates], str | list[str]]
@@ -1293,12 +1271,7 @@ def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
 
 def format_estimates(est: BehaviourEstimates) -> str:
     """The estimates as text, one line each (the text of each of :data:`MEASURES` that has one)."""
-    lines: list[str] = []
-    for m in MEASURES:
-        if m.text is not None:
-            text = m.text(est[m.name], est)
-            lines += [text] if isinstance(text, str) else text
-    return "\n".join(lines)
+    return "\n".join(text_lines(MEASURES, est))
 
 
 def format_condition_means(rows: Sequence[dict[str, Any]]) -> str:
