@@ -301,3 +301,27 @@ def test_confident_share_by_half_of_the_trial() -> None:
     first, second = est.confident_by_half["joystick"]["reaching"]
     assert first == pytest.approx(0.5, abs=0.01) and second == pytest.approx(0.75, abs=0.01)
     assert "joystick reaching 0.50 / 0.75" in format_estimates(est)
+
+
+def test_an_estimate_is_one_function_and_one_row_of_the_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    from drake_disamb.study.measures import calibration
+
+    trials = [_trial("J1", "joystick", "reaching", 0, [(2.0, 1)], 4.0)]
+    est = estimate_behaviour(trials)
+    names = [m.name for m in calibration.MEASURES]
+    assert list(est) == names and len(set(names)) == len(names) == 46
+    assert est["tail"] is est.tail and est.n_trials == 1
+    with pytest.raises(AttributeError, match="BehaviourEstimates has no measure 'no_such'"):
+        _ = est.no_such
+    lines = format_estimates(est).splitlines()
+    # one line per estimate with a text, two of the gripper and of the commanding
+    assert len(lines) == sum(m.text is not None for m in calibration.MEASURES) + 2
+    longest = calibration.Measure(
+        "longest_trial",
+        lambda measured: max(v.record.duration for v in measured),
+        lambda v, est: f"longest trial {v:.1f} s of {est.n_trials}",
+    )
+    monkeypatch.setattr(calibration, "MEASURES", (*calibration.MEASURES, longest))
+    est = estimate_behaviour(trials)
+    assert est.longest_trial == 4.0
+    assert format_estimates(est).splitlines() == [*lines, "longest trial 4.0 s of 1"]
