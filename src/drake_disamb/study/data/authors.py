@@ -163,12 +163,25 @@ def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
     return m[1], int(m[2]), _TASKS[m[3]], _INTERFACES[m[4]], int(m[5])
 
 
+class _MatVariables(dict):
+    """A MATLAB file's variables: reading one it lacks is a ``ValueError`` naming the file and the
+    variable (not a ``KeyError``, which no command turns into its one-line error)."""
+
+    def __init__(self, variables: dict[str, Any], path: Path) -> None:
+        super().__init__(variables)
+        self.path = path
+
+    def __missing__(self, name: str) -> Any:
+        raise ValueError(f"{self.path}: no variable {name!r}")
+
+
 def load_mat(path: Path) -> dict[str, Any]:
-    """The variables of a MATLAB file (scipy's loadmat); a damaged file is a ValueError naming it."""
+    """The variables of a MATLAB file (scipy's loadmat); a damaged file, or reading a variable it
+    lacks, is a ValueError naming it."""
     from scipy.io import loadmat
 
     try:
-        return loadmat(str(path))
+        return _MatVariables(loadmat(str(path)), path)
     except Exception as err:  # scipy raises several types for a damaged file
         raise ValueError(f"{path}: cannot read the MATLAB file: {err}") from None
 
@@ -353,12 +366,21 @@ class _Series:
     alpha_share: float | None
 
 
-def _read_series(data: dict[str, Any], start: float, total: float) -> _Series:
-    """The time series of a trial file (variables ``data``), times in s from ``start``."""
-    alpha_log = np.asarray(data["alpha"], dtype=float)[1:]
-    belief = np.asarray(data["goal_probabilities"], dtype=float)[1:]
-    blended = np.asarray(data["blended_vel"], dtype=float).T[1:]
-    user_vel = np.asarray(data["user_vel"], dtype=float).T
+def _table(data: dict[str, Any], name: str, path: Path, rows: bool = True) -> NDArray[np.float64]:
+    """The 2-D variable ``name`` of the trial file ``path``, one sample per row (``rows``) or per
+    column (transposed); anything else is a ValueError naming the file and the variable."""
+    a = np.asarray(data[name], dtype=float)
+    if a.ndim != 2 or a.size == 0:
+        raise ValueError(f"{path}: {name} has shape {a.shape}, expected a table of samples")
+    return a if rows else a.T
+
+
+def _read_series(data: dict[str, Any], path: Path, start: float, total: float) -> _Series:
+    """The time series of the trial file ``path`` (variables ``data``), times in s from ``start``."""
+    alpha_log = _events(data, "alpha", path, 2)
+    belief = _table(data, "goal_probabilities", path)[1:]
+    blended = _table(data, "blended_vel", path, rows=False)[1:]
+    user_vel = _table(data, "user_vel", path, rows=False)
     t_alpha = alpha_log[:, 1] - start
     in_trial = (t_alpha >= 0.0) & (t_alpha <= total)
     mean_alpha = float(np.mean(alpha_log[in_trial, 0])) if np.any(in_trial) else None
@@ -471,7 +493,7 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
     total = _scalar(data, "total_time", path)
     events = _read_events(data, path, start)
     modes = _modes(f, events, start)
-    series = _read_series(data, start, total)
+    series = _read_series(data, path, start, total)
     return LoggedTrial(
         _record(f, events, modes, series, total),
         _trace(f, events, modes, series),
