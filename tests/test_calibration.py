@@ -325,3 +325,32 @@ def test_an_estimate_is_one_function_and_one_row_of_the_table(monkeypatch: pytes
     est = estimate_behaviour(trials)
     assert est.longest_trial == 4.0
     assert format_estimates(est).splitlines() == [*lines, "longest trial 4.0 s of 1"]
+
+
+def test_trials_of_an_interface_the_logs_lack_are_left_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A simulated study with sip-and-puff trials: the estimates are measured on the logs'
+    interfaces only (the same as without them), and ``study calibrate --simulated`` says how many
+    it left out; a folder of sip-and-puff trials only is one line and status 2, not a traceback."""
+    from drake_disamb.cli import main
+
+    puff = _trial("P1", "sip_and_puff", "reaching", 0, [(2.0, 1), (4.0, 2)], 10.0)
+    assert format_estimates(estimate_behaviour([*_trials(), puff])) == format_estimates(
+        estimate_behaviour(_trials())
+    )
+    if not DATA.is_dir():
+        pytest.skip(f"the authors' human-study logs are not at {DATA}")
+    for name, trials in (("both", [*_trials(), puff]), ("puff", [puff])):
+        folder = tmp_path / name
+        (folder / "traces").mkdir(parents=True)
+        for trial in trials:
+            append_record(folder / "trials.jsonl", trial.record)
+            save_trace(folder / "traces" / f"{trial.record.trial_id}.npz", trial.trace)
+    assert main(["study", "calibrate", str(DATA), "--simulated", str(tmp_path / "both")]) == 0
+    assert "(1 trials of sip_and_puff left out: the logs have only joystick and head_array)" in (
+        capsys.readouterr().out
+    )
+    assert main(["study", "calibrate", str(DATA), "--simulated", str(tmp_path / "puff")]) == 2
+    err = capsys.readouterr().err
+    assert "of the joystick or head_array, got none" in err and "Traceback" not in err

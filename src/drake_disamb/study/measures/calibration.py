@@ -1258,14 +1258,23 @@ MEASURES: tuple[Measure, ...] = (
 adding one is a function of the analysed trials and a row here."""
 
 
+def measured_here(trial: LoggedTrial) -> bool:
+    """Whether :func:`estimate_behaviour` measures ``trial``: a valid Manual or Disambiguation trial
+    of an interface the people's logs have (:data:`LOG_INTERFACES`: the estimates are compared
+    with theirs, interface by interface)."""
+    r = trial.record
+    return is_analysed(r) and r.paradigm in PEOPLE_PARADIGMS and r.interface in LOG_INTERFACES
+
+
 def estimate_behaviour(trials: Iterable[LoggedTrial]) -> BehaviourEstimates:
-    """The behaviour estimates (:data:`MEASURES`) of the valid trials (module docstring), from
-    :func:`drake_disamb.study.data.authors.read_trials`."""
-    valid = [
-        MeasuredTrial(t) for t in trials if is_analysed(t.record) and t.record.paradigm in PEOPLE_PARADIGMS
-    ]
+    """The behaviour estimates (:data:`MEASURES`) of the trials :func:`measured_here` keeps (module
+    docstring), from :func:`drake_disamb.study.data.authors.read_trials`."""
+    valid = [MeasuredTrial(t) for t in trials if measured_here(t)]
     if not valid:
-        raise ValueError("trials: expected at least one valid Manual or Disambiguation trial, got none")
+        raise ValueError(
+            "trials: expected at least one valid Manual or Disambiguation trial of the "
+            f"{' or '.join(LOG_INTERFACES)}, got none"
+        )
     return BehaviourEstimates({m.name: m.measure(valid) for m in MEASURES})
 
 
