@@ -86,6 +86,7 @@ from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.trial_files import load_trials
 from drake_disamb.core.trials import Trial
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
+from drake_disamb.systems.loop import ControlLoop
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
 """Where the published trials are expected: ``../shared/data/...`` beside the repository."""
@@ -231,7 +232,9 @@ def build_playback(trial: Trial, params: DFTParams):  # noqa: ANN201 (Diagram, i
     period, n = trial.dt, trial.n_goals
     builder = DiagramBuilder()
     playback = builder.AddSystem(TrialPlayback(trial.u_h, trial.traj, period))
-    inference = builder.AddSystem(FieldTheoreticIntentInference(n, _trial_params(params, trial), period))
+    inference = builder.AddSystem(
+        FieldTheoreticIntentInference(ControlLoop(n, period), _trial_params(params, trial))
+    )
     goal_poses = np.hstack([trial.goals, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))]).reshape(-1)
     goals = builder.AddSystem(ConstantVectorSource(goal_poses))
     u_a = builder.AddSystem(ConstantVectorSource(np.zeros(6 * n)))

@@ -14,7 +14,8 @@ resolved into the frozen configs the core and the systems use.
   and the value;
 - :mod:`~drake_disamb.config.resolve`: :func:`resolve_scenario`, the one place a scenario becomes
   a :class:`TrialConfig` (rho thresholds, shared DFT parameters and potential field, the user's,
-  interface's, station's and simulator's configs).
+  interface's, station's, task manager's and simulator's configs, the control period: all the
+  builder reads).
 
 Two scenarios are embedded as package data (``drake_disamb/tasks/reaching.yaml`` and
 ``pouring.yaml``); ``drake-disamb demo --dump-scenario`` prints any scenario fully written out.
@@ -22,6 +23,7 @@ Two scenarios are embedded as package data (``drake_disamb/tasks/reaching.yaml``
 
 from drake_disamb.config.resolve import (
     TrialConfig,
+    check_start_clearance,
     interface_variant,
     ordered_variant,
     resolve_scenario,
@@ -52,7 +54,6 @@ from drake_disamb.config.validation import (
     MICO_SHOULDER_POSITION,
     MIN_START_CLEARANCE,
     MIN_TABLE_CLEARANCE,
-    check_start_clearance,
     min_goal_separation,
 )
 from drake_disamb.config.yaml_io import (
