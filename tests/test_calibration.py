@@ -301,3 +301,56 @@ def test_confident_share_by_half_of_the_trial() -> None:
     first, second = est.confident_by_half["joystick"]["reaching"]
     assert first == pytest.approx(0.5, abs=0.01) and second == pytest.approx(0.75, abs=0.01)
     assert "joystick reaching 0.50 / 0.75" in format_estimates(est)
+
+
+def test_an_estimate_is_one_function_and_one_row_of_the_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    from drake_disamb.study.measures import calibration
+
+    trials = [_trial("J1", "joystick", "reaching", 0, [(2.0, 1)], 4.0)]
+    est = estimate_behaviour(trials)
+    names = [m.name for m in calibration.MEASURES]
+    assert list(est) == names and len(set(names)) == len(names) == 46
+    assert est["tail"] is est.tail and est.n_trials == 1
+    with pytest.raises(AttributeError, match="BehaviourEstimates has no measure 'no_such'"):
+        _ = est.no_such
+    lines = format_estimates(est).splitlines()
+    # one line per estimate with a text, two of the gripper and of the commanding
+    assert len(lines) == sum(m.text is not None for m in calibration.MEASURES) + 2
+    longest = calibration.Measure(
+        "longest_trial",
+        lambda measured: max(v.record.duration for v in measured),
+        lambda v, est: f"longest trial {v:.1f} s of {est.n_trials}",
+    )
+    monkeypatch.setattr(calibration, "MEASURES", (*calibration.MEASURES, longest))
+    est = estimate_behaviour(trials)
+    assert est.longest_trial == 4.0
+    assert format_estimates(est).splitlines() == [*lines, "longest trial 4.0 s of 1"]
+
+
+def test_trials_of_an_interface_the_logs_lack_are_left_out(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A simulated study with sip-and-puff trials: the estimates are measured on the logs'
+    interfaces only (the same as without them), and ``study calibrate --simulated`` says how many
+    it left out; a folder of sip-and-puff trials only is one line and status 2, not a traceback."""
+    from drake_disamb.cli import main
+
+    puff = _trial("P1", "sip_and_puff", "reaching", 0, [(2.0, 1), (4.0, 2)], 10.0)
+    assert format_estimates(estimate_behaviour([*_trials(), puff])) == format_estimates(
+        estimate_behaviour(_trials())
+    )
+    if not DATA.is_dir():
+        pytest.skip(f"the authors' human-study logs are not at {DATA}")
+    for name, trials in (("both", [*_trials(), puff]), ("puff", [puff])):
+        folder = tmp_path / name
+        (folder / "traces").mkdir(parents=True)
+        for trial in trials:
+            append_record(folder / "trials.jsonl", trial.record)
+            save_trace(folder / "traces" / f"{trial.record.trial_id}.npz", trial.trace)
+    assert main(["study", "calibrate", str(DATA), "--simulated", str(tmp_path / "both")]) == 0
+    assert "(1 trials of sip_and_puff left out: the logs have only joystick and head_array)" in (
+        capsys.readouterr().out
+    )
+    assert main(["study", "calibrate", str(DATA), "--simulated", str(tmp_path / "puff")]) == 2
+    err = capsys.readouterr().err
+    assert "of the joystick or head_array, got none" in err and "Traceback" not in err

@@ -79,11 +79,30 @@ def test_demo_rejects_a_bad_meshcat_port(capsys: pytest.CaptureFixture[str], tmp
 # -- signals and warnings: one line of ours, never a traceback ---------------------------------------
 
 
+def _wait_for_our_handler(pid: int, timeout: float = 20.0) -> None:
+    """Wait until process ``pid`` catches SIGTERM (``SigCgt`` in ``/proc/PID/status``): the command
+    line's first act, which Python's own start-up does not do. Before it, a signal meets the
+    interpreter's start (the kernel's default action, as for any program): a busy machine can
+    stretch that start past the test's first moments."""
+    status = Path(f"/proc/{pid}/status")
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            caught = next(line for line in status.read_text().splitlines() if line.startswith("SigCgt:"))
+        except (OSError, StopIteration):  # not Linux's /proc: the start is taken as done
+            return
+        if int(caught.split()[1], 16) & (1 << (signal.SIGTERM - 1)):
+            return
+        time.sleep(0.002)
+    raise AssertionError(f"the command did not install its signal handlers within {timeout} s")
+
+
 def _signalled(argv: list[str], sig: signal.Signals, after: float) -> tuple[int, str, str]:
-    """Run ``python -m drake_disamb.cli ARGV``, send ``sig`` ``after`` seconds past its start; its
-    exit status, stdout and stderr."""
+    """Run ``python -m drake_disamb.cli ARGV``, send ``sig`` ``after`` seconds past the moment it
+    installs its signal handlers; its exit status, stdout and stderr."""
     proc = cli_process(*argv)
     try:
+        _wait_for_our_handler(proc.pid)
         time.sleep(after)
         proc.send_signal(sig)
         out, err = proc.communicate(timeout=60)
@@ -96,7 +115,7 @@ def _signalled(argv: list[str], sig: signal.Signals, after: float) -> tuple[int,
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 @pytest.mark.parametrize("after", [0.05, 0.15, 0.3, 1.0])
 def test_a_signal_at_any_moment_gives_one_line(sig: signal.Signals, after: float, tmp_path: Path) -> None:
-    """From the interpreter's first moments (the sub-commands and pydrake still importing) to the
+    """From the command line's first moments (the sub-commands and pydrake still importing) to the
     running trial: exit status 130, a line saying which signal stopped it, no traceback."""
     # At half real time the default reaching trial (about 6 s simulated) cannot end by itself.
     argv = ["demo", "--no-meshcat", "--quiet", "--realtime-rate", "0.5", "--out", str(tmp_path / "out")]

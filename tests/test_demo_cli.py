@@ -13,7 +13,7 @@ import pytest
 from support import cli_process, interrupt
 
 from drake_disamb.cli import main
-from drake_disamb.plotting import goal_probability_figure, nonzero_segments
+from drake_disamb.plotting import BeliefPlot, goal_probability_figure, nonzero_segments
 
 
 @pytest.mark.parametrize(
@@ -110,9 +110,9 @@ def test_nonzero_segments() -> None:
 
 def test_plot_rejects_mismatched_shapes() -> None:
     with pytest.raises(ValueError, match="belief"):
-        goal_probability_figure(np.arange(3), np.ones((4, 2)))
+        goal_probability_figure(BeliefPlot(np.arange(3), np.ones((4, 2))))
     with pytest.raises(ValueError, match="goal_names"):
-        goal_probability_figure(np.arange(3), np.ones((3, 2)) / 2, goal_names=["a"])
+        goal_probability_figure(BeliefPlot(np.arange(3), np.ones((3, 2)) / 2, goal_names=["a"]))
 
 
 # ----------------------------------------------------------------------------------------------

@@ -89,6 +89,36 @@ def test_update_rows_and_period() -> None:
     assert update_period([trial]).period == pytest.approx(0.1)
 
 
+def test_an_identification_is_one_function_and_one_row_of_the_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from drake_disamb.study.measures import identify as module
+
+    assert [row.name for row in module.IDENTIFICATIONS] == [
+        "trials", "subjects", "period", "decay", "idle_error", "alpha", "requests", "mode_maps", "known_path",
+    ]  # fmt: skip
+    params = DFTParams(tau1=3.0, tau2=3.0, lam=1.0, zero_command_excitation=False)
+    trials = [_idle_trial(4, params, 0.1, seed) for seed in range(2)]
+
+    def updates(logs: module.Logs, found: module.Identification) -> int:  # reads one found before it
+        return found.period.n + len(logs.trials)
+
+    table = (
+        *module.IDENTIFICATIONS[:3],
+        module.Identifying("updates", updates, lambda v, _: f"Updates: {v}", lambda v, _: {"updates": v}),
+    )
+    monkeypatch.setattr(module, "IDENTIFICATIONS", table)
+    ident = module.identify(tmp_path, trials=trials)
+    assert list(ident) == ["trials", "subjects", "period", "updates"]
+    assert ident.updates == ident.period.n + 2 == ident["updates"]
+    text = module.format_identification(ident).splitlines()
+    assert text[0] == "Trials: 2 (subjects S01)" and text[-1] == f"Updates: {ident.updates}"
+    assert len(text) == 3 and text[1].startswith("Belief update period: 0.100 s")
+    assert ident.to_json() == {
+        "trials": 2, "subjects": ["S01"], "belief_update_period": 0.1, "updates": ident.updates,
+    }  # fmt: skip
+
+
 @pytest.mark.parametrize("excite", [False, True])
 def test_idle_decay_recovers_tau_rest_and_excitation(excite: bool) -> None:
     params = DFTParams(tau1=3.0, tau2=3.0, lam=1.0, zero_command_excitation=excite)

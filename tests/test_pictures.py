@@ -17,7 +17,7 @@ from support import screenshot_script
 from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario
 from drake_disamb.display import add_legend_to_html, belief_caption, css_color, legend_rows
-from drake_disamb.plotting import goal_probability_figure, trial_figure, trial_outcome
+from drake_disamb.plotting import BeliefPlot, goal_probability_figure, trial_figure, trial_outcome, trial_plot
 from drake_disamb.systems.visualization import COLOR_LEVELS, ROOT, visualizer_for_scenario
 from drake_disamb.trial import run_trial
 
@@ -133,19 +133,42 @@ def test_figure_layout_strip_end_line_and_caption(trial) -> None:  # noqa: ANN00
         _close_figures()
 
 
+def test_the_trial_figure_draws_the_trials_plot_record(trial) -> None:  # noqa: ANN001
+    sc = trial.scenario
+    plot = trial_plot(trial)
+    t, belief = trial.logs["belief"]
+    assert np.array_equal(plot.times, t) and np.array_equal(plot.belief, belief)
+    assert plot.rho1 == trial.rho1 and plot.end_time == trial.time
+    assert list(plot.request_times) == list(trial.request_times)
+    assert list(plot.mode_switch_times) == list(trial.mode_switch_times)
+    assert len(plot.stage_times) == (sc.n_stages if sc.n_stages > 1 else 0)
+    figures = (trial_figure(trial), goal_probability_figure(plot))
+    try:
+        drawn = [
+            [(line.get_label(), tuple(line.get_xdata())) for line in fig.axes[0].get_lines()]
+            for fig in figures
+        ]
+        assert drawn[0] == drawn[1]
+        assert figures[0].axes[0].get_title() == figures[1].axes[0].get_title() == plot.title
+    finally:
+        _close_figures()
+
+
 def test_lines_of_a_stage_start_after_the_belief_reset() -> None:
     # Stage 0 ends at t = 1.0; the belief still refers to it one sample later, then resets to uniform.
     t = np.round(np.arange(0.0, 2.0, 0.1), 10)
     p = np.tile([0.9, 0.1], (len(t), 1))
     p[12:] = [0.5, 0.5]
     fig = goal_probability_figure(
-        t,
-        p,
-        goal_names=[["a", "b"], ["c", "d"]],
-        goal_colors=[[(1, 0, 0), (0, 1, 0)], [(0, 0, 1), (0.5, 0.5, 0.5)]],
-        stage_times=[1.0, 1.9],
-        stage_names=["one", "two"],
-        intended_goal=[0, 1],
+        BeliefPlot(
+            t,
+            p,
+            goal_names=[["a", "b"], ["c", "d"]],
+            goal_colors=[[(1, 0, 0), (0, 1, 0)], [(0, 0, 1), (0.5, 0.5, 0.5)]],
+            stage_times=[1.0, 1.9],
+            stage_names=["one", "two"],
+            intended_goal=[0, 1],
+        )
     )
     try:
         lines = {line.get_label(): line for line in fig.axes[0].get_lines()}
@@ -160,11 +183,11 @@ def test_lines_of_a_stage_start_after_the_belief_reset() -> None:
 def test_counts_are_checked() -> None:
     t, p = np.arange(3.0), np.full((3, 2), 0.5)
     with pytest.raises(ValueError, match="goal_colors: expected 2 entries"):
-        goal_probability_figure(t, p, goal_colors=[(1, 0, 0)])
+        goal_probability_figure(BeliefPlot(t, p, goal_colors=[(1, 0, 0)]))
     with pytest.raises(ValueError, match="goal_names: expected 2 lists"):
-        goal_probability_figure(t, p, goal_names=[["a", "b"]], stage_times=[1.0, 2.0])
+        goal_probability_figure(BeliefPlot(t, p, goal_names=[["a", "b"]], stage_times=[1.0, 2.0]))
     with pytest.raises(ValueError, match="intended_goal"):
-        goal_probability_figure(t, p, intended_goal=[0], stage_times=[1.0, 2.0])
+        goal_probability_figure(BeliefPlot(t, p, intended_goal=[0], stage_times=[1.0, 2.0]))
 
 
 def test_outcome_labels() -> None:

@@ -254,3 +254,36 @@ def test_bad_data_folders(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert (tmp_path / "o" / "trials.jsonl").read_text() == "{not json}\n"
     with pytest.raises(ValueError, match="trial file name"):
         parse_trial_name("H2PH3POHAT1.mat")
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"drop": "alpha"}, "no variable 'alpha'"),
+        ({"drop": "blended_vel"}, "no variable 'blended_vel'"),
+        ({"alpha": np.zeros((4, 3))}, "alpha has shape (4, 3), expected (k, 2)"),
+        ({"goal_probabilities": np.zeros((0, 4))}, "goal_probabilities has shape (0, 4)"),
+    ],
+    ids=["no-alpha", "no-blended-vel", "flat-alpha", "empty-belief"],
+)
+def test_a_trial_file_missing_or_misshaping_a_series_is_named(
+    change: dict, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A trial file without one of its time series, or with one of the wrong shape: a ValueError
+    naming the file and the variable (``study import-authors``: one line, status 2), not a
+    ``KeyError`` or ``IndexError`` traceback."""
+    from scipy.io import savemat
+
+    data = {k: v for k, v in loadmat(str(DATA / "H2" / "H2PH1POHAT1.mat")).items() if not k.startswith("__")}
+    data.pop(change.pop("drop", None), None)
+    data.update(change)
+    folder = tmp_path / "d"
+    (folder / "H2").mkdir(parents=True)
+    (folder / "trial_order_testing_8.mat").write_bytes((DATA / "trial_order_testing_8.mat").read_bytes())
+    savemat(str(folder / "H2" / "H2PH1POHAT1.mat"), data)
+    order = load_trial_order(folder / "trial_order_testing_8.mat")
+    with pytest.raises(ValueError, match=re.escape(message)):
+        read_trial(folder / "H2" / "H2PH1POHAT1.mat", order)
+    assert main(["study", "import-authors", str(folder), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "H2PH1POHAT1.mat" in err and "Traceback" not in err

@@ -8,6 +8,7 @@ import json
 import shutil
 import tempfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -15,7 +16,8 @@ from scipy.stats import mannwhitneyu, skew
 from support import screenshot_script
 
 from drake_disamb.cli import main
-from drake_disamb.study.analysis.findings import compare_summaries
+from drake_disamb.study.analysis import findings as findings_module
+from drake_disamb.study.analysis.findings import compare_summaries, findings
 from drake_disamb.study.analysis.stats import rank_biserial, run_tests, stars
 from drake_disamb.study.data.records import RecordError, TrialRecord, append_record, assistance_onset
 from drake_disamb.study.measures.metrics import (
@@ -213,6 +215,25 @@ def test_summary_excludes_invalid_and_failed_trials_from_means_and_counts_failur
 
 # ----------------------------------------------------------------------------------------------
 # The report
+
+
+def test_a_finding_is_one_function_and_one_row_of_the_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    records = synthetic_records()
+    tests = run_tests(records, mixed_metrics=())
+    trials = [trial_metrics(r) for r in records]
+    rows = findings(trials, tests, "simulated")
+    # 12 findings: the skewness and the manual switches each a row per interface and task
+    assert len(findings_module.FINDINGS) == 12 and len(rows) == 18
+    assert rows[0]["paper"].startswith("Head array: significantly fewer button presses")
+    assert {r["agree"] for r in rows} <= {"yes", "no", "n/a"}
+
+    def count(evidence) -> list[dict[str, str]]:  # noqa: ANN001
+        return [
+            {"paper": "a new finding", "ours": str(len(evidence.trials)), "agree": "n/a", "criterion": "-"}
+        ]
+
+    monkeypatch.setattr(findings_module, "FINDINGS", (*findings_module.FINDINGS, count))
+    assert findings(trials, tests, "simulated") == [*rows, *count(SimpleNamespace(trials=trials))]
 
 
 def test_report_writes_its_files(study: Path) -> None:

@@ -7,13 +7,15 @@ plotted data). :func:`goal_probability_figure` draws the same in two panels on o
 probabilities on top (each goal in its own colour, the intended goal thicker and named so in the
 legend), and below them a strip with the requests, the mode switches and the stretches of
 non-zero command. Vertical lines mark the stage changes of a multi-step task and the end of the
-trial (goal reached, time limit or interruption); an optional caption explains the picture.
+trial (goal reached, time limit or interruption); an optional caption explains the picture. What it
+draws is a :class:`BeliefPlot` (:func:`trial_plot` makes one of a trial's result).
 """
 
 from __future__ import annotations
 
 import textwrap
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -96,28 +98,11 @@ def _is_color(c: Any) -> bool:
     return isinstance(c, str) or (np.ndim(c) == 1 and len(c) in (3, 4))
 
 
-def goal_probability_figure(
-    times: ArrayLike,
-    belief: ArrayLike,
-    *,
-    rho1: float | None = None,
-    goal_names: Sequence[str] | Sequence[Sequence[str]] | None = None,
-    goal_colors: Sequence[Any] | None = None,
-    request_times: Sequence[float] = (),
-    mode_switch_times: Sequence[float] = (),
-    command_times: ArrayLike | None = None,
-    commands: ArrayLike | None = None,
-    stage_times: Sequence[float] = (),
-    stage_names: Sequence[str] = (),
-    intended_goal: int | Sequence[int] | None = None,
-    end_time: float | None = None,
-    end_label: str = "end of trial",
-    title: str = "",
-    caption: str = "",
-) -> Any:
-    """The goal-probability figure of one trial (a matplotlib ``Figure``; the caller closes it).
+@dataclass(frozen=True, eq=False)
+class BeliefPlot:
+    """What :func:`goal_probability_figure` draws of one trial.
 
-    Args:
+    Attributes:
         times: ``(T,)`` sample times (s) of the belief.
         belief: ``(T, n)`` goal probabilities; slot ``i`` is goal ``i`` of the current stage.
         rho1: The assistance threshold drawn as a grey dashed line (omitted when ``None``).
@@ -126,6 +111,8 @@ def goal_probability_figure(
         goal_colors: Line colours ``(r, g, b[, a])`` in [0, 1] (or matplotlib colours): ``n``, or
             one list of ``n`` per stage (default :data:`GOAL_COLORS`). Slot ``i`` is drawn in
             stage ``k``'s colour ``i`` while stage ``k`` runs.
+        intended_goal: The user's goal index (every stage) or one per stage: its line is thicker and
+            its legend entry says "intended".
         request_times: Times (s) of disambiguation requests (red dots in the bottom strip).
         mode_switch_times: Times (s) of manual mode switches (red open circles in the strip).
         command_times, commands: ``(T_u,)`` and ``(T_u, d)`` human commands: their non-zero
@@ -134,33 +121,86 @@ def goal_probability_figure(
             completed); the number of stages is ``len(stage_times)`` (at least 1). The changes
             between stages are dotted vertical lines.
         stage_names: Names of the stages, written at the top of each stage's stretch.
-        intended_goal: The user's goal index (every stage) or one per stage: its line is thicker and
-            its legend entry says "intended".
         end_time, end_label: A solid vertical line at ``end_time`` (s), labelled ``end_label``
             (e.g. "goal reached"); none when ``end_time`` is ``None``.
         title: Figure title.
         caption: Text under the figure (wrapped; newlines start new paragraphs).
+    """
+
+    times: ArrayLike
+    belief: ArrayLike
+    rho1: float | None = None
+    goal_names: Sequence[str] | Sequence[Sequence[str]] | None = None
+    goal_colors: Sequence[Any] | None = None
+    intended_goal: int | Sequence[int] | None = None
+    request_times: Sequence[float] = ()
+    mode_switch_times: Sequence[float] = ()
+    command_times: ArrayLike | None = None
+    commands: ArrayLike | None = None
+    stage_times: Sequence[float] = ()
+    stage_names: Sequence[str] = ()
+    end_time: float | None = None
+    end_label: str = "end of trial"
+    title: str = ""
+    caption: str = ""
+
+
+@dataclass(frozen=True)
+class _Stages:
+    """A :class:`BeliefPlot` checked and laid out per stage: the samples, each stage's goal names,
+    colours and intended goal, and the times the data spans and each stage starts."""
+
+    t: NDArray[np.float64]
+    p: NDArray[np.float64]
+    names: list[list[str]]
+    colors: list[list[Any]]
+    intended: list[int | None]
+    t0: float
+    t1: float
+    starts: list[float]
+
+    @property
+    def count(self) -> int:
+        return len(self.names)
+
+    @property
+    def ran(self) -> list[bool]:
+        """Per stage, whether it started before the data ends (the first always counts)."""
+        return [k == 0 or s < self.t1 for k, s in enumerate(self.starts)]
+
+
+def _intended_per_stage(intended_goal: int | Sequence[int] | None, n_stages: int) -> list[int | None]:
+    """The intended goal of each stage (``None``: not drawn as intended)."""
+    if intended_goal is None:
+        return [None] * n_stages
+    if isinstance(intended_goal, int | np.integer):
+        return [int(intended_goal)] * n_stages
+    intended: list[int | None] = [int(g) for g in intended_goal]
+    if len(intended) != n_stages:
+        raise ValueError(f"intended_goal: expected {n_stages} indices (one per stage), got {intended}")
+    return intended
+
+
+def _stages(plot: BeliefPlot) -> _Stages:
+    """``plot`` checked (shapes and counts) and laid out per stage.
 
     Raises:
         ValueError: shapes or counts that do not match.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    t = np.asarray(times, dtype=float)
-    p = np.asarray(belief, dtype=float)
+    t = np.asarray(plot.times, dtype=float)
+    p = np.asarray(plot.belief, dtype=float)
     if p.ndim != 2 or p.shape[0] != t.shape[0]:
         raise ValueError(f"belief: expected shape ({t.shape[0]}, n) matching times, got {p.shape}")
     n = p.shape[1]
-    n_stages = max(1, len(stage_times))
-    names_in = [f"g{i}" for i in range(n)] if goal_names is None else list(goal_names)
+    n_stages = max(1, len(plot.stage_times))
+    names_in = [f"g{i}" for i in range(n)] if plot.goal_names is None else list(plot.goal_names)
     names = _per_stage(
         names_in, bool(names_in) and not isinstance(names_in[0], str), n_stages, n, "goal_names"
     )
     colors_in = (
-        [GOAL_COLORS[i % len(GOAL_COLORS)] for i in range(n)] if goal_colors is None else list(goal_colors)
+        [GOAL_COLORS[i % len(GOAL_COLORS)] for i in range(n)]
+        if plot.goal_colors is None
+        else list(plot.goal_colors)
     )
     colors = _per_stage(
         colors_in, bool(colors_in) and not _is_color(colors_in[0]), n_stages, n, "goal_colors"
@@ -168,93 +208,134 @@ def goal_probability_figure(
     colors = [
         [c if isinstance(c, str) else tuple(float(x) for x in c[:3]) for c in stage] for stage in colors
     ]
-    if intended_goal is None:
-        intended: list[int | None] = [None] * n_stages
-    elif isinstance(intended_goal, int | np.integer):
-        intended = [int(intended_goal)] * n_stages
-    else:
-        intended = [int(g) for g in intended_goal]
-        if len(intended) != n_stages:
-            raise ValueError(f"intended_goal: expected {n_stages} indices (one per stage), got {intended}")
-
+    intended = _intended_per_stage(plot.intended_goal, n_stages)
     t0 = float(t[0]) if len(t) else 0.0
     t1 = float(t[-1]) if len(t) else 1.0
     # Stage k runs from the end of stage k - 1 to its own end (or the end of the data).
-    ends = [float(x) if np.isfinite(x) else np.inf for x in stage_times] or [np.inf]
+    ends = [float(x) if np.isfinite(x) else np.inf for x in plot.stage_times] or [np.inf]
     starts = [t0] + [min(e, t1) for e in ends[:-1]]
+    return _Stages(t, p, names, colors, intended, t0, t1, starts)
 
-    fig, (ax, strip) = plt.subplots(
-        2,
-        1,
-        sharex=True,
-        figsize=(9.0, 4.9 if caption else 4.4),
-        dpi=120,
-        gridspec_kw={"height_ratios": [4.0, 1.25], "hspace": 0.08},
-    )
-    # The belief refers to a stage's goals from its reset on (a tick or two after the stage
-    # changed): each stage's lines start at the sample after the largest jump of the belief within
-    # RESET_WINDOW samples of the change, so no line joins two goal sets.
-    first = [0] + [_reset_index(t, p, starts[k]) for k in range(1, n_stages)]
-    for k in range(n_stages):
-        if k > 0 and starts[k] >= t1:
+
+def _draw_goals(ax: Any, st: _Stages, stage_names: Sequence[str]) -> None:
+    """Each stage's goal lines, from the belief's reset after the stage began.
+
+    The belief refers to a stage's goals from its reset on (a tick or two after the stage
+    changed): each stage's lines start at the sample after the largest jump of the belief within
+    RESET_WINDOW samples of the change, so no line joins two goal sets."""
+    t, p = st.t, st.p
+    first = [0] + [_reset_index(t, p, st.starts[k]) for k in range(1, st.count)]
+    for k in range(st.count):
+        if not st.ran[k]:
             break  # the trial ended before this stage
-        stop = first[k + 1] if k + 1 < n_stages and starts[k + 1] < t1 else len(t)
+        stop = first[k + 1] if k + 1 < st.count and st.ran[k + 1] else len(t)
         seg = slice(first[k], stop)
-        for i in range(n):
-            mine = intended[k] == i
-            label = names[k][i] + (" (intended)" if mine else "")
-            if n_stages > 1 and stage_names:
+        for i in range(p.shape[1]):
+            mine = st.intended[k] == i
+            label = st.names[k][i] + (" (intended)" if mine else "")
+            if st.count > 1 and stage_names:
                 label = f"{stage_names[k]}: {label}"
-            ax.plot(t[seg], p[seg, i], color=colors[k][i], lw=2.8 if mine else 1.4, label=label)
-    if rho1 is not None:
-        ax.axhline(rho1, color="0.5", ls="--", lw=1.2, label=r"$\rho_1$ (assistance threshold)")
-    for k in range(1, n_stages):
-        if starts[k] < t1:
+            ax.plot(t[seg], p[seg, i], color=st.colors[k][i], lw=2.8 if mine else 1.4, label=label)
+
+
+def _draw_marks(ax: Any, strip: Any, st: _Stages, plot: BeliefPlot) -> None:
+    """The threshold, the stage changes and names, and the end of the trial."""
+    if plot.rho1 is not None:
+        ax.axhline(plot.rho1, color="0.5", ls="--", lw=1.2, label=r"$\rho_1$ (assistance threshold)")
+    for k in range(1, st.count):
+        if st.ran[k]:
             for a in (ax, strip):
                 a.axvline(
-                    starts[k], color="k", ls=":", lw=1.1, label="stage change" if a is ax and k == 1 else None
+                    st.starts[k],
+                    color="k",
+                    ls=":",
+                    lw=1.1,
+                    label="stage change" if a is ax and k == 1 else None,
                 )
-    if n_stages > 1 and stage_names:
-        for k in range(n_stages):
-            if starts[k] < t1 or k == 0:
-                ax.text(starts[k], 1.045, f" {k + 1}: {stage_names[k]}", fontsize=8, va="bottom", ha="left")
-    if end_time is not None and np.isfinite(end_time):
+    if st.count > 1 and plot.stage_names:
+        for k in range(st.count):
+            if st.ran[k]:
+                ax.text(
+                    st.starts[k],
+                    1.045,
+                    f" {k + 1}: {plot.stage_names[k]}",
+                    fontsize=8,
+                    va="bottom",
+                    ha="left",
+                )
+    if _has_end(plot):
         for a in (ax, strip):
-            a.axvline(end_time, color="0.15", lw=1.6, label=end_label if a is ax else None)
+            a.axvline(plot.end_time, color="0.15", lw=1.6, label=plot.end_label if a is ax else None)
 
-    # Bottom strip: one row per kind of event, on the same time axis.
+
+def _has_end(plot: BeliefPlot) -> bool:
+    return plot.end_time is not None and bool(np.isfinite(plot.end_time))
+
+
+def _draw_strip(strip: Any, plot: BeliefPlot) -> None:
+    """The bottom strip: one row per kind of event, on the same time axis."""
     rows = ("$u_h \\neq 0$", "mode switch", "request")
-    if command_times is not None and commands is not None:
-        for a, b in nonzero_segments(command_times, commands):
+    if plot.command_times is not None and plot.commands is not None:
+        for a, b in nonzero_segments(plot.command_times, plot.commands):
             strip.plot([a, b], [0, 0], color="k", lw=5, solid_capstyle="butt")
-    if len(mode_switch_times):
-        strip.plot(mode_switch_times, np.ones(len(mode_switch_times)), "o", mfc="none", mec="red", ms=6)
-    if len(request_times):
-        strip.plot(request_times, np.full(len(request_times), 2.0), "o", color="red", ms=6)
+    switches, requests = plot.mode_switch_times, plot.request_times
+    if len(switches):
+        strip.plot(switches, np.ones(len(switches)), "o", mfc="none", mec="red", ms=6)
+    if len(requests):
+        strip.plot(requests, np.full(len(requests), 2.0), "o", color="red", ms=6)
     strip.set_yticks(range(len(rows)), rows, fontsize=8)
     strip.set_ylim(-0.7, 2.7)
     strip.grid(axis="x", alpha=0.25)
     strip.set_xlabel("time (s)")
 
+
+def _frame(fig: Any, ax: Any, st: _Stages, plot: BeliefPlot) -> None:
+    """Axes limits and labels, the title, the legend, the caption and the margins."""
     ax.set_ylim(-0.02, 1.02)
     # A little room on both sides, so that an event at t = 0 and the end line show in full.
-    t_last = max(t1, float(end_time)) if end_time is not None and np.isfinite(end_time) else t1
-    pad = 0.015 * max(t_last - t0, 1e-3)
-    ax.set_xlim(t0 - pad, t_last + pad)
+    end = plot.end_time
+    t_last = max(st.t1, float(end)) if end is not None and np.isfinite(end) else st.t1
+    pad = 0.015 * max(t_last - st.t0, 1e-3)
+    ax.set_xlim(st.t0 - pad, t_last + pad)
     ax.set_ylabel("goal probability")
-    if title:
-        ax.set_title(title, pad=16 if n_stages > 1 and stage_names else 6)
+    named_stages = st.count > 1 and bool(plot.stage_names)
+    if plot.title:
+        ax.set_title(plot.title, pad=16 if named_stages else 6)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     ax.grid(alpha=0.25)
-    right = 0.72
     bottom = 0.12
-    if caption:
-        wrapped = "\n".join(textwrap.fill(par, 140) for par in caption.split("\n"))
+    if plot.caption:
+        wrapped = "\n".join(textwrap.fill(par, 140) for par in plot.caption.split("\n"))
         lines = wrapped.count("\n") + 1
         bottom = 0.11 + 0.035 * lines
         fig.text(0.02, 0.015, wrapped, fontsize=7.5, va="bottom", ha="left", color="0.2")
-    top = 0.88 if n_stages > 1 and stage_names else 0.92
-    fig.subplots_adjust(left=0.11, right=right, top=top, bottom=bottom)
+    fig.subplots_adjust(left=0.11, right=0.72, top=0.88 if named_stages else 0.92, bottom=bottom)
+
+
+def goal_probability_figure(plot: BeliefPlot) -> Any:
+    """The goal-probability figure of one trial (a matplotlib ``Figure``; the caller closes it).
+
+    Raises:
+        ValueError: shapes or counts of ``plot`` that do not match.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    st = _stages(plot)
+    fig, (ax, strip) = plt.subplots(
+        2,
+        1,
+        sharex=True,
+        figsize=(9.0, 4.9 if plot.caption else 4.4),
+        dpi=120,
+        gridspec_kw={"height_ratios": [4.0, 1.25], "hspace": 0.08},
+    )
+    _draw_goals(ax, st, plot.stage_names)
+    _draw_marks(ax, strip, st, plot)
+    _draw_strip(strip, plot)
+    _frame(fig, ax, st, plot)
     return fig
 
 
@@ -268,10 +349,10 @@ def trial_outcome(result: Any) -> str:
     return "time limit"
 
 
-def trial_figure(result: Any) -> Any:
-    """:func:`goal_probability_figure` of a :class:`~drake_disamb.trial.TrialResult`: its goals
-    in their objects' colours, the intended goal(s), stage changes, the end of the trial and the
-    caption of :func:`drake_disamb.display.belief_caption`."""
+def trial_plot(result: Any) -> BeliefPlot:
+    """The :class:`BeliefPlot` of a :class:`~drake_disamb.trial.TrialResult`: its goals in their
+    objects' colours, the intended goal(s), stage changes, the end of the trial and the caption of
+    :func:`drake_disamb.display.belief_caption`."""
     from drake_disamb.display import belief_caption, goal_colors
 
     sc = result.scenario
@@ -281,7 +362,7 @@ def trial_figure(result: Any) -> Any:
     colors = goal_colors(sc)
     multi = sc.n_stages > 1
     outcome = trial_outcome(result)
-    return goal_probability_figure(
+    return BeliefPlot(
         t,
         belief,
         rho1=result.rho1,
@@ -302,6 +383,11 @@ def trial_figure(result: Any) -> Any:
         f"{outcome} at {result.time:.1f} s",
         caption=belief_caption(sc),
     )
+
+
+def trial_figure(result: Any) -> Any:
+    """:func:`goal_probability_figure` of a :class:`~drake_disamb.trial.TrialResult` (:func:`trial_plot`)."""
+    return goal_probability_figure(trial_plot(result))
 
 
 def write_trial_figure(result: Any, path: str | Path) -> Path:

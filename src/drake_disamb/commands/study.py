@@ -2,12 +2,19 @@
 
 Each module in :data:`STUDY_COMMANDS` defines ``HELP``, ``add_arguments(parser)`` and
 ``run(args) -> int``, like the top-level commands, and imports pydrake lazily.
+
+The study needs the ``study`` extra (:mod:`drake_disamb.extras`): without it every ``study``
+sub-command prints one line naming the extra and exits with status 2 before it reads or makes
+anything (``--help`` still works).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+
+from drake_disamb.commands.study_run import error
+from drake_disamb.extras import MissingExtra, require
 
 HELP = "Run the user study with simulated users, import the authors' human logs, and report on them."
 
@@ -33,4 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    try:
+        require("study")
+    except MissingExtra as exc:
+        return error(args.study_command, exc)
     return int(args._study_run(args) or 0)

@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drake_disamb.study.data.authors import read_trials
+    from drake_disamb.study.data.authors import LOG_INTERFACES, read_trials
     from drake_disamb.study.data.folder import StudyFolder
     from drake_disamb.study.measures.calibration import (
         estimate_behaviour,
@@ -64,5 +64,12 @@ def run(args: argparse.Namespace) -> int:
     if simulated is not None:
         print()
         print(f"The same estimates from the {len(simulated)} simulated trials in {args.simulated}")
+        others = sorted({t.record.interface for t in simulated} - set(LOG_INTERFACES))
+        if others:
+            n = sum(t.record.interface in others for t in simulated)
+            print(
+                f"({n} trials of {', '.join(others)} left out: the logs have only "
+                f"{' and '.join(LOG_INTERFACES)})"
+            )
         print(format_estimates(simulated_estimates))
     return 0

@@ -36,6 +36,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+from drake_disamb.extras import import_optional
+
 HELP = "Run the study protocol with simulated subjects (records in DIR/trials.jsonl, traces in DIR/traces)."
 
 SCHEDULER_TIMEOUT = 5.0
@@ -118,14 +120,15 @@ def open_executor(workers: int | None, scheduler: str | None) -> Iterator[tuple[
     Raises:
         ValueError: ``scheduler`` is not a scheduler's address (:func:`check_scheduler_address`), or
             the scheduler cannot be reached within :data:`SCHEDULER_TIMEOUT` seconds.
+        MissingExtra: ``scheduler`` given without Dask ``distributed`` (the ``study`` extra).
     """
     if scheduler is not None:
         check_scheduler_address(scheduler)
-        from distributed import Client
+        distributed = import_optional("distributed", "study")
 
         with _log_held_back():
             try:
-                client = Client(scheduler, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
+                client = distributed.Client(scheduler, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
             except Exception as exc:  # OSError, TimeoutError
                 raise ValueError(
                     f"--scheduler: cannot reach a Dask scheduler at {scheduler!r} within "
@@ -169,13 +172,14 @@ def check_scheduler_address(address: str | None) -> None:
     """Refuse (``ValueError`` naming ``--scheduler``) an address that names no scheduler: no port, an
     unknown scheme, a port outside 1..65535. Dask's client would take it, fail inside, and leave a
     half-made client that the interpreter waits 10 s to close at exit. ``None`` (no ``--scheduler``)
-    passes."""
+    passes; an address without Dask ``distributed`` installed raises
+    :class:`~drake_disamb.extras.MissingExtra`."""
     if address is None:
         return
-    from distributed.comm import get_address_host_port
+    comm = import_optional("distributed.comm", "study")
 
     try:
-        host, port = get_address_host_port(address)
+        host, port = comm.get_address_host_port(address)
     except ValueError as exc:
         reason = str(exc)
     else:

@@ -1,14 +1,16 @@
 """The paper's findings beside ours, and one study folder's means beside another's.
 
 :func:`findings` is the table "the paper's finding / ours / agree?" of ``study report`` (paper
-Section "Results" and the data README's manual means); :func:`compare_summaries` is its ``--compare``
+Section "Results" and the data README's manual means; one function per finding, in the table
+:data:`FINDINGS`); :func:`compare_summaries` is its ``--compare``
 section (the criterion for a simulated population: its means within 50 % of the people's).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -18,6 +20,7 @@ from drake_disamb.study.measures.metrics import TrialMetrics, request_time_skewn
 
 __all__ = [
     "COMPARED",
+    "FINDINGS",
     "INTERFACE_NAMES",
     "PAPER_MANUAL_SWITCHES",
     "PAPER_SKEWNESS",
@@ -106,45 +109,60 @@ def _verdict(ok: bool | None) -> str:
     return "n/a" if ok is None else ("yes" if ok else "no")
 
 
-def findings(
-    trials: Sequence[TrialMetrics], tests: Sequence[dict[str, Any]], source: str
-) -> list[dict[str, str]]:
-    """The table "the paper's finding / ours / agree?": one row per result of the paper's
-    Section "Results" (and the data README's manual means), each computed from ``trials`` of
-    ``source`` with the criterion used for "agree"."""
-    rows: list[dict[str, str]] = []
+@dataclass(frozen=True)
+class _Evidence:
+    """What the findings read: the ``trials`` of one ``source`` and the ``tests`` of the folder."""
 
-    def add(paper: str, ours: str, ok: bool | None, criterion: str) -> None:
-        rows.append({"paper": paper, "ours": ours, "agree": _verdict(ok), "criterion": criterion})
+    trials: Sequence[TrialMetrics]
+    tests: Sequence[dict[str, Any]]
+    source: str
 
-    def test(metric: str, interface: str, task: str) -> dict[str, Any] | None:
-        return find_ranksum(tests, metric, interface, task, "manual", "disambiguation", source)
+    def test(self, metric: str, interface: str, task: str) -> dict[str, Any] | None:
+        """The rank-sum test of ``metric``, Manual against Disambiguation (None: none)."""
+        return find_ranksum(self.tests, metric, interface, task, "manual", "disambiguation", self.source)
 
-    def means(t: dict[str, Any] | None) -> str:
-        return "no data" if t is None else f"Manual {fmt(t['mean_a'])} vs Disambiguation {fmt(t['mean_b'])}"
 
-    t = test("button_presses", "head_array", "all")
-    add(
-        "Head array: significantly fewer button presses with Disambiguation than Manual",
-        f"{means(t)}, {_p(t)}",
-        _fewer(t),
-        "fewer with Disambiguation and p < 0.05 (rank-sum, both tasks)",
-    )
-    t = test("mode_switches", "joystick", "all")
-    add(
-        "Joystick: significantly fewer user mode switches with Disambiguation (p < 0.05)",
-        f"{means(t)}, {_p(t)}",
-        _fewer(t),
-        "fewer with Disambiguation and p < 0.05",
-    )
-    t = test("button_presses", "joystick", "all")
-    add(
-        "Joystick: the gain is offset by the requests (no significant decrease in button presses)",
-        f"button presses {means(t)}, {_p(t)}",
-        None if _fewer(t) is None else not _fewer(t),
-        "no significant decrease in button presses",
-    )
-    tr, tp = test("button_presses", "all", "reaching"), test("button_presses", "all", "pouring")
+Row = dict[str, str]
+
+
+def _row(paper: str, ours: str, ok: bool | None, criterion: str) -> Row:
+    return {"paper": paper, "ours": ours, "agree": _verdict(ok), "criterion": criterion}
+
+
+def _means(t: dict[str, Any] | None) -> str:
+    return "no data" if t is None else f"Manual {fmt(t['mean_a'])} vs Disambiguation {fmt(t['mean_b'])}"
+
+
+Finding = Callable[[_Evidence], list[Row]]
+"""One of the paper's findings: its rows of the table from the evidence."""
+
+
+def _fewer_with_disambiguation(metric: str, interface: str, paper: str, criterion: str) -> Finding:
+    """The finding ``paper``: significantly fewer ``metric`` with Disambiguation than Manual on
+    ``interface`` (both tasks; ``criterion`` says so)."""
+
+    def finding(ev: _Evidence) -> list[Row]:
+        t = ev.test(metric, interface, "all")
+        return [_row(paper, f"{_means(t)}, {_p(t)}", _fewer(t), criterion)]
+
+    return finding
+
+
+def _joystick_presses(ev: _Evidence) -> list[Row]:
+    t = ev.test("button_presses", "joystick", "all")
+    return [
+        _row(
+            "Joystick: the gain is offset by the requests (no significant decrease in button presses)",
+            f"button presses {_means(t)}, {_p(t)}",
+            None if _fewer(t) is None else not _fewer(t),
+            "no significant decrease in button presses",
+        )
+    ]
+
+
+def _decrease_by_task(ev: _Evidence) -> list[Row]:
+    tr, tp = ev.test("button_presses", "all", "reaching"), ev.test("button_presses", "all", "pouring")
+    ok: bool | None = None
     if tr is not None and tp is not None:
         dr, dp = tr["mean_a"] - tr["mean_b"], tp["mean_a"] - tp["mean_b"]
         ours = (
@@ -153,15 +171,20 @@ def findings(
             if tp["mean_a"] and tr["mean_a"]
             else f"decrease pouring {fmt(dp)}, reaching {fmt(dr)}"
         )
-        ok: bool | None = dp > dr
+        ok = dp > dr
     else:
-        ours, ok = "no data for both tasks", None
-    add(
-        "The decrease in button presses is larger for the multi-step task",
-        ours,
-        ok,
-        "mean decrease (both interfaces) larger for pouring than for reaching",
-    )
+        ours = "no data for both tasks"
+    return [
+        _row(
+            "The decrease in button presses is larger for the multi-step task",
+            ours,
+            ok,
+            "mean decrease (both interfaces) larger for pouring than for reaching",
+        )
+    ]
+
+
+def _completion_time(ev: _Evidence) -> list[Row]:
     parts, sig, seen = [], False, False
     for interface, task in (
         ("joystick", "all"),
@@ -169,124 +192,219 @@ def findings(
         ("all", "reaching"),
         ("all", "pouring"),
     ):
-        t = test("completion_time", interface, task)
+        t = ev.test("completion_time", interface, task)
         if t is None or t["p_value"] is None:
             continue
         seen = True
         sig = sig or t["p_value"] < 0.05
         name = INTERFACE_NAMES[interface] if task == "all" else TASK_NAMES[task]
         parts.append(f"{name}: {fmt(t['mean_a'], 1)} s vs {fmt(t['mean_b'], 1)} s, {_p(t)}")
-    add(
-        "No significant difference in completion time between Manual and Disambiguation",
-        "; ".join(parts) or "no data",
-        (not sig) if seen else None,
-        "no rank-sum p < 0.05 by interface or by task",
-    )
+    return [
+        _row(
+            "No significant difference in completion time between Manual and Disambiguation",
+            "; ".join(parts) or "no data",
+            (not sig) if seen else None,
+            "no rank-sum p < 0.05 by interface or by task",
+        )
+    ]
+
+
+def _success(ev: _Evidence) -> list[Row]:
     rate = {}
     for paradigm in ("disambiguation", "manual"):
-        known = [m.success for m in trials if m.record.paradigm == paradigm and m.success is not None]
+        known = [m.success for m in ev.trials if m.record.paradigm == paradigm and m.success is not None]
         rate[paradigm] = (sum(known), len(known))
+    ok: bool | None = None
     if all(n for _, n in rate.values()):
         (sd, nd), (sm, nm) = rate["disambiguation"], rate["manual"]
         ours = f"Disambiguation {100 * sd / nd:.2f} % ({sd}/{nd}) vs Manual {100 * sm / nm:.2f} % ({sm}/{nm})"
         ok = sd / nd <= sm / nm
     else:
-        ours, ok = "success not known for both paradigms", None
-    add(
-        "Success 92.50 % (148/160) with Disambiguation vs 97.92 % (94/96) Manual",
-        ours,
-        ok,
-        "success rate not higher with Disambiguation",
-    )
-    failed = [m for m in trials if m.success is False]
-    if [m for m in trials if m.success is not None]:
+        ours = "success not known for both paradigms"
+    return [
+        _row(
+            "Success 92.50 % (148/160) with Disambiguation vs 97.92 % (94/96) Manual",
+            ours,
+            ok,
+            "success rate not higher with Disambiguation",
+        )
+    ]
+
+
+def _failures(ev: _Evidence) -> list[Row]:
+    failed = [m for m in ev.trials if m.success is False]
+    ok: bool | None = None
+    if [m for m in ev.trials if m.success is not None]:
         n_pour = sum(1 for m in failed if m.record.task == "pouring")
-        ours, ok = (
-            f"{n_pour} of {len(failed)} unsuccessful trials in pouring",
-            (n_pour > len(failed) / 2 if failed else None),
-        )
+        ours = f"{n_pour} of {len(failed)} unsuccessful trials in pouring"
+        ok = n_pour > len(failed) / 2 if failed else None
     else:
-        ours, ok = "success not known", None
-    add("13 of the 14 unsuccessful trials were multi-step", ours, ok, "most failures in the multi-step task")
-    t = test("mean_alpha", "all", "all")
+        ours = "success not known"
+    return [
+        _row(
+            "13 of the 14 unsuccessful trials were multi-step",
+            ours,
+            ok,
+            "most failures in the multi-step task",
+        )
+    ]
+
+
+def _alpha_sd(trials: Sequence[TrialMetrics], paradigm: str) -> float:
+    """The standard deviation of the analysed ``paradigm`` trials' mean alpha."""
+    return float(
+        np.std(
+            [
+                m.mean_alpha
+                for m in select_trials(trials)
+                if m.record.paradigm == paradigm and m.mean_alpha is not None
+            ]
+        )
+    )
+
+
+def _alpha(ev: _Evidence) -> list[Row]:
+    t = ev.test("mean_alpha", "all", "all")
+    ok: bool | None = None
     if t is not None:
-        sa = np.std(
-            [
-                m.mean_alpha
-                for m in select_trials(trials)
-                if m.record.paradigm == "manual" and m.mean_alpha is not None
-            ]
-        )
-        sb = np.std(
-            [
-                m.mean_alpha
-                for m in select_trials(trials)
-                if m.record.paradigm == "disambiguation" and m.mean_alpha is not None
-            ]
-        )
+        sa, sb = _alpha_sd(ev.trials, "manual"), _alpha_sd(ev.trials, "disambiguation")
         ours = (
-            f"Disambiguation {fmt(t['mean_b'])} +/- {fmt(float(sb))} vs "
-            f"Manual {fmt(t['mean_a'])} +/- {fmt(float(sa))}, {_p(t)}"
+            f"Disambiguation {fmt(t['mean_b'])} +/- {fmt(sb)} vs "
+            f"Manual {fmt(t['mean_a'])} +/- {fmt(sa)}, {_p(t)}"
         )
         ok = None if t["p_value"] is None else t["mean_b"] > t["mean_a"] and t["p_value"] >= 0.05
     else:
-        ours, ok = "no data", None
-    add(
-        "alpha higher with Disambiguation (0.27 +/- 0.16 vs 0.25 +/- 0.16), not significant",
-        ours,
-        ok,
-        "higher mean alpha with Disambiguation, p >= 0.05",
-    )
-    skew = {}
-    for (interface, task), paper in PAPER_SKEWNESS.items():
-        sel = [m for m in select_trials(trials, interface, task) if m.record.paradigm == "disambiguation"]
-        skew[(interface, task)] = s = request_time_skewness(sel)
-        add(
-            f"Request-time skewness {INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}: "
-            f"{paper:.2f} (requests early)",
-            fmt(s),
-            None if s is None else s > 0,
-            "positive skewness (requests concentrated early)",
+        ours = "no data"
+    return [
+        _row(
+            "alpha higher with Disambiguation (0.27 +/- 0.16 vs 0.25 +/- 0.16), not significant",
+            ours,
+            ok,
+            "higher mean alpha with Disambiguation, p >= 0.05",
         )
-    pairs = [(skew[("head_array", k)], skew[("joystick", k)]) for k in ("reaching", "pouring")]
-    add(
-        "Head-array requests less skewed than joystick requests (both tasks)",
-        ", ".join(
-            f"{k}: head array {fmt(h)} vs joystick {fmt(j)}"
-            for k, (h, j) in zip(("reaching", "pouring"), pairs, strict=True)
-        ),
-        None if any(h is None or j is None for h, j in pairs) else all(h < j for h, j in pairs),
-        "head-array skewness below joystick skewness for both tasks",
-    )
+    ]
+
+
+def _skewness_of(trials: Sequence[TrialMetrics], interface: str, task: str) -> float | None:
+    """The request-time skewness of the analysed Disambiguation trials of ``interface`` and ``task``."""
+    sel = [m for m in select_trials(trials, interface, task) if m.record.paradigm == "disambiguation"]
+    return request_time_skewness(sel)
+
+
+def _skewness(ev: _Evidence) -> list[Row]:
+    rows = []
+    for (interface, task), paper in PAPER_SKEWNESS.items():
+        s = _skewness_of(ev.trials, interface, task)
+        rows.append(
+            _row(
+                f"Request-time skewness {INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}: "
+                f"{paper:.2f} (requests early)",
+                fmt(s),
+                None if s is None else s > 0,
+                "positive skewness (requests concentrated early)",
+            )
+        )
+    return rows
+
+
+def _head_array_less_skewed(ev: _Evidence) -> list[Row]:
+    tasks = ("reaching", "pouring")
+    pairs = [
+        (_skewness_of(ev.trials, "head_array", k), _skewness_of(ev.trials, "joystick", k)) for k in tasks
+    ]
+    return [
+        _row(
+            "Head-array requests less skewed than joystick requests (both tasks)",
+            ", ".join(
+                f"{k}: head array {fmt(h)} vs joystick {fmt(j)}"
+                for k, (h, j) in zip(tasks, pairs, strict=True)
+            ),
+            None if any(h is None or j is None for h, j in pairs) else all(h < j for h, j in pairs),
+            "head-array skewness below joystick skewness for both tasks",
+        )
+    ]
+
+
+def _more_requests(ev: _Evidence) -> list[Row]:
     req = {}
     for key in ("joystick", "head_array", "reaching", "pouring"):
-        sel = select_trials(trials, *((key, "all") if key in INTERFACE_NAMES else ("all", key)))
+        sel = select_trials(ev.trials, *((key, "all") if key in INTERFACE_NAMES else ("all", key)))
         v = [m.requests for m in sel if m.record.paradigm == "disambiguation"]
         req[key] = float(np.mean(v)) if v else None
-    add(
-        "More requests with the more limited interface and the more complex task",
-        f"mean requests: head array {fmt(req['head_array'])} vs joystick {fmt(req['joystick'])}; "
-        f"pouring {fmt(req['pouring'])} vs reaching {fmt(req['reaching'])}",
-        None
-        if None in req.values()
-        else req["head_array"] > req["joystick"] and req["pouring"] > req["reaching"],
-        "more requests with the head array and with pouring",
-    )
+    return [
+        _row(
+            "More requests with the more limited interface and the more complex task",
+            f"mean requests: head array {fmt(req['head_array'])} vs joystick {fmt(req['joystick'])}; "
+            f"pouring {fmt(req['pouring'])} vs reaching {fmt(req['reaching'])}",
+            None
+            if None in req.values()
+            else req["head_array"] > req["joystick"] and req["pouring"] > req["reaching"],
+            "more requests with the head array and with pouring",
+        )
+    ]
+
+
+def _manual_switches(ev: _Evidence) -> list[Row]:
+    rows = []
     for (interface, task), paper in PAPER_MANUAL_SWITCHES.items():
-        v = [m.mode_switches for m in select_trials(trials, interface, task) if m.record.paradigm == "manual"]
+        v = [
+            m.mode_switches
+            for m in select_trials(ev.trials, interface, task)
+            if m.record.paradigm == "manual"
+        ]
+        ok: bool | None = None
         if v:
             mean = float(np.mean(v))
             ours, ok = f"{mean:.2f} (ratio {mean / paper:.2f})", abs(mean / paper - 1) <= WITHIN
         else:
-            ours, ok = "no Manual trials", None
-        add(
-            f"Manual user mode switches, {INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}: {paper:.2f} "
-            "(8 subjects, data README)",
-            ours,
-            ok,
-            "within 50 %",
+            ours = "no Manual trials"
+        rows.append(
+            _row(
+                f"Manual user mode switches, {INTERFACE_NAMES[interface]}, {TASK_NAMES[task]}: {paper:.2f} "
+                "(8 subjects, data README)",
+                ours,
+                ok,
+                "within 50 %",
+            )
         )
     return rows
+
+
+FINDINGS: tuple[Finding, ...] = (
+    _fewer_with_disambiguation(
+        "button_presses",
+        "head_array",
+        "Head array: significantly fewer button presses with Disambiguation than Manual",
+        "fewer with Disambiguation and p < 0.05 (rank-sum, both tasks)",
+    ),
+    _fewer_with_disambiguation(
+        "mode_switches",
+        "joystick",
+        "Joystick: significantly fewer user mode switches with Disambiguation (p < 0.05)",
+        "fewer with Disambiguation and p < 0.05",
+    ),
+    _joystick_presses,
+    _decrease_by_task,
+    _completion_time,
+    _success,
+    _failures,
+    _alpha,
+    _skewness,
+    _head_array_less_skewed,
+    _more_requests,
+    _manual_switches,
+)
+"""The paper's findings in the order of the table: each a function of the evidence giving its rows."""
+
+
+def findings(
+    trials: Sequence[TrialMetrics], tests: Sequence[dict[str, Any]], source: str
+) -> list[dict[str, str]]:
+    """The table "the paper's finding / ours / agree?": one row per result of the paper's
+    Section "Results" (and the data README's manual means, :data:`FINDINGS`), each computed from
+    ``trials`` of ``source`` with the criterion used for "agree"."""
+    evidence = _Evidence(trials, tests, source)
+    return [row for finding in FINDINGS for row in finding(evidence)]
 
 
 # ----------------------------------------------------------------------------------------------

@@ -21,7 +21,8 @@ disambiguation vs automatic), over the analysed trials with a value (valid and n
 - ``test = "mixedlm"`` (for :data:`MIXED_METRICS`): ``value ~ paradigm`` with a random intercept per subject
   (``statsmodels`` ``mixedlm``, REML), ``statistic`` the paradigm coefficient (b minus a),
   ``p_value`` its Wald p; where the model cannot be fitted (too few subjects, a singular fit, no
-  variance) the row has null numbers and ``note`` says why.
+  variance) the row has null numbers and ``note`` says why; without ``statsmodels`` (the ``study``
+  extra) :func:`run_tests` raises :class:`~drake_disamb.extras.MissingExtra` instead.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.extras import import_optional
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.metrics import METRICS, TrialMetrics, trial_metrics
 
@@ -190,10 +192,9 @@ def _mixedlm(a: list[tuple[str, float]], b: list[tuple[str, float]]) -> dict[str
     if np.ptp(values) == 0:
         row["note"] = "no variance"
         return row
+    pd = import_optional("pandas", "study")
+    smf = import_optional("statsmodels.formula.api", "study")
     try:
-        import pandas as pd
-        import statsmodels.formula.api as smf
-
         frame = pd.DataFrame(
             {
                 "value": values,

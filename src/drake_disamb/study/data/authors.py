@@ -163,12 +163,25 @@ def parse_trial_name(name: str) -> tuple[str, int, str, str, int]:
     return m[1], int(m[2]), _TASKS[m[3]], _INTERFACES[m[4]], int(m[5])
 
 
+class _MatVariables(dict):
+    """A MATLAB file's variables: reading one it lacks is a ``ValueError`` naming the file and the
+    variable (not a ``KeyError``, which no command turns into its one-line error)."""
+
+    def __init__(self, variables: dict[str, Any], path: Path) -> None:
+        super().__init__(variables)
+        self.path = path
+
+    def __missing__(self, name: str) -> Any:
+        raise ValueError(f"{self.path}: no variable {name!r}")
+
+
 def load_mat(path: Path) -> dict[str, Any]:
-    """The variables of a MATLAB file (scipy's loadmat); a damaged file is a ValueError naming it."""
+    """The variables of a MATLAB file (scipy's loadmat); a damaged file, or reading a variable it
+    lacks, is a ValueError naming it."""
     from scipy.io import loadmat
 
     try:
-        return loadmat(str(path))
+        return _MatVariables(loadmat(str(path)), path)
     except Exception as err:  # scipy raises several types for a damaged file
         raise ValueError(f"{path}: cannot read the MATLAB file: {err}") from None
 
@@ -226,6 +239,242 @@ def _scalar(data: dict[str, Any], name: str, path: Path) -> float:
     return value
 
 
+@dataclass(frozen=True)
+class _TrialFile:
+    """One trial file: its path, what its name says and its entry of the trial order."""
+
+    path: Path
+    subject: str
+    block: int
+    task: str
+    interface: str
+    trial: int
+    cond: dict[str, Any]
+
+
+def _trial_file(path: Path, order: dict[tuple[str, int, int], dict[str, Any]]) -> _TrialFile:
+    """``path``'s name parsed and matched to its trial-order entry (which must agree with it)."""
+    subject, block, task, interface, trial = parse_trial_name(path.name)
+    cond = order.get((subject, block, trial))
+    if cond is None:
+        raise ValueError(f"{path}: no entry for ({subject}, block {block}, trial {trial}) in the trial order")
+    if (cond["task"], cond["interface"]) != (task, interface):
+        raise ValueError(
+            f"{path}: the trial order says {cond['task']} / {cond['interface']}, "
+            f"the file name {task} / {interface}"
+        )
+    return _TrialFile(path, subject, block, task, interface, trial, cond)
+
+
+def _mode_name(f: _TrialFile, mode_id: float) -> str:
+    """The study's name of the authors' ``mode_id`` of ``f``'s interface."""
+    ids = MODE_IDS[f.interface]
+    if int(mode_id) not in ids:
+        raise ValueError(f"{f.path}: current_mode id {mode_id!r} is not one of {ids} ({f.interface})")
+    return mode_name(study_modes(f.interface)[ids.index(int(mode_id))])
+
+
+@dataclass(frozen=True)
+class _Events:
+    """A trial file's logged events (times in s from its start): every mode switch but the
+    initial-mode row, the requests, the ``current_mode`` rows and their times, and the scores of
+    each request (the time column last)."""
+
+    switch_t: NDArray[np.float64]
+    request_t: NDArray[np.float64]
+    current: NDArray[np.float64]
+    cm_t: NDArray[np.float64]
+    scores: NDArray[np.float64]
+    dim_scores: NDArray[np.float64]
+
+    @property
+    def initial_id(self) -> int:
+        return int(self.current[0, 0])
+
+    def mode_id_at(self, k: int) -> float:
+        """The authors' id of the mode entered by switch ``k`` (the ``current_mode`` row nearest it)."""
+        return self.current[int(np.argmin(np.abs(self.cm_t - self.switch_t[k]))), 0]
+
+
+def _read_events(data: dict[str, Any], path: Path, start: float) -> _Events:
+    """The events of the trial file ``path`` (variables ``data``, start time ``start``)."""
+    switches = _events(data, "mode_switches", path, 2)
+    current = _events(data, "current_mode", path, 2)
+    requested = _events(data, "assistance_requested", path, 2)
+    scores = np.asarray(data.get("cmode_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
+    dim_scores = np.asarray(data.get("cdim_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
+    if len(switches) < 1 or len(current) < 1:
+        raise ValueError(f"{path}: mode_switches / current_mode lack the initial-mode row")
+    if len(scores) != len(requested):
+        raise ValueError(
+            f"{path}: {len(requested)} requests but {len(scores)} rows of cmode_conf_disamb (one per request)"
+        )
+    return _Events(
+        switch_t=switches[1:, 1] - start,
+        request_t=requested[:, 1] - start,
+        current=current,
+        cm_t=current[:, 1] - start,
+        scores=scores,
+        dim_scores=dim_scores,
+    )
+
+
+def _request_switches(path: Path, events: _Events, start: float) -> list[int]:
+    """Per request, the index of the mode switch it made: the one nearest its score row."""
+    own: list[int] = []
+    for score_t in events.scores[:, -1] - start:
+        gaps = np.abs(events.switch_t - score_t)
+        k = int(np.argmin(gaps)) if len(gaps) else -1
+        if k < 0 or gaps[k] > _SWITCH_MATCH or k in own:
+            raise ValueError(
+                f"{path}: no mode switch of its own for the request scored at t = {score_t:.3f} s"
+            )
+        own.append(k)
+    return own
+
+
+@dataclass(frozen=True)
+class _Modes:
+    """A trial file's modes: the initial one's name, the index of each request's own mode switch
+    among the events' switches, those of the user's switches and the name of the mode each entered."""
+
+    initial: str
+    own: list[int]
+    user: list[int]
+    user_modes: list[str]
+
+
+def _modes(f: _TrialFile, events: _Events, start: float) -> _Modes:
+    """The modes of ``f`` (module docstring: ``initial_mode``, ``request_times``, ``mode_switch_times``)."""
+    initial = _mode_name(f, events.initial_id)
+    own = _request_switches(f.path, events, start)
+    user = [k for k in range(len(events.switch_t)) if k not in own]
+    return _Modes(initial, own, user, [_mode_name(f, events.mode_id_at(k)) for k in user])
+
+
+@dataclass(frozen=True)
+class _Series:
+    """A trial file's time series on the alpha samples' times ``t`` (cut to their common length),
+    the user's command as logged, and alpha's mean and share above 0.6 within the trial."""
+
+    t: NDArray[np.float64]
+    alpha: NDArray[np.float64]
+    belief: NDArray[np.float64]
+    blended: NDArray[np.float64]
+    user_vel: NDArray[np.float64]
+    mean_alpha: float | None
+    alpha_share: float | None
+
+
+def _table(data: dict[str, Any], name: str, path: Path, rows: bool = True) -> NDArray[np.float64]:
+    """The 2-D variable ``name`` of the trial file ``path``, one sample per row (``rows``) or per
+    column (transposed); anything else is a ValueError naming the file and the variable."""
+    a = np.asarray(data[name], dtype=float)
+    if a.ndim != 2 or a.size == 0:
+        raise ValueError(f"{path}: {name} has shape {a.shape}, expected a table of samples")
+    return a if rows else a.T
+
+
+def _read_series(data: dict[str, Any], path: Path, start: float, total: float) -> _Series:
+    """The time series of the trial file ``path`` (variables ``data``), times in s from ``start``."""
+    alpha_log = _events(data, "alpha", path, 2)
+    belief = _table(data, "goal_probabilities", path)[1:]
+    blended = _table(data, "blended_vel", path, rows=False)[1:]
+    user_vel = _table(data, "user_vel", path, rows=False)
+    t_alpha = alpha_log[:, 1] - start
+    in_trial = (t_alpha >= 0.0) & (t_alpha <= total)
+    mean_alpha = float(np.mean(alpha_log[in_trial, 0])) if np.any(in_trial) else None
+    share = float(np.mean(alpha_log[in_trial, 0] > 0.6)) if np.any(in_trial) else None
+    # A few files log one sample more of one of these arrays: the trace keeps the common length.
+    n = min(len(t_alpha), len(belief), len(blended))
+    return _Series(t_alpha[:n], alpha_log[:n, 0], belief[:n], blended[:n], user_vel, mean_alpha, share)
+
+
+def _mode_index(f: _TrialFile, events: _Events, t: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Per sample time ``t``, the index into the interface's modes of the mode in force."""
+    ids = MODE_IDS[f.interface]
+    mode_index = np.zeros(len(t), dtype=np.int64)
+    order_idx = np.searchsorted(events.cm_t, t, side="right") - 1
+    cm_index = np.array([ids.index(int(v)) if int(v) in ids else -1 for v in events.current[:, 0]])
+    mode_index[:] = np.where(order_idx >= 0, cm_index[np.clip(order_idx, 0, None)], cm_index[0])
+    return mode_index
+
+
+def _extra(f: _TrialFile, events: _Events, series: _Series) -> dict[str, Any]:
+    """The record's ``extra``: where it came from and what the authors kept that the record does not."""
+    extra: dict[str, Any] = {
+        "file": f"{f.subject}/{f.path.name}",
+        "block": f.block,
+        "trial": f.trial,
+        "target_goal": f.cond["goal"],
+        "initial_mode_id": events.initial_id,
+        "alpha_share_above_0_6": series.alpha_share,
+    }
+    if f.cond["initial_mode"] != MODE_IDS[f.interface].index(events.initial_id):
+        extra["order_initial_mode"] = f.cond["initial_mode"]
+    return extra
+
+
+def _record(f: _TrialFile, events: _Events, modes: _Modes, series: _Series, total: float) -> TrialRecord:
+    """The trial's record (module docstring)."""
+    t, goal = series.t, f.cond["goal"] - 1
+    during = (t >= 0.0) & (t <= total)
+    onset = None
+    if f.task == "reaching" and np.any(during):
+        onset = assistance_onset(t[during], series.belief[during], series.alpha[during], goal)
+    paradigm = f.cond["paradigm"]
+    return TrialRecord(
+        trial_id=f.path.stem,
+        subject=f.subject,
+        interface=f.interface,
+        task=f.task,
+        paradigm=paradigm,
+        disambiguation_method="algorithm1" if paradigm == "disambiguation" else None,
+        repetition=0,
+        seed=None,
+        start_pose=f.cond["home"] - 1,
+        initial_mode=modes.initial,
+        intended_goals=[goal],
+        reached_goals=None,
+        success=None,
+        done=None,
+        duration=total,
+        completion_time=total,
+        mode_switches=len(modes.user),
+        requests=len(events.request_t),
+        automatic_switches=0,
+        button_presses=len(modes.user) + len(events.request_t),
+        request_times=[float(x) for x in events.request_t],
+        mode_switch_times=[float(events.switch_t[k]) for k in modes.user],
+        mode_switch_modes=modes.user_modes,
+        automatic_switch_times=[],
+        mean_alpha=series.mean_alpha,
+        assistance_onset=onset,
+        wall_time=0.0,
+        valid=(f.subject, f.block, f.trial) not in FAILED_TRIALS,
+        source="authors",
+        extra=_extra(f, events, series),
+    )
+
+
+def _trace(f: _TrialFile, events: _Events, modes: _Modes, series: _Series) -> dict[str, NDArray[Any]]:
+    """The trial's trace (module docstring)."""
+    t = series.t
+    m = len(series.user_vel)
+    return {
+        "t": t,
+        "belief": series.belief,
+        "alpha": series.alpha,
+        "u": series.blended,
+        "mode": _mode_index(f, events, t),
+        "u_h": series.user_vel,
+        "t_u_h": np.linspace(t[0], t[-1], m) if len(t) and m else np.zeros(m),
+        "request_mode_scores": events.scores[:, :-1],
+        "request_dim_scores": events.dim_scores[:, :-1],
+        "request_mode_ids": np.array([events.mode_id_at(k) for k in modes.own], dtype=np.int64),
+    }
+
+
 def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any]]) -> LoggedTrial:
     """Read one trial file into its record and trace (see the module docstring).
 
@@ -238,135 +487,18 @@ def read_trial(path: str | Path, order: dict[tuple[str, int, int], dict[str, Any
             message names the file.
     """
     path = Path(path)
-    subject, block, task, interface, trial = parse_trial_name(path.name)
-    cond = order.get((subject, block, trial))
-    if cond is None:
-        raise ValueError(f"{path}: no entry for ({subject}, block {block}, trial {trial}) in the trial order")
-    if (cond["task"], cond["interface"]) != (task, interface):
-        raise ValueError(
-            f"{path}: the trial order says {cond['task']} / {cond['interface']}, "
-            f"the file name {task} / {interface}"
-        )
+    f = _trial_file(path, order)
     data = load_mat(path)
     start = _scalar(data, "start_time", path)
     total = _scalar(data, "total_time", path)
-    switches = _events(data, "mode_switches", path, 2)
-    current = _events(data, "current_mode", path, 2)
-    requested = _events(data, "assistance_requested", path, 2)
-    scores = np.asarray(data.get("cmode_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
-    dim_scores = np.asarray(data.get("cdim_conf_disamb", np.zeros((1, 7))), dtype=float)[1:]
-    if len(switches) < 1 or len(current) < 1:
-        raise ValueError(f"{path}: mode_switches / current_mode lack the initial-mode row")
-    if len(scores) != len(requested):
-        raise ValueError(
-            f"{path}: {len(requested)} requests but {len(scores)} rows of cmode_conf_disamb (one per request)"
-        )
-    ids = MODE_IDS[interface]
-    modes = study_modes(interface)
-
-    def name_of(mode_id: float) -> str:
-        if int(mode_id) not in ids:
-            raise ValueError(f"{path}: current_mode id {mode_id!r} is not one of {ids} ({interface})")
-        return mode_name(modes[ids.index(int(mode_id))])
-
-    initial_id = int(current[0, 0])
-    initial_mode = name_of(initial_id)
-    switch_t = switches[1:, 1] - start  # without the initial-mode row
-    request_t = requested[:, 1] - start
-    own: list[int] = []
-    for score_t in scores[:, -1] - start:
-        gaps = np.abs(switch_t - score_t)
-        k = int(np.argmin(gaps)) if len(gaps) else -1
-        if k < 0 or gaps[k] > _SWITCH_MATCH or k in own:
-            raise ValueError(
-                f"{path}: no mode switch of its own for the request scored at t = {score_t:.3f} s"
-            )
-        own.append(k)
-    user = [k for k in range(len(switch_t)) if k not in own]
-    cm_t = current[:, 1] - start
-    user_modes = [name_of(current[int(np.argmin(np.abs(cm_t - switch_t[k]))), 0]) for k in user]
-
-    alpha_log = np.asarray(data["alpha"], dtype=float)[1:]
-    belief = np.asarray(data["goal_probabilities"], dtype=float)[1:]
-    blended = np.asarray(data["blended_vel"], dtype=float).T[1:]
-    user_vel = np.asarray(data["user_vel"], dtype=float).T
-    t_alpha = alpha_log[:, 1] - start
-    in_trial = (t_alpha >= 0.0) & (t_alpha <= total)
-    mean_alpha = float(np.mean(alpha_log[in_trial, 0])) if np.any(in_trial) else None
-    share = float(np.mean(alpha_log[in_trial, 0] > 0.6)) if np.any(in_trial) else None
-    # A few files log one sample more of one of these arrays: the trace keeps the common length.
-    n = min(len(t_alpha), len(belief), len(blended))
-    t, alpha, belief, blended = t_alpha[:n], alpha_log[:n, 0], belief[:n], blended[:n]
-    during = (t >= 0.0) & (t <= total)
-    mode_index = np.zeros(n, dtype=np.int64)
-    order_idx = np.searchsorted(cm_t, t, side="right") - 1
-    cm_index = np.array([ids.index(int(v)) if int(v) in ids else -1 for v in current[:, 0]])
-    mode_index[:] = np.where(order_idx >= 0, cm_index[np.clip(order_idx, 0, None)], cm_index[0])
-
-    goal = cond["goal"] - 1
-    onset = None
-    if task == "reaching" and np.any(during):
-        onset = assistance_onset(t[during], belief[during], alpha[during], goal)
-    paradigm = cond["paradigm"]
-    extra: dict[str, Any] = {
-        "file": f"{subject}/{path.name}",
-        "block": block,
-        "trial": trial,
-        "target_goal": cond["goal"],
-        "initial_mode_id": initial_id,
-        "alpha_share_above_0_6": share,
-    }
-    if cond["initial_mode"] != ids.index(initial_id):
-        extra["order_initial_mode"] = cond["initial_mode"]
-    record = TrialRecord(
-        trial_id=path.stem,
-        subject=subject,
-        interface=interface,
-        task=task,
-        paradigm=paradigm,
-        disambiguation_method="algorithm1" if paradigm == "disambiguation" else None,
-        repetition=0,
-        seed=None,
-        start_pose=cond["home"] - 1,
-        initial_mode=initial_mode,
-        intended_goals=[goal],
-        reached_goals=None,
-        success=None,
-        done=None,
-        duration=total,
-        completion_time=total,
-        mode_switches=len(user),
-        requests=len(request_t),
-        automatic_switches=0,
-        button_presses=len(user) + len(request_t),
-        request_times=[float(x) for x in request_t],
-        mode_switch_times=[float(switch_t[k]) for k in user],
-        mode_switch_modes=user_modes,
-        automatic_switch_times=[],
-        mean_alpha=mean_alpha,
-        assistance_onset=onset,
-        wall_time=0.0,
-        valid=(subject, block, trial) not in FAILED_TRIALS,
-        source="authors",
-        extra=extra,
+    events = _read_events(data, path, start)
+    modes = _modes(f, events, start)
+    series = _read_series(data, path, start, total)
+    return LoggedTrial(
+        _record(f, events, modes, series, total),
+        _trace(f, events, modes, series),
+        request_switch_times=events.switch_t[modes.own],
     )
-    m = len(user_vel)
-    t_u_h = np.linspace(t[0], t[-1], m) if n and m else np.zeros(m)
-    trace = {
-        "t": t,
-        "belief": belief,
-        "alpha": alpha,
-        "u": blended,
-        "mode": mode_index,
-        "u_h": user_vel,
-        "t_u_h": t_u_h,
-        "request_mode_scores": scores[:, :-1],
-        "request_dim_scores": dim_scores[:, :-1],
-        "request_mode_ids": np.array(
-            [current[int(np.argmin(np.abs(cm_t - switch_t[k]))), 0] for k in own], dtype=np.int64
-        ),
-    }
-    return LoggedTrial(record, trace, request_switch_times=switch_t[own])
 
 
 @dataclass

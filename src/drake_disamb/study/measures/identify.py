@@ -49,6 +49,10 @@ dft_euler_step`, :func:`~drake_disamb.core.inference.dft_euler_rollout`,
 
 What the logs cannot show: orientations were not logged, so neither the agreement term nor the
 rotational part of the autonomy can be identified, and the system's ``D_k`` cannot be recomputed.
+
+Each identification is a function of the logs (:class:`Logs`) and of the identifications before it,
+with its text and its JSON keys, and one row of :data:`IDENTIFICATIONS`, which :func:`identify`,
+:func:`format_identification` and :meth:`Identification.to_json` loop over.
 """
 
 from __future__ import annotations
@@ -56,8 +60,8 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -71,17 +75,21 @@ from drake_disamb.core.inference import DFTParams, dft_drive, dft_euler_rollout,
 from drake_disamb.core.layout import DIM_NAMES
 from drake_disamb.study.data.authors import MODE_IDS, load_mat, read_trials
 from drake_disamb.study.data.folder import LoggedTrial
+from drake_disamb.study.measures.table import Measured, text_lines
 
 __all__ = [
     "ALPHA_DECIMALS",
     "ALPHA_TOLERANCE",
     "EXCITATION_TOLERANCE",
+    "IDENTIFICATIONS",
     "KNOWN_PATH_TRIAL",
     "AlphaLaw",
     "BeliefReplay",
     "Identification",
+    "Identifying",
     "IdleDecay",
     "KnownPath",
+    "Logs",
     "ModeMap",
     "RequestTiming",
     "UpdatePeriod",
@@ -502,8 +510,10 @@ def _request_modes(trial: LoggedTrial) -> NDArray[np.int64]:
     return np.asarray(trial.trace["request_mode_ids"], dtype=np.int64)
 
 
-def identify_mode_map(trials: Sequence[LoggedTrial], interface: str) -> ModeMap:
-    """:class:`ModeMap` of ``interface`` from its trials' requests."""
+def _request_scores(
+    trials: Sequence[LoggedTrial], interface: str
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """The mode scores, the dimension scores and the new mode id of every request of ``interface``."""
     modes, dims, new_ids = [], [], []
     for trial in trials:
         if trial.record.interface != interface or not trial.record.requests:
@@ -517,7 +527,14 @@ def identify_mode_map(trials: Sequence[LoggedTrial], interface: str) -> ModeMap:
         new_ids.append(_request_modes(trial))
     if not modes:
         raise ValueError(f"trials: no {interface} requests")
-    m, d, ids = np.concatenate(modes), np.concatenate(dims), np.concatenate(new_ids)
+    return np.concatenate(modes), np.concatenate(dims), np.concatenate(new_ids)
+
+
+def _column_dims(
+    m: NDArray[np.float64], d: NDArray[np.float64]
+) -> tuple[list[tuple[int, ...] | None], float]:
+    """Per mode-score column of ``m``, the subset of the dimension-score columns of ``d`` whose sum
+    it is (``None``: none within :data:`SCORE_TOLERANCE`), and the largest residual."""
     subsets = [s for k in range(1, d.shape[1] + 1) for s in itertools.combinations(range(d.shape[1]), k)]
     sums = np.stack([d[:, list(s)].sum(axis=1) for s in subsets], axis=1)  # (requests, subsets)
     column_dims: list[tuple[int, ...] | None] = []
@@ -527,13 +544,20 @@ def identify_mode_map(trials: Sequence[LoggedTrial], interface: str) -> ModeMap:
         k = int(np.argmin(err))
         column_dims.append(subsets[k] if err[k] <= SCORE_TOLERANCE else None)
         residual = max(residual, float(err[k]))
+    return column_dims, residual
+
+
+def _id_columns(
+    m: NDArray[np.float64], ids: NDArray[np.int64], interface: str
+) -> tuple[dict[int, int], dict[int, int | None]]:
+    """The mode id the system switched to most often when each column scored highest, and per arm
+    mode id of ``interface`` its column (the single one left when one id and one column are)."""
     winner = np.argmax(m, axis=1)
     column_id: dict[int, int] = {}
     for j in range(m.shape[1]):
         chosen, counts = np.unique(ids[winner == j], return_counts=True)
         if len(chosen):
             column_id[j] = int(chosen[np.argmax(counts)])
-    consistent = len(set(column_id.values())) == len(column_id)
     id_column: dict[int, int | None] = {i: None for i in MODE_IDS[interface][:-1]}
     for j, mode_id in column_id.items():
         if mode_id in id_column:
@@ -542,13 +566,22 @@ def identify_mode_map(trials: Sequence[LoggedTrial], interface: str) -> ModeMap:
     free_cols = sorted(set(range(m.shape[1])) - {c for c in id_column.values() if c is not None})
     if len(free_ids) == 1 and len(free_cols) == 1:
         id_column[free_ids[0]] = free_cols[0]
+    return column_id, id_column
+
+
+def identify_mode_map(trials: Sequence[LoggedTrial], interface: str) -> ModeMap:
+    """:class:`ModeMap` of ``interface`` from its trials' requests."""
+    m, d, ids = _request_scores(trials, interface)
+    column_dims, residual = _column_dims(m, d)
+    column_id, id_column = _id_columns(m, ids, interface)
+    winner = np.argmax(m, axis=1)
     hits = np.array([column_id.get(int(c)) == int(i) for c, i in zip(winner, ids, strict=True)])
     return ModeMap(
         interface=interface,
         column_dims=column_dims,
         sum_residual=residual,
         id_column=id_column,
-        consistent=bool(consistent),
+        consistent=len(set(column_id.values())) == len(column_id),
         argmax_share=float(np.mean(hits)),
         requests=len(ids),
     )
@@ -703,32 +736,25 @@ def belief_replay(
     return BeliefReplay(label, lam, float(params.tau1), corr, agree, len(rows))
 
 
-def identify_known_path(
-    trial: LoggedTrial,
-    known_path: str | Path,
-    goals: NDArray[np.float64],
-    decay: IdleDecay,
-    other: tuple[str, DFTParams] | None = None,
-) -> KnownPath:
-    """:class:`KnownPath` of the trial whose autonomy commands are in ``known_path`` (the .mat file)."""
-
+def _autonomy_commands(
+    known_path: str | Path, n_goals: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The published autonomy commands ``(T, n, 6)`` of the known-path trial and their times ``(T,)``."""
     data = load_mat(Path(known_path))
     if "gv" not in data:
         raise ValueError(f"{known_path}: no variable 'gv'")
     gv = np.asarray(data["gv"], dtype=float)
-    if gv.ndim != 3 or gv.shape[0] != 7 or gv.shape[2] != len(goals):
-        raise ValueError(f"{known_path}: gv has shape {gv.shape}, expected (7, samples, {len(goals)})")
-    u_a = gv[:6].transpose(1, 2, 0)  # (T, n, 6)
-    t_path = gv[6, :, 0]
-    x, rms, repel, speed = solve_positions(u_a[..., :3], goals)
-    dist = np.min(np.linalg.norm(x[:, None] - goals, axis=-1), axis=1)
-    felt = np.linalg.norm(repel, axis=1) > _REPELLER_FLOOR
-    # The rotational commands (no orientation was logged, so their law cannot be solved for): their
-    # norm over every goal's samples, and how many sit at it (a saturation).
-    w_norm = np.linalg.norm(u_a[..., 3:], axis=-1).ravel()
-    rotation_speed = float(np.median(w_norm))
-    rotation_share = float(np.mean(np.abs(w_norm - rotation_speed) <= 0.01 * rotation_speed))
-    # The blend law on the trial's rows with alpha > 0.
+    if gv.ndim != 3 or gv.shape[0] != 7 or gv.shape[2] != n_goals:
+        raise ValueError(f"{known_path}: gv has shape {gv.shape}, expected (7, samples, {n_goals})")
+    return gv[:6].transpose(1, 2, 0), gv[6, :, 0]
+
+
+def _blend_law(
+    trial: LoggedTrial, t_path: NDArray[np.float64], u_a: NDArray[np.float64]
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """On the trial's rows with ``alpha > 0`` within the commands' times: whether the blend law
+    ``(1 - alpha) u_h + alpha u_a(argmax p)`` gives the logged blended command (within 1e-3), and
+    whether the user commanded."""
     t = np.asarray(trial.trace["t"], dtype=float)
     alpha = np.asarray(trial.trace["alpha"], dtype=float)
     belief = np.asarray(trial.trace["belief"], dtype=float)
@@ -740,28 +766,49 @@ def identify_known_path(
     g = np.argmax(belief[inside], axis=1)
     predicted = blend(u_h, ua[np.arange(len(g)), g], alpha[inside])
     ok = np.max(np.abs(predicted - blended[inside]), axis=1) <= 1e-3
-    commanding = np.any(u_h != 0.0, axis=1)
+    return ok, np.any(u_h != 0.0, axis=1)
+
+
+def _best_replay(replay: Callable[[DFTParams, str], BeliefReplay], decay: IdleDecay) -> BeliefReplay:
+    """Of the DFT gains :data:`LAMBDA_GRID` (directedness only, the identified decay), the ``replay``
+    with the highest mean per-goal correlation."""
     best: BeliefReplay | None = None
     for lam in LAMBDA_GRID:
-        r = belief_replay(trial, t_path, x, goals, decay.params(lam=lam), decay.dt, "identified")
+        r = replay(decay.params(lam=lam), "identified")
         if best is None or np.nanmean(r.correlation) > np.nanmean(best.correlation):
             best = r
     assert best is not None
+    return best
+
+
+def identify_known_path(
+    trial: LoggedTrial,
+    known_path: str | Path,
+    goals: NDArray[np.float64],
+    decay: IdleDecay,
+    other: tuple[str, DFTParams] | None = None,
+) -> KnownPath:
+    """:class:`KnownPath` of the trial whose autonomy commands are in ``known_path`` (the .mat file)."""
+    u_a, t_path = _autonomy_commands(known_path, len(goals))
+    x, rms, repel, speed = solve_positions(u_a[..., :3], goals)
+    dist = np.min(np.linalg.norm(x[:, None] - goals, axis=-1), axis=1)
+    felt = np.linalg.norm(repel, axis=1) > _REPELLER_FLOOR
+    # The rotational commands (no orientation was logged, so their law cannot be solved for): their
+    # norm over every goal's samples, and how many sit at it (a saturation).
+    w_norm = np.linalg.norm(u_a[..., 3:], axis=-1).ravel()
+    rotation_speed = float(np.median(w_norm))
+    rotation_share = float(np.mean(np.abs(w_norm - rotation_speed) <= 0.01 * rotation_speed))
+    ok, commanding = _blend_law(trial, t_path, u_a)
+
+    def replay(params: DFTParams, label: str) -> BeliefReplay:
+        return belief_replay(trial, t_path, x, goals, params, decay.dt, label)
+
+    best = _best_replay(replay, decay)
     proximity = [
-        belief_replay(
-            trial,
-            t_path,
-            x,
-            goals,
-            decay.params(lam=best.lam, proximity=True, R=R),
-            decay.dt,
-            f"proximity R {R:g} m",
-        )
+        replay(decay.params(lam=best.lam, proximity=True, R=R), f"proximity R {R:g} m")
         for R in PROXIMITY_RADII
     ]
-    other_replay = None
-    if other is not None:
-        other_replay = belief_replay(trial, t_path, x, goals, other[1], decay.dt, other[0])
+    other_replay = None if other is None else replay(other[1], other[0])
     return KnownPath(
         trial_id=trial.record.trial_id,
         samples=len(t_path),
@@ -783,142 +830,104 @@ def identify_known_path(
     )
 
 
-# -- everything -------------------------------------------------------------------------------------
+# -- the table ---------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Identification:
-    """Everything :func:`identify` measured (:meth:`to_json` for ``--json``)."""
+@dataclass
+class Logs:
+    """What the identifications read: the logs' folder and its trials, the reaching task's goal
+    positions ``(5, 3)`` (m) for the known-path trial (``None``: the embedded reaching task's) and a
+    labelled DFT setting to replay that trial with beside the identified one."""
 
-    trials: int
-    subjects: list[str]
-    period: UpdatePeriod
-    decay: IdleDecay
-    idle_error: float
-    alpha: AlphaLaw
-    requests: RequestTiming
-    mode_maps: dict[str, ModeMap]
-    known_path: KnownPath | None
+    data_dir: Path
+    trials: list[LoggedTrial]
+    goals: NDArray[np.float64] | None = None
+    other: tuple[str, DFTParams] | None = None
+    _idle: dict[float, tuple[list[tuple[NDArray[np.float64], NDArray[np.float64]]], int]] = field(
+        default_factory=dict, repr=False
+    )
+
+    def idle_steps(self, period: float) -> tuple[list[tuple[NDArray[np.float64], NDArray[np.float64]]], int]:
+        """Per trial, the beliefs before and after its idle updates (:func:`idle_steps`, updates
+        ``period`` s apart), and the number of idle stretches of all trials (computed once)."""
+        if period not in self._idle:
+            steps, stretches = [], 0
+            for trial in self.trials:
+                before, after, k = idle_steps(trial, period)
+                steps.append((before, after))
+                stretches += k
+            self._idle[period] = (steps, stretches)
+        return self._idle[period]
+
+
+class Identification(Measured):
+    """Everything :func:`identify` measured: the value of each of :data:`IDENTIFICATIONS` by its
+    name, as a key or an attribute (``ident.decay``); :meth:`to_json` for ``--json``."""
 
     def to_json(self) -> dict[str, Any]:
-        """The identified values under the documented keys (s, m, m/s, 1/s)."""
-        out: dict[str, Any] = {
-            "trials": self.trials,
-            "subjects": self.subjects,
-            "belief_update_period": self.period.period,
-            "idle_tau": self.decay.tau,
-            "idle_factor": {str(n): f for n, f in self.decay.factor.items()},
-            "idle_updates": {str(n): k for n, k in self.decay.updates.items()},
-            "idle_stretches": self.decay.stretches,
-            "idle_replay_error": self.idle_error,
-            "rest_state_deviation": {str(n): v for n, v in self.decay.rest_deviation.items()},
-            "zero_command_excitation": self.decay.zero_command_excitation,
-            "zero_command_excitation_rate": self.decay.excitation,
-            "alpha_thresholds": {str(n): list(v) for n, v in self.alpha.thresholds.items()},
-            "alpha_thresholds_above_uniform": {
-                str(n): [round(lo - 1.0 / n, 9), round(hi - 1.0 / n, 9)]
-                for n, (lo, hi) in self.alpha.thresholds.items()
-            },
-            "alpha_max": self.alpha.alpha_max,
-            "alpha_belief_decimals": self.alpha.decimals,
-            "alpha_match": {f"{i}/{t}": v for (i, t), v in self.alpha.match.items()},
-            "request_time": {
-                "min": self.requests.minimum,
-                "median": self.requests.median,
-                "max": self.requests.maximum,
-                "n": self.requests.n,
-            },
-            "request_zero_share": self.requests.zero_share,
-            "request_belief_change_share": self.requests.belief_change_share,
-            "request_mode_is_argmax": _pooled_argmax(self.mode_maps),
-            "mode_order": {
-                k: [None if d is None else list(d) for d in m.mode_order] for k, m in self.mode_maps.items()
-            },
-            "mode_ids": {k: list(MODE_IDS[k][:-1]) for k in self.mode_maps},
-            "mode_order_unresolved": {
-                k: {
-                    "ids": m.unresolved[0],
-                    "modes": [None if d is None else list(d) for d in m.unresolved[1]],
-                }
-                for k, m in self.mode_maps.items()
-                if m.unresolved[0]
-            },
-        }
-        kp = self.known_path
-        if kp is not None:
-            out["known_path"] = {
-                "trial": kp.trial_id,
-                "start": list(kp.start),
-                "end": list(kp.end),
-                "solved_share": kp.solved_share,
-                "attractor_speed": kp.attractor_speed,
-                "repeller_radius": kp.repeller_radius,
-                "rotation_speed": kp.rotation_speed,
-                "rotation_share": kp.rotation_share,
-                "blend_share": kp.blend_share,
-                "blend_share_without_command": kp.blend_share_idle,
-                "lambda": kp.best.lam,
-                "correlation": kp.best.correlation,
-                "argmax_agreement": kp.best.argmax_agreement,
-            }
-            out["known_path"]["proximity"] = [dataclasses.asdict(r) for r in kp.proximity]
-            if kp.other is not None:
-                out["known_path"]["other"] = dataclasses.asdict(kp.other)
+        """The identified values under the documented keys (s, m, m/s, 1/s): the JSON of each of
+        :data:`IDENTIFICATIONS` that has one, in the table's order."""
+        out: dict[str, Any] = {}
+        for row in IDENTIFICATIONS:
+            if row.json is not None:
+                out.update(row.json(self[row.name], self))
         return out
 
 
-def _pooled_argmax(maps: dict[str, ModeMap]) -> float:
-    n = sum(m.requests for m in maps.values())
-    return sum(m.argmax_share * m.requests for m in maps.values()) / n if n else math.nan
+def _trials(logs: Logs, _: Identification) -> int:
+    """The trials read."""
+    return len(logs.trials)
 
 
-def identify(
-    data_dir: str | Path,
-    goals: NDArray[np.float64] | None = None,
-    other: tuple[str, DFTParams] | None = None,
-    trials: Sequence[LoggedTrial] | None = None,
-) -> Identification:
-    """Identify the study's system from the logs in ``data_dir`` (module docstring).
+def _subjects(logs: Logs, _: Identification) -> list[str]:
+    """Their subjects."""
+    return sorted({t.record.subject for t in logs.trials})
 
-    Args:
-        data_dir: The logs' folder (``H*/`` and the trial-order file; any subset of subjects).
-        goals: The reaching task's goal positions ``(5, 3)`` (m) for the known-path trial; ``None``:
-            the embedded reaching task's.
-        other: A labelled DFT setting to replay the known-path trial with beside the identified one.
-        trials: The trials already read from ``data_dir`` (read here if ``None``).
 
-    Raises:
-        ValueError: The logs are missing or malformed, or show no idle updates or no requests.
-    """
-    data_dir = Path(data_dir)
-    trials = read_trials(data_dir) if trials is None else list(trials)
-    period = update_period(trials)
-    steps, stretches = [], 0
-    for trial in trials:
-        before, after, k = idle_steps(trial, period.period)
-        steps.append((before, after))
-        stretches += k
-    decay = fit_idle_decay(steps, period.period, stretches)
-    params = decay.params()
-    idle_error = max(idle_replay_error(b, a, params, period.period) for b, a in steps)
-    interfaces = sorted({t.record.interface for t in trials if t.record.requests})
-    known: KnownPath | None = None
-    path = data_dir / KNOWN_PATH_FILE
-    by_id = {t.record.trial_id: t for t in trials}
-    if path.is_file() and KNOWN_PATH_TRIAL in by_id:
-        g = _reaching_goals() if goals is None else np.asarray(goals, dtype=float)
-        known = identify_known_path(by_id[KNOWN_PATH_TRIAL], path, g, decay, other)
-    return Identification(
-        trials=len(trials),
-        subjects=sorted({t.record.subject for t in trials}),
-        period=period,
-        decay=decay,
-        idle_error=idle_error,
-        alpha=fit_alpha_law(trials),
-        requests=request_timing(trials),
-        mode_maps={i: identify_mode_map(trials, i) for i in interfaces},
-        known_path=known,
-    )
+def _period(logs: Logs, _: Identification) -> UpdatePeriod:
+    """The belief's update period (:func:`update_period`)."""
+    return update_period(logs.trials)
+
+
+def _decay(logs: Logs, found: Identification) -> IdleDecay:
+    """The belief's decay with no command (:func:`fit_idle_decay`)."""
+    steps, stretches = logs.idle_steps(found.period.period)
+    return fit_idle_decay(steps, found.period.period, stretches)
+
+
+def _idle_error(logs: Logs, found: Identification) -> float:
+    """The largest error of the identified decay replayed from each belief before an idle update
+    (:func:`idle_replay_error`)."""
+    steps, _ = logs.idle_steps(found.period.period)
+    params = found.decay.params()
+    return max(idle_replay_error(b, a, params, found.period.period) for b, a in steps)
+
+
+def _alpha(logs: Logs, _: Identification) -> AlphaLaw:
+    """The alpha law (:func:`fit_alpha_law`)."""
+    return fit_alpha_law(logs.trials)
+
+
+def _requests(logs: Logs, _: Identification) -> RequestTiming:
+    """The request time (:func:`request_timing`)."""
+    return request_timing(logs.trials)
+
+
+def _mode_maps(logs: Logs, _: Identification) -> dict[str, ModeMap]:
+    """Per interface with requests, its mode map (:func:`identify_mode_map`)."""
+    interfaces = sorted({t.record.interface for t in logs.trials if t.record.requests})
+    return {i: identify_mode_map(logs.trials, i) for i in interfaces}
+
+
+def _known_path(logs: Logs, found: Identification) -> KnownPath | None:
+    """What the known-path trial shows (:func:`identify_known_path`; ``None`` where the logs lack
+    :data:`KNOWN_PATH_FILE` or the trial :data:`KNOWN_PATH_TRIAL`)."""
+    path = logs.data_dir / KNOWN_PATH_FILE
+    by_id = {t.record.trial_id: t for t in logs.trials}
+    if not path.is_file() or KNOWN_PATH_TRIAL not in by_id:
+        return None
+    goals = _reaching_goals() if logs.goals is None else np.asarray(logs.goals, dtype=float)
+    return identify_known_path(by_id[KNOWN_PATH_TRIAL], path, goals, found.decay, logs.other)
 
 
 def _reaching_goals() -> NDArray[np.float64]:
@@ -926,20 +935,43 @@ def _reaching_goals() -> NDArray[np.float64]:
     return np.array([g.position for g in load_scenario("reaching").goals], dtype=float)
 
 
-# -- printing ---------------------------------------------------------------------------------------
+# -- the text and the JSON of each identification --------------------------------------------------
 
 
 def _dims(d: tuple[int, ...] | None) -> str:
     return "?" if d is None else "{" + ", ".join(DIM_NAMES[k] for k in d) + "}"
 
 
-def format_identification(ident: Identification) -> str:
-    """The identification as text, each value with its evidence."""
-    d, a, r = ident.decay, ident.alpha, ident.requests
-    lines = [
-        f"Trials: {ident.trials} (subjects {', '.join(ident.subjects)})",
-        f"Belief update period: {ident.period.period:.3f} s ({ident.period.n} intervals between updates; "
-        f"{100 * ident.period.share:.1f} % of the logged rows are updates)",
+def _modes_json(modes: Sequence[tuple[int, ...] | None]) -> list[list[int] | None]:
+    return [None if d is None else list(d) for d in modes]
+
+
+def _text_trials(trials: int, ident: Identification) -> str:
+    return f"Trials: {trials} (subjects {', '.join(ident.subjects)})"
+
+
+def _json_trials(trials: int, _: Identification) -> dict[str, Any]:
+    return {"trials": trials}
+
+
+def _json_subjects(subjects: list[str], _: Identification) -> dict[str, Any]:
+    return {"subjects": subjects}
+
+
+def _text_period(p: UpdatePeriod, _: Identification) -> str:
+    return (
+        f"Belief update period: {p.period:.3f} s ({p.n} intervals between updates; "
+        f"{100 * p.share:.1f} % of the logged rows are updates)"
+    )
+
+
+def _json_period(p: UpdatePeriod, _: Identification) -> dict[str, Any]:
+    return {"belief_update_period": p.period}
+
+
+def _text_decay(d: IdleDecay, ident: Identification) -> list[str]:
+    """The decay's lines, with the replay error of :func:`_idle_error`."""
+    return [
         "Idle decay (no user command): "
         + ", ".join(f"{n} goals factor {f:.7f} ({d.updates[n]} updates)" for n, f in d.factor.items())
         + f"; {d.stretches} idle stretches",
@@ -954,6 +986,25 @@ def format_identification(ident: Identification) -> str:
             if d.excitation is None
             else f"{d.excitation:.1e} /s ({'yes' if d.zero_command_excitation else 'none'})"
         ),
+    ]
+
+
+def _json_decay(d: IdleDecay, ident: Identification) -> dict[str, Any]:
+    """The decay's keys, with the replay error of :func:`_idle_error`."""
+    return {
+        "idle_tau": d.tau,
+        "idle_factor": {str(n): f for n, f in d.factor.items()},
+        "idle_updates": {str(n): k for n, k in d.updates.items()},
+        "idle_stretches": d.stretches,
+        "idle_replay_error": ident.idle_error,
+        "rest_state_deviation": {str(n): v for n, v in d.rest_deviation.items()},
+        "zero_command_excitation": d.zero_command_excitation,
+        "zero_command_excitation_rate": d.excitation,
+    }
+
+
+def _text_alpha(a: AlphaLaw, _: Identification) -> list[str]:
+    return [
         f"Alpha: {a.alpha_max:g} * clip((round(max p, {a.decimals}) - rho1) / (rho2 - rho1), 0, 1), "
         "0 from a request's press to its switch",
         "  "
@@ -961,39 +1012,97 @@ def format_identification(ident: Identification) -> str:
             f"{n} goals: rho1 {lo:g}, rho2 {hi:g} ({a.fit_rows[n]} rows of the linear part)"
             for n, (lo, hi) in a.thresholds.items()
         ),
-        "  rows matched within "
-        f"{ALPHA_TOLERANCE:g}: "
+        f"  rows matched within {ALPHA_TOLERANCE:g}: "
         + ", ".join(f"{i} {t} {100 * v:.1f} % of {a.rows[(i, t)]}" for (i, t), v in a.match.items()),
+    ]
+
+
+def _json_alpha(a: AlphaLaw, _: Identification) -> dict[str, Any]:
+    return {
+        "alpha_thresholds": {str(n): list(v) for n, v in a.thresholds.items()},
+        "alpha_thresholds_above_uniform": {
+            str(n): [round(lo - 1.0 / n, 9), round(hi - 1.0 / n, 9)] for n, (lo, hi) in a.thresholds.items()
+        },
+        "alpha_max": a.alpha_max,
+        "alpha_belief_decimals": a.decimals,
+        "alpha_match": {f"{i}/{t}": v for (i, t), v in a.match.items()},
+    }
+
+
+def _text_requests(r: RequestTiming, _: Identification) -> str:
+    return (
         f"Request time (press to switch): min {r.minimum:.2f} s, median {r.median:.2f} s, "
         f"max {r.maximum:.2f} s ({r.n} requests); alpha and the blended command 0 on "
         f"{100 * r.zero_share:.1f} % of the {r.rows} rows in between; the belief changed on "
         f"{100 * r.belief_change_share:.1f} % of them (the other rows: "
-        f"{100 * r.belief_change_share_outside:.1f} %)",
+        f"{100 * r.belief_change_share_outside:.1f} %)"
+    )
+
+
+def _json_requests(r: RequestTiming, _: Identification) -> dict[str, Any]:
+    return {
+        "request_time": {"min": r.minimum, "median": r.median, "max": r.maximum, "n": r.n},
+        "request_zero_share": r.zero_share,
+        "request_belief_change_share": r.belief_change_share,
+    }
+
+
+def _text_mode_map(name: str, m: ModeMap) -> list[str]:
+    """The lines of one interface's mode map."""
+    ids = MODE_IDS[name][:-1]
+    lines = [
+        f"Mode map, {name} ({m.requests} requests): the new mode is the argmax of the logged mode scores "
+        f"on {100 * m.argmax_share:.1f} %; score columns sum dimensions "
+        + " ".join(_dims(c) for c in m.column_dims)
+        + f" (to {m.sum_residual:.0e})",
+        "  mode ids "
+        + ", ".join(f"{i} = {_dims(o)}" for i, o in zip(ids, m.mode_order, strict=True))
+        + ("" if m.consistent else " (two columns led to the same mode id: inconsistent)"),
     ]
-    for name, m in ident.mode_maps.items():
-        ids = MODE_IDS[name][:-1]
+    ids_left, modes_left = m.unresolved
+    if ids_left:
         lines.append(
-            f"Mode map, {name} ({m.requests} requests): the new mode is the argmax of the logged mode scores "
-            f"on {100 * m.argmax_share:.1f} %; score columns sum dimensions "
-            + " ".join(_dims(c) for c in m.column_dims)
-            + f" (to {m.sum_residual:.0e})"
+            f"  not shown by these requests: which of ids {', '.join(map(str, ids_left))} is which of "
+            + " ".join(_dims(d) for d in modes_left)
         )
-        lines.append(
-            "  mode ids "
-            + ", ".join(f"{i} = {_dims(o)}" for i, o in zip(ids, m.mode_order, strict=True))
-            + ("" if m.consistent else " (two columns led to the same mode id: inconsistent)")
-        )
-        ids_left, modes_left = m.unresolved
-        if ids_left:
-            lines.append(
-                f"  not shown by these requests: which of ids {', '.join(map(str, ids_left))} is which of "
-                + " ".join(_dims(d) for d in modes_left)
-            )
-    kp = ident.known_path
+    return lines
+
+
+def _text_mode_maps(maps: dict[str, ModeMap], _: Identification) -> list[str]:
+    return [line for name, m in maps.items() for line in _text_mode_map(name, m)]
+
+
+def _pooled_argmax(maps: dict[str, ModeMap]) -> float:
+    n = sum(m.requests for m in maps.values())
+    return sum(m.argmax_share * m.requests for m in maps.values()) / n if n else math.nan
+
+
+def _json_mode_maps(maps: dict[str, ModeMap], _: Identification) -> dict[str, Any]:
+    return {
+        "request_mode_is_argmax": _pooled_argmax(maps),
+        "mode_order": {k: _modes_json(m.mode_order) for k, m in maps.items()},
+        "mode_ids": {k: list(MODE_IDS[k][:-1]) for k in maps},
+        "mode_order_unresolved": {
+            k: {"ids": m.unresolved[0], "modes": _modes_json(m.unresolved[1])}
+            for k, m in maps.items()
+            if m.unresolved[0]
+        },
+    }
+
+
+def _text_replay(rep: BeliefReplay) -> str:
+    return (
+        f"  belief replay ({rep.label}: tau {rep.tau:.2f} s, lambda {rep.lam:g}, "
+        f"{rep.updates} updates): per-goal correlation "
+        + " ".join(f"{c:.3f}" for c in rep.correlation)
+        + f", argmax agreement {100 * rep.argmax_agreement:.1f} %"
+    )
+
+
+def _text_known_path(kp: KnownPath | None, _: Identification) -> list[str]:
     if kp is None:
-        lines.append(f"Known path: {KNOWN_PATH_TRIAL} or {KNOWN_PATH_FILE} not in the data")
-        return "\n".join(lines)
-    lines += [
+        return [f"Known path: {KNOWN_PATH_TRIAL} or {KNOWN_PATH_FILE} not in the data"]
+    lines = [
         f"Known path ({kp.trial_id}, {kp.samples} samples of the autonomy's commands): the end effector "
         f"solved from a {kp.attractor_speed:.3f} m/s unit attractor plus repeller, rms under 1e-4 m/s on "
         f"{100 * kp.solved_share:.1f} % of samples (worst {kp.worst_rms:.1e})",
@@ -1010,13 +1119,88 @@ def format_identification(ident: Identification) -> str:
         f"{100 * kp.blend_share:.1f} % of {kp.blend_rows} with a user command, "
         f"{100 * kp.blend_share_idle:.1f} % of {kp.blend_rows_idle} without, within 1e-3",
     ]
-    for rep in (kp.best, *kp.proximity, kp.other):
-        if rep is None:
-            continue
-        lines.append(
-            f"  belief replay ({rep.label}: tau {rep.tau:.2f} s, lambda {rep.lam:g}, "
-            f"{rep.updates} updates): per-goal correlation "
-            + " ".join(f"{c:.3f}" for c in rep.correlation)
-            + f", argmax agreement {100 * rep.argmax_agreement:.1f} %"
-        )
-    return "\n".join(lines)
+    return lines + [_text_replay(rep) for rep in (kp.best, *kp.proximity, kp.other) if rep is not None]
+
+
+def _json_known_path(kp: KnownPath | None, _: Identification) -> dict[str, Any]:
+    if kp is None:
+        return {}
+    out: dict[str, Any] = {
+        "trial": kp.trial_id,
+        "start": list(kp.start),
+        "end": list(kp.end),
+        "solved_share": kp.solved_share,
+        "attractor_speed": kp.attractor_speed,
+        "repeller_radius": kp.repeller_radius,
+        "rotation_speed": kp.rotation_speed,
+        "rotation_share": kp.rotation_share,
+        "blend_share": kp.blend_share,
+        "blend_share_without_command": kp.blend_share_idle,
+        "lambda": kp.best.lam,
+        "correlation": kp.best.correlation,
+        "argmax_agreement": kp.best.argmax_agreement,
+        "proximity": [dataclasses.asdict(r) for r in kp.proximity],
+    }
+    if kp.other is not None:
+        out["other"] = dataclasses.asdict(kp.other)
+    return {"known_path": out}
+
+
+@dataclass(frozen=True)
+class Identifying:
+    """One identification: its ``name`` (its key and attribute in :class:`Identification`), the
+    function that measures it from the logs and what was identified before it, its text lines
+    and its JSON keys (``None``: shown with another identification, which reads it)."""
+
+    name: str
+    identify: Callable[[Logs, Identification], Any]
+    text: Callable[[Any, Identification], str | list[str]] | None
+    json: Callable[[Any, Identification], dict[str, Any]] | None
+
+
+IDENTIFICATIONS: tuple[Identifying, ...] = (
+    Identifying("trials", _trials, _text_trials, _json_trials),
+    Identifying("subjects", _subjects, None, _json_subjects),
+    Identifying("period", _period, _text_period, _json_period),
+    Identifying("decay", _decay, _text_decay, _json_decay),
+    Identifying("idle_error", _idle_error, None, None),
+    Identifying("alpha", _alpha, _text_alpha, _json_alpha),
+    Identifying("requests", _requests, _text_requests, _json_requests),
+    Identifying("mode_maps", _mode_maps, _text_mode_maps, _json_mode_maps),
+    Identifying("known_path", _known_path, _text_known_path, _json_known_path),
+)
+"""What :func:`identify` measures (module docstring), in the order of the text and the JSON: adding
+an identification is a function (with its text and JSON) and a row here."""
+
+
+def identify(
+    data_dir: str | Path,
+    goals: NDArray[np.float64] | None = None,
+    other: tuple[str, DFTParams] | None = None,
+    trials: Sequence[LoggedTrial] | None = None,
+) -> Identification:
+    """Identify the study's system from the logs in ``data_dir`` (module docstring): each of
+    :data:`IDENTIFICATIONS` in turn, each seeing those before it.
+
+    Args:
+        data_dir: The logs' folder (``H*/`` and the trial-order file; any subset of subjects).
+        goals: The reaching task's goal positions ``(5, 3)`` (m) for the known-path trial; ``None``:
+            the embedded reaching task's.
+        other: A labelled DFT setting to replay the known-path trial with beside the identified one.
+        trials: The trials already read from ``data_dir`` (read here if ``None``).
+
+    Raises:
+        ValueError: The logs are missing or malformed, or show no idle updates or no requests.
+    """
+    data_dir = Path(data_dir)
+    logs = Logs(data_dir, read_trials(data_dir) if trials is None else list(trials), goals, other)
+    values: dict[str, Any] = {}
+    for row in IDENTIFICATIONS:
+        values[row.name] = row.identify(logs, Identification(values))
+    return Identification(values)
+
+
+def format_identification(ident: Identification) -> str:
+    """The identification as text, each value with its evidence (the text of each of
+    :data:`IDENTIFICATIONS` that has one)."""
+    return "\n".join(text_lines(IDENTIFICATIONS, ident))

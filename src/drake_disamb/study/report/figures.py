@@ -13,14 +13,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from drake_disamb.config.schema import PARADIGMS
 from drake_disamb.core.interfaces import INTERFACES, interfaces_in
 from drake_disamb.study.analysis.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
+from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.metrics import TrialMetrics
+
+if TYPE_CHECKING:
+    from drake_disamb.plotting import BeliefPlot
 
 __all__ = ["ablation_figure", "save_figure", "source_figures", "trace_figures"]
 
@@ -312,6 +316,32 @@ def source_figures(
     return written
 
 
+def _trace_plot(record: TrialRecord, trace: dict[str, Any]) -> BeliefPlot | None:
+    """The goal-probability plot of a record's trace (``None``: fewer than two samples)."""
+    from drake_disamb.plotting import BeliefPlot
+
+    r = record
+    t, belief = np.asarray(trace["t"], dtype=float), np.asarray(trace["belief"], dtype=float)
+    u_h = np.asarray(trace["u_h"], dtype=float)
+    if len(t) < 2:
+        return None
+    n = belief.shape[1]
+    intended = r.intended_goals[0] if len(r.intended_goals) == 1 and r.intended_goals[0] < n else None
+    return BeliefPlot(
+        t,
+        belief,
+        rho1=1.2 / n,
+        request_times=r.request_times,
+        mode_switch_times=r.mode_switch_times,
+        intended_goal=intended,
+        # The authors' u_h has no time stamps of its own (and another length): not drawn.
+        command_times=t if len(u_h) == len(t) else None,
+        commands=u_h if len(u_h) == len(t) else None,
+        end_time=r.duration,
+        title=f"{r.trial_id}: {INTERFACE_NAMES[r.interface]}, {r.task}, {r.paradigm} ({r.source})",
+    )
+
+
 def trace_figures(
     folder: Path,
     trials: Sequence[TrialMetrics],
@@ -344,25 +374,10 @@ def trace_figures(
             if warn is not None:
                 warn(f"{exc}; left out of the figures")
             continue
-        t, belief = np.asarray(trace["t"], dtype=float), np.asarray(trace["belief"], dtype=float)
-        u_h = np.asarray(trace["u_h"], dtype=float)
-        if len(t) < 2:
+        plot = _trace_plot(r, trace)
+        if plot is None:
             continue
-        n = belief.shape[1]
-        intended = r.intended_goals[0] if len(r.intended_goals) == 1 and r.intended_goals[0] < n else None
-        fig = goal_probability_figure(
-            t,
-            belief,
-            rho1=1.2 / n,
-            request_times=r.request_times,
-            mode_switch_times=r.mode_switch_times,
-            intended_goal=intended,
-            # The authors' u_h has no time stamps of its own (and another length): not drawn.
-            command_times=t if len(u_h) == len(t) else None,
-            commands=u_h if len(u_h) == len(t) else None,
-            end_time=r.duration,
-            title=f"{r.trial_id}: {INTERFACE_NAMES[r.interface]}, {r.task}, {r.paradigm} ({r.source})",
-        )
+        fig = goal_probability_figure(plot)
         written.append(save_figure(fig, out / f"traces_{r.interface}_{r.task}_{r.paradigm}{suffix}.png"))
         seen.add(key)
     return written

@@ -66,7 +66,7 @@ from drake_disamb.study.analysis.per_goal import per_goal
 from drake_disamb.study.analysis.stats import MIXED_METRICS, run_tests
 from drake_disamb.study.data.folder import StudyFolder, write_atomic
 from drake_disamb.study.data.records import RecordError, TrialRecord
-from drake_disamb.study.measures.metrics import request_time_skewness, summarize, trial_metrics
+from drake_disamb.study.measures.metrics import TrialMetrics, request_time_skewness, summarize, trial_metrics
 from drake_disamb.study.report.effect_table import EFFECT_HEADERS, effect_cells
 from drake_disamb.study.report.figures import ablation_figure, save_figure, source_figures, trace_figures
 
@@ -229,6 +229,185 @@ def _json_clean(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     ]
 
 
+def _intro(
+    folder: Path, records: Sequence[TrialRecord], sources: Sequence[str], summary: list[dict[str, Any]]
+) -> list[str]:
+    """The note on what the report reads and how it counts, and the summary table."""
+    return [
+        f'<p class="note">{len(records)} trials from '
+        f"<code>{html.escape(str(folder / 'trials.jsonl'))}</code>; "
+        f"sources: {', '.join(sources)}"
+        + (" (a mix: every table and figure is per source)" if len(sources) > 1 else "")
+        + ". Means over the analysed trials (valid and not failed: failed trials are left out, as the "
+        "authors did; they count in the success rate), after the authors' cleaning (requests less "
+        "than 3 s apart merged, "
+        "repeated joystick presses into the same mode within 2 s dropped); raw means in the *_raw columns. "
+        "Tests: two-sided Wilcoxon rank-sum over trials (scipy mannwhitneyu); "
+        "*** p &lt; 0.001, ** p &lt; 0.01, "
+        "* p &lt; 0.05.</p>",
+        "<h2>Summary</h2>",
+        _table(summary, SUMMARY_COLUMNS),
+    ]
+
+
+def _findings_section(mine: Sequence[TrialMetrics], tests: list[dict[str, Any]], source: str) -> list[str]:
+    """The table "the paper's finding / ours / agree?" of one source."""
+    return [
+        f"<h2>The paper's findings: the paper / ours ({html.escape(source)}) / agree?</h2>",
+        _table(
+            findings(mine, tests, source),
+            ("paper", "ours", "agree", "criterion"),
+            ("the paper's finding", "ours", "agree?", "criterion"),
+        ),
+    ]
+
+
+def _skewness_rows(mine: Sequence[TrialMetrics]) -> list[dict[str, Any]]:
+    """Per interface, task and paradigm with requests (Disambiguation, Automatic): the request-time
+    skewness beside the paper's."""
+    rows = []
+    for interface in interfaces_in(m.record.interface for m in mine):
+        for task in ("reaching", "pouring"):
+            for paradigm in ("disambiguation", "automatic"):
+                sel = [m for m in select_trials(mine, interface, task) if m.record.paradigm == paradigm]
+                if not sel:
+                    continue
+                rows.append(
+                    {
+                        "interface": interface,
+                        "task": task,
+                        "paradigm": paradigm,
+                        "requests": sum(len(m.normalized_request_times) for m in sel),
+                        "skewness": request_time_skewness(sel),
+                        "paper": PAPER_SKEWNESS.get((interface, task))
+                        if paradigm == "disambiguation"
+                        else None,
+                    }
+                )
+    return rows
+
+
+def _skewness_section(mine: Sequence[TrialMetrics], source: str) -> list[str]:
+    """The request-time skewness table of one source."""
+    return [
+        f"<h2>Skewness of request times ({html.escape(source)})</h2>",
+        '<p class="note">Cleaned request times divided by the trial\'s duration, pooled over the '
+        "analysed trials of a condition; biased sample skewness (MATLAB skewness, scipy.stats.skew).</p>",
+        _table(_skewness_rows(mine), ("interface", "task", "paradigm", "requests", "skewness", "paper")),
+    ]
+
+
+def _source_sections(
+    folder: Path,
+    out: Path,
+    mine: Sequence[TrialMetrics],
+    tests: list[dict[str, Any]],
+    source: str,
+    suffix: str,
+) -> tuple[list[str], list[Path]]:
+    """The sections of one source (its findings, skewness, figures and example traces) and the
+    figures written for them (named with ``suffix``)."""
+    sections = _findings_section(mine, tests, source) + _skewness_section(mine, source)
+    figures: list[Path] = []
+    for path, caption in source_figures(mine, tests, source, out, suffix):
+        figures.append(path)
+        sections.append(f"<h2>{html.escape(caption)} ({html.escape(source)})</h2>")
+        sections.append(_img(path, caption))
+    traces = trace_figures(folder, mine, out, suffix, warn=_warn)
+    figures += traces
+    sections.append(f"<h2>Example goal-probability traces ({html.escape(source)})</h2>")
+    if not traces:
+        sections.append('<p class="note">No traces in traces/ for these trials.</p>')
+    for path in traces:
+        sections.append(_img(path, path.stem))
+    return sections, figures
+
+
+def _tests_sections(tests: list[dict[str, Any]]) -> list[str]:
+    """The rank-sum tests of the main metrics and the per-subject checks."""
+    per_subject = [
+        t
+        for t in tests
+        if t["test"] != "ranksum"
+        and t["metric"] in ("button_presses", "completion_time")
+        and t["interface"] != "all"
+        and t["task"] == "all"
+    ]
+    return [
+        "<h2>Rank-sum tests (main metrics)</h2>",
+        '<p class="note">effect_size: rank-biserial correlation (positive: a larger), '
+        "95 % bootstrap interval; every test, the raw counts and the per-subject checks "
+        "(signed-rank on subject means, mixed model with a "
+        "random intercept per subject) are in stats.json.</p>",
+        _table([t for t in tests if t["test"] == "ranksum" and t["metric"] in MAIN_METRICS], TEST_COLUMNS),
+        "<h2>Per-subject checks (button presses, completion time)</h2>",
+        _table(
+            per_subject,
+            ("source", *TEST_KEY, "test", "n_a", "n_b", "statistic", "p_value", "stars", "note"),
+        ),
+    ]
+
+
+def _means_section(
+    out: Path, compare: str | Path, summary: list[dict[str, Any]], other: Sequence[TrialRecord]
+) -> list[str]:
+    """``compare.json`` written, and its section: the means here beside the other folder's."""
+    rows = _json_clean(compare_summaries(summary, _json_clean(summarize(other))))
+    _write_json(out / "compare.json", rows)
+    cols = ["interface", "task", "paradigm", "source", "other_source"]
+    for name in COMPARED:
+        cols += [name, f"other_{name}", f"ratio_{name}", f"within_{name}"]
+    return [
+        f"<h2>Compared with {html.escape(str(compare))}</h2>",
+        '<p class="note">Ratio = this folder / the other; flagged (red) outside 50 % '
+        "(the criterion for a simulated population: "
+        "its means within 50 % of the people's).</p>",
+        _table(rows, cols),
+    ]
+
+
+def _effect_section(
+    out: Path, records: Sequence[TrialRecord], other: Sequence[TrialRecord], tests: list[dict[str, Any]]
+) -> list[str]:
+    """``paradigm_effect.json`` written, and its section: the paradigm effect here and there."""
+    effect = _json_clean(paradigm_effect(records, other, tests))
+    _write_json(out / "paradigm_effect.json", effect)
+    headers = ("source", "other source", *EFFECT_HEADERS)
+    cells = [{"source": r["source"], "other source": r["other_source"], **effect_cells(r)} for r in effect]
+    return [
+        "<h2>Paradigm effect: this folder beside the other</h2>",
+        '<p class="note">The Manual -&gt; Disambiguation effect on button presses and user mode '
+        "switches, per interface (both tasks) and per interface and task, here ("
+        + html.escape(", ".join(sorted({r.source for r in records})))
+        + ") and in the other folder ("
+        + html.escape(", ".join(sorted({r.source for r in other})))
+        + "): n (Manual/Disambiguation trials), the two means and the two-sided rank-sum p, "
+        "as the summary and the tests above compute them (analysed trials: failed ones left out, "
+        "after the authors' cleaning), the relative change (Dis - Man) / Man, the ratio of the "
+        "relative changes (here / there) and the check: same direction and within a factor of 2 "
+        "(ratio in [0.5, 2]). - : no test for the cell on that side (no analysed trials of a "
+        "paradigm); n/a: no ratio. The numbers are in paradigm_effect.json.</p>",
+        _table(cells, headers),
+    ]
+
+
+def _per_goal_section(out: Path, records: Sequence[TrialRecord], other: Sequence[TrialRecord]) -> list[str]:
+    """``per_goal.json`` written, and its section: the means per intended goal here and there."""
+    goals = _json_clean(per_goal(records, other))
+    _write_json(out / "per_goal.json", goals)
+    goal_cols = ["interface", "task", "paradigm", "goal"]
+    goal_cols += [f"{p}{k}" for p in ("", "other_") for k in GOAL_SIDE_KEYS]
+    return [
+        "<h2>Per intended goal: this folder beside the other</h2>",
+        '<p class="note">The tasks whose records name one intended goal (reaching), per interface, '
+        "paradigm and goal (0-based): trials, failed trials, and the means over the analysed ones "
+        "(user mode switches, requests, completion time in s), here and in the other folder. A "
+        "condition's mean above mixes the goals its trials drew. The numbers are in "
+        "per_goal.json.</p>",
+        _table(goals, goal_cols),
+    ]
+
+
 def write_report(
     folder: str | Path, compare: str | Path | None = None, mixed_model: bool = True
 ) -> ReportFiles:
@@ -256,151 +435,19 @@ def write_report(
     _write_json(out / "summary.json", summary)
     _write_json(out / "stats.json", tests)
     sources = sorted({r.source for r in records})
+    sections = _intro(folder, records, sources, summary)
     figures: list[Path] = []
-    sections = [
-        f'<p class="note">{len(records)} trials from '
-        f"<code>{html.escape(str(folder / 'trials.jsonl'))}</code>; "
-        f"sources: {', '.join(sources)}"
-        + (" (a mix: every table and figure is per source)" if len(sources) > 1 else "")
-        + ". Means over the analysed trials (valid and not failed: failed trials are left out, as the "
-        "authors did; they count in the success rate), after the authors' cleaning (requests less "
-        "than 3 s apart merged, "
-        "repeated joystick presses into the same mode within 2 s dropped); raw means in the *_raw columns. "
-        "Tests: two-sided Wilcoxon rank-sum over trials (scipy mannwhitneyu); "
-        "*** p &lt; 0.001, ** p &lt; 0.01, "
-        "* p &lt; 0.05.</p>",
-        "<h2>Summary</h2>",
-        _table(summary, SUMMARY_COLUMNS),
-    ]
     for source in sources:
         mine = [m for m in trials if m.record.source == source]
         suffix = "" if len(sources) == 1 else f"_{source}"
-        sections.append(f"<h2>The paper's findings: the paper / ours ({html.escape(source)}) / agree?</h2>")
-        sections.append(
-            _table(
-                findings(mine, tests, source),
-                ("paper", "ours", "agree", "criterion"),
-                ("the paper's finding", "ours", "agree?", "criterion"),
-            )
-        )
-        skew_rows = []
-        for interface in interfaces_in(m.record.interface for m in mine):
-            for task in ("reaching", "pouring"):
-                for paradigm in ("disambiguation", "automatic"):
-                    sel = [m for m in select_trials(mine, interface, task) if m.record.paradigm == paradigm]
-                    if not sel:
-                        continue
-                    skew_rows.append(
-                        {
-                            "interface": interface,
-                            "task": task,
-                            "paradigm": paradigm,
-                            "requests": sum(len(m.normalized_request_times) for m in sel),
-                            "skewness": request_time_skewness(sel),
-                            "paper": PAPER_SKEWNESS.get((interface, task))
-                            if paradigm == "disambiguation"
-                            else None,
-                        }
-                    )
-        sections.append(f"<h2>Skewness of request times ({html.escape(source)})</h2>")
-        sections.append(
-            '<p class="note">Cleaned request times divided by the trial\'s duration, pooled over the '
-            "analysed trials of a condition; biased sample skewness (MATLAB skewness, scipy.stats.skew).</p>"
-        )
-        sections.append(_table(skew_rows, ("interface", "task", "paradigm", "requests", "skewness", "paper")))
-        for path, caption in source_figures(mine, tests, source, out, suffix):
-            figures.append(path)
-            sections.append(f"<h2>{html.escape(caption)} ({html.escape(source)})</h2>")
-            sections.append(_img(path, caption))
-        traces = trace_figures(folder, mine, out, suffix, warn=_warn)
-        figures += traces
-        sections.append(f"<h2>Example goal-probability traces ({html.escape(source)})</h2>")
-        if not traces:
-            sections.append('<p class="note">No traces in traces/ for these trials.</p>')
-        for path in traces:
-            sections.append(_img(path, path.stem))
-    sections.append("<h2>Rank-sum tests (main metrics)</h2>")
-    sections.append(
-        '<p class="note">effect_size: rank-biserial correlation (positive: a larger), '
-        "95 % bootstrap interval; every test, the raw counts and the per-subject checks "
-        "(signed-rank on subject means, mixed model with a "
-        "random intercept per subject) are in stats.json.</p>"
-    )
-    sections.append(
-        _table([t for t in tests if t["test"] == "ranksum" and t["metric"] in MAIN_METRICS], TEST_COLUMNS)
-    )
-    per_subject = [
-        t
-        for t in tests
-        if t["test"] != "ranksum"
-        and t["metric"] in ("button_presses", "completion_time")
-        and t["interface"] != "all"
-        and t["task"] == "all"
-    ]
-    sections.append("<h2>Per-subject checks (button presses, completion time)</h2>")
-    sections.append(
-        _table(
-            per_subject,
-            (
-                "source",
-                *TEST_KEY,
-                "test",
-                "n_a",
-                "n_b",
-                "statistic",
-                "p_value",
-                "stars",
-                "note",
-            ),
-        )
-    )
-    if other is not None:
-        rows = _json_clean(compare_summaries(summary, _json_clean(summarize(other))))
-        _write_json(out / "compare.json", rows)
-        sections.append(f"<h2>Compared with {html.escape(str(compare))}</h2>")
-        sections.append(
-            '<p class="note">Ratio = this folder / the other; flagged (red) outside 50 % '
-            "(the criterion for a simulated population: "
-            "its means within 50 % of the people's).</p>"
-        )
-        cols = ["interface", "task", "paradigm", "source", "other_source"]
-        for name in COMPARED:
-            cols += [name, f"other_{name}", f"ratio_{name}", f"within_{name}"]
-        sections.append(_table(rows, cols))
-        effect = _json_clean(paradigm_effect(records, other, tests))
-        _write_json(out / "paradigm_effect.json", effect)
-        sections.append("<h2>Paradigm effect: this folder beside the other</h2>")
-        sections.append(
-            '<p class="note">The Manual -&gt; Disambiguation effect on button presses and user mode '
-            "switches, per interface (both tasks) and per interface and task, here ("
-            + html.escape(", ".join(sorted({r.source for r in records})))
-            + ") and in the other folder ("
-            + html.escape(", ".join(sorted({r.source for r in other})))
-            + "): n (Manual/Disambiguation trials), the two means and the two-sided rank-sum p, "
-            "as the summary and the tests above compute them (analysed trials: failed ones left out, "
-            "after the authors' cleaning), the relative change (Dis - Man) / Man, the ratio of the "
-            "relative changes (here / there) and the check: same direction and within a factor of 2 "
-            "(ratio in [0.5, 2]). - : no test for the cell on that side (no analysed trials of a "
-            "paradigm); n/a: no ratio. The numbers are in paradigm_effect.json.</p>"
-        )
-        headers = ("source", "other source", *EFFECT_HEADERS)
-        cells = [
-            {"source": r["source"], "other source": r["other_source"], **effect_cells(r)} for r in effect
-        ]
-        sections.append(_table(cells, headers))
-        goals = _json_clean(per_goal(records, other))
-        _write_json(out / "per_goal.json", goals)
-        sections.append("<h2>Per intended goal: this folder beside the other</h2>")
-        sections.append(
-            '<p class="note">The tasks whose records name one intended goal (reaching), per interface, '
-            "paradigm and goal (0-based): trials, failed trials, and the means over the analysed ones "
-            "(user mode switches, requests, completion time in s), here and in the other folder. A "
-            "condition's mean above mixes the goals its trials drew. The numbers are in "
-            "per_goal.json.</p>"
-        )
-        goal_cols = ["interface", "task", "paradigm", "goal"]
-        goal_cols += [f"{p}{k}" for p in ("", "other_") for k in GOAL_SIDE_KEYS]
-        sections.append(_table(goals, goal_cols))
+        part, drawn = _source_sections(folder, out, mine, tests, source, suffix)
+        sections += part
+        figures += drawn
+    sections += _tests_sections(tests)
+    if compare is not None and other is not None:
+        sections += _means_section(out, compare, summary, other)
+        sections += _effect_section(out, records, other, tests)
+        sections += _per_goal_section(out, records, other)
     files = _write_page(out, f"Study report: {folder.name}", sections, figures)
     if other is not None:
         files.paradigm_effect = out / "paradigm_effect.json"
