@@ -50,7 +50,7 @@ scheme the script prints, over all ticks of all trials:
 
 For comparison it also prints the authors' own discretisation replayed by the numpy core
 (:func:`~drake_disamb.core.comparison.replay_trials`: explicit Euler, clip and renormalise) at the data's
-2 ms (with the authors' parameters on all 100 trials: the numbers of the README's inference table)
+2 ms (with the authors' parameters on all 100 trials: the numbers of docs/results.md's inference table)
 and on the tick samples at ``T``.
 
 The machine's state (hypervisor steal, load, speed gauge) is printed with each setting, since the
@@ -443,7 +443,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"parameters ({params.tau1=}, {params.tau2=}, lam={params.lam}); {host_summary()}"
     )
     full = core_replay_accuracy(trials, params)
-    readme = "; the README's inference table" if args.params == "authors" and args.limit is None else ""
+    readme = "; docs/results.md's inference table" if args.params == "authors" and args.limit is None else ""
     print(
         f"core replay at the data's dt = {trials[0].dt * 1e3:g} ms (authors' Euler + clip/renormalise"
         f"{readme}): paper {100 * full[0]:.2f} %, strict {100 * full[1]:.2f} %"

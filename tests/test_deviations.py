@@ -1,4 +1,4 @@
-"""The switches for every deviation from the paper (README "Where we differ from the paper"): each
+"""The switches for every deviation from the paper (docs/choices.md, "Where we differ from the paper"): each
 scenario option selects the paper's behaviour or ours, reaches the code that uses it, and refuses a
 bad value naming the field and the value."""
 

@@ -235,7 +235,7 @@ def test_default_scenario_object_is_invalid_without_goals() -> None:
 
 
 # ------------------------------------------------------------------------------------------------
-# Validation that matches the README: trials it lets through can be run
+# Validation that matches docs/scenarios.md: trials it lets through can be run
 # ------------------------------------------------------------------------------------------------
 
 
