@@ -5,6 +5,8 @@ person's keyboard sends them) on the page the commands print.
   percentage; holding a key moves the arm and the text follows; after the request key, within the
   request's latency plus 1 s, a line names the chosen mode and the goals it tells apart, and the
   scene shows the cue (screenshots before and after the request);
+- ``study session``: a two-trial session and its questionnaire, done on the page; one record per
+  trial and the answers in the folder; ``study report`` prints the questionnaire's table;
 - ``demo --live --station lcm`` against ``mico-driver``: the page drives the simulated driver over
   LCM.
 
@@ -187,6 +189,86 @@ def test_the_page_says_what_the_robot_believes_and_why_it_chose_a_mode(browser: 
     assert (tmp_path / "before_request.png").stat().st_size > 0 and (tmp_path / "after_request.png").is_file()
 
 
+def test_a_session_and_its_questionnaire_done_at_the_page(browser: Any, tmp_path: Path) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
+    from test_study_session import protocol_file
+
+    out = tmp_path / "sessions"
+    session = cli_process(
+        "study",
+        "session",
+        "--subject",
+        "P01",
+        "--out",
+        str(out),
+        "--protocol",
+        str(protocol_file(tmp_path, 6.0)),
+    )
+    try:
+        _open(browser, _page_url(wait_for_line(session, "trial 1 of 2", timeout=300)))
+
+        def screen_title() -> str:
+            return browser.execute_script(
+                "const s = document.getElementById('op-screen'); return s && !s.closest('[hidden]') && "
+                "s.querySelector('h1').textContent"
+            )
+
+        assert _wait(screen_title, "no instructions").startswith("Trial 1 of 2: Head array, reaching")
+        assert "Your goal: the" in browser.find_element(By.ID, "op-screen").text
+        browser.save_screenshot(str(tmp_path / "instructions.png"))
+        _press(browser, Keys.ENTER)  # the person is ready
+        _wait(lambda: not screen_title(), "the trial did not start")
+        _hold(browser, Keys.ARROW_LEFT, 1.0)
+        title = _wait(
+            lambda: (screen_title() or "").startswith("Trial 2") and screen_title(), "no second trial", 60
+        )
+        assert "Rest as long as you like" in browser.find_element(By.ID, "op-screen").text
+        assert title.startswith("Trial 2 of 2: Head array, reaching")
+        _press(browser, Keys.ENTER)
+        _wait(lambda: not screen_title(), "the second trial did not start")
+        time.sleep(1.0)
+        _press(browser, Keys.ESCAPE)  # the experimenter ends it
+        _wait(lambda: screen_title() == "Questionnaire", "no questionnaire", 60)
+        selects = browser.find_elements(By.CSS_SELECTOR, "#op-survey select")
+        names = [f"Q{k}|head_array/reaching" for k in (1, 2, 3)] + ["Q4", "Q5", "Q6", "Q7"]
+        assert [s.get_attribute("name") for s in selects] == names
+        for select, value in zip(
+            selects, ["5", "6", "4", "head_array", "head_array", "disambiguation"], strict=False
+        ):
+            Select(select).select_by_value(value)
+        browser.find_element(By.ID, "op-go").click()  # Q7 unanswered: the page says so, keeps the rest
+        _wait(
+            lambda: "Q7: choose one of" in browser.find_element(By.ID, "op-screen-error").text, "no error", 30
+        )
+        assert Select(selects[1]).first_selected_option.get_attribute("value") == "6"
+        Select(selects[6]).select_by_value("manual")
+        browser.save_screenshot(str(tmp_path / "questionnaire.png"))
+        browser.find_element(By.ID, "op-go").click()
+        _wait(lambda: screen_title() == "Thank you!", "the session did not end", 60)
+        stdout, err = session.communicate(timeout=60)
+    finally:
+        if session.poll() is None:
+            session.kill()
+    assert session.returncode == 0, err
+    records = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
+    assert [r["trial_id"] for r in records] == [
+        "P01-head_array-reaching-manual-r0",
+        "P01-head_array-reaching-disambiguation-r0",
+    ]
+    assert all(r["source"] == "human" for r in records)
+    assert (
+        records[0]["extra"]["ended_by"] == "time limit" and records[1]["extra"]["ended_by"] == "experimenter"
+    )
+    survey = json.loads((out / "surveys.jsonl").read_text())
+    assert survey["ratings"]["Q2"] == {"head_array/reaching": 6} and survey["preferences"]["Q7"] == "manual"
+    report = cli_process("study", "report", str(out), "--no-mixed-model")
+    printed, err = report.communicate(timeout=300)
+    assert report.returncode == 0, err
+    assert "Questionnaire" in printed and "6.19 \u00b1 0.75" in printed and "disambiguation/manual" in printed
+
+
 def test_the_page_drives_the_simulated_driver_over_lcm(browser: Any, tmp_path: Path) -> None:
     from selenium.webdriver.common.keys import Keys
     from test_station_lcm import multicast_url
@@ -214,4 +296,3 @@ def test_the_page_drives_the_simulated_driver_over_lcm(browser: Any, tmp_path: P
     assert demo is not None and demo.returncode == 130, err
     assert "station fault" not in err
     assert _trace_moved(record) > 0.05
-

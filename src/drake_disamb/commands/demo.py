@@ -85,6 +85,7 @@ from drake_disamb.commands._meshcat import (
 )
 from drake_disamb.commands._outputs import check_output_dir
 from drake_disamb.commands._page import add_page_arguments, print_page_address, start_page
+from drake_disamb.commands._record import NotRecorded, append_or_keep
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 from drake_disamb.commands._station import (
     EXIT_STATION_FAULT,
@@ -321,11 +322,6 @@ def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]
     return trial_id, n
 
 
-class NotRecorded(Exception):
-    """The ``--record`` folder did not take a person's trial; the message (one line) says why and
-    names the file that keeps it."""
-
-
 def record_human_trial(result, folder: Path, subject: str, trial_id: str, repetition: int) -> str:  # noqa: ANN001 (TrialResult)
     """Append a person's trial to the study folder ``folder`` (source ``human``) with its trace in
     ``folder/traces/``, and return its ``trial_id``.
@@ -340,7 +336,7 @@ def record_human_trial(result, folder: Path, subject: str, trial_id: str, repeti
             (:func:`~drake_disamb.study.data.folder.keep_unsaved`), which the message names.
         ValueError: A value of the trial the record refuses (names the field).
     """
-    from drake_disamb.study.data.folder import StudyFolder, keep_unsaved
+    from drake_disamb.study.data.folder import StudyFolder
     from drake_disamb.study.run.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
@@ -364,20 +360,8 @@ def record_human_trial(result, folder: Path, subject: str, trial_id: str, repeti
         wall_time=0.0,
         extra={"live": True, "scenario_seed": sc.seed},
     )
-    if failure is None:
-        try:
-            study.append(record, trace)
-            return trial_id
-        except (OSError, ValueError) as exc:
-            failure = exc
-    why = failure.strerror if isinstance(failure, OSError) and failure.strerror else failure
-    try:
-        kept = keep_unsaved(folder, record, trace)
-    except OSError as exc:
-        raise NotRecorded(
-            f"{folder} did not take the trial ({why}), nor could it be kept beside it ({exc})"
-        ) from None
-    raise NotRecorded(f"{folder} did not take the trial ({why}); it is kept in {kept}")
+    append_or_keep(study, record, trace, failure)
+    return trial_id
 
 
 def _record_failed(message: object) -> int:
