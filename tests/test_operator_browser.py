@@ -296,3 +296,18 @@ def test_the_page_drives_the_simulated_driver_over_lcm(browser: Any, tmp_path: P
     assert demo is not None and demo.returncode == 130, err
     assert "station fault" not in err
     assert _trace_moved(record) > 0.05
+
+
+@pytest.mark.slow
+def test_the_latency_benchmark_measures_the_page() -> None:
+    """``benchmarks/bench_page_latency.py`` measures every state the page drew: drawn after it
+    arrived, which is after it was published."""
+    from support import benchmark_module
+
+    pytest.importorskip("selenium.webdriver", reason="needs the selenium package")
+    with benchmark_module("bench_page_latency") as bench:
+        delays, rate = bench.measure(4.0)
+    assert delays.ndim == 2 and delays.shape[1] == 2 and len(delays) >= 10
+    shown, arrived = delays[:, 0], delays[:, 1]
+    assert np.all(np.isfinite(delays)) and np.all(arrived > -0.005) and np.all(shown >= arrived)
+    assert 0.5 < rate < 1.5  # at real time
