@@ -83,6 +83,25 @@ def _open(driver: Any, url: str) -> None:
     )
 
 
+def _scene_drawn(driver: Any) -> None:
+    """Wait until the page's scene (Meshcat in its iframe) holds the arm and the goals, and a
+    moment for the browser to draw them."""
+    from selenium.webdriver.common.by import By
+
+    def drawn() -> bool:
+        driver.switch_to.frame(driver.find_element(By.ID, "scene"))
+        try:
+            return driver.execute_script(
+                "return typeof viewer !== 'undefined' && ['drake', 'shared_control']"
+                ".every(k => k in viewer.scene_tree.children);"
+            )
+        finally:
+            driver.switch_to.default_content()
+
+    _wait(drawn, "the scene never arrived in its iframe", 60)
+    time.sleep(1.0)
+
+
 def _panel(driver: Any) -> dict[str, Any]:
     """The panel state the page shows now."""
     return driver.execute_script("return operatorPage.lastMessage && operatorPage.lastMessage.panel")
@@ -146,6 +165,7 @@ def test_the_page_says_what_the_robot_believes_and_why_it_chose_a_mode(browser: 
         assert re.search(r"share of the motion\s+\d+ %", text, re.IGNORECASE)
         assert "move right/left (x)" in text and "\u2190" in text and "ask the robot to choose" in text
         before = _percentages(text, names)
+        _scene_drawn(browser)
         browser.save_screenshot(str(tmp_path / "before_request.png"))
         _hold(browser, Keys.ARROW_LEFT, 2.5)  # the Left switch held: +x
         after = _percentages(_text(browser), names)
