@@ -1,6 +1,6 @@
 """The layers contract (``[tool.importlinter]`` in pyproject.toml): the package keeps it, and an
-upward import, Drake in the core, a private module imported from another package or an import
-circle between sibling packages each break it."""
+upward import, Drake in the core or in the simulated user's policy, a private module imported from
+another package or an import circle between sibling packages each break it."""
 
 from __future__ import annotations
 
@@ -60,6 +60,9 @@ def package_copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
         ("station/config.py", "from drake_disamb import builder", "Layers import one way", "builder"),
         # Drake in the numpy core.
         ("core/layout.py", "import pydrake.math", "The core is numpy", "pydrake"),
+        # Drake in the simulated user's policy, directly and through the package it is read from.
+        ("user/policy.py", "import pydrake.math", "The simulated user's policy is numpy", "pydrake"),
+        ("user/__init__.py", "from drake_disamb.user import system", "The simulated user's policy", "system"),
         # A private module of another package.
         ("builder.py", "from drake_disamb.core import _kernels", "A private module", "_kernels"),
         # Two siblings of one layer (independent) importing each other.

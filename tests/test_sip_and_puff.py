@@ -21,8 +21,8 @@ from drake_disamb.core.interfaces import (
     interface_update,
 )
 from drake_disamb.core.interfaces.sip_and_puff import SipAndPuff
-from drake_disamb.core.user import UserConfig, UserState, user_step
 from drake_disamb.systems.live import LiveState, live_raw_step
+from drake_disamb.user import UserConfig, UserState, user_step
 
 CFG = InterfaceConfig(kind="sip_and_puff")
 KIND = CFG.variant

@@ -62,7 +62,7 @@ from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
 from drake_disamb.systems.interfaces import make_interface
 from drake_disamb.systems.task import FixedGoalSet, TaskManager
-from drake_disamb.systems.user import SimulatedUser
+from drake_disamb.user.system import SimulatedUser
 
 LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
     ("belief", "inference", "belief"),

@@ -48,10 +48,10 @@ from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, P
 from drake_disamb.core.inference import AGREEMENT_MEASURES, INFERENCE_METHODS, DFTParams
 from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS
 from drake_disamb.core.layout import SHAPE_SIZES
-from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import MAX_GOALS
 from drake_disamb.station import default_plant_config
 from drake_disamb.station.backends import Sim, StationBackend
+from drake_disamb.user import UserConfig
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
@@ -139,7 +139,7 @@ UserBehaviorSpec = _spec_class(
     "UserBehaviorSpec",
     UserConfig(stall_time=None, request_when_unhelped_for=None),
     exclude=("rho1", "seed"),
-    doc="""The simulated user's behaviour: the fields of :class:`drake_disamb.core.user.UserConfig`
+    doc="""The simulated user's behaviour: the fields of :class:`drake_disamb.user.UserConfig`
     but ``seed`` and ``rho1``, which the resolver sets from :attr:`Scenario.seed` and the blending
     thresholds. ``stall_time`` and ``request_when_unhelped_for`` are off when left out (the
     embedded tasks set 2 s and 3 s).""",

@@ -133,7 +133,7 @@ class Protocol:
     """The study protocol (see the module docstring and ``study/protocol.yaml``).
 
     Attributes:
-        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.design.population``).
+        subjects: Number of simulated subjects (drawn by ``drake_disamb.user.population``).
         interfaces: Interfaces every subject uses.
         tasks: Tasks and their start poses.
         paradigms: Paradigms and their trials per condition.

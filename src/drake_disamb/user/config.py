@@ -4,7 +4,7 @@
 (reaction and timing), :class:`CommandConfig` (the command and its noise, judging where to stop),
 :class:`ModeChoiceConfig` (which mode next, stalls, reviews, overshoots), :class:`RequestConfig`
 (disambiguation requests) and :class:`PauseConfig`. Every behaviour is off by default (the
-deterministic user of :mod:`drake_disamb.core.user.rules`).
+deterministic user of :mod:`drake_disamb.user.rules`).
 
 Every field of every group also has one flat name, its own (the groups share none): a scenario's
 ``user.config``, a population's overrides and ``dataclasses.replace`` give
