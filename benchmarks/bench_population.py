@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_disamb.config import load_scenario
-from drake_disamb.core.interfaces import interface_modes
+from drake_disamb.interfaces import interface_modes
 from drake_disamb.study.data.authors import read_trials
 from drake_disamb.study.design.protocol import default_protocol
 from drake_disamb.study.measures.calibration import estimate_behaviour

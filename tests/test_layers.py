@@ -1,6 +1,7 @@
 """The layers contract (``[tool.importlinter]`` in pyproject.toml): the package keeps it, and an
-upward import, Drake in the core or in the simulated user's policy, a private module imported from
-another package or an import circle between sibling packages each break it."""
+upward import, Drake in the core, in the simulated user's policy or in an interface's model, a
+private module imported from another package or an import circle between sibling packages each
+break it."""
 
 from __future__ import annotations
 
@@ -63,6 +64,8 @@ def package_copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
         # Drake in the simulated user's policy, directly and through the package it is read from.
         ("user/policy.py", "import pydrake.math", "The simulated user's policy is numpy", "pydrake"),
         ("user/__init__.py", "from drake_disamb.user import system", "The simulated user's policy", "system"),
+        # Drake in an interface's model (a kind's module).
+        ("interfaces/kinds/joystick.py", "import pydrake.math", "An interface's model is numpy", "pydrake"),
         # A private module of another package.
         ("builder.py", "from drake_disamb.core import _kernels", "A private module", "_kernels"),
         # Two siblings of one layer (independent) importing each other.

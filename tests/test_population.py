@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update
 from drake_disamb.core.sampling import lognormal
+from drake_disamb.interfaces import InterfaceConfig, initial_state, interface_update
 from drake_disamb.user import (
     UserConfig,
     UserState,

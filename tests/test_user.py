@@ -10,7 +10,7 @@ import pytest
 from support import integrate_pose
 
 from drake_disamb.core.geometry import quat_from_rotvec
-from drake_disamb.core.interfaces import (
+from drake_disamb.interfaces import (
     REQUEST_BUTTON,
     InterfaceConfig,
     command_from_raw,
@@ -526,9 +526,9 @@ def test_diagram_loop_reaches_goal() -> None:
     from pydrake.systems.primitives import ConstantVectorSource
 
     from drake_disamb.core.blending import BlendingConfig
+    from drake_disamb.interfaces.system import make_interface
     from drake_disamb.systems.autonomy import PotentialFieldAutonomy
     from drake_disamb.systems.blending import SharedControlBlender
-    from drake_disamb.systems.interfaces import make_interface
     from drake_disamb.systems.loop import ControlLoop
     from drake_disamb.user.system import SimulatedUser
 

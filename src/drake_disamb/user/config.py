@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from drake_disamb.core.validation import bounded_repr, is_real
 
 if TYPE_CHECKING:
-    from drake_disamb.core.interfaces import InterfaceConfig
+    from drake_disamb.interfaces import InterfaceConfig
 
 __all__ = [
     "FIELD_GROUPS",

@@ -29,7 +29,7 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
    also through modes on the way that would help a little (the shorter way round on an interface
    that also steps back). With a joystick that selects modes directly
    (``InterfaceConfig.mode_selection == "direct"``) it instead deflects the stick into the
-   target's sector and presses once (:func:`~drake_disamb.core.interfaces.joystick.sector_stick`): one
+   target's sector and presses once (:func:`~drake_disamb.interfaces.kinds.joystick.sector_stick`): one
    press per change. The target is dropped when it is reached, when it has nothing left to do
    (the autonomy finished it), or after a disambiguation request (the user then re-evaluates the
    mode the disambiguation system chose).
@@ -142,8 +142,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.sampling import lognormal
+from drake_disamb.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.user.config import UserConfig
 from drake_disamb.user.judgement import draw, goal_error, goal_reached, helped, misled
 from drake_disamb.user.rules import decide

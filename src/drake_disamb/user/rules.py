@@ -31,9 +31,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.layout import GRIPPER_DIM, is_rotation_mode
 from drake_disamb.core.sampling import lognormal, sample_von_mises_fisher
+from drake_disamb.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.user.config import UserConfig
 from drake_disamb.user.judgement import choose_mode, dim_tolerances, draw, mode_remaining
 from drake_disamb.user.state import NOT_COUNTING, UserState, evolve

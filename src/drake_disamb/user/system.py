@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
+from drake_disamb.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.system_helpers.status import flag_set
 from drake_disamb.user import UserConfig, UserState, user_step
@@ -67,7 +67,7 @@ class SimulatedUser(LeafSystem):
     error of the policy propagates.
 
     Attributes:
-        interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
+        interface: The :class:`~drake_disamb.interfaces.InterfaceConfig` it operates.
         goal_indices: Its goal per stage (a single-stage task has one entry).
         releases: Per stage, whether the stage ends by letting go of the held object (at the goal
             the user changes to the gripper mode and opens it: ``user_step``'s ``release``).

@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from drake_disamb.core.interfaces import arm_modes
+from drake_disamb.interfaces import arm_modes
 from drake_disamb.study.data.folder import StudyFolder
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.design.protocol import (
