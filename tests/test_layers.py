@@ -1,7 +1,7 @@
 """The layers contract (``[tool.importlinter]`` in pyproject.toml): the package keeps it, and an
-upward import, Drake in the core, the inference comparison, the simulated user's policy or an
-interface's model, a private module imported from another package or an import circle between
-sibling packages each break it."""
+upward import (the controller side importing the study among them), Drake in the core, the
+inference comparison, the simulated user's policy or an interface's model, a private module
+imported from another package or an import circle between sibling packages each break it."""
 
 from __future__ import annotations
 
@@ -73,6 +73,13 @@ def package_copy(tmp_path_factory: pytest.TempPathFactory) -> Path:
             "import drake_disamb.study.data.records",
             "Layers import one way",
             "core.layout -> ",
+        ),
+        # The builder reaching up to the study (the controller side never imports it).
+        (
+            "builder.py",
+            "import drake_disamb.study.run.outcome",
+            "Nothing below the study imports it",
+            "study",
         ),
         # The station reaching up to the builder.
         ("station/config.py", "from drake_disamb import builder", "Layers import one way", "builder"),
