@@ -1,5 +1,5 @@
-"""One job per function: no function of the modules below is longer than :data:`MAX_LINES` lines
-(from its ``def`` to its last line, docstring and comments included)."""
+"""One job per function: no function of the package is longer than :data:`MAX_LINES` lines (from its
+``def`` to its last line, docstring and comments included)."""
 
 from __future__ import annotations
 
@@ -12,20 +12,15 @@ from support import SRC
 MAX_LINES = 120
 """The longest a function may be."""
 
-HELD = (
-    "drake_disamb/plotting.py",
-    "drake_disamb/study/data/authors.py",
-    "drake_disamb/study/measures",
-    "drake_disamb/study/analysis",
-    "drake_disamb/study/report",
-)
-"""The modules (and the packages, every module in them) held to :data:`MAX_LINES`, relative to
-``src``."""
-MODULES = sorted(
-    str(p.relative_to(SRC))
-    for held in HELD
-    for p in ([SRC / held] if held.endswith(".py") else (SRC / held).glob("*.py"))
-)
+NOT_YET: dict[str, set[str]] = {
+    # The station on LCM's assembly: its start checks, systems and wiring in one function.
+    "drake_disamb/station/lcm/station.py": {"build_lcm_station"},
+}
+"""The functions still longer than :data:`MAX_LINES`, by module (relative to ``src``); a test fails
+once one of them is short enough, so that it leaves this list."""
+
+MODULES = sorted(str(p.relative_to(SRC)) for p in (SRC / "drake_disamb").rglob("*.py"))
+"""Every module of the package, relative to ``src``."""
 
 
 def function_lengths(path: Path) -> list[tuple[str, int]]:
@@ -49,8 +44,16 @@ def function_lengths(path: Path) -> list[tuple[str, int]]:
 
 @pytest.mark.parametrize("module", MODULES)
 def test_no_function_is_longer_than_the_limit(module: str) -> None:
-    long = [(name, n) for name, n in function_lengths(SRC / module) if n > MAX_LINES]
+    allowed = NOT_YET.get(module, set())
+    long = [(name, n) for name, n in function_lengths(SRC / module) if n > MAX_LINES and name not in allowed]
     assert not long, f"{module}: functions over {MAX_LINES} lines: {long}"
+
+
+@pytest.mark.parametrize("module", sorted(NOT_YET))
+def test_a_function_not_yet_split_is_still_long(module: str) -> None:
+    lengths = dict(function_lengths(SRC / module))
+    short = sorted(name for name in NOT_YET[module] if lengths.get(name, 0) <= MAX_LINES)
+    assert not short, f"{module}: {short} are at most {MAX_LINES} lines (or gone): take them out of NOT_YET"
 
 
 def test_the_length_counts_every_line_of_a_nested_function(tmp_path: Path) -> None:
