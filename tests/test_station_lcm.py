@@ -12,6 +12,7 @@ import pytest
 from drake import lcmt_jaco_command
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
+from support import multicast_url
 
 from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import MICO_HOME_Q, StationConfig, build_station
@@ -610,28 +611,6 @@ def test_the_seeded_trial_on_the_wire_matches_the_simulated_one() -> None:
 # ----------------------------------------------------------------------------------------------
 # Two processes over UDP multicast on loopback: the driver, then the controller.
 # ----------------------------------------------------------------------------------------------
-MULTICAST_HELP = (
-    "UDP multicast on loopback does not work here; on Linux: `sudo ip link set lo multicast on` and "
-    "`sudo ip route add 239.0.0.0/8 dev lo` (see the README, On a real arm)"
-)
-
-
-def multicast_url(port: int) -> str:
-    """A udpm:// URL on loopback that delivers here, or skip the test saying how to enable it."""
-    url = f"udpm://239.255.76.67:{port}?ttl=0"
-    try:
-        lcm = DrakeLcm(url)
-    except RuntimeError as exc:
-        pytest.skip(f"{MULTICAST_HELP} ({exc})")
-    got: list[bytes] = []
-    lcm.Subscribe("DRAKE_DISAMB_PROBE", got.append)
-    lcm.Publish("DRAKE_DISAMB_PROBE", b"probe")
-    lcm.HandleSubscriptions(500)
-    if not got:
-        pytest.skip(MULTICAST_HELP)
-    return url
-
-
 @pytest.mark.slow
 def test_two_processes_run_the_seeded_trial_as_the_simulation_does() -> None:
     from support import cli_process, wait_for_line

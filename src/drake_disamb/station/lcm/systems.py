@@ -60,6 +60,14 @@ step between consecutive statuses used among the last ``SPACING_WINDOW`` (a miss
 lengthens a step)."""
 
 
+def within_speed_limits(v: NDArray[np.float64], limits: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The joint velocities ``v`` scaled down, all joints alike (the direction is kept), until every
+    one is within its speed limit ``limits`` (same units); unchanged when they all are already."""
+    v = np.asarray(v, dtype=float)
+    scale = float(np.min(np.asarray(limits, dtype=float) / np.maximum(np.abs(v), 1e-300)))
+    return v * scale if scale < 1.0 else v
+
+
 def posture_jump(q: NDArray[np.float64], utime: int, last_q: NDArray[np.float64], last_utime: int) -> str:
     """Why the DH angles ``q`` (6, rad) at ``utime`` (us) cannot follow ``last_q`` at
     ``last_utime`` on one arm (a joint moved further than :data:`JUMP_TOLERANCE` plus
@@ -378,10 +386,7 @@ class JacoCommandSender(LeafSystem):
             np.all(np.isfinite(v)) and np.all(np.isfinite(fv))
         ):
             return np.zeros(6), np.zeros(2)
-        scale = float(np.min(self._vmax / np.maximum(np.abs(v), 1e-300)))
-        if scale < 1.0:
-            v = v * scale
-        return v, np.clip(fv, -self._fmax, self._fmax)
+        return within_speed_limits(v, self._vmax), np.clip(fv, -self._fmax, self._fmax)
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
         v, fv = self.command(context)
@@ -484,4 +489,5 @@ __all__ = [
     "JacoStatusSender",
     "ModelEndEffectorState",
     "posture_jump",
+    "within_speed_limits",
 ]
