@@ -50,7 +50,7 @@ scheme the script prints, over all ticks of all trials:
 
 For comparison it also prints the authors' own discretisation replayed by the numpy core
 (:func:`~drake_disamb.core.comparison.replay_trials`: explicit Euler, clip and renormalise) at the data's
-2 ms (with the authors' parameters on all 100 trials: the numbers of the README's inference table)
+2 ms (with the authors' parameters on all 100 trials: the numbers of docs/results.md's inference table)
 and on the tick samples at ``T``.
 
 The machine's state (hypervisor steal, load, speed gauge) is printed with each setting, since the
@@ -86,6 +86,7 @@ from drake_disamb.core.inference import DFTParams
 from drake_disamb.core.trial_files import load_trials
 from drake_disamb.core.trials import Trial
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
+from drake_disamb.systems.loop import ControlLoop
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
 """Where the published trials are expected: ``../shared/data/...`` beside the repository."""
@@ -231,7 +232,9 @@ def build_playback(trial: Trial, params: DFTParams):  # noqa: ANN201 (Diagram, i
     period, n = trial.dt, trial.n_goals
     builder = DiagramBuilder()
     playback = builder.AddSystem(TrialPlayback(trial.u_h, trial.traj, period))
-    inference = builder.AddSystem(FieldTheoreticIntentInference(n, _trial_params(params, trial), period))
+    inference = builder.AddSystem(
+        FieldTheoreticIntentInference(ControlLoop(n, period), _trial_params(params, trial))
+    )
     goal_poses = np.hstack([trial.goals, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))]).reshape(-1)
     goals = builder.AddSystem(ConstantVectorSource(goal_poses))
     u_a = builder.AddSystem(ConstantVectorSource(np.zeros(6 * n)))
@@ -440,7 +443,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"parameters ({params.tau1=}, {params.tau2=}, lam={params.lam}); {host_summary()}"
     )
     full = core_replay_accuracy(trials, params)
-    readme = "; the README's inference table" if args.params == "authors" and args.limit is None else ""
+    readme = "; docs/results.md's inference table" if args.params == "authors" and args.limit is None else ""
     print(
         f"core replay at the data's dt = {trials[0].dt * 1e3:g} ms (authors' Euler + clip/renormalise"
         f"{readme}): paper {100 * full[0]:.2f} %, strict {100 * full[1]:.2f} %"

@@ -9,7 +9,7 @@ any ``--set``.
 
 ``--set PATH=VALUE`` sets a scenario field by its dotted path (``inference.goal_set=stage``,
 ``blending.assist_without_input=false``; the value is read as YAML), so one command measures a
-deviation from the paper (the README's table "Where we differ from the paper").
+deviation from the paper (docs/choices.md's table "Where we differ from the paper").
 
 For each task, interface and intended goal (reaching: each of the 5 objects; pouring: each
 (container, location) pair) it runs one trial of the embedded scenario with the default simulated

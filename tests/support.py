@@ -48,7 +48,7 @@ def cli_process(*argv: str) -> subprocess.Popen:
 
 MULTICAST_HELP = (
     "UDP multicast on loopback does not work here; on Linux: `sudo ip link set lo multicast on` and "
-    "`sudo ip route add 239.0.0.0/8 dev lo` (see the README, On a real arm)"
+    "`sudo ip route add 239.0.0.0/8 dev lo` (see docs/real_arm.md, The arm on LCM)"
 )
 
 

@@ -11,6 +11,7 @@ from pydrake.systems.analysis import Simulator
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
 from drake_disamb.core.geometry import quat_from_rotvec
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
+from drake_disamb.systems.loop import ControlLoop
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
 
@@ -30,7 +31,7 @@ def test_shape_and_direction_toward_each_goal() -> None:
             [0.0, 0.0, 0.0, *quat_from_rotvec([0.0, 0.0, 0.3])],
         ]
     )
-    system = PotentialFieldAutonomy(3)
+    system = PotentialFieldAutonomy(ControlLoop(3))
     ctx = _context(system, [0.0, 0.0, 0.3, *IDENTITY], goals)
     u_a = system.get_output_port(0).Eval(ctx)
     assert u_a.shape == (18,)
@@ -49,7 +50,7 @@ def test_shape_and_direction_toward_each_goal() -> None:
 
 def test_config_is_used() -> None:
     cfg = PotentialFieldConfig(max_linear_speed=0.05)
-    system = PotentialFieldAutonomy(1, cfg)
+    system = PotentialFieldAutonomy(ControlLoop(1), cfg)
     ctx = _context(system, [0.0, 0.0, 0.0, *IDENTITY], [1.0, 0.0, 0.0, *IDENTITY])
     np.testing.assert_allclose(system.get_output_port(0).Eval(ctx), [0.05, 0, 0, 0, 0, 0])
     assert system.HasDirectFeedthrough(0, 0) and system.HasDirectFeedthrough(1, 0)
@@ -68,7 +69,7 @@ GOALS_2 = [[0.3, 0, 0, *IDENTITY], [0, 0.3, 0, *IDENTITY]]
     ],
 )
 def test_unusable_pose_gives_zero_and_is_counted(ee_pose, goal_poses) -> None:  # noqa: ANN001
-    system = PotentialFieldAutonomy(2, control_period=0.01)
+    system = PotentialFieldAutonomy(ControlLoop(2, control_period=0.01))
     assert system.GetOutputPort("sanitized_input_count").size() == 1
     simulator = Simulator(system)
     ctx = simulator.get_mutable_context()
@@ -89,7 +90,7 @@ def test_unusable_pose_gives_zero_and_is_counted(ee_pose, goal_poses) -> None:  
 
 
 def test_usable_poses_are_not_counted() -> None:
-    system = PotentialFieldAutonomy(2)
+    system = PotentialFieldAutonomy(ControlLoop(2))
     simulator = Simulator(system, _context(system, [0, 0, 0.2, *IDENTITY], GOALS_2))
     simulator.AdvanceTo(0.05)
     assert system.GetOutputPort("sanitized_input_count").Eval(simulator.get_context())[0] == 0
@@ -103,7 +104,7 @@ def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exceptio
     def broken(*args: object) -> None:
         raise error
 
-    system = PotentialFieldAutonomy(2)
+    system = PotentialFieldAutonomy(ControlLoop(2))
     ctx = _context(system, [0, 0, 0.2, *IDENTITY], GOALS_2)
     monkeypatch.setattr(module, "potential_field_commands_from_poses", broken)
     with pytest.raises(type(error), match=re.escape(str(error))):
@@ -111,13 +112,13 @@ def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exceptio
     assert system.GetOutputPort("sanitized_input_count").Eval(ctx)[0] == 0
 
 
-def test_constructor_validation() -> None:
-    with pytest.raises(ValueError, match="n_goals"):
-        PotentialFieldAutonomy(0)
-    with pytest.raises(ValueError, match="config"):
-        PotentialFieldAutonomy(2, config={"max_linear_speed": 0.1})  # type: ignore[arg-type]
-    with pytest.raises(ValueError, match="control_period: expected a finite number > 0, got nan"):
-        PotentialFieldAutonomy(2, control_period=float("nan"))
+def test_it_ticks_at_the_loops_period_and_asserts_its_config() -> None:
+    # The bounds are the resolved scenario's (tests/test_bounds.py); the system asserts the types.
+    system = PotentialFieldAutonomy(ControlLoop(2, control_period=0.02))
+    assert system.GetUniquePeriodicDiscreteUpdateAttribute().period_sec() == 0.02
+    assert system.GetInputPort("goal_poses").size() == 14 and system.GetOutputPort("u_a").size() == 12
+    with pytest.raises(AssertionError):
+        PotentialFieldAutonomy(ControlLoop(2), config={"max_linear_speed": 0.1})  # type: ignore[arg-type]
 
 
 def test_usable_poses() -> None:

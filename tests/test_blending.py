@@ -149,9 +149,10 @@ def _blender_context(blender, u_h, belief, u_a):
 
 def test_blender_system_outputs() -> None:
     from drake_disamb.systems.blending import SharedControlBlender
+    from drake_disamb.systems.loop import ControlLoop
 
     n = 4
-    blender = SharedControlBlender(n)
+    blender = SharedControlBlender(ControlLoop(n))
     u_a = np.zeros((n, 6))
     u_a[:, 0] = [0.1, 0.2, -0.2, 0.0]
     u_a[2, 3] = 0.3
@@ -172,15 +173,16 @@ def test_blender_system_outputs() -> None:
 
 def test_blender_system_speed_limit_and_no_input() -> None:
     from drake_disamb.systems.blending import SharedControlBlender
+    from drake_disamb.systems.loop import ControlLoop
 
-    blender = SharedControlBlender(2, max_linear_speed=0.1, assist_without_input=True)
+    blender = SharedControlBlender(ControlLoop(2), max_linear_speed=0.1, assist_without_input=True)
     u_a = np.zeros((2, 6))
     u_a[0, :3] = [0.3, 0.0, 0.4]
     ctx = _blender_context(blender, np.zeros(6), [0.9, 0.1], u_a)
     u = blender.GetOutputPort("u").Eval(ctx)
     assert np.linalg.norm(u[:3]) == pytest.approx(0.1)
     np.testing.assert_allclose(u[:3] / np.linalg.norm(u[:3]), [0.6, 0.0, 0.8])
-    default = SharedControlBlender(2)  # assists only while the user commands
+    default = SharedControlBlender(ControlLoop(2))  # assists only while the user commands
     ctx = _blender_context(default, np.zeros(6), [0.9, 0.1], u_a)
     np.testing.assert_allclose(default.GetOutputPort("u").Eval(ctx), 0.0)
     assert default.GetOutputPort("alpha").Eval(ctx)[0] == 0.0
@@ -190,8 +192,9 @@ def test_blender_system_nonfinite_inputs_never_reach_the_arm() -> None:
     from pydrake.systems.analysis import Simulator
 
     from drake_disamb.systems.blending import SharedControlBlender
+    from drake_disamb.systems.loop import ControlLoop
 
-    blender = SharedControlBlender(2, control_period=0.01)
+    blender = SharedControlBlender(ControlLoop(2, control_period=0.01))
     u_a = np.full((2, 6), np.nan)
     ctx = _blender_context(blender, [np.inf, 0.05, 0, 0, 0, np.nan], [np.nan, 0.2], u_a)
     u = blender.GetOutputPort("u").Eval(ctx)
@@ -215,11 +218,12 @@ def test_blender_system_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, 
     from pydrake.systems.analysis import Simulator
 
     from drake_disamb.systems import blending as module
+    from drake_disamb.systems.loop import ControlLoop
 
     def broken(*args: object) -> None:
         raise error
 
-    blender = module.SharedControlBlender(2)
+    blender = module.SharedControlBlender(ControlLoop(2))
     ctx = _blender_context(blender, [0.1, 0, 0, 0, 0, 0], [0.9, 0.1], np.zeros((2, 6)))
     monkeypatch.setattr(module, "shared_control", broken)
     with pytest.raises(type(error), match=re.escape(str(error))):
@@ -234,13 +238,14 @@ def test_blender_system_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, 
 
 def test_blender_rejects_bad_config() -> None:
     from drake_disamb.systems.blending import SharedControlBlender
+    from drake_disamb.systems.loop import ControlLoop
 
-    with pytest.raises(ValueError, match="rho2"):
-        SharedControlBlender(3, rho1=0.5, rho2=0.2)
-    with pytest.raises(ValueError, match="n_goals"):
-        SharedControlBlender(0)
-    with pytest.raises(ValueError, match="control_period: expected a finite number > 0, got -0.01"):
-        SharedControlBlender(2, control_period=-0.01)
+    with pytest.raises(ValueError, match="rho2"):  # the config's own check
+        SharedControlBlender(ControlLoop(3), rho1=0.5, rho2=0.2)
+    with pytest.raises(AssertionError):  # the loop's bounds are the resolved scenario's (test_bounds.py)
+        SharedControlBlender(ControlLoop(2), config={"rho1": 0.5})  # type: ignore[arg-type]
+    blender = SharedControlBlender(ControlLoop(2, control_period=0.02))
+    assert blender.GetUniquePeriodicDiscreteUpdateAttribute().period_sec() == 0.02
 
 
 def test_resolve_rhos_checks_survive_its_cache() -> None:
@@ -272,9 +277,10 @@ def test_blender_paused_pauses_the_loop() -> None:
     """``paused`` above 0.5 (a request being computed by the study's system): nothing reaches the arm
     and alpha is 0, whatever the inputs; g_star is still the belief's argmax."""
     from drake_disamb.systems.blending import SharedControlBlender
+    from drake_disamb.systems.loop import ControlLoop
 
     n = 4
-    blender = SharedControlBlender(n, assist_without_input=True)
+    blender = SharedControlBlender(ControlLoop(n), assist_without_input=True)
     u_a = np.zeros((n, 6))
     u_a[:, 0] = [0.1, 0.2, -0.2, 0.0]
     ctx = _blender_context(blender, [0.0, 0.1, 0.0, 0.0, 0.0, 0.0], [0.1, 0.1, 0.7, 0.1], u_a)

@@ -43,6 +43,96 @@ def test_a_scenario_value_out_of_bounds_names_the_field(path: str, value: float,
         scenario_from_dict(data)
 
 
+def _set(path: str, value: object):  # noqa: ANN202
+    """An edit of a scenario's plain data: ``path`` (dotted; ``name[i]``, a list entry) set to ``value``."""
+
+    def edit(data: dict) -> None:
+        node = data
+        *parents, last = path.split(".")
+        for part in parents:
+            name, _, index = part.partition("[")
+            node = node[name][int(index[:-1])] if index else node.setdefault(name, {})
+        node[last] = value
+
+    return edit
+
+
+def _second_stage_of_one_goal(data: dict) -> None:
+    data["stages"].append({"name": "place"})
+    data["goals"][4]["stage"] = 1
+    data["user"]["goals"] = [0, 0]
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        # The loop's period: every system ticks at it (the task manager, the user's decisions, the
+        # autonomy, inference, blender, disambiguation, trigger and the gripper controller).
+        (
+            _set("control_period", 0.0),
+            r"scenario\.control_period: expected a finite number in \[0\.001, 0\.1\] s, got 0\.0",
+        ),
+        (_set("control_period", float("nan")), r"scenario\.control_period: expected a finite number"),
+        # The belief's size: at least one goal, the same number in every stage.
+        (_set("goals", []), r"scenario\.goals: expected at least one goal, got \[\]"),
+        (_second_stage_of_one_goal, r"scenario\.stages\[1\]: every stage needs the same number of goals"),
+        # The task manager's goal poses, tolerances, hold times, release openings and targets.
+        (_set("goals[2].position", [0.1, float("nan"), 0.3]), r"scenario\.goals\[2\]\.position"),
+        (
+            _set("goals[2].orientation", [0, 0, 0, 0]),
+            r"scenario\.goals\[2\]\.orientation: expected a non-zero",
+        ),
+        (
+            _set("success.position_tolerance", 0.0),
+            r"scenario\.success\.position_tolerance: expected a finite",
+        ),
+        (_set("success.orientation_tolerance", -1.0), r"scenario\.success\.orientation_tolerance: expected"),
+        (
+            _set("stages[0].hold_time", -0.1),
+            r"scenario\.stages\[0\]\.hold_time: expected a finite number >= 0",
+        ),
+        (
+            _set("stages[0].release_opening", -0.1),
+            r"scenario\.stages\[0\]\.release_opening: expected an opening",
+        ),
+        (_set("user.goals", [5]), r"scenario\.user\.goals\[0\]: expected a goal index in \[0, 4\], got 5"),
+        # The simulated user decides at most once a control period, and waits two decisions after a
+        # press (the system asserts both).
+        (
+            _set("user.config.decision_period", 0.005),
+            r"scenario\.user\.config\.decision_period: expected at least the control period "
+            r"\(0\.01 s\), got 0\.005",
+        ),
+        (
+            _set("user.config.reaction_time", 0.15),
+            r"scenario\.user\.config\.reaction_time: expected reaction_time - reaction_time_jitter to be "
+            r"at least two decision periods \(0\.2 s\), got 0\.15 - ",
+        ),
+        # The automatic trigger's (the interface's) request latency; the inference's matrix sizes.
+        (
+            _set("disambiguation.request_latency", -1.0),
+            r"scenario\.disambiguation\.request_latency: expected",
+        ),
+        (
+            _set("inference.dft.transition", [[1.0, 0.0], [0.0, 1.0]]),
+            r"scenario\.inference\.dft\.transition: expected a 5 x 5 matrix",
+        ),
+        # The differential IK's start set point.
+        (
+            _set("start_joint_positions", [0.0, 9.0, 0.0, 0.0, 0.0, 0.0]),
+            r"scenario\.start_joint_positions\[1\]: expected an angle within joint 2's limits",
+        ),
+    ],
+)
+def test_what_a_system_relies_on_is_refused_at_resolution(edit, message: str) -> None:  # noqa: ANN001
+    """Each bound a shared-control system relies on is checked once, when the scenario is resolved,
+    and the message names the scenario's field (the systems only assert it)."""
+    data = _reaching_dict()
+    edit(data)
+    with pytest.raises(ValueError, match=message):
+        scenario_from_dict(data)
+
+
 def test_a_goal_in_the_arms_base_is_refused() -> None:
     data = _reaching_dict()
     data["goals"][4]["position"] = [0.05, -0.05, 0.3]

@@ -223,6 +223,66 @@ def test_unknown_names_and_bad_scenarios() -> None:
         build_shared_control_diagram(dataclasses.replace(s, goals=goals))
 
 
+class _Untouchable:
+    """Stands in for the scenario once it is resolved: any read of it fails."""
+
+    def __getattr__(self, name: str) -> object:
+        raise AssertionError(f"the builder read scenario.{name}, not the resolved config")
+
+
+@pytest.mark.parametrize("paradigm", ["disambiguation", "automatic"])
+def test_the_builder_reads_only_the_resolved_config(monkeypatch: pytest.MonkeyPatch, paradigm: str) -> None:
+    """Once resolved, the scenario is only kept on the handle: every system, period, goal set, name
+    and connection comes from the resolved config (here a 20 ms loop, a belief over the pouring
+    task's four goals, the loop paused while a request is computed)."""
+    from drake_disamb import builder as module
+    from drake_disamb.config import resolve_scenario
+
+    layer = {
+        "control_period": 0.02,
+        "plant_config": {"time_step": 0.02},
+        "simulator_config": {"max_step_size": 0.02},
+        "paradigm": paradigm,
+        "inference": {"goal_set": "task"},
+        "disambiguation": {"hold_while_computing": True},
+    }
+    config = resolve_scenario(load_scenario("pouring", layer))
+    monkeypatch.setattr(module, "resolve_scenario", lambda scenario: config)
+    scenario = _Untouchable()
+    handles = build_shared_control_diagram(scenario)  # type: ignore[arg-type]
+    assert handles.scenario is scenario and handles.config is config
+    assert handles.goal_names(1) == ["platform_low", "platform_high"]
+    assert handles.systems["user"].releases == (False, True)  # the place ends by letting go
+    assert handles.diagram.get_name() == "shared_control_pouring"
+    # Every system but the simulated user (its decision period: 0.1 s) ticks at 20 ms.
+    discrete = (
+        "task",
+        "ee_pose_sampler",
+        "autonomy",
+        "blender",
+        "disambiguation",
+        "diff_ik",
+        "gripper_controller",
+    )
+    ticks = {
+        name: handles.systems[name].GetUniquePeriodicDiscreteUpdateAttribute().period_sec()
+        for name in discrete
+    }
+    ticks["interface"] = handles.systems["interface"].config.control_period  # (unrestricted updates)
+    ticks["inference"] = handles.systems["inference"].control_period
+    assert ticks == dict.fromkeys(ticks, pytest.approx(0.02))
+    source = handles.systems["task_goal_poses"]  # the belief's one goal set
+    goal_set = source.GetOutputPort("goal_poses").Eval(source.CreateDefaultContext())
+    np.testing.assert_array_equal(goal_set, config.task_goal_poses.ravel())
+    connections = handles.diagram.connection_map()
+    paused = handles.systems["interface"].GetOutputPort("paused")
+    for name in ("inference", "blender", "user"):
+        system = handles.systems[name]
+        source = connections[(system, system.GetInputPort("paused").get_index())]
+        assert source == (paused.get_system(), paused.get_index()), name
+    assert ("automatic_trigger" in handles.systems) == (paradigm == "automatic")
+
+
 def test_direct_mode_selection_reaches_with_fewer_mode_button_presses() -> None:
     # The same joystick trial (same seed), cycling vs direct selection: the simulated user reaches
     # its target modes in one press each instead of cycling through the modes on the way.

@@ -1,4 +1,4 @@
-"""The switches for every deviation from the paper (README "Where we differ from the paper"): each
+"""The switches for every deviation from the paper (docs/choices.md, "Where we differ from the paper"): each
 scenario option selects the paper's behaviour or ours, reaches the code that uses it, and refuses a
 bad value naming the field and the value."""
 
@@ -119,7 +119,7 @@ def test_blending_without_input_follows_the_switch(assist: bool) -> None:
     s = load_scenario("reaching")
     s.blending.assist_without_input = assist
     config = resolve_scenario(s)
-    blender = SharedControlBlender(config.n_goals, config.blending, s.control_period)
+    blender = SharedControlBlender(config.loop, config.blending)
     context = blender.CreateDefaultContext()
     u_a = np.zeros((5, 6))
     u_a[2] = [0.1, -0.05, 0.0, 0.0, 0.2, 0.0]

@@ -137,7 +137,7 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 def test_the_example_files(capsys: pytest.CaptureFixture[str]) -> None:
     """``examples/disambiguate_cases.json`` is all valid; ``disambiguate_errors.json`` shows the
-    per-case errors around one valid case (as the README says)."""
+    per-case errors around one valid case (as docs/commands.md says)."""
     parser = argparse.ArgumentParser()
     command.add_arguments(parser)
     assert command.run(parser.parse_args(["--cases", str(EXAMPLES / "disambiguate_cases.json")])) == 0

@@ -12,6 +12,7 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from drake_disamb.core.disambiguation import DisambiguationResult, disambiguate, preset
 from drake_disamb.systems.disambiguation import DisambiguationSystem, LastResult, LatchedRequest
+from drake_disamb.systems.loop import ControlLoop
 
 HEAD_ARRAY_ARM_MODES = [[0], [1], [2], [3], [4], [5]]
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
@@ -36,7 +37,7 @@ def _answer(system: DisambiguationSystem, request: LatchedRequest, context=None)
 
 
 def test_ports_and_feedthrough() -> None:
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES)
+    system = DisambiguationSystem(ControlLoop(2), HEAD_ARRAY_ARM_MODES)
     assert system.num_input_ports() == 1 and system.GetInputPort("request").size() == 9 + 8 * 2
     assert system.GetOutputPort("answer").size() == 2
     system.GetOutputPort("last_result")  # exists (abstract)
@@ -58,7 +59,7 @@ def test_latched_request_round_trip() -> None:
 
 
 def test_answer_matches_core() -> None:
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, preset("mico"))
+    system = DisambiguationSystem(ControlLoop(2), HEAD_ARRAY_ARM_MODES, preset("mico"))
     assert _answer(system, _request([0.5, 0.5], current_mode=0))[0] == [1.0, 1.0]
     # Already in the vy mode: kept (-1).
     assert _answer(system, _request([0.5, 0.5], current_mode=1, request_id=4.0))[0] == [4.0, -1.0]
@@ -68,7 +69,7 @@ def test_answer_matches_core() -> None:
     goals[:, 3:] /= np.linalg.norm(goals[:, 3:], axis=1, keepdims=True)
     pose = np.array([0.0, -0.3, 0.3, 0.9, 0.1, -0.2, 0.1])
     pose[3:] /= np.linalg.norm(pose[3:])
-    system3 = DisambiguationSystem(3, HEAD_ARRAY_ARM_MODES)
+    system3 = DisambiguationSystem(ControlLoop(3), HEAD_ARRAY_ARM_MODES)
     request = LatchedRequest(1.0, np.array([0.2, 0.5, 0.3]), pose, goals.ravel(), 6.0)  # the gripper mode
     core = disambiguate([0.2, 0.5, 0.3], pose[:3], goals[:, :3], HEAD_ARRAY_ARM_MODES, orientation=pose[3:],
                         goal_orientations=goals[:, 3:], current_mode=6)  # fmt: skip
@@ -79,7 +80,7 @@ def test_answer_matches_core() -> None:
 def test_each_request_is_solved_once_in_the_update(monkeypatch: pytest.MonkeyPatch) -> None:
     """The update solves a request when its id is new, once; its answer and the stored request
     (``last_result``) stay until the next one, whatever else happens."""
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.01)
+    system = DisambiguationSystem(ControlLoop(2, control_period=0.01), HEAD_ARRAY_ARM_MODES)
     calls = [0]
     select = system.method.select
 
@@ -136,7 +137,7 @@ UNUSABLE = [
 
 @pytest.mark.parametrize("field, value", UNUSABLE)
 def test_unusable_requests_keep_the_mode_and_are_counted(field: str, value: object) -> None:
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.01)
+    system = DisambiguationSystem(ControlLoop(2, control_period=0.01), HEAD_ARRAY_ARM_MODES)
     changes = {"current_mode": value} if field == "current_mode" else {field: value}
     belief = changes.pop("belief", [0.5, 0.5])
     first = _request(belief, **changes)
@@ -160,7 +161,7 @@ def test_unusable_requests_keep_the_mode_and_are_counted(field: str, value: obje
 
 
 def test_a_drifted_belief_is_renormalised() -> None:
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES)
+    system = DisambiguationSystem(ControlLoop(2), HEAD_ARRAY_ARM_MODES)
     for belief in ([0.7, 0.7], [1e308, 1e308], [1e-300, 1e-300]):  # the sum of the second overflows
         assert _answer(system, _request(belief))[0] == [1.0, 1.0]
 
@@ -171,7 +172,7 @@ def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exceptio
     def broken(*args: object, **kwargs: object) -> None:
         raise error
 
-    system = DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.01)
+    system = DisambiguationSystem(ControlLoop(2, control_period=0.01), HEAD_ARRAY_ARM_MODES)
     context = system.CreateDefaultContext()
     system.GetInputPort("request").FixValue(context, LatchedRequest.none(2).to_vector())
     simulator = Simulator(system, context)
@@ -184,16 +185,17 @@ def test_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exceptio
 
 
 def test_constructor_validation() -> None:
-    with pytest.raises(ValueError, match="n_goals"):
-        DisambiguationSystem(0, HEAD_ARRAY_ARM_MODES)
     with pytest.raises(ValueError, match=r"modes\[0\]"):
-        DisambiguationSystem(2, [[9]])
-    with pytest.raises(ValueError, match="control_period"):
-        DisambiguationSystem(2, HEAD_ARRAY_ARM_MODES, control_period=0.0)
+        DisambiguationSystem(ControlLoop(2), [[9]])
+    with pytest.raises(AssertionError):  # the loop and the config are the resolved scenario's
+        DisambiguationSystem(ControlLoop(2), HEAD_ARRAY_ARM_MODES, {"step": 0.1})  # type: ignore[arg-type]
+    assert DisambiguationSystem(
+        ControlLoop(2, control_period=0.02), HEAD_ARRAY_ARM_MODES
+    ).GetUniquePeriodicDiscreteUpdateAttribute().period_sec() == pytest.approx(0.02)
     # The constructor runs one request (it loads the compiled kernels before any simulation), so
     # a configuration that does not fit the goal count fails when the diagram is built.
     with pytest.raises(ValueError, match="transition: expected a 3x3 matrix"):
-        DisambiguationSystem(3, HEAD_ARRAY_ARM_MODES, preset("mico", transition=np.eye(2)))
+        DisambiguationSystem(ControlLoop(3), HEAD_ARRAY_ARM_MODES, preset("mico", transition=np.eye(2)))
 
 
 def test_interface_switches_mode_the_tick_after_the_request() -> None:
@@ -203,7 +205,7 @@ def test_interface_switches_mode_the_tick_after_the_request() -> None:
 
     builder = DiagramBuilder()
     interface = builder.AddSystem(make_interface("head_array", n_goals=2, initial_mode=0))
-    disamb = builder.AddSystem(DisambiguationSystem(2, interface.arm_modes, control_period=0.01))
+    disamb = builder.AddSystem(DisambiguationSystem(ControlLoop(2, control_period=0.01), interface.arm_modes))
     for name, value in (("belief", [0.5, 0.5]), ("ee_pose", EE_POSE), ("goal_poses", GOAL_POSES.ravel())):
         source = builder.AddSystem(ConstantVectorSource(np.asarray(value, dtype=float)))
         builder.Connect(source.get_output_port(), interface.GetInputPort(name))

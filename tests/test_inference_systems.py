@@ -16,20 +16,34 @@ from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
 from drake_disamb.core.comparison import authors_dft_params, replay_trials
-from drake_disamb.core.inference import DFTParams, bayes_step, dft_mass_conserving_rhs, memory_step
+from drake_disamb.core.inference import (
+    BayesInference,
+    DFTParams,
+    MemoryInference,
+    bayes_step,
+    dft_mass_conserving_rhs,
+    memory_step,
+)
 from drake_disamb.core.trial_files import load_trial_mat
 from drake_disamb.systems.inference import (
     FieldTheoreticIntentInference,
     MemoryBasedIntentInference,
     RecursiveBayesIntentInference,
 )
+from drake_disamb.systems.loop import ControlLoop
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
 
 SYSTEMS = {
-    "dft": lambda n, **kw: FieldTheoreticIntentInference(n, DFTParams(**kw.pop("params", {})), **kw),
-    "bayes": lambda n, **kw: RecursiveBayesIntentInference(n, **kw),
-    "memory": lambda n, **kw: MemoryBasedIntentInference(n, **kw),
+    "dft": lambda n, params=None, control_period=0.01, **kw: FieldTheoreticIntentInference(
+        ControlLoop(n, control_period), DFTParams(**(params or {})), **kw
+    ),
+    "bayes": lambda n, transition=None, control_period=0.01, **kw: RecursiveBayesIntentInference(
+        ControlLoop(n, control_period), BayesInference(transition=transition), **kw
+    ),
+    "memory": lambda n, transition=None, control_period=0.01, **kw: MemoryBasedIntentInference(
+        ControlLoop(n, control_period), MemoryInference(transition=transition), **kw
+    ),
 }
 
 
@@ -87,7 +101,7 @@ def test_dft_derivative_is_the_core_flow() -> None:
     P = np.eye(n) + rng.uniform(0, 0.01, (n, n))
     P /= P.sum(axis=1, keepdims=True)
     params = DFTParams(transition=P, agreement=True, proximity=True, R=0.5)
-    system = FieldTheoreticIntentInference(n, params)
+    system = FieldTheoreticIntentInference(ControlLoop(n), params)
     context = system.CreateDefaultContext()
     goals, x, u, u_a = (
         rng.uniform(-0.5, 0.5, (n, 3)),
@@ -126,11 +140,11 @@ def test_discrete_updates_are_the_core_steps() -> None:
     x1 = x0 + 0.01
     uniform = np.full(n, 1 / n)
     # Bayes: the update at t = 0 uses x0, the one at t = period x1.
-    got = _advance_one_period(RecursiveBayesIntentInference(n, transition=P), u, x0, x1, goals, P)
+    got = _advance_one_period(SYSTEMS["bayes"](n, transition=P), u, x0, x1, goals, P)
     want = bayes_step(bayes_step(uniform, u, x0, goals, P), u, x1, goals, P)
     np.testing.assert_allclose(got, want, rtol=1e-12)
     # Memory: at t = 0 no move from the start; at t = period the move x0 -> x1.
-    got = _advance_one_period(MemoryBasedIntentInference(n, transition=P), u, x0, x1, goals, P)
+    got = _advance_one_period(SYSTEMS["memory"](n, transition=P), u, x0, x1, goals, P)
     p, cost = memory_step(uniform, 0.0, x0, x0, x0, goals, P)
     want, _ = memory_step(p, cost, x0, x1, x0, goals, P)
     np.testing.assert_allclose(got, want, rtol=1e-12)
@@ -247,18 +261,15 @@ def test_errors_of_the_core_propagate(
 
 
 def test_bad_constructor_arguments() -> None:
-    with pytest.raises(ValueError, match="n_goals"):
-        FieldTheoreticIntentInference(0)
-    with pytest.raises(ValueError, match="control_period"):
-        RecursiveBayesIntentInference(2, control_period=0.0)
-    with pytest.raises(ValueError, match="transition"):
-        MemoryBasedIntentInference(3, transition=np.eye(2))
+    # The configs' own checks; the sizes are the resolved scenario's (tests/test_bounds.py), asserted.
     with pytest.raises(ValueError, match="rest"):
-        FieldTheoreticIntentInference(2, rest=[0.2, 0.2])
-    with pytest.raises(ValueError, match="params.transition"):
-        FieldTheoreticIntentInference(3, DFTParams(transition=np.eye(2)))
+        FieldTheoreticIntentInference(ControlLoop(2), rest=[0.2, 0.2])
     with pytest.raises(ValueError, match="sigma"):
-        RecursiveBayesIntentInference(2, sigma=-1.0)
+        RecursiveBayesIntentInference(ControlLoop(2), BayesInference(sigma=-1.0))
+    with pytest.raises(AssertionError):
+        MemoryBasedIntentInference(ControlLoop(3), MemoryInference(transition=np.eye(2)))
+    with pytest.raises(AssertionError):
+        FieldTheoreticIntentInference(ControlLoop(3), DFTParams(transition=np.eye(2)))
 
 
 def test_simulated_published_trial_agrees_with_the_euler_replay() -> None:
@@ -272,7 +283,7 @@ def test_simulated_published_trial_agrees_with_the_euler_replay() -> None:
 
     builder = DiagramBuilder()
     params = authors_dft_params(transition=tr.transition, euler_equivalent_step=dt)
-    system = builder.AddSystem(FieldTheoreticIntentInference(n, params, control_period=dt))
+    system = builder.AddSystem(FieldTheoreticIntentInference(ControlLoop(n, dt), params))
     times = np.arange(L + 1) * dt
     u = np.zeros((6, L + 1))
     u[:3, :L] = tr.u_h.T  # command j holds over [j dt, (j + 1) dt)

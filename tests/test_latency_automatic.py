@@ -22,6 +22,7 @@ from drake_disamb.core.interfaces import (
 )
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem, LatchedRequest
 from drake_disamb.systems.interfaces import make_interface
+from drake_disamb.systems.loop import ControlLoop
 
 DT = 0.01
 PRESS = [0.0, 0.0, 0.0, 1.0]
@@ -214,7 +215,7 @@ def test_the_trigger_needs_its_threshold_written_out() -> None:
 
 
 def test_automatic_trigger_system_with_fixed_inputs() -> None:
-    system = AutomaticTrigger(3, TRIGGER, control_period=DT)
+    system = AutomaticTrigger(ControlLoop(3, control_period=DT), TRIGGER)
     names = [system.get_input_port(i).get_name() for i in range(system.num_input_ports())]
     assert names == ["belief", "u_h", "mode"]
     context = system.CreateDefaultContext()
@@ -235,19 +236,20 @@ def test_automatic_trigger_system_with_fixed_inputs() -> None:
     assert system.get_trigger_count(context) == 2
 
 
-def test_automatic_trigger_system_validation() -> None:
-    with pytest.raises(ValueError, match="n_goals"):
-        AutomaticTrigger(0, TRIGGER)
-    with pytest.raises(ValueError, match="confidence_threshold written out"):
-        AutomaticTrigger(3, AutomaticConfig())
-    with pytest.raises(ValueError, match="control_period"):
-        AutomaticTrigger(3, TRIGGER, control_period=0.0)
-    with pytest.raises(ValueError, match="request_latency: expected a finite number >= 0, got -1"):
-        AutomaticTrigger(3, TRIGGER, request_latency=-1.0)
+def test_automatic_trigger_system_asserts_its_resolved_config() -> None:
+    # Resolution writes the threshold out and checks the latency (scenario.disambiguation.
+    # request_latency: tests/test_bounds.py); the system asserts both.
+    with pytest.raises(AssertionError):
+        AutomaticTrigger(ControlLoop(3), AutomaticConfig())
+    with pytest.raises(AssertionError):
+        AutomaticTrigger(ControlLoop(3), TRIGGER, request_latency=-1.0)
+    config = resolve_scenario(load_scenario("reaching", "paradigm: automatic")).automatic
+    assert config is not None and config.confidence_threshold is not None
+    assert AutomaticTrigger(ControlLoop(3), config).config is config
 
 
 def test_automatic_trigger_system_counts_the_interval_from_the_switch() -> None:
-    system = AutomaticTrigger(3, TRIGGER, control_period=DT, request_latency=0.1)
+    system = AutomaticTrigger(ControlLoop(3, control_period=DT), TRIGGER, request_latency=0.1)
     context = system.CreateDefaultContext()
     system.GetInputPort("belief").FixValue(context, LOW)
     system.GetInputPort("u_h").FixValue(context, MOVE)
@@ -324,7 +326,7 @@ EE_POSE = np.array([0.0, 0.0, 0.1, *IDENTITY])
 @pytest.mark.parametrize("method", ["entropy", "kl"])
 def test_disambiguation_system_runs_the_chosen_method(method: str) -> None:
     modes = [[0], [1], [2], [3], [4], [5]]
-    system = DisambiguationSystem(2, modes, method=method)
+    system = DisambiguationSystem(ControlLoop(2), modes, method=method)
     assert system.method.name == method
     context = system.CreateDefaultContext()
     belief = np.array([0.55, 0.45])
@@ -345,7 +347,7 @@ def test_disambiguation_system_rejects_an_unknown_method() -> None:
     with pytest.raises(
         ValueError, match=r"mode-selection method: expected one of algorithm1, entropy, kl, got 'fisher'"
     ):
-        DisambiguationSystem(2, [[0], [1]], method="fisher")
+        DisambiguationSystem(ControlLoop(2), [[0], [1]], method="fisher")
 
 
 # ------------------------------------------------------------------------------------------------

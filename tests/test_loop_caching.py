@@ -20,6 +20,7 @@ from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import DisambiguationSystem
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
 from drake_disamb.systems.interfaces import EventLog, make_interface
+from drake_disamb.systems.loop import ControlLoop
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
 GOALS = np.array([[0.3, -0.4, 0.1, *IDENTITY], [-0.2, -0.5, 0.2, 0.0, 1.0, 0.0, 0.0]])
@@ -40,7 +41,7 @@ def _count(obj: object, name: str) -> list[int]:
 
 
 def test_blender_computes_one_step_for_all_outputs() -> None:
-    blender = SharedControlBlender(2)
+    blender = SharedControlBlender(ControlLoop(2))
     calls = _count(blender, "_compute")
     ctx = blender.CreateDefaultContext()
     blender.GetInputPort("u_h").FixValue(ctx, [0.1, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -76,7 +77,7 @@ def test_autonomy_depends_on_its_inputs_only(monkeypatch: pytest.MonkeyPatch) ->
     from drake_disamb.systems import autonomy as module
 
     calls = _counting(monkeypatch, module, "potential_field_commands_from_poses")
-    autonomy = PotentialFieldAutonomy(2, PotentialFieldConfig())
+    autonomy = PotentialFieldAutonomy(ControlLoop(2), PotentialFieldConfig())
     ctx = autonomy.CreateDefaultContext()
     autonomy.GetInputPort("ee_pose").FixValue(ctx, EE_POSE)
     autonomy.GetInputPort("goal_poses").FixValue(ctx, GOALS.ravel())
@@ -96,7 +97,7 @@ def test_dft_drive_is_computed_once_per_input_change(monkeypatch: pytest.MonkeyP
     from drake_disamb.systems import inference as module
 
     calls = _counting(monkeypatch, module, "dft_drive")
-    system = FieldTheoreticIntentInference(2, DFTParams(agreement=True), 0.01)
+    system = FieldTheoreticIntentInference(ControlLoop(2, 0.01), DFTParams(agreement=True))
     ctx = system.CreateDefaultContext()
     system.GetInputPort("u_h").FixValue(ctx, [0.1, 0.0, 0.0, 0.0, 0.0, 0.05])
     system.GetInputPort("ee_pose").FixValue(ctx, EE_POSE)
@@ -174,7 +175,7 @@ def test_event_log_is_shared_by_copies() -> None:
 def test_disambiguation_state_is_numeric_and_written_once_per_request() -> None:
     from drake_disamb.systems.disambiguation import LatchedRequest
 
-    system = DisambiguationSystem(2, [[0], [1], [2], [3], [4], [5]], control_period=0.01)
+    system = DisambiguationSystem(ControlLoop(2, 0.01), [[0], [1], [2], [3], [4], [5]])
     ctx = system.CreateDefaultContext()
     assert ctx.num_abstract_states() == 0  # nothing to deep-copy at unrestricted updates
     request = system.GetInputPort("request")
@@ -196,7 +197,7 @@ def test_dft_belief_is_computed_once_per_tick(monkeypatch: pytest.MonkeyPatch) -
     from drake_disamb.systems import inference as module
 
     builder = DiagramBuilder()
-    system = builder.AddSystem(FieldTheoreticIntentInference(2, DFTParams(), 0.01))
+    system = builder.AddSystem(FieldTheoreticIntentInference(ControlLoop(2, 0.01), DFTParams()))
     sampler = builder.AddSystem(ZeroOrderHold(0.01, 2))
     builder.Connect(system.GetOutputPort("belief"), sampler.get_input_port())
     LogVectorOutput(system.GetOutputPort("belief"), builder, 0.01)
@@ -223,7 +224,9 @@ def test_belief_outputs_share_one_projection(monkeypatch: pytest.MonkeyPatch, di
 
     calls = _counting(monkeypatch, module, "normalize_belief")
     system = (
-        module.RecursiveBayesIntentInference(2) if discrete else FieldTheoreticIntentInference(2, DFTParams())
+        module.RecursiveBayesIntentInference(ControlLoop(2))
+        if discrete
+        else FieldTheoreticIntentInference(ControlLoop(2), DFTParams())
     )
     contexts = [system.CreateDefaultContext() for _ in range(2)]
     for ctx, p in zip(contexts, ([0.6, 0.2], [0.1, 0.3]), strict=True):
@@ -241,8 +244,8 @@ def test_belief_outputs_share_one_projection(monkeypatch: pytest.MonkeyPatch, di
 def test_blender_and_inference_keep_nothing_on_the_system() -> None:
     """Their values computed from a context live in that context (cache entries), not on the
     system object, where every context would share them."""
-    blender = SharedControlBlender(2)
-    inference = FieldTheoreticIntentInference(2, DFTParams())
+    blender = SharedControlBlender(ControlLoop(2))
+    inference = FieldTheoreticIntentInference(ControlLoop(2), DFTParams())
 
     def attributes(system: object) -> dict[str, int]:  # identities only: no reference kept
         return {name: id(value) for name, value in vars(system).items()}
@@ -263,7 +266,7 @@ def test_blender_and_inference_keep_nothing_on_the_system() -> None:
 def test_dft_projection_writes_only_when_the_belief_left_the_simplex() -> None:
     from pydrake.systems.framework import EventStatus
 
-    system = FieldTheoreticIntentInference(2, DFTParams(), 0.01)
+    system = FieldTheoreticIntentInference(ControlLoop(2, 0.01), DFTParams())
     ctx = system.CreateDefaultContext()
     system.GetInputPort("goal_poses").FixValue(ctx, GOALS.ravel())
     state = ctx.get_mutable_state()

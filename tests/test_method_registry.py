@@ -156,6 +156,7 @@ def test_the_scenario_resolves_one_inference_method_for_the_live_system_and_the_
         RecursiveBayesIntentInference,
         inference_system,
     )
+    from drake_disamb.systems.loop import ControlLoop
 
     for name, cls, system in (
         ("dft", DFTInference, FieldTheoreticIntentInference),
@@ -169,18 +170,18 @@ def test_the_scenario_resolves_one_inference_method_for_the_live_system_and_the_
         c = resolve_scenario(s)
         assert type(c.inference) is cls
         assert c.disambiguation is None or c.disambiguation.inference is c.inference
-        assert type(inference_system(c.inference, c.n_goals, 0.01)) is system
+        assert type(inference_system(c.inference, c.loop)) is system
 
     @dataclasses.dataclass(frozen=True)
     class Unbuilt(MemoryInference):
         name: ClassVar[str] = "unbuilt"
 
     # A subclass of a variant gets that variant's system; a method nobody gave one is an error.
-    assert type(inference_system(Unbuilt(), 2, 0.01)) is MemoryBasedIntentInference
+    assert type(inference_system(Unbuilt(), ControlLoop(2))) is MemoryBasedIntentInference
     with pytest.raises(
         ValueError, match=r"inference method 'orphan': no Drake system is registered for _Orphan"
     ):
-        inference_system(_Orphan(), 2, 0.01)
+        inference_system(_Orphan(), ControlLoop(2))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -373,11 +374,7 @@ def test_a_registered_inference_method_is_selectable_from_yaml() -> None:
 
     INFERENCE_METHODS.register(_Stubborn)
     try:
-        inference_system.register(_Stubborn)(
-            lambda method, n_goals, control_period: RecursiveBayesIntentInference(
-                n_goals, control_period=control_period
-            )
-        )
+        inference_system.register(_Stubborn)(lambda method, loop: RecursiveBayesIntentInference(loop))
         scenario = scenario_from_yaml(_reaching("inference: {method: stubborn}"))
         config = resolve_scenario(scenario)
         assert type(config.inference) is _Stubborn and config.disambiguation.inference is config.inference

@@ -15,10 +15,10 @@ from matplotlib.colors import to_rgb
 from support import screenshot_script
 
 from drake_disamb.builder import build_shared_control_diagram
-from drake_disamb.config import load_scenario
+from drake_disamb.config import load_scenario, resolve_scenario
 from drake_disamb.display import add_legend_to_html, belief_caption, css_color, legend_rows
 from drake_disamb.plotting import BeliefPlot, goal_probability_figure, trial_figure, trial_outcome, trial_plot
-from drake_disamb.systems.visualization import COLOR_LEVELS, ROOT, visualizer_for_scenario
+from drake_disamb.systems.visualization import COLOR_LEVELS, ROOT, visualizer_for_trial
 from drake_disamb.trial import run_trial
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -60,7 +60,7 @@ def test_figure_lines_and_meshcat_spheres_have_the_objects_colours(trial) -> Non
         _close_figures()
     # The Meshcat spheres, drawn by the visualizer the builder makes for the scenario.
     fake = FakeMeshcat()
-    vis = visualizer_for_scenario(fake, sc, [[0], [1], [2], [6]])  # type: ignore[arg-type]
+    vis = visualizer_for_trial(fake, resolve_scenario(sc), [[0], [1], [2], [6]])  # type: ignore[arg-type]
     for k in range(sc.n_stages):
         for i, rgb in enumerate(_object_rgb(sc, k)):
             for level in range(COLOR_LEVELS):

@@ -713,7 +713,7 @@ def test_system_decides_at_its_decision_period_and_holds_the_raw_signal() -> Non
         sim.AdvanceTo(k * 0.01 + 0.001)
         seen.append(tuple(user.GetOutputPort("raw").Eval(ctx)))
     assert len(set(seen[:9])) == 1 and len(set(seen)) == 3  # held 0.1 s; redrawn at 0.1 and 0.2
-    with pytest.raises(ValueError, match="decision_period"):
+    with pytest.raises(AssertionError):  # the resolved scenario's: tests/test_bounds.py
         SimulatedUser("joystick", 0, 2, dataclasses.replace(QUIET, decision_period=0.005))
 
 

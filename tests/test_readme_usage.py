@@ -27,9 +27,9 @@ ACTIVATE = "source .venv/bin/activate"
 
 
 def usage_section(text: str) -> str:
-    """README's "Usage" section: from ``## Usage`` to ``### Building your own experiments``."""
+    """README's "Usage" section: from ``## Usage`` to the next section (``## ...``)."""
     start = text.index("\n## Usage\n")
-    return text[start : text.index("\n### Building your own experiments", start)]
+    return text[start : text.index("\n## ", start + 1)]
 
 
 def usage_commands(section: str) -> list[str]:

@@ -19,6 +19,7 @@ from drake_disamb.config import (
     check_start_clearance,
     embedded_scenario_text,
     load_scenario,
+    resolve_scenario,
     scenario_from_dict,
     scenario_from_yaml,
     scenario_to_dict,
@@ -213,9 +214,17 @@ def test_stages_need_equal_goal_counts() -> None:
 
 def test_start_clearance() -> None:
     s = load_scenario("reaching")
-    check_start_clearance(s, [0.0, -0.3, 0.4])
+    config = resolve_scenario(s)
+    check_start_clearance(config, [0.0, -0.3, 0.4])
     with pytest.raises(ValueError, match=r"scenario\.goals\[1\]\.position: goal 'green_can' is on top of"):
-        check_start_clearance(s, np.asarray(s.goals[1].position) + 0.01)
+        check_start_clearance(config, np.asarray(s.goals[1].position) + 0.01)
+    # Only the first stage's goals, each named by its own field.
+    p = load_scenario("pouring")
+    check_start_clearance(resolve_scenario(p), np.asarray(p.goals[2].position))  # a goal of stage 1
+    with pytest.raises(
+        ValueError, match=r"^scenario\.goals\[1\]\.position: goal 'container_left' is on top of"
+    ):
+        check_start_clearance(resolve_scenario(p), np.asarray(p.goals[1].position))
 
 
 def test_default_scenario_object_is_invalid_without_goals() -> None:
@@ -226,7 +235,7 @@ def test_default_scenario_object_is_invalid_without_goals() -> None:
 
 
 # ------------------------------------------------------------------------------------------------
-# Validation that matches the README: trials it lets through can be run
+# Validation that matches docs/scenarios.md: trials it lets through can be run
 # ------------------------------------------------------------------------------------------------
 
 

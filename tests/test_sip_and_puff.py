@@ -29,7 +29,7 @@ KIND = CFG.variant
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
 
 PROTOCOL = """\
-# A small study of the sip-and-puff beside the head array (README, "A third interface").
+# A small study of the sip-and-puff beside the head array (docs/scenarios.md, "A third interface").
 subjects: 1
 interfaces: [sip_and_puff, head_array]
 paradigms:

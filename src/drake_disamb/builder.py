@@ -1,6 +1,16 @@
-"""One function that assembles every shared-control diagram from a :class:`~drake_disamb.config.Scenario`.
+"""The shared-control diagram of a scenario, assembled from its resolved config.
 
-:func:`build_shared_control_diagram` wires (paper Figure "exp_block_diagram")::
+:func:`build_shared_control_diagram` resolves the scenario once
+(:func:`~drake_disamb.config.resolve_scenario`: every bound checked there, each message naming the
+scenario's field) and then reads only the resolved :class:`~drake_disamb.config.TrialConfig`; each
+system gets its typed config from it (the belief-sized ones the loop's
+:class:`~drake_disamb.systems.loop.ControlLoop`: the number of goals and the control period). One
+short function adds each part: the station (the hardware, joint-level ports: whichever backend the
+scenario's ``station`` names), the interface, the task (its manager, the sampled end-effector pose,
+the belief's goal set), the belief and the autonomy (inference, autonomy, blender), the user (the
+simulated one, or a given input source), the controllers between the blender and the station, the
+disambiguation (a request is a value; one ``paused`` signal), the automatic trigger, the visualizer
+and the loggers. The wiring (paper Figure "exp_block_diagram")::
 
     user.raw ------------------------------> interface.raw
     interface.u_h -------------------------> blender.u_h, inference.u_h
@@ -23,12 +33,11 @@
       (inference.goal_set "task": a constant source of every goal instead; the task manager still
       completes a stage only at one of its own goals)
 
-The interface, user, autonomy, blender, disambiguation and task manager tick every
-``scenario.control_period`` (100 Hz by default, the MICO's Cartesian velocity interface); the DFT
-belief is continuous state, integrated between ticks by the integrator of the scenario's
-``simulator_config``; the arm is the station's discrete plant (``plant_config``). Every system's
-config comes from :func:`~drake_disamb.config.resolve_scenario`. Running a trial is
-:func:`drake_disamb.trial.run_trial`; this module only wires.
+Every system ticks every ``config.control_period`` (100 Hz by default, the MICO's Cartesian
+velocity interface; the simulated user decides at its own decision period, at least that long);
+the DFT belief is continuous state, integrated between ticks by the integrator of the scenario's
+``simulator_config``; the arm is the station's discrete plant (``plant_config``). Running a trial
+is :func:`drake_disamb.trial.run_trial`; this module only wires.
 
 Belief slot ``i`` in stage ``k`` is goal ``i`` of :meth:`Scenario.belief_goals(k)
 <drake_disamb.config.Scenario.belief_goals>` (the stage's goals, or every goal of the task); the
@@ -38,13 +47,13 @@ simulated user gets the belief slot of its intended goal per stage
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from pydrake.geometry import Meshcat
-from pydrake.systems.framework import Context, Diagram, DiagramBuilder, System
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPort, System
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
@@ -83,9 +92,10 @@ class SharedControlDiagram:
         systems: Named subsystems: ``user`` (or the given input source), ``interface``,
             ``autonomy``, ``inference``, ``blender``, ``disambiguation`` (disambiguation and
             automatic paradigms), ``automatic_trigger`` (automatic paradigm only), ``task``,
-            ``ee_pose_sampler``, ``diff_ik`` and ``gripper_controller`` (the controllers between
-            the blender and interface and the station's joint-level inputs), ``visualizer`` (with
-            Meshcat only).
+            ``ee_pose_sampler``, ``task_goal_poses`` (a belief over every goal of a multi-step
+            task), ``diff_ik`` and ``gripper_controller`` (the controllers between the blender and
+            interface and the station's joint-level inputs), ``deadman`` (an input source driving
+            an arm on a wire from the page), ``visualizer`` (with Meshcat only).
         loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS`).
         modes: The interface's control modes (dimension lists; gripper mode last).
         meshcat: The Meshcat instance, or ``None``.
@@ -128,15 +138,37 @@ class SharedControlDiagram:
             self.station.link.stop_arm()
 
     def goal_names(self, stage: int) -> list[str]:
-        """Goal names in belief-slot order for ``stage``."""
-        return [g.name for g in self.scenario.stage_goals(stage)]
+        """The names of ``stage``'s goals, in the task manager's order."""
+        return list(self.config.goal_names[stage])
 
 
-def _make_inference(config: TrialConfig, control_period: float) -> System:
-    from drake_disamb.systems.inference import inference_system
+@dataclass
+class _Wiring:
+    """What the builder's steps share: the builder, the resolved config, the station, the systems
+    added so far by name, and the signals every part reads."""
 
-    # The method and its parameters are the forward projection's too.
-    return inference_system(config.inference, config.n_goals, control_period)
+    builder: DiagramBuilder
+    config: TrialConfig
+    station: Any
+    systems: dict[str, System] = field(default_factory=dict)
+    ee_pose: OutputPort | None = None
+    """The end-effector pose sampled at the control ticks."""
+    goal_poses: OutputPort | None = None
+    """The belief's goal set (the task manager's stage goals, or every goal of the task)."""
+
+    def add(self, name: str, system: System) -> System:
+        """Add ``system`` named ``name`` to the diagram and to :attr:`systems`."""
+        self.systems[name] = self.builder.AddNamedSystem(name, system)
+        return system
+
+    def port(self, system: str, port: str) -> OutputPort:
+        """The output ``port`` of the added ``system``."""
+        return self.systems[system].GetOutputPort(port)
+
+    def connect(self, source: OutputPort, system: str, *ports: str) -> None:
+        """Connect ``source`` to the input ``ports`` of the added ``system``."""
+        for port in ports:
+            self.builder.Connect(source, self.systems[system].GetInputPort(port))
 
 
 def build_shared_control_diagram(
@@ -147,7 +179,8 @@ def build_shared_control_diagram(
     """Assemble the full shared-control diagram of ``scenario``.
 
     Args:
-        scenario: The scenario (checked and resolved here, :func:`~drake_disamb.config.resolve_scenario`).
+        scenario: The scenario (checked and resolved here, :func:`~drake_disamb.config.resolve_scenario`;
+            the diagram is built from the resolved config alone, the scenario kept on the handle).
         meshcat: If given, the arm, table and objects are drawn, plus the goal probabilities, the
             active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
         input_source: A system with one 4-vector output port ``raw`` to drive the interface
@@ -158,186 +191,184 @@ def build_shared_control_diagram(
     Raises:
         ValueError: an invalid scenario, or a goal on top of the gripper's start position.
     """
-    from drake_disamb.controller import add_station_controller
     from drake_disamb.station.backends import make_station
 
     config = resolve_scenario(scenario)
-    n = config.n_goals
     builder = DiagramBuilder()
-
     station = make_station(config.backend, config.station, meshcat=meshcat)
     builder.AddSystem(station.diagram)
-    plant = station.plant
-    check_start_clearance(scenario, start_ee_pose(station)[:3])
-
-    interface = builder.AddSystem(make_interface(config.interface, n))
-    modes = [list(m) for m in interface.modes]
-
-    task = builder.AddSystem(
-        TaskManager(
-            [scenario.stage_goal_poses(k) for k in range(scenario.n_stages)],
-            position_tolerance=scenario.success.position_tolerance,
-            orientation_tolerance=scenario.success.orientation_tolerance,
-            hold_times=[scenario.hold_time(k) for k in range(scenario.n_stages)],
-            period=scenario.control_period,
-            release_openings=[stage.release_opening for stage in scenario.stages],
-            targets=[
-                scenario.user.goals[k] if stage.ends_at_target else None
-                for k, stage in enumerate(scenario.stages)
-            ],
-        )
-    )
-    task.set_name("task")
-    autonomy = builder.AddSystem(PotentialFieldAutonomy(n, config.autonomy, scenario.control_period))
-    autonomy.set_name("autonomy")
-    inference = builder.AddSystem(_make_inference(config, scenario.control_period))
-    inference.set_name("inference")
-    blender = builder.AddSystem(SharedControlBlender(n, config.blending, scenario.control_period))
-    blender.set_name("blender")
-
-    if input_source is None:
-        user = builder.AddSystem(
-            SimulatedUser(
-                config.interface, list(config.user_goals), n, config.user, releases=scenario.releases()
-            )
-        )
-        user.set_name("user")
-        builder.Connect(interface.GetOutputPort("mode"), user.GetInputPort("mode"))
-    else:
-        user = builder.AddSystem(input_source)
-        if not user.get_name():
-            user.set_name("input_source")
-    raw = user.GetOutputPort("raw")
-    if input_source is not None and meshcat is not None and station.link is not None:
-        # A person at the page drives a real arm: losing the page releases every signal.
-        from drake_disamb.systems.deadman import PageDeadman
-
-        deadman = builder.AddNamedSystem("deadman", PageDeadman(meshcat, scenario.control_period))
-        builder.Connect(raw, deadman.GetInputPort("raw_in"))
-        raw = deadman.GetOutputPort("raw")
-    builder.Connect(raw, interface.GetInputPort("raw"))
-
-    # The control loop (every scenario.control_period, 10 ms by default) sees the end-effector pose
-    # sampled at its ticks (as the MICO's Cartesian interface reports it); this also keeps plant
-    # steps finer than the control period (scenario.plant_config.time_step, by default equal to it) and the
-    # belief integrator's stages from re-evaluating the autonomy and the belief's inputs between ticks.
-    sampler = builder.AddSystem(ZeroOrderHold(scenario.control_period, 7))
-    sampler.set_name("ee_pose_sampler")
-    builder.Connect(station.diagram.GetOutputPort("ee_pose"), sampler.get_input_port())
-    ee_pose = sampler.get_output_port()
-    goal_poses = task.GetOutputPort("goal_poses")
-    if scenario.inference.goal_set == "task" and scenario.n_stages > 1:  # one belief over every goal
-        goal_source = builder.AddNamedSystem("task_goal_poses", FixedGoalSet(scenario.belief_goal_poses(0)))
-        goal_poses = goal_source.get_output_port()
-    builder.Connect(ee_pose, task.GetInputPort("ee_pose"))
-    builder.Connect(station.diagram.GetOutputPort("gripper_opening"), task.GetInputPort("gripper_opening"))
-    if input_source is None:
-        builder.Connect(ee_pose, user.GetInputPort("ee_pose"))
-        builder.Connect(goal_poses, user.GetInputPort("goal_poses"))
-        builder.Connect(inference.GetOutputPort("belief"), user.GetInputPort("belief"))
-        builder.Connect(task.GetOutputPort("stage"), user.GetInputPort("stage"))
-    builder.Connect(ee_pose, autonomy.GetInputPort("ee_pose"))
-    builder.Connect(goal_poses, autonomy.GetInputPort("goal_poses"))
-    builder.Connect(interface.GetOutputPort("u_h"), inference.GetInputPort("u_h"))
-    builder.Connect(interface.GetOutputPort("u_h"), blender.GetInputPort("u_h"))
-    builder.Connect(ee_pose, inference.GetInputPort("ee_pose"))
-    builder.Connect(goal_poses, inference.GetInputPort("goal_poses"))
-    builder.Connect(autonomy.GetOutputPort("u_a"), inference.GetInputPort("u_a"))
-    builder.Connect(autonomy.GetOutputPort("u_a"), blender.GetInputPort("u_a"))
-    builder.Connect(inference.GetOutputPort("belief"), blender.GetInputPort("belief"))
-    controller = add_station_controller(builder, station)  # the IK and the gripper's, joint-level out
-    builder.Connect(blender.GetOutputPort("u"), controller.diff_ik.GetInputPort("ee_velocity_command"))
-    builder.Connect(
-        interface.GetOutputPort("gripper_command"), controller.gripper.GetInputPort("gripper_command")
-    )
-
-    systems: dict[str, System] = {
-        "user": user,
-        "interface": interface,
-        "autonomy": autonomy,
-        "inference": inference,
-        "blender": blender,
-        "task": task,
-        "diff_ik": controller.diff_ik,
-        "gripper_controller": controller.gripper,
-        "ee_pose_sampler": sampler,
-    }
+    check_start_clearance(config, start_ee_pose(station)[:3])
+    w = _Wiring(builder, config, station)
+    # (the interface names itself after its kind)
+    interface = w.systems["interface"] = builder.AddSystem(make_interface(config.interface, config.n_goals))
+    _add_task(w)
+    _add_belief_and_autonomy(w)
+    _add_user(w, input_source, meshcat)
+    _add_controller(w)
     if config.disambiguation is not None:  # the preset's probing, the live inference's update
-        disamb = builder.AddSystem(
-            DisambiguationSystem(
-                n,
-                interface.arm_modes,
-                config.disambiguation,
-                control_period=scenario.control_period,
-                method=config.disambiguation_method,
-            )
-        )
-        disamb.set_name("disambiguation")
-        # A request is a value: the interface latches what it is made of at the press, the
-        # disambiguation system answers it once, and the interface applies the answer.
-        builder.Connect(inference.GetOutputPort("belief"), interface.GetInputPort("belief"))
-        builder.Connect(ee_pose, interface.GetInputPort("ee_pose"))
-        builder.Connect(goal_poses, interface.GetInputPort("goal_poses"))
-        builder.Connect(interface.GetOutputPort("request"), disamb.GetInputPort("request"))
-        builder.Connect(disamb.GetOutputPort("answer"), interface.GetInputPort("answer"))
-        systems["disambiguation"] = disamb
-        if scenario.disambiguation.hold_while_computing:  # the loop pauses while a request is computed
-            paused = interface.GetOutputPort("paused")
-            builder.Connect(paused, inference.GetInputPort("paused"))
-            builder.Connect(paused, blender.GetInputPort("paused"))
-            if input_source is None:  # the simulated user sees the arm stop and waits
-                builder.Connect(paused, user.GetInputPort("paused"))
+        _add_disambiguation(w)
     if config.automatic is not None:
-        trigger = builder.AddSystem(
-            AutomaticTrigger(n, config.automatic, scenario.control_period, config.interface.request_latency)
-        )
-        trigger.set_name("automatic_trigger")
-        builder.Connect(inference.GetOutputPort("belief"), trigger.GetInputPort("belief"))
-        builder.Connect(interface.GetOutputPort("u_h"), trigger.GetInputPort("u_h"))
-        builder.Connect(interface.GetOutputPort("mode"), trigger.GetInputPort("mode"))
-        builder.Connect(
-            trigger.GetOutputPort("automatic_request_count"),
-            interface.GetInputPort("automatic_request_count"),
-        )
-        systems["automatic_trigger"] = trigger
-
+        _add_automatic_trigger(w)
     if meshcat is not None:
-        from drake_disamb.systems import visualization
-
-        vis = builder.AddSystem(visualization.visualizer_for_scenario(meshcat, scenario, modes))
-        vis.set_name("visualizer")
-        if vis.HasInputPort("stage"):
-            builder.Connect(task.GetOutputPort("stage"), vis.GetInputPort("stage"))
-        bounds = visualization.illustration_bounds(plant, station.scene_graph)
-        visualization.frame_workspace(meshcat, *bounds, work_height=station.geometry.table_top)
-        builder.Connect(inference.GetOutputPort("belief"), vis.GetInputPort("belief"))
-        builder.Connect(goal_poses, vis.GetInputPort("goal_poses"))
-        builder.Connect(station.diagram.GetOutputPort("ee_pose"), vis.GetInputPort("ee_pose"))
-        builder.Connect(interface.GetOutputPort("mode"), vis.GetInputPort("mode"))
-        builder.Connect(blender.GetOutputPort("alpha"), vis.GetInputPort("alpha"))
-        systems["visualizer"] = vis
-
-    loggers: dict[str, VectorLogSink] = {}
-    for name, sys_name, port in LOGGED_SIGNALS:
-        system = station.diagram if sys_name == "station" else systems[sys_name]
-        source = system.GetOutputPort(port)
-        logger = LogVectorOutput(source, builder, scenario.control_period)
-        logger.set_name(f"log_{name}")
-        loggers[name] = logger
-
+        _add_visualizer(w, meshcat, interface.modes)
+    loggers = _add_loggers(w)
     diagram = builder.Build()
-    diagram.set_name(f"shared_control_{scenario.task}")
+    diagram.set_name(f"shared_control_{config.task_name}")
     return SharedControlDiagram(
         diagram=diagram,
         scenario=scenario,
         config=config,
-        plant=plant,
+        plant=station.plant,
         station=station,
-        systems=systems,
+        systems=w.systems,
         loggers=loggers,
-        modes=modes,
+        modes=[list(m) for m in interface.modes],
         meshcat=meshcat,
     )
+
+
+def _add_task(w: _Wiring) -> None:
+    """The task manager, the end-effector pose sampled at the control ticks and the belief's goal
+    set (the manager's stage goals, or a constant source of every goal of the task)."""
+    config, station = w.config, w.station.diagram
+    w.add("task", TaskManager(config.task))
+    # The control loop (every control period, 10 ms by default) sees the end-effector pose sampled
+    # at its ticks (as the MICO's Cartesian interface reports it); this also keeps plant steps finer
+    # than the control period (plant_config.time_step, by default equal to it) and the belief
+    # integrator's stages from re-evaluating the autonomy and the belief's inputs between ticks.
+    w.add("ee_pose_sampler", ZeroOrderHold(config.control_period, 7))
+    w.builder.Connect(station.GetOutputPort("ee_pose"), w.systems["ee_pose_sampler"].get_input_port())
+    w.ee_pose = w.systems["ee_pose_sampler"].get_output_port()
+    w.goal_poses = w.port("task", "goal_poses")
+    if config.task_goal_poses is not None:  # one belief over every goal of the task
+        w.add("task_goal_poses", FixedGoalSet(config.task_goal_poses))
+        w.goal_poses = w.port("task_goal_poses", "goal_poses")
+    w.connect(w.ee_pose, "task", "ee_pose")
+    w.connect(station.GetOutputPort("gripper_opening"), "task", "gripper_opening")
+
+
+def _add_belief_and_autonomy(w: _Wiring) -> None:
+    """The autonomy (a command per goal), the inference (the belief; its method and parameters are
+    the forward projection's too) and the blender, fed by the interface's ``u_h``."""
+    from drake_disamb.systems.inference import inference_system
+
+    config = w.config
+    w.add("autonomy", PotentialFieldAutonomy(config.loop, config.autonomy))
+    w.add("inference", inference_system(config.inference, config.loop))
+    w.add("blender", SharedControlBlender(config.loop, config.blending))
+    w.connect(w.ee_pose, "autonomy", "ee_pose")
+    w.connect(w.goal_poses, "autonomy", "goal_poses")
+    w.connect(w.port("interface", "u_h"), "inference", "u_h")
+    w.connect(w.port("interface", "u_h"), "blender", "u_h")
+    w.connect(w.ee_pose, "inference", "ee_pose")
+    w.connect(w.goal_poses, "inference", "goal_poses")
+    w.connect(w.port("autonomy", "u_a"), "inference", "u_a")
+    w.connect(w.port("autonomy", "u_a"), "blender", "u_a")
+    w.connect(w.port("inference", "belief"), "blender", "belief")
+
+
+def _add_user(w: _Wiring, input_source: System | None, meshcat: Meshcat | None) -> None:
+    """The simulated user, or ``input_source``, on the interface's ``raw`` input (behind the page's
+    deadman when a person at the page drives an arm on a wire)."""
+    config = w.config
+    if input_source is not None:
+        w.systems["user"] = w.builder.AddSystem(input_source)
+        if not input_source.get_name():
+            input_source.set_name("input_source")
+        raw = input_source.GetOutputPort("raw")
+        if meshcat is not None and w.station.link is not None:
+            # A person at the page drives a real arm: losing the page releases every signal.
+            from drake_disamb.systems.deadman import PageDeadman
+
+            w.add("deadman", PageDeadman(meshcat, config.control_period))
+            w.connect(raw, "deadman", "raw_in")
+            raw = w.port("deadman", "raw")
+        w.connect(raw, "interface", "raw")
+        return
+    user = SimulatedUser(
+        config.interface, list(config.user_goals), config.n_goals, config.user, releases=config.user_releases
+    )
+    w.add("user", user)
+    w.connect(w.port("interface", "mode"), "user", "mode")
+    w.connect(w.port("user", "raw"), "interface", "raw")
+    w.connect(w.ee_pose, "user", "ee_pose")
+    w.connect(w.goal_poses, "user", "goal_poses")
+    w.connect(w.port("inference", "belief"), "user", "belief")
+    w.connect(w.port("task", "stage"), "user", "stage")
+
+
+def _add_controller(w: _Wiring) -> None:
+    """The controllers between the shared-control commands and the station's joint-level inputs:
+    the differential IK (the blender's ``u``) and the gripper's (the interface's opening speed)."""
+    from drake_disamb.controller import add_station_controller
+
+    controller = add_station_controller(w.builder, w.station)
+    w.systems["diff_ik"], w.systems["gripper_controller"] = controller.diff_ik, controller.gripper
+    w.connect(w.port("blender", "u"), "diff_ik", "ee_velocity_command")
+    w.connect(w.port("interface", "gripper_command"), "gripper_controller", "gripper_command")
+
+
+def _add_disambiguation(w: _Wiring) -> None:
+    """The disambiguation system. A request is a value: the interface latches what it is made of at
+    the press, the disambiguation system answers it once, and the interface applies the answer.
+    With ``hold_while_computing`` the interface's one ``paused`` signal pauses the loop (the
+    inference, the blender and the simulated user) while a request is computed."""
+    config = w.config
+    arm_modes = w.systems["interface"].arm_modes
+    w.add(
+        "disambiguation",
+        DisambiguationSystem(config.loop, arm_modes, config.disambiguation, config.disambiguation_method),
+    )
+    w.connect(w.port("inference", "belief"), "interface", "belief")
+    w.connect(w.ee_pose, "interface", "ee_pose")
+    w.connect(w.goal_poses, "interface", "goal_poses")
+    w.connect(w.port("interface", "request"), "disambiguation", "request")
+    w.connect(w.port("disambiguation", "answer"), "interface", "answer")
+    if config.hold_while_computing:
+        paused = w.port("interface", "paused")
+        w.connect(paused, "inference", "paused")
+        w.connect(paused, "blender", "paused")
+        if isinstance(w.systems["user"], SimulatedUser):  # the simulated user sees the arm stop and waits
+            w.connect(paused, "user", "paused")
+
+
+def _add_automatic_trigger(w: _Wiring) -> None:
+    """The Automatic paradigm's trigger: it counts the moments to disambiguate, which the interface
+    starts as it does a request press."""
+    config = w.config
+    w.add(
+        "automatic_trigger", AutomaticTrigger(config.loop, config.automatic, config.interface.request_latency)
+    )
+    w.connect(w.port("inference", "belief"), "automatic_trigger", "belief")
+    w.connect(w.port("interface", "u_h"), "automatic_trigger", "u_h")
+    w.connect(w.port("interface", "mode"), "automatic_trigger", "mode")
+    w.connect(w.port("automatic_trigger", "automatic_request_count"), "interface", "automatic_request_count")
+
+
+def _add_visualizer(w: _Wiring, meshcat: Meshcat, modes: list[list[int]]) -> None:
+    """The goal probabilities, the active mode and alpha in Meshcat, the workspace framed."""
+    from drake_disamb.systems import visualization
+
+    vis = w.add("visualizer", visualization.visualizer_for_trial(meshcat, w.config, modes))
+    if vis.HasInputPort("stage"):
+        w.connect(w.port("task", "stage"), "visualizer", "stage")
+    bounds = visualization.illustration_bounds(w.station.plant, w.station.scene_graph)
+    visualization.frame_workspace(meshcat, *bounds, work_height=w.station.geometry.table_top)
+    w.connect(w.port("inference", "belief"), "visualizer", "belief")
+    w.connect(w.goal_poses, "visualizer", "goal_poses")
+    w.connect(w.station.diagram.GetOutputPort("ee_pose"), "visualizer", "ee_pose")
+    w.connect(w.port("interface", "mode"), "visualizer", "mode")
+    w.connect(w.port("blender", "alpha"), "visualizer", "alpha")
+
+
+def _add_loggers(w: _Wiring) -> dict[str, VectorLogSink]:
+    """One VectorLogSink per :data:`LOGGED_SIGNALS` entry, sampled every control period."""
+    loggers: dict[str, VectorLogSink] = {}
+    for name, system, port in LOGGED_SIGNALS:
+        source = w.station.diagram.GetOutputPort(port) if system == "station" else w.port(system, port)
+        loggers[name] = LogVectorOutput(source, w.builder, w.config.control_period)
+        loggers[name].set_name(f"log_{name}")
+    return loggers
 
 
 def start_ee_pose(station: Any) -> NDArray[np.float64]:

@@ -1,27 +1,20 @@
 """Scenarios in Drake's style: typed dataclasses loaded with Drake's YAML loader, checked once and
-resolved into the frozen configs the core and the systems use.
-
-- :mod:`~drake_disamb.config.schema`: :class:`Scenario` and its parts, nesting Drake's
-  ``SimulatorConfig`` (``simulator_config``) and ``MultibodyPlantConfig`` (``plant_config``);
-- :mod:`~drake_disamb.config.yaml_io`: the one loader, layers of YAML merged by Drake's
-  ``yaml_load_typed`` with ``defaults=`` (:class:`Layer`, :func:`load_layers`; a task file, a
-  system preset, ``--scenario-text``, a study trial's draws, a ``--switch``), :func:`load_scenario`
-  (an embedded task name or a YAML path, and layers on top), :func:`dump_scenario`; each layer's
-  raw text is checked (:mod:`drake_disamb.yaml_safety`) before ``yaml_load_typed`` reads it;
-- :mod:`~drake_disamb.config.system_presets`: the named systems, each a layer;
-- :mod:`~drake_disamb.config.checks`: the strict type check of plain data that Drake's loader lacks;
-- :mod:`~drake_disamb.config.validation`: every other check, with messages naming the field path
-  and the value;
-- :mod:`~drake_disamb.config.resolve`: :func:`resolve_scenario`, the one place a scenario becomes
-  a :class:`TrialConfig` (rho thresholds, shared DFT parameters and potential field, the user's,
-  interface's, station's and simulator's configs).
+resolved into the frozen configs the core and the systems use. :class:`Scenario` nests Drake's
+``SimulatorConfig`` (``simulator_config``) and ``MultibodyPlantConfig`` (``plant_config``);
+:func:`load_scenario` (an embedded task name or a YAML path, and layers on top) and
+:func:`load_layers` are the one loader (layers of YAML merged by Drake's ``yaml_load_typed`` with
+``defaults=``), :func:`dump_scenario` writes one, and :func:`resolve_scenario` is the one place a
+scenario becomes a :class:`TrialConfig` (all the builder reads).
 
 Two scenarios are embedded as package data (``drake_disamb/tasks/reaching.yaml`` and
 ``pouring.yaml``); ``drake-disamb demo --dump-scenario`` prints any scenario fully written out.
+
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 from drake_disamb.config.resolve import (
     TrialConfig,
+    check_start_clearance,
     interface_variant,
     ordered_variant,
     resolve_scenario,
@@ -52,7 +45,6 @@ from drake_disamb.config.validation import (
     MICO_SHOULDER_POSITION,
     MIN_START_CLEARANCE,
     MIN_TABLE_CLEARANCE,
-    check_start_clearance,
     min_goal_separation,
 )
 from drake_disamb.config.yaml_io import (

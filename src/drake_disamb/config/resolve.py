@@ -27,7 +27,15 @@ and returns a :class:`TrialConfig`:
 - the simulated user's config (its seed is the scenario's; in the manual and automatic paradigms
   it never asks for disambiguation), the interface's, the station's (Drake's
   ``MultibodyPlantConfig``, the start posture and the scene objects) and its backend (the
-  scenario's ``station``, which builds it), and Drake's ``SimulatorConfig``.
+  scenario's ``station``, which builds it), and Drake's ``SimulatorConfig``;
+- everything else the builder reads (:func:`drake_disamb.builder.build_shared_control_diagram`
+  reads nothing but the resolved config): the control period (:attr:`TrialConfig.loop`, with the
+  belief's size), the task manager's config (stage goal poses, tolerances, hold times, release
+  openings, targets), the belief's goal set, the user's releases, whether the loop pauses while a
+  request is computed, and the goals' names, fields, colours and legend.
+
+:func:`check_start_clearance` is the one check that needs the built station (the gripper's start
+position): the builder runs it on the resolved config.
 
 An error from a core config's own checks is raised as a ``ValueError`` that names the scenario
 field first, e.g. ``scenario.inference.dft: DFTParams.tau1 must be a finite positive number, got -1.0``.
@@ -37,15 +45,16 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
+from numpy.typing import NDArray
 
 from drake_disamb.config.checks import cut, fmt
 from drake_disamb.config.schema import Scenario
-from drake_disamb.config.validation import check_scenario
+from drake_disamb.config.validation import MIN_START_CLEARANCE, check_scenario
 from drake_disamb.core.automatic import AutomaticConfig
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
@@ -58,6 +67,9 @@ from drake_disamb.core.disambiguation import (
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
 from drake_disamb.core.interfaces import INTERFACES, Interface, InterfaceConfig
 from drake_disamb.core.user import UserConfig
+from drake_disamb.display import LegendRow, goal_colors, legend_rows
+from drake_disamb.systems.loop import ControlLoop
+from drake_disamb.systems.task import TaskConfig
 
 T = TypeVar("T")
 
@@ -90,6 +102,25 @@ class TrialConfig:
         simulator: Drake's ``SimulatorConfig`` for ``ApplySimulatorConfig`` (a copy).
         backend: The station's backend (the scenario's ``station``, its settings checked): what
             builds the station (:func:`drake_disamb.station.backends.make_station`).
+        control_period: The loop's period (s): every system of the shared-control diagram ticks
+            at it (the interface's and station's configs carry it too).
+        task: The task manager's config: per stage, its goal poses, hold time, release opening
+            and target (the user's goal where the stage ends at its target), and the success
+            tolerances.
+        task_name: The scenario's ``task`` (the diagram is named after it).
+        task_goal_poses: With ``inference.goal_set`` ``"task"`` in a multi-step task, the
+            ``(n_goals, 7)`` poses of every goal of the task: the belief's one goal set from start
+            to end; ``None``: the belief is over the current stage's goals (the task manager's).
+        user_releases: Per stage, whether it ends by letting go of the held object (the
+            simulated user then opens the gripper at the goal).
+        hold_while_computing: Whether the loop pauses while a disambiguation is computed
+            (``disambiguation.hold_while_computing``).
+        goal_names: Per stage, the names of its goals (in the order of ``task.stage_goal_poses``).
+        goal_fields: Per stage, the scenario field of each of its goals (``scenario.goals[i]``),
+            what an error about the goal names.
+        goal_colors: Per stage, the ``(r, g, b, a)`` of each belief slot (its goal's object's
+            colour, :func:`drake_disamb.display.goal_colors`).
+        legend: The Meshcat legend (:func:`drake_disamb.display.legend_rows`).
     """
 
     n_goals: int
@@ -105,7 +136,22 @@ class TrialConfig:
     simulator: Any
     backend: Any
     disambiguation_method: ModeSelectionMethod
+    control_period: float
+    task: TaskConfig
+    task_name: str
+    task_goal_poses: NDArray[np.float64] | None = dataclasses.field(compare=False)
+    user_releases: tuple[bool, ...]
+    hold_while_computing: bool
+    goal_names: tuple[tuple[str, ...], ...]
+    goal_fields: tuple[tuple[str, ...], ...]
+    goal_colors: tuple[tuple[tuple[float, float, float, float], ...], ...]
+    legend: tuple[LegendRow, ...]
     automatic: AutomaticConfig | None = None
+
+    @property
+    def loop(self) -> ControlLoop:
+        """The belief's size and the control period: what each belief-sized system takes."""
+        return ControlLoop(self.n_goals, self.control_period)
 
 
 def ordered_variant(kind: str, order: object, path: str = "interface_mode_order") -> Interface:
@@ -249,6 +295,7 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
             mode_selection=selection if selection in INTERFACES[s.interface].mode_selections else "cycle",
         ),
     )
+    index = {id(g): i for i, g in enumerate(s.goals)}  # a goal's place in scenario.goals
     home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
     station = _named(
         name,
@@ -275,6 +322,29 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         disambiguation_method=_named(
             f"{name}.disambiguation.method", lambda: mode_selection_method(s.disambiguation.method)
         ),
+        control_period=s.control_period,
+        task=TaskConfig(
+            stage_goal_poses=tuple(s.stage_goal_poses(k) for k in range(s.n_stages)),
+            position_tolerance=s.success.position_tolerance,
+            orientation_tolerance=s.success.orientation_tolerance,
+            hold_times=tuple(s.hold_time(k) for k in range(s.n_stages)),
+            control_period=s.control_period,
+            release_openings=tuple(stage.release_opening for stage in s.stages),
+            targets=tuple(
+                goal if stage.ends_at_target else None
+                for goal, stage in zip(s.user.goals, s.stages, strict=True)
+            ),
+        ),
+        task_name=s.task,
+        task_goal_poses=s.belief_goal_poses(0) if s.inference.goal_set == "task" and s.n_stages > 1 else None,
+        user_releases=tuple(s.releases()),
+        hold_while_computing=bool(s.disambiguation.hold_while_computing),
+        goal_names=tuple(tuple(g.name for g in s.stage_goals(k)) for k in range(s.n_stages)),
+        goal_fields=tuple(
+            tuple(f"{name}.goals[{index[id(g)]}]" for g in s.stage_goals(k)) for k in range(s.n_stages)
+        ),
+        goal_colors=tuple(tuple(colors) for colors in goal_colors(s)),
+        legend=tuple(legend_rows(s)),
         automatic=automatic,
     )
 
@@ -287,6 +357,28 @@ def validate_scenario(scenario: Scenario, name: str = "scenario") -> Scenario:
     """
     resolve_scenario(scenario, name)
     return scenario
+
+
+def check_start_clearance(config: TrialConfig, start_position: Sequence[float]) -> None:
+    """Reject a goal of the first stage within
+    :data:`~drake_disamb.config.validation.MIN_START_CLEARANCE` of the gripper's start position.
+
+    The start position depends on the arm's kinematics (on a wire, on the measured arm), so the
+    builder calls this with the resolved ``config`` once the station exists.
+
+    Raises:
+        ValueError: naming the goal's field (``scenario.goals[i].position``) and the value.
+    """
+    start = np.asarray(start_position, dtype=float)
+    positions = np.asarray(config.task.stage_goal_poses[0])[:, :3]
+    for position, goal, path in zip(positions, config.goal_names[0], config.goal_fields[0], strict=True):
+        dist = float(np.linalg.norm(position - start))
+        if dist < MIN_START_CLEARANCE:
+            raise ValueError(
+                f"{path}.position: goal {goal!r} is on top of the gripper's start position "
+                f"{np.round(start, 4).tolist()} ({dist:.3f} m < {MIN_START_CLEARANCE} m), "
+                f"got {fmt(position.tolist())}"
+            )
 
 
 def scene_objects(scenario: Scenario) -> list[Any]:

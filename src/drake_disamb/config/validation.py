@@ -30,7 +30,8 @@ that is not one of its field's choices). Then:
 - start joint angles outside the joint limits, or that put a link, a finger or the carried object
   less than :data:`MIN_TABLE_CLEARANCE` above the table top (forward kinematics of the station's
   model, :mod:`drake_disamb.station.geometry`);
-- a simulated user whose intended goals or success tolerances do not fit the task.
+- a simulated user whose intended goals or success tolerances do not fit the task, who decides
+  more often than the control period, or who waits less than two decisions after a press.
 
 Every error is a ``ValueError`` naming the field path and the value, e.g.
 ``scenario.goals[3].position: goal 'yellow_bottle' is out of the arm's reach: ...``. The checks of
@@ -387,6 +388,26 @@ def _check_user(s: Scenario, name: str) -> None:
                 f"{name}.user.config.{user_field}: expected at most {name}.success.{task_field} "
                 f"({getattr(s.success, task_field)!r}), got {fmt(getattr(u, user_field))}"
             )
+    _check_user_timing(s, name)
+
+
+def _check_user_timing(s: Scenario, name: str) -> None:
+    """The simulated user decides at most once per control period (each press is one rising edge
+    of the interface), and waits at least two decisions after a press (it is released and the new
+    mode seen before the next one)."""
+    u, path = s.user.config, f"{name}.user.config"
+    period = s.control_period if u.decision_period is None else u.decision_period
+    if period < s.control_period - 1e-12:
+        raise ValueError(
+            f"{path}.decision_period: expected at least the control period ({s.control_period!r} s), "
+            f"got {fmt(u.decision_period)}"
+        )
+    if u.reaction_time - u.reaction_time_jitter < 2 * period:
+        raise ValueError(
+            f"{path}.reaction_time: expected reaction_time - reaction_time_jitter to be at least two "
+            f"decision periods ({2 * period!r} s), got {fmt(u.reaction_time)} - "
+            f"{fmt(u.reaction_time_jitter)}"
+        )
 
 
 def _check_separation(s: Scenario, name: str) -> None:
@@ -430,28 +451,6 @@ def _check_start_posture(q: Sequence[float], held: Sequence[Any], path: str) -> 
         )
 
 
-def check_start_clearance(scenario: Scenario, start_position: Sequence[float]) -> None:
-    """Reject a goal within :data:`MIN_START_CLEARANCE` of the gripper's start position.
-
-    The start position depends on the arm's kinematics, so the builder calls this once the
-    station exists.
-
-    Raises:
-        ValueError: naming ``scenario.goals[i].position`` and the value.
-    """
-    start = np.asarray(start_position, dtype=float)
-    for i, g in enumerate(scenario.goals):
-        if g.stage != 0:
-            continue
-        dist = float(np.linalg.norm(np.asarray(g.position) - start))
-        if dist < MIN_START_CLEARANCE:
-            raise ValueError(
-                f"scenario.goals[{i}].position: goal {g.name!r} is on top of the gripper's start position "
-                f"{np.round(start, 4).tolist()} ({dist:.3f} m < {MIN_START_CLEARANCE} m), "
-                f"got {fmt(g.position)}"
-            )
-
-
 __all__ = [
     "MICO_REACH",
     "MICO_SHOULDER_POSITION",
@@ -460,6 +459,5 @@ __all__ = [
     "check_counts",
     "check_scenario",
     "check_station",
-    "check_start_clearance",
     "min_goal_separation",
 ]

@@ -5,11 +5,7 @@ hardware: every station backend takes the joint-level commands they output
 (:mod:`drake_disamb.station.ports`), and they sit in the shared-control diagram between the blender
 and the station.
 
-- :mod:`~drake_disamb.controller.systems`: :class:`DifferentialIKIntegrator`,
-  :class:`GripperController`;
-- :mod:`~drake_disamb.controller.build`: :func:`add_station_controller` (the builder's wiring) and
-  :func:`build_controlled_station` (a station and its controllers as one Diagram with the
-  Cartesian inputs).
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 from drake_disamb.controller.build import (

@@ -58,9 +58,7 @@ def add_station_controller(builder: DiagramBuilder, station: Station) -> Station
             station.control_plant, config, held_objects=station.scene_objects, geometry=station.geometry
         ),
     )
-    gripper = builder.AddNamedSystem(
-        "gripper_controller", GripperController(config.control_period, config.warn_interval)
-    )
+    gripper = builder.AddNamedSystem("gripper_controller", GripperController(config))
     arm = station.diagram
     builder.Connect(arm.GetOutputPort("arm_joint_state"), diff_ik.GetInputPort("arm_joint_state"))
     builder.Connect(diff_ik.GetOutputPort("arm_velocity_command"), arm.GetInputPort("arm_velocity_command"))

@@ -38,7 +38,6 @@ from drake_disamb.station.config import (
     SceneObject,
     StationConfig,
     arm_velocity_limits,
-    check_home_q,
 )
 from drake_disamb.station.geometry import StationGeometry
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
@@ -128,8 +127,9 @@ class DifferentialIKIntegrator(LeafSystem):
         amax = np.array(config.joint_acceleration_limits)
         self._lower, self._upper = lower, upper
         self._vmax, self._amax = vmax, amax
-        check_home_q(config, lower, upper)
         home = np.array(config.home_q)
+        # The station's own config: building the station refused a home posture outside the limits.
+        assert np.all(home >= lower) and np.all(home <= upper), home
         nominal = np.array(config.nominal_posture) if config.nominal_posture is not None else home
 
         self._floor = None if config.table_clearance is None else geometry.table_top + config.table_clearance
@@ -263,7 +263,9 @@ class DifferentialIKIntegrator(LeafSystem):
 
 class GripperController(LeafSystem):
     """The gripper's opening speed -> the finger slides' velocities: each finger moves at half the
-    opening speed (the fingers close symmetrically), sampled every ``control_period`` and held.
+    opening speed (the fingers close symmetrically), sampled every ``config.control_period`` (the
+    station's :class:`~drake_disamb.station.config.StationConfig`, which also gives the warnings'
+    ``warn_interval``) and held.
 
     @system
     name: GripperController
@@ -279,15 +281,14 @@ class GripperController(LeafSystem):
     are the fingers' travel, which the station keeps.
     """
 
-    def __init__(self, control_period: float, warn_interval: float = 1.0) -> None:
+    def __init__(self, config: StationConfig) -> None:
         super().__init__()
-        if not (math.isfinite(control_period) and control_period > 0):
-            raise ValueError(f"GripperController.control_period: expected > 0, got {control_period!r}")
+        assert isinstance(config, StationConfig), config  # a StationConfig checks itself when made
         self._state = self.DeclareDiscreteState(np.zeros(2))
-        self._sanitized = SanitizedInputCounter(self, warn_interval)
+        self._sanitized = SanitizedInputCounter(self, config.warn_interval)
         self._command_port = self.DeclareVectorInputPort("gripper_command", 1)
         self.DeclareStateOutputPort("finger_velocity_command", self._state)
-        self.DeclarePeriodicDiscreteUpdateEvent(float(control_period), 0.0, self._update)
+        self.DeclarePeriodicDiscreteUpdateEvent(config.control_period, 0.0, self._update)
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         cmd = self._command_port.Eval(context)[0].item()

@@ -5,25 +5,11 @@ integrated from the commanded velocities) or a real or simulated arm behind LCM.
 takes joint-level commands (the arm's joint velocities, the fingers' velocities: what a Kinova Gen2
 arm's driver accepts) and gives the measured joint state and fingers; the controllers that turn the
 shared-control commands into joint velocities are :mod:`drake_disamb.controller`'s.
-
-Modules:
-
-- :mod:`~drake_disamb.station.backends`: the registry of backends (one module each) and
-  :func:`~drake_disamb.station.backends.make_station`, the one entry point.
-- :mod:`~drake_disamb.station.ports`: the ports every backend provides, and the ones only the
-  simulation (or only a wire) has, with their units.
-- :mod:`~drake_disamb.station.geometry`: the clearance geometry read from a station's own plant.
-
-- :mod:`~drake_disamb.station.config`: joint and frame names, the home posture (read from the
-  model directives), :class:`SceneObject` and :class:`StationConfig`.
-- :mod:`~drake_disamb.station.systems`: the simulation's LeafSystems
-  (:class:`JointVelocityIntegrator`, :class:`EndEffectorState`).
-- :mod:`~drake_disamb.station.build`: :func:`build_station`, which returns a :class:`Station`
-  (the Diagram and typed handles on the plant, control plant and integrator); its docstring
-  lists the ports, the subsystem names and how to use it.
-- :mod:`~drake_disamb.station.lcm`: the station on LCM and the simulated driver behind it.
+:func:`~drake_disamb.station.backends.make_station` is the one entry point.
 
 Every public name is re-exported here: ``from drake_disamb.station import build_station``.
+
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 from drake_disamb.station.build import (

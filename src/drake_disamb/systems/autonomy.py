@@ -13,9 +13,9 @@ from pydrake.systems.framework import (
 )
 
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands_from_poses
-from drake_disamb.core.validation import is_real
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.system_helpers.status import DID_NOTHING
+from drake_disamb.systems.loop import ControlLoop
 
 __all__ = ["PotentialFieldAutonomy"]
 
@@ -50,34 +50,32 @@ class PotentialFieldAutonomy(LeafSystem):
     **Unusable poses.** A pose with a NaN or infinite entry, an entry beyond ``1e150``, or a
     quaternion of (near) zero norm (:func:`~drake_disamb.system_helpers.sanitized.usable_poses`,
     checked before the core is called), gives an all-zero ``u_a`` (the arm is then only driven by
-    the user) instead of propagating NaN. Every ``control_period`` (first at t = 0) a discrete
+    the user) instead of propagating NaN. Every ``loop.control_period`` (first at t = 0) a discrete
     update checks the inputs again and, if they are unusable, adds one to
     ``sanitized_input_count`` and warns (at most once per second of simulated time). Any other
     error of the core propagates.
 
     State: discrete ``[sanitised-input count]`` and ``[time of the last warning]`` (s), only
     written at ticks with unusable poses.
+
+    Args:
+        loop: The number of goals and the control period.
+        config: The potential field (default :class:`PotentialFieldConfig`'s defaults).
     """
 
-    def __init__(
-        self, n_goals: int, config: PotentialFieldConfig | None = None, control_period: float = 0.01
-    ) -> None:
+    def __init__(self, loop: ControlLoop, config: PotentialFieldConfig | None = None) -> None:
         super().__init__()
-        if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
-            raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
-        if config is not None and not isinstance(config, PotentialFieldConfig):
-            raise ValueError(f"config: expected a PotentialFieldConfig, got {config!r}")
-        if not (is_real(control_period) and control_period > 0):
-            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
-        self.n_goals = int(n_goals)
-        self.config = PotentialFieldConfig() if config is None else config
+        config = PotentialFieldConfig() if config is None else config
+        assert isinstance(loop, ControlLoop) and isinstance(config, PotentialFieldConfig), (loop, config)
+        self.n_goals = loop.n_goals
+        self.config = config
         self._ee_port = self.DeclareVectorInputPort("ee_pose", 7)
         self._goal_port = self.DeclareVectorInputPort("goal_poses", 7 * self.n_goals)
         # Depends on the two inputs only (not on time or state): computed once per input change.
         inputs = {self._ee_port.ticket(), self._goal_port.ticket()}
         self.DeclareVectorOutputPort("u_a", 6 * self.n_goals, self._calc_u_a, prerequisites_of_calc=inputs)
         self._sanitized = SanitizedInputCounter(self)
-        self.DeclarePeriodicDiscreteUpdateEvent(float(control_period), 0.0, self._check_inputs)
+        self.DeclarePeriodicDiscreteUpdateEvent(loop.control_period, 0.0, self._check_inputs)
 
     def _inputs(self, context: Context) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return self._ee_port.Eval(context), self._goal_port.Eval(context)

@@ -17,9 +17,10 @@ from pydrake.systems.framework import (
 )
 
 from drake_disamb.core.blending import BlendingConfig, shared_control
-from drake_disamb.core.validation import all_finite, is_real
+from drake_disamb.core.validation import all_finite
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 from drake_disamb.system_helpers.status import DID_NOTHING, flag_set
+from drake_disamb.systems.loop import ControlLoop
 
 __all__ = ["BlendingConfig", "SharedControlBlender"]
 
@@ -86,30 +87,25 @@ class SharedControlBlender(LeafSystem):
 
     Non-finite inputs never reach the arm: a NaN/inf entry of ``u_h`` or ``u_a`` is read as 0, a
     non-finite belief as 0 (if nothing finite is left, ``g*`` = 0 with ``alpha`` = 0). Every
-    ``control_period`` (first at t = 0) a discrete update checks the inputs and, if one holds a
-    NaN/inf, adds one to ``sanitized_input_count`` and warns (at most once per second of simulated
-    time). State: discrete ``[sanitised-input count]`` and ``[time of the last warning]`` (s),
-    written only at such ticks.
+    ``loop.control_period`` (first at t = 0) a discrete update checks the inputs and, if one holds
+    a NaN/inf, adds one to ``sanitized_input_count`` and warns (at most once per second of
+    simulated time). State: discrete ``[sanitised-input count]`` and ``[time of the last warning]``
+    (s), written only at such ticks.
+
+    Args:
+        loop: The number of goals and the control period.
+        config: The blending law's settings (default :class:`BlendingConfig`'s defaults; its
+            ``rho1`` and ``rho2`` resolved for ``loop.n_goals`` by the config itself).
+        overrides: :class:`BlendingConfig` fields replacing those of ``config``.
     """
 
-    def __init__(
-        self,
-        n_goals: int,
-        config: BlendingConfig | None = None,
-        control_period: float = 0.01,
-        **overrides: object,
-    ) -> None:
+    def __init__(self, loop: ControlLoop, config: BlendingConfig | None = None, **overrides: object) -> None:
         super().__init__()
-        if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
-            raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
-        if config is not None and not isinstance(config, BlendingConfig):
-            raise ValueError(f"config: expected a BlendingConfig, got {config!r}")
-        if not (is_real(control_period) and control_period > 0):
-            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
         cfg = BlendingConfig() if config is None else config
+        assert isinstance(loop, ControlLoop) and isinstance(cfg, BlendingConfig), (loop, cfg)
         self.config = replace(cfg, **overrides) if overrides else cfg
-        self.n_goals = int(n_goals)
-        self.rhos = self.config.rhos(self.n_goals)  # validates rho1 < rho2 in [0, 1]
+        self.n_goals = loop.n_goals
+        self.rhos = self.config.rhos(self.n_goals)  # the config's own check: rho1 < rho2 in [0, 1]
         self._u_h_port = self.DeclareVectorInputPort("u_h", 6)
         self._belief_port = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_a_port = self.DeclareVectorInputPort("u_a", 6 * self.n_goals)
@@ -128,7 +124,7 @@ class SharedControlBlender(LeafSystem):
         self.DeclareVectorOutputPort("alpha", 1, self._calc_alpha, prerequisites_of_calc=step)
         self.DeclareVectorOutputPort("g_star", 1, self._calc_g_star, prerequisites_of_calc=step)
         self._sanitized = SanitizedInputCounter(self)
-        self.DeclarePeriodicDiscreteUpdateEvent(float(control_period), 0.0, self._check_inputs)
+        self.DeclarePeriodicDiscreteUpdateEvent(loop.control_period, 0.0, self._check_inputs)
 
     def _inputs(
         self, context: Context

@@ -31,9 +31,9 @@ from drake_disamb.core.disambiguation import (
     validate_modes,
 )
 from drake_disamb.core.layout import POSE_SIZE
-from drake_disamb.core.validation import is_real
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.system_helpers.status import DID_NOTHING
+from drake_disamb.systems.loop import ControlLoop
 
 __all__ = ["AutomaticTrigger", "DisambiguationSystem", "LastResult", "LatchedRequest"]
 
@@ -155,8 +155,8 @@ class DisambiguationSystem(LeafSystem):
     to ``sanitized_input_count`` and a warning is issued (at most once per second of simulated
     time). Any other error of the core propagates out of the update (and so out of the simulation).
 
-    State: numeric only, updated by a periodic *discrete* update every ``control_period`` seconds
-    (first at t = 0) that writes only when the request's id differs from the one last answered:
+    State: numeric only, updated by a periodic *discrete* update every ``loop.control_period``
+    seconds (first at t = 0) that writes only when the request's id differs from the one last answered:
     it then solves the request (once: one call of the method per request) and writes the answer
     ``[id, m*]`` and the request itself (the *served* group, what ``last_result`` shows). In a
     diagram the interface latches a request in its (unrestricted) update of the press's tick and
@@ -171,7 +171,7 @@ class DisambiguationSystem(LeafSystem):
     transition matrix of the wrong size, say) fails when the diagram is built.
 
     Attributes:
-        n_goals: Number of goals.
+        n_goals: Number of goals (``loop.n_goals``).
         modes: The arm modes (dimension indices), as tuples.
         config: The :class:`~drake_disamb.core.disambiguation.DisambiguationConfig`.
         method: The mode-selection method (a
@@ -182,22 +182,16 @@ class DisambiguationSystem(LeafSystem):
 
     def __init__(
         self,
-        n_goals: int,
+        loop: ControlLoop,
         modes: Sequence[Sequence[int]],
         config: DisambiguationConfig | None = None,
-        control_period: float = 0.01,
         method: str | ModeSelectionMethod = "algorithm1",
     ) -> None:
         super().__init__()
-        if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
-            raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
-        if not (np.isfinite(control_period) and control_period > 0):
-            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
-        self.n_goals = int(n_goals)
-        self.modes = validate_modes(modes)
         self.config = DisambiguationConfig() if config is None else config
-        if not isinstance(self.config, DisambiguationConfig):
-            raise ValueError(f"config: expected a DisambiguationConfig, got {config!r}")
+        assert isinstance(loop, ControlLoop) and isinstance(self.config, DisambiguationConfig), (loop, config)
+        self.n_goals = loop.n_goals
+        self.modes = validate_modes(modes)
         self.method = mode_selection_method(method)
 
         n = self.n_goals
@@ -213,7 +207,7 @@ class DisambiguationSystem(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._served_index)},
         )
         self._sanitized = SanitizedInputCounter(self)
-        self.DeclarePeriodicDiscreteUpdateEvent(control_period, 0.0, self._update)
+        self.DeclarePeriodicDiscreteUpdateEvent(loop.control_period, 0.0, self._update)
         # One request on a small scene now, so that the compiled kernels of the core are loaded
         # (a fraction of a second, once per process) before a simulation, not at the user's first
         # request in a live session.
@@ -335,40 +329,29 @@ class AutomaticTrigger(LeafSystem):
 
     State: two discrete groups, ``[dwell (s), mode seen, time of the last trigger (s; -1e9 before the
     first)]`` and ``[trigger count]``, updated by a periodic discrete update every
-    ``control_period`` seconds (first at t = 0).
+    ``loop.control_period`` seconds (first at t = 0).
 
     Attributes:
-        n_goals: Number of goals.
+        n_goals: Number of goals (``loop.n_goals``).
         config: The :class:`~drake_disamb.core.automatic.AutomaticConfig` (threshold written out).
-        control_period: Period (s) of the update (the dwell grows by it per commanding tick).
+        control_period: Period (s) of the update (``loop.control_period``: the dwell grows by it
+            per commanding tick).
         request_latency: Seconds (>= 0) from a trigger to its switch (the interface's).
     """
 
     _NEVER = -1e9
     """The state's "no trigger yet" time: finite, so that an unchanged state compares equal."""
 
-    def __init__(
-        self,
-        n_goals: int,
-        config: AutomaticConfig,
-        control_period: float = 0.01,
-        request_latency: float = 0.0,
-    ) -> None:
+    def __init__(self, loop: ControlLoop, config: AutomaticConfig, request_latency: float = 0.0) -> None:
         super().__init__()
-        if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
-            raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
-        if not isinstance(config, AutomaticConfig) or config.confidence_threshold is None:
-            raise ValueError(
-                "config: expected an AutomaticConfig with its confidence_threshold written out, "
-                f"got {config!r}"
-            )
-        if not (is_real(control_period) and control_period > 0):
-            raise ValueError(f"control_period: expected a finite number > 0, got {control_period!r}")
-        if not (is_real(request_latency) and request_latency >= 0):
-            raise ValueError(f"request_latency: expected a finite number >= 0, got {request_latency!r}")
-        self.n_goals = int(n_goals)
+        # The resolved trigger: its threshold written out (scenario.disambiguation.automatic), the
+        # interface's request latency (scenario.disambiguation.request_latency).
+        assert isinstance(loop, ControlLoop) and isinstance(config, AutomaticConfig), (loop, config)
+        assert config.confidence_threshold is not None, config
+        assert math.isfinite(request_latency) and request_latency >= 0, request_latency
+        self.n_goals = loop.n_goals
         self.config = config
-        self.control_period = float(control_period)
+        self.control_period = loop.control_period
         self.request_latency = float(request_latency)
         self._belief = self.DeclareVectorInputPort("belief", self.n_goals)
         self._u_h = self.DeclareVectorInputPort("u_h", 6)

@@ -60,7 +60,6 @@ from pydrake.systems.framework import (
 )
 
 from drake_disamb.core.inference import (
-    BAYES_SIGMA,
     BayesInference,
     DFTInference,
     DFTParams,
@@ -68,7 +67,6 @@ from drake_disamb.core.inference import (
     InferenceMethod,
     MemoryInference,
     bayes_step,
-    check_transition,
     dft_drive,
     memory_step,
     normalize_belief,
@@ -78,28 +76,16 @@ from drake_disamb.core.inference import (
 from drake_disamb.core.validation import all_finite
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter
 from drake_disamb.system_helpers.status import DID_NOTHING, flag_set
+from drake_disamb.systems.loop import ControlLoop
 
 SIMPLEX_TOLERANCE = 1e-12
 """Largest ``|sum(p) - 1|``, and largest ``-min(p)``, the DFT system's periodic projection leaves
 alone (the belief output is projected onto the simplex anyway)."""
 
 
-def _check_common(n_goals: object, control_period: object, goal_change_tolerance: object) -> None:
-    if not isinstance(n_goals, int | np.integer) or isinstance(n_goals, bool) or n_goals < 1:
-        raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
-    for name, value in (("control_period", control_period), ("goal_change_tolerance", goal_change_tolerance)):
-        ok = isinstance(value, int | float | np.floating) and np.isfinite(value)
-        if not ok or value < 0 or (name == "control_period" and value == 0):
-            raise ValueError(f"{name}: expected a finite positive number, got {value!r}")
-
-
-def _check_square(matrix: ArrayLike | None, n: int, name: str) -> NDArray[np.float64] | None:
-    if matrix is None:
-        return None
-    P = check_transition(matrix, name)
-    if P.shape != (n, n):
-        raise ValueError(f"{name}: expected shape ({n}, {n}), got {P.shape}")
-    return P
+def _assert_square(matrix: NDArray[np.float64] | None, n: int) -> None:
+    """What the systems rely on of a (checked) goal-transition matrix: ``None`` or ``n x n``."""
+    assert matrix is None or np.shape(matrix) == (n, n), np.shape(matrix)
 
 
 def _goals_changed(new: NDArray[np.float64], old: NDArray[np.float64], tol: float) -> bool:
@@ -117,12 +103,13 @@ class _IntentInferenceBase(LeafSystem):
     Subclasses define ``_raw_belief(context)``: the stored belief (continuous or discrete state).
     """
 
-    def __init__(self, n_goals: int, rest: ArrayLike | None, control_period: float, tol: float) -> None:
+    def __init__(self, loop: ControlLoop, rest: ArrayLike | None, tol: float) -> None:
         super().__init__()
-        _check_common(n_goals, control_period, tol)
-        self._n = int(n_goals)
-        self._rest = rest_state(self._n, rest).astype(float)
-        self._period = float(control_period)
+        assert isinstance(loop, ControlLoop), loop
+        assert math.isfinite(tol) and tol >= 0, tol
+        self._n = loop.n_goals
+        self._rest = rest_state(self._n, rest).astype(float)  # the core's check of a rest state
+        self._period = loop.control_period
         self._tol = float(tol)
         self._u_h = self.DeclareVectorInputPort("u_h", 6)
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", 7)
@@ -245,10 +232,10 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
     the rest state. At initialization ``p`` is the rest state.
 
     Args:
-        n_goals: Number of goals n.
+        loop: The number of goals n and the control period (s) of the projection / goal-change
+            check.
         params: DFT parameters (:class:`~drake_disamb.core.inference.DFTParams`); its
-            ``transition`` and ``lam`` (if a matrix) must be n x n.
-        control_period: Period (s) of the projection / goal-change check.
+            ``transition`` and ``lam`` (if a matrix) are n x n.
         rest: Rest state (task prior, a probability vector of n entries); overrides
             ``params.rest``; None keeps ``params.rest`` (uniform if that is None too).
         goal_change_tolerance: Largest change (m or quaternion units) of any ``goal_poses`` entry
@@ -257,24 +244,17 @@ class FieldTheoreticIntentInference(_IntentInferenceBase):
 
     def __init__(
         self,
-        n_goals: int,
+        loop: ControlLoop,
         params: DFTParams | None = None,
-        control_period: float = 0.01,
         rest: ArrayLike | None = None,
         goal_change_tolerance: float = 1e-9,
     ) -> None:
         params = DFTParams() if params is None else params
-        if not isinstance(params, DFTParams):
-            raise ValueError(f"params: expected DFTParams, got {params!r}")
-        _check_common(n_goals, control_period, goal_change_tolerance)
-        rest = params.rest if rest is None else rest
-        super().__init__(n_goals, rest, control_period, goal_change_tolerance)
-        _check_square(params.transition, self._n, "params.transition")
-        lam = np.asarray(params.lam, dtype=float)
-        if lam.ndim == 2 and lam.shape != (self._n, self._n):
-            raise ValueError(
-                f"params.lam: expected a scalar or a ({self._n}, {self._n}) matrix, got {lam.shape}"
-            )
+        assert isinstance(params, DFTParams), params
+        super().__init__(loop, params.rest if rest is None else rest, goal_change_tolerance)
+        # Sizes resolution checked (scenario.inference.dft.transition, .rest).
+        _assert_square(params.transition, self._n)
+        assert np.ndim(params.lam) == 0 or np.shape(params.lam) == (self._n, self._n), np.shape(params.lam)
         self._params = replace(params, rest=self._rest)
         # The core's drive and flow for one belief, prepared once (the same kernels and numbers as
         # dft_drive / dft_mass_conserving_rhs_from_drive, without their per-call checks and layout).
@@ -367,8 +347,8 @@ class _DiscreteInference(_IntentInferenceBase):
     belief (and of the method's extra state) with the goal positions ``x_g`` (n, 3).
     """
 
-    def __init__(self, n_goals: int, rest, control_period: float, tol: float, n_extra: int) -> None:  # noqa: ANN001
-        super().__init__(n_goals, rest, control_period, tol)
+    def __init__(self, loop: ControlLoop, rest, tol: float, n_extra: int) -> None:  # noqa: ANN001
+        super().__init__(loop, rest, tol)
         self._n_extra = n_extra
         self._state_index = self.DeclareDiscreteState(np.full(self._n + n_extra + 7 * self._n, np.nan))
         self.DeclareInitializationDiscreteUpdateEvent(self._reset_update)
@@ -426,29 +406,26 @@ class RecursiveBayesIntentInference(_DiscreteInference):
     sanitised-input count: ticks with a non-finite ``u_h``).
 
     Args:
-        n_goals: Number of goals n.
-        transition: Goal-transition matrix P (n x n, row-stochastic); None means I.
-        sigma: Standard deviation (rad) of the Gaussian angle likelihood.
-        control_period: Update period (s).
+        loop: The number of goals n and the update period (s).
+        method: The method's settings (:class:`~drake_disamb.core.inference.BayesInference`: the
+            likelihood's ``sigma``, the goal-transition matrix P, n x n, or None for I).
         rest: Initial / reset belief (probability vector); None means uniform.
         goal_change_tolerance: As for :class:`FieldTheoreticIntentInference`.
     """
 
     def __init__(
         self,
-        n_goals: int,
-        transition: ArrayLike | None = None,
-        sigma: float = BAYES_SIGMA,
-        control_period: float = 0.01,
+        loop: ControlLoop,
+        method: BayesInference | None = None,
         rest: ArrayLike | None = None,
         goal_change_tolerance: float = 1e-9,
     ) -> None:
-        _check_common(n_goals, control_period, goal_change_tolerance)
-        self._P = _check_square(transition, int(n_goals), "transition")
-        if not (isinstance(sigma, int | float | np.floating) and np.isfinite(sigma) and sigma > 0):
-            raise ValueError(f"sigma: expected a finite positive angle (rad), got {sigma!r}")
-        self._sigma = float(sigma)
-        super().__init__(n_goals, rest, control_period, goal_change_tolerance, n_extra=0)
+        method = BayesInference() if method is None else method
+        assert isinstance(method, BayesInference), method
+        _assert_square(method.transition, loop.n_goals)
+        self._P = method.transition
+        self._sigma = float(method.sigma)
+        super().__init__(loop, rest, goal_change_tolerance, n_extra=0)
 
     def _step(self, context, belief, extra, x_g):  # noqa: ANN001, ANN202
         p = bayes_step(belief, self._command(context), self._position(context), x_g, self._P, self._sigma)
@@ -482,24 +459,25 @@ class MemoryBasedIntentInference(_DiscreteInference):
     and the sanitised-input count: ticks with a non-finite end-effector position (read as no move).
 
     Args:
-        n_goals: Number of goals n.
-        transition: Goal-transition matrix P (n x n, row-stochastic); None means I.
-        control_period: Update period (s).
+        loop: The number of goals n and the update period (s).
+        method: The method's settings (:class:`~drake_disamb.core.inference.MemoryInference`: the
+            goal-transition matrix P, n x n, or None for I).
         rest: Initial / reset belief (probability vector); None means uniform.
         goal_change_tolerance: As for :class:`FieldTheoreticIntentInference`.
     """
 
     def __init__(
         self,
-        n_goals: int,
-        transition: ArrayLike | None = None,
-        control_period: float = 0.01,
+        loop: ControlLoop,
+        method: MemoryInference | None = None,
         rest: ArrayLike | None = None,
         goal_change_tolerance: float = 1e-9,
     ) -> None:
-        _check_common(n_goals, control_period, goal_change_tolerance)
-        self._P = _check_square(transition, int(n_goals), "transition")
-        super().__init__(n_goals, rest, control_period, goal_change_tolerance, n_extra=7)
+        method = MemoryInference() if method is None else method
+        assert isinstance(method, MemoryInference), method
+        _assert_square(method.transition, loop.n_goals)
+        self._P = method.transition
+        super().__init__(loop, rest, goal_change_tolerance, n_extra=7)
 
     def _reset_extra(self, context: Context) -> NDArray[np.float64]:
         x = self._position(context)
@@ -523,24 +501,24 @@ class MemoryBasedIntentInference(_DiscreteInference):
 
 
 @functools.singledispatch
-def inference_system(method: InferenceMethod, n_goals: int, control_period: float) -> LeafSystem:
-    """The Drake system running ``method`` (with its configuration) over ``n_goals`` goals, updated
-    every ``control_period`` seconds; chosen by the method's type."""
+def inference_system(method: InferenceMethod, loop: ControlLoop) -> LeafSystem:
+    """The Drake system running ``method`` (with its configuration) over ``loop.n_goals`` goals,
+    updated every ``loop.control_period`` seconds; chosen by the method's type."""
     raise ValueError(
         f"inference method {method.name!r}: no Drake system is registered for {type(method).__name__}"
     )
 
 
 @inference_system.register
-def _(method: DFTInference, n_goals: int, control_period: float) -> LeafSystem:
-    return FieldTheoreticIntentInference(n_goals, method.params, control_period)
+def _(method: DFTInference, loop: ControlLoop) -> LeafSystem:
+    return FieldTheoreticIntentInference(loop, method.params)
 
 
 @inference_system.register
-def _(method: BayesInference, n_goals: int, control_period: float) -> LeafSystem:
-    return RecursiveBayesIntentInference(n_goals, method.transition, method.sigma, control_period)
+def _(method: BayesInference, loop: ControlLoop) -> LeafSystem:
+    return RecursiveBayesIntentInference(loop, method)
 
 
 @inference_system.register
-def _(method: MemoryInference, n_goals: int, control_period: float) -> LeafSystem:
-    return MemoryBasedIntentInference(n_goals, method.transition, control_period)
+def _(method: MemoryInference, loop: ControlLoop) -> LeafSystem:
+    return MemoryBasedIntentInference(loop, method)

@@ -162,10 +162,8 @@ class InterfaceSystem(LeafSystem):
 
     def __init__(self, config: InterfaceConfig, n_goals: int = 1) -> None:
         super().__init__()
-        if not isinstance(config, InterfaceConfig):
-            raise ValueError(f"config: expected an InterfaceConfig, got {config!r}")
-        if isinstance(n_goals, bool) or not isinstance(n_goals, int | np.integer) or n_goals < 1:
-            raise ValueError(f"n_goals: expected a positive integer, got {n_goals!r}")
+        assert isinstance(config, InterfaceConfig), config  # a config checks itself when made
+        assert isinstance(n_goals, int | np.integer) and n_goals >= 1, n_goals
         self.config = config
         self.n_goals = int(n_goals)
         self.modes: list[list[int]] = [list(m) for m in config.modes]

@@ -17,6 +17,7 @@ the experimenter named it): then only that goal completes it.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -28,6 +29,36 @@ from drake_disamb.system_helpers.status import DID_NOTHING
 
 # Discrete state layout: [stage, candidate goal, hold start time, reached[S], stage end times[S]].
 _STAGE, _CANDIDATE, _HOLD_START, _HEADER = 0, 1, 2, 3
+
+
+@dataclass(frozen=True, eq=False)
+class TaskConfig:
+    """The task as the :class:`TaskManager` runs it: a scenario's stages, resolved by
+    :func:`~drake_disamb.config.resolve_scenario` (:attr:`~drake_disamb.config.TrialConfig.task`),
+    which checks every bound and names the scenario's field; the manager only asserts the shapes.
+
+    Attributes:
+        stage_goal_poses: Per stage, its goal poses: an ``(n, 7)`` array of ``[x, y, z, qw, qx,
+            qy, qz]`` (m; non-zero quaternions, normalised by the manager), the same ``n >= 1`` in
+            every stage.
+        position_tolerance: Distance (m, > 0) within which a goal position counts as reached.
+        orientation_tolerance: Angle (rad, > 0) within which a goal orientation counts as reached.
+        hold_times: Time (s, >= 0) the end effector must stay at a goal: one for every stage, or
+            one per stage.
+        control_period: Period (s, > 0) of the manager's check.
+        release_openings: Per stage, ``None`` or the opening (m) the gripper must reach at the goal
+            (a stage that ends by letting go of the held object); ``None``: no stage does.
+        targets: Per stage, ``None`` (any of its goals completes it) or the index of the one goal
+            that does; ``None``: any goal in every stage.
+    """
+
+    stage_goal_poses: Sequence[ArrayLike]
+    position_tolerance: float = 0.02
+    orientation_tolerance: float = 0.15
+    hold_times: float | Sequence[float] = 0.3
+    control_period: float = 0.01
+    release_openings: Sequence[float | None] | None = None
+    targets: Sequence[int | None] | None = None
 
 
 class TaskManager(LeafSystem):
@@ -60,86 +91,43 @@ class TaskManager(LeafSystem):
         reached_goals (S): per stage, the index of the goal reached (-1 while pending).
         stage_end_times (S): per stage, the time (s) it completed (NaN while pending).
 
-    A goal counts as reached when the end effector stays within ``position_tolerance`` (m) and
-    ``orientation_tolerance`` (rad) of it for ``hold_times[stage]`` seconds (and, if
-    ``release_openings[stage]`` is not ``None``, the gripper is then open at least that wide, m: the
-    held object let go at the goal; the hold goes on while it opens), checked every
-    ``period`` seconds (a periodic discrete update; all outputs are state output ports, each a
-    discrete group of its own written when the stage changes, so the manager has no direct
-    feedthrough). A NaN pose never counts as reached, nor does a NaN opening release. With
-    ``targets[stage]`` a goal index, only that goal counts in the stage (``None``: any goal).
+    A goal counts as reached when the end effector stays within ``config.position_tolerance`` (m)
+    and ``config.orientation_tolerance`` (rad) of it for the stage's hold time (and, if the stage
+    has a release opening, the gripper is then open at least that wide, m: the held object let go
+    at the goal; the hold goes on while it opens), checked every ``config.control_period`` seconds
+    (a periodic discrete update; all outputs are state output ports, each a discrete group of its
+    own written when the stage changes, so the manager has no direct feedthrough). A NaN pose
+    never counts as reached, nor does a NaN opening release. With a target for the stage, only
+    that goal counts in it (:class:`TaskConfig`).
     """
 
-    def __init__(
-        self,
-        stage_goal_poses: Sequence[ArrayLike],
-        position_tolerance: float = 0.02,
-        orientation_tolerance: float = 0.15,
-        hold_times: float | Sequence[float] = 0.3,
-        period: float = 0.01,
-        release_openings: Sequence[float | None] | None = None,
-        targets: Sequence[int | None] | None = None,
-    ) -> None:
+    def __init__(self, config: TaskConfig) -> None:
         super().__init__()
-        if len(stage_goal_poses) == 0:
-            raise ValueError("stage_goal_poses: expected at least one stage, got 0")
-        goal_sets = []
-        for k, poses in enumerate(stage_goal_poses):
-            a = np.asarray(poses, dtype=float)
-            if a.ndim != 2 or a.shape[1] != POSE_SIZE or a.shape[0] < 1:
-                raise ValueError(f"stage_goal_poses[{k}]: expected shape (n >= 1, 7), got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise ValueError(f"stage_goal_poses[{k}]: expected finite numbers, got {a.tolist()!r}")
-            norms = np.linalg.norm(a[:, 3:], axis=1)
-            if np.any(norms < 1e-9):
-                raise ValueError(f"stage_goal_poses[{k}]: a goal quaternion is zero, got {a.tolist()!r}")
-            a = a.copy()
-            a[:, 3:] /= norms[:, None]
-            if goal_sets and a.shape[0] != goal_sets[0].shape[0]:
-                raise ValueError(
-                    f"stage_goal_poses[{k}]: expected {goal_sets[0].shape[0]} goals like stage 0, "
-                    f"got {a.shape[0]}"
-                )
-            goal_sets.append(a)
+        # Resolution checked every bound (scenario.goals, success, stages, user.goals): only the
+        # shapes this system relies on are asserted.
+        assert isinstance(config, TaskConfig), config
+        goal_sets = [np.array(poses, dtype=float) for poses in config.stage_goal_poses]
         n_stages = len(goal_sets)
-        holds = [float(hold_times)] * n_stages if np.isscalar(hold_times) else [float(h) for h in hold_times]
-        if len(holds) != n_stages:
-            raise ValueError(f"hold_times: expected one per stage ({n_stages}), got {list(holds)!r}")
-        for name, value, strict in (
-            ("position_tolerance", position_tolerance, True),
-            ("orientation_tolerance", orientation_tolerance, True),
-            ("period", period, True),
-            *((f"hold_times[{k}]", h, False) for k, h in enumerate(holds)),
-        ):
-            if not (np.isfinite(value) and (value > 0 if strict else value >= 0)):
-                raise ValueError(
-                    f"{name}: expected a finite number {'> 0' if strict else '>= 0'}, got {value!r}"
-                )
+        assert n_stages >= 1 and goal_sets[0].ndim == 2 and goal_sets[0].shape[0] >= 1, goal_sets
+        for a in goal_sets:
+            assert a.shape == goal_sets[0].shape and a.shape[1] == POSE_SIZE, a.shape
+            norms = np.linalg.norm(a[:, 3:], axis=1)
+            assert np.all(norms > 0), a
+            a[:, 3:] /= norms[:, None]  # unit quaternions, whatever rounding they come with
+        holds = config.hold_times
+        holds = [float(holds)] * n_stages if np.isscalar(holds) else [float(h) for h in holds]
+        releases = [None] * n_stages if config.release_openings is None else list(config.release_openings)
+        targets = [None] * n_stages if config.targets is None else list(config.targets)
+        assert len(holds) == len(releases) == len(targets) == n_stages, (holds, releases, targets)
         self._goal_sets = goal_sets
         self._n_goals = goal_sets[0].shape[0]
         self._n_stages = n_stages
-        self._pos_tol = float(position_tolerance)
-        self._ori_tol = float(orientation_tolerance)
-        releases = [None] * n_stages if release_openings is None else list(release_openings)
-        if len(releases) != n_stages:
-            raise ValueError(f"release_openings: expected one per stage ({n_stages}), got {releases!r}")
-        for k, r in enumerate(releases):
-            if r is not None and not (np.isfinite(r) and r > 0):
-                raise ValueError(f"release_openings[{k}]: expected None or a finite number > 0, got {r!r}")
-        stage_targets = [None] * n_stages if targets is None else list(targets)
-        if len(stage_targets) != n_stages:
-            raise ValueError(f"targets: expected one per stage ({n_stages}), got {stage_targets!r}")
-        for k, g in enumerate(stage_targets):
-            if g is not None and not (
-                isinstance(g, int | np.integer) and not isinstance(g, bool) and 0 <= g < self._n_goals
-            ):
-                raise ValueError(
-                    f"targets[{k}]: expected None or a goal index in [0, {self._n_goals - 1}], got {g!r}"
-                )
-        self._targets: list[int | None] = [None if g is None else int(g) for g in stage_targets]
+        self._pos_tol = float(config.position_tolerance)
+        self._ori_tol = float(config.orientation_tolerance)
+        self._targets: list[int | None] = [None if g is None else int(g) for g in targets]
         self._holds = holds
         self._releases: list[float | None] = [None if r is None else float(r) for r in releases]
-        self._period = float(period)
+        self._period = float(config.control_period)
 
         self._ee_pose = self.DeclareVectorInputPort("ee_pose", POSE_SIZE)
         self._gripper_opening = self.DeclareVectorInputPort("gripper_opening", 1)

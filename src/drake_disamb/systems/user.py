@@ -84,40 +84,26 @@ class SimulatedUser(LeafSystem):
         **overrides: object,
     ) -> None:
         super().__init__()
-        if isinstance(interface_kind, InterfaceConfig):
-            self.interface = interface_kind
-        else:
-            self.interface = InterfaceConfig(kind=interface_kind)  # validates the kind
-        if not (isinstance(n_goals, int | np.integer) and not isinstance(n_goals, bool) and n_goals >= 1):
-            raise ValueError(f"n_goals: expected an integer >= 1, got {n_goals!r}")
-        indices = [goal_index] if isinstance(goal_index, int | np.integer) else list(goal_index)
-        if not indices or not all(
-            isinstance(g, int | np.integer) and not isinstance(g, bool) and 0 <= g < n_goals for g in indices
-        ):
-            raise ValueError(
-                f"goal_index: expected an integer (or one per stage) in [0, {n_goals - 1}], "
-                f"got {goal_index!r}"
-            )
-        if config is not None and not isinstance(config, UserConfig):
-            raise ValueError(f"config: expected a UserConfig, got {config!r}")
+        # A kind's name makes its InterfaceConfig (which checks it); the rest is a resolved
+        # scenario's (its checks name the fields, scenario.user...): asserted here.
+        if not isinstance(interface_kind, InterfaceConfig):
+            interface_kind = InterfaceConfig(kind=interface_kind)
+        self.interface = interface_kind
         cfg = UserConfig() if config is None else config
+        assert isinstance(cfg, UserConfig), cfg
         self.config = replace(cfg, **overrides) if overrides else cfg
+        indices = [goal_index] if isinstance(goal_index, int | np.integer) else list(goal_index)
+        assert isinstance(n_goals, int | np.integer) and n_goals >= 1, n_goals
+        assert indices and all(isinstance(g, int | np.integer) and 0 <= g < n_goals for g in indices), indices
         period = self.config.period(self.interface)
-        if period < self.interface.control_period - 1e-12:
-            raise ValueError(
-                f"UserConfig.decision_period: expected at least the control period "
-                f"({self.interface.control_period} s), got {period!r}"
-            )
-        if self.config.min_reaction_time < 2 * period:
-            raise ValueError(
-                f"UserConfig.reaction_time: reaction_time - reaction_time_jitter must be at least two "
-                f"decision periods ({2 * period} s) so presses are released and the new mode is seen, "
-                f"got {self.config.min_reaction_time!r}"
-            )
+        # One press is one rising edge of the interface, and presses are released and the new
+        # mode seen before the next decision (resolution: scenario.user.config.decision_period,
+        # reaction_time).
+        assert period >= self.interface.control_period - 1e-12, period
+        assert self.config.min_reaction_time >= 2 * period, self.config.min_reaction_time
         self.goal_indices: tuple[int, ...] = tuple(int(g) for g in indices)
         flags = [False] * len(indices) if releases is None else list(releases)
-        if len(flags) != len(indices) or not all(isinstance(f, bool | np.bool_) for f in flags):
-            raise ValueError(f"releases: expected one bool per stage ({len(indices)}), got {releases!r}")
+        assert len(flags) == len(indices), (flags, indices)
         self.releases: tuple[bool, ...] = tuple(bool(f) for f in flags)
         self.n_goals = int(n_goals)
         self.raw_layout = self.interface.raw_layout

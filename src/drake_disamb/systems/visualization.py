@@ -406,19 +406,13 @@ def frame_workspace(
     return camera, target
 
 
-def visualizer_for_scenario(
-    meshcat: Meshcat, scenario: Any, modes: Sequence[Sequence[int]], **kwargs: Any
+def visualizer_for_trial(
+    meshcat: Meshcat, config: Any, modes: Sequence[Sequence[int]], **kwargs: Any
 ) -> SharedControlVisualizer:
-    """A :class:`SharedControlVisualizer` for ``scenario``: its goals in their objects' colours (one
-    set per stage), the legend of :func:`drake_disamb.display.legend_rows`; ``kwargs`` go to the
-    constructor. A multi-step scenario's visualizer has the ``stage`` input port."""
-    from drake_disamb.display import goal_colors, legend_rows
-
+    """The :class:`SharedControlVisualizer` of a trial: its goals in their objects' colours (one set
+    per stage) and its legend, as a resolved scenario gives them (``config``, a
+    :class:`~drake_disamb.config.TrialConfig`: ``n_goals``, ``goal_colors``, ``legend``);
+    ``kwargs`` go to the constructor. A multi-step trial's visualizer has the ``stage`` input port."""
     return SharedControlVisualizer(
-        meshcat,
-        scenario.n_goals,
-        modes,
-        goal_colors=goal_colors(scenario),
-        legend=legend_rows(scenario),
-        **kwargs,
+        meshcat, config.n_goals, modes, goal_colors=config.goal_colors, legend=config.legend, **kwargs
     )

@@ -1,18 +1,11 @@
 """Intent disambiguation: choosing the control mode whose motion best tells the goals apart.
 
-Every mode-selection method scores the modes from one forward projection of the belief:
+Every mode-selection method (:data:`MODE_SELECTION_METHODS`: the paper's Algorithm 1, and the
+authors' expected entropy and expected KL divergence) scores the modes from one forward projection
+of the belief, run with the inference method's own update, and returns its own result and
+explanation.
 
-- :mod:`~drake_disamb.core.disambiguation.config`: the projection's configuration and presets;
-- :mod:`~drake_disamb.core.disambiguation.request`: the request every method is given, checked;
-- :mod:`~drake_disamb.core.disambiguation.projection`: the forward projection, run with the
-  inference method's own update;
-- :mod:`~drake_disamb.core.disambiguation.selection`: the tie rule and the results' common part;
-- :mod:`~drake_disamb.core.disambiguation.registry`: what a method is and the registry
-  :data:`MODE_SELECTION_METHODS`;
-- one module per method, each with its own result and explanation:
-  :mod:`~drake_disamb.core.disambiguation.algorithm1` (the paper's),
-  :mod:`~drake_disamb.core.disambiguation.entropy` and :mod:`~drake_disamb.core.disambiguation.kl`
-  (the authors' alternatives).
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 from drake_disamb.core.disambiguation.algorithm1 import (

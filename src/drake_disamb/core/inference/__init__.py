@@ -1,17 +1,12 @@
-"""Intent inference: the belief over the goals, updated by a registered method from the user's
-commands and the end-effector's path.
-
-- :mod:`~drake_disamb.core.inference.belief`: the probability vector, its checks and projection,
-  the posterior recursion the baselines share;
-- :mod:`~drake_disamb.core.inference.methods`: what a method is and the registry
-  :data:`INFERENCE_METHODS`;
-- one module per method, each with its configuration: :mod:`~drake_disamb.core.inference.dft`
-  (field-theoretic, the paper's), :mod:`~drake_disamb.core.inference.bayes` (recursive Bayes) and
-  :mod:`~drake_disamb.core.inference.memory` (memory-based).
+"""Intent inference: the belief over the goals, updated by a registered method
+(:data:`INFERENCE_METHODS`: field-theoretic, the paper's; recursive Bayes; memory-based) from the
+user's commands and the end-effector's path.
 
 Every array function broadcasts over any number of leading batch dimensions, so the same update
 serves a single live step, a vectorised replay of hundreds of trials, and the disambiguation's
 forward projection of all probe directions at once.
+
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 # The variants register as they are imported: in the paper's order (dft, bayes, memory).

@@ -1,11 +1,10 @@
 """Control interfaces: one module per kind, one registry, one update (pure numpy).
 
-:mod:`~drake_disamb.core.interfaces.base` defines the variant every kind derives
-(:class:`~drake_disamb.core.interfaces.base.Interface`) and the registry :data:`INTERFACES`;
-:mod:`~drake_disamb.core.interfaces.update` runs any kind's update. Every other module of this
-package is one kind, registered when the package is imported (so a new kind is one new module):
-:mod:`~drake_disamb.core.interfaces.joystick` and :mod:`~drake_disamb.core.interfaces.head_array`
-are the paper's study's two interfaces.
+:class:`~drake_disamb.core.interfaces.base.Interface` is the variant every kind derives and
+:data:`INTERFACES` the registry; every kind is registered when this package is imported, so a new
+kind is one new module. The joystick and the head array are the paper's study's two interfaces.
+
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 from __future__ import annotations

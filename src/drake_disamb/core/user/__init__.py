@@ -1,8 +1,9 @@
-"""The simulated user of a control interface (pure numpy), in parts: its settings
-(:mod:`~drake_disamb.core.user.config`), its memory (:mod:`~drake_disamb.core.user.state`), how
-it sees the task (:mod:`~drake_disamb.core.user.judgement`), its rules, one function each
-(:mod:`~drake_disamb.core.user.rules`), and one decision (:mod:`~drake_disamb.core.user.policy`,
-whose docstring describes the policy)."""
+"""The simulated user of a control interface (pure numpy), in parts: its settings, its memory, how it
+sees the task, its rules (one function each) and one decision (:func:`user_step`, whose module's
+docstring describes the policy).
+
+Its modules, and where this package sits among the others: docs/architecture.md (Layout).
+"""
 
 from drake_disamb.core.user.config import (
     FIELD_GROUPS,
