@@ -296,14 +296,16 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         ),
     )
     index = {id(g): i for i, g in enumerate(s.goals)}  # a goal's place in scenario.goals
-    home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
+    arm = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
+    if s.joint_velocity_limits is not None:
+        arm["joint_velocity_limits"] = tuple(float(v) for v in s.joint_velocity_limits)
     station = _named(
         name,
         lambda: StationConfig(
             plant_config=s.plant_config,
             control_period=s.control_period,
             scene_objects=tuple(scene_objects(s)),
-            **home,
+            **arm,
         ),
     )
     return TrialConfig(

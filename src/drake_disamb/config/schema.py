@@ -401,6 +401,10 @@ class Scenario:
         initial_mode: Index into the interface's mode list of the mode at the start.
         start_joint_positions: The arm's 6 joint angles (rad) at the start; ``None`` means the
             station's home configuration.
+        joint_velocity_limits: The arm's 6 joint speed limits (rad/s, base to wrist) for the
+            differential IK and the commands sent to an arm on the wire, each in (0, the model's]
+            (0.628 rad/s for joints 1-3, 0.838 for joints 4-6); ``None`` means the model's. A first
+            run on a real arm takes a fraction of them.
         goals: Every goal of every stage.
         stages: The task's stages, in order (one for single-step tasks). Every stage has the
             same number of goals: the goal set switches when a stage completes.
@@ -432,6 +436,7 @@ class Scenario:
     seed: int = 0
     initial_mode: int = 0
     start_joint_positions: list[float] | None = field(default=None, metadata=_meta(size=(6,)))
+    joint_velocity_limits: list[float] | None = field(default=None, metadata=_meta(size=(6,)))
     goals: list[GoalSpec] = field(default_factory=list)
     stages: list[StageSpec] = field(default_factory=lambda: [StageSpec()])
     carried_object: CarriedObjectSpec | None = None

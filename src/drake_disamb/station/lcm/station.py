@@ -16,7 +16,10 @@ status), then the tick's systems run and one command answers it. Start checks
 (:func:`first_status`): a status must arrive within ``start_timeout``, with 6 joints and 2 fingers,
 finite, and every joint inside the model's limits (each angle the 2 pi equivalent inside them
 nearest the task's start posture); the model's default posture and the returned configuration's
-``home_q`` (which seeds the IK) are the measured ones.
+``home_q`` (which seeds the IK) are the measured ones. Then the driver's announced period
+(:func:`status_spacing`: the ``utime`` spacing of its next statuses) must be at most
+``max_status_period``; the watchdog's timeout follows it
+(:class:`~drake_disamb.station.lcm.systems.JacoStatusReceiver`).
 """
 
 from __future__ import annotations
@@ -104,6 +107,43 @@ def first_status(
     )
 
 
+SPACING_STATUSES = 3
+"""Statuses after the first whose ``utime`` steps :func:`status_spacing` measures."""
+
+
+def status_spacing(inbox: StatusInbox, first: StatusReading, timeout: float, slowest: float) -> float:
+    """The period (s) the driver announces: the smallest ``utime`` step between the first status
+    and the :data:`SPACING_STATUSES` valid ones after it, waited for up to ``timeout`` seconds (a
+    status missed in between only lengthens a step).
+
+    Raises:
+        RuntimeError: no further status within ``timeout``, or statuses further apart than
+            ``slowest`` seconds (``station.max_status_period``): the link is too slow for the
+            watchdog this station keeps.
+    """
+    deadline = time.monotonic() + timeout
+    utimes = [first.utime]
+    while len(utimes) <= SPACING_STATUSES and time.monotonic() < deadline:
+        inbox.poll(min(0.01, max(deadline - time.monotonic(), 0.0)))
+        for data, received in inbox.take():
+            reading, _ = read_status(data, utimes[-1], first.q)
+            if reading is not None:
+                utimes.append(reading.utime)
+                inbox.last_good = received
+    if len(utimes) < 2:
+        raise RuntimeError(
+            f"station: the arm's statuses on {inbox.channel!r} stopped after the first one "
+            f"(none within {timeout:g} s): is the driver still running?"
+        )
+    spacing = float(np.min(np.diff(utimes))) * 1e-6
+    if spacing > slowest:
+        raise RuntimeError(
+            f"station: the driver's statuses come every {spacing:.3f} s ({1 / spacing:.1f} Hz), slower "
+            f"than station.max_status_period ({slowest:g} s): the link to the arm is too slow"
+        )
+    return spacing
+
+
 def build_lcm_station(
     settings: object,
     config: StationConfig,
@@ -122,10 +162,11 @@ def build_lcm_station(
         scene_objects: Drawn in Meshcat and, when held, part of the gripper for the floor.
         meshcat: Draws the arm posed by the statuses.
         lcm: The bus (default: a ``DrakeLcm`` of ``settings.lcm_url``).
-        pump: Called before every poll (the in-process driver's step).
+        pump: Called before every poll (the in-process driver's step; its period is the
+            station's, so the start does not measure it).
 
     Raises:
-        RuntimeError: the start checks (:func:`first_status`).
+        RuntimeError: the start checks (:func:`first_status`, :func:`status_spacing`).
     """
     objects = tuple(config.scene_objects) + tuple(scene_objects)
     lcm = lcm if lcm is not None else DrakeLcm(settings.lcm_url)  # type: ignore[attr-defined]
@@ -150,6 +191,14 @@ def build_lcm_station(
         np.asarray(config.home_q),
         settings.lcm_url,  # type: ignore[attr-defined]
     )
+    spacing = period
+    if pump is None:
+        spacing = status_spacing(
+            inbox,
+            first,
+            settings.start_timeout,  # type: ignore[attr-defined]
+            settings.max_status_period,  # type: ignore[attr-defined]
+        )
     for name, q in zip(ARM_JOINTS, first.q, strict=True):  # the model starts where the arm is
         plant.GetJointByName(name, arm).set_default_positions([q])
     for name, q in zip(FINGER_JOINTS, first.finger_q, strict=True):
@@ -175,6 +224,8 @@ def build_lcm_station(
             settings.status_timeout,
             config.warn_interval,  # type: ignore[attr-defined]
             real_time=pump is None,
+            spacing=spacing,
+            max_spacing=max(period, settings.max_status_period),  # type: ignore[attr-defined]
         ),
     )
     ee_state = builder.AddNamedSystem("ee_state", ModelEndEffectorState(control_plant, control_arm))
