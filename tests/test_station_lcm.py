@@ -801,7 +801,7 @@ def test_a_paused_controller_latches_a_fault_and_says_so(tmp_path) -> None:  # n
 
 
 def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:
-    from drake_disamb.systems.deadman import PageDeadman
+    from drake_disamb.interfaces.deadman import PageDeadman
 
     class Page:
         connections = 1

@@ -57,12 +57,12 @@ from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPo
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
+from drake_disamb.interfaces.system import make_interface
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
-from drake_disamb.systems.interfaces import make_interface
 from drake_disamb.systems.task import FixedGoalSet, TaskManager
-from drake_disamb.systems.user import SimulatedUser
+from drake_disamb.user.system import SimulatedUser
 
 LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
     ("belief", "inference", "belief"),
@@ -278,7 +278,7 @@ def _add_user(w: _Wiring, input_source: System | None, meshcat: Meshcat | None) 
         raw = input_source.GetOutputPort("raw")
         if meshcat is not None and w.station.link is not None:
             # A person at the page drives a real arm: losing the page releases every signal.
-            from drake_disamb.systems.deadman import PageDeadman
+            from drake_disamb.interfaces.deadman import PageDeadman
 
             w.add("deadman", PageDeadman(meshcat, config.control_period))
             w.connect(raw, "deadman", "raw_in")

@@ -13,7 +13,7 @@ time, mode switches, disambiguation requests, button presses) and writes into ``
 - ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
 
 ``--live`` replaces the simulated user by you: the interface is driven from the Meshcat page
-(:class:`~drake_disamb.systems.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
+(:class:`~drake_disamb.interfaces.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
 ``--live --record DIR --subject NAME`` also appends the person's trial to ``DIR/trials.jsonl`` as a
@@ -90,7 +90,7 @@ from drake_disamb.commands._station import (
     station_layers,
 )
 from drake_disamb.commands.study_run import EXIT_WRITE_FAILED
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
 
@@ -513,8 +513,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if watching else 0.0)
     source = None
     if args.live:
-        from drake_disamb.core.interfaces import InterfaceConfig
-        from drake_disamb.systems.live import MeshcatLiveInput
+        from drake_disamb.interfaces import InterfaceConfig
+        from drake_disamb.interfaces.live import MeshcatLiveInput
 
         interface = InterfaceConfig(kind=scenario.interface, control_period=scenario.control_period)
         source = MeshcatLiveInput(meshcat, interface)

@@ -65,11 +65,11 @@ from drake_disamb.core.disambiguation import (
     preset,
 )
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
-from drake_disamb.core.interfaces import INTERFACES, Interface, InterfaceConfig
-from drake_disamb.core.user import UserConfig
 from drake_disamb.display import LegendRow, goal_colors, legend_rows
+from drake_disamb.interfaces import INTERFACES, Interface, InterfaceConfig
 from drake_disamb.systems.loop import ControlLoop
 from drake_disamb.systems.task import TaskConfig
+from drake_disamb.user import UserConfig
 
 T = TypeVar("T")
 
