@@ -55,7 +55,7 @@ from drake_disamb.station.build import make_control_plant
 from drake_disamb.station.config import FINGER_JOINTS, StationConfig, arm_velocity_limits
 from drake_disamb.station.kinova.sdk import EthernetSettings, KinovaArm
 from drake_disamb.station.lcm import mapping
-from drake_disamb.station.lcm.bus import CommandInbox, StatusLink
+from drake_disamb.station.lcm.bus import DriverEnds
 from drake_disamb.station.lcm.driver import DEFAULT_COMMAND_CHANNEL, DEFAULT_STATUS_CHANNEL
 from drake_disamb.station.lcm.loop import prepare_loop
 from drake_disamb.station.lcm.messages import wire_status
@@ -95,7 +95,7 @@ def model_speed_limits() -> tuple[NDArray[np.float64], float]:
     return joints, float(finger)
 
 
-class SdkDriver:
+class SdkDriver(DriverEnds):
     """The loop on an arm whose angular control was started (module docstring).
 
     Attributes:
@@ -126,8 +126,7 @@ class SdkDriver:
         self._factor = float(velocity_factor)
         self.period = NOMINAL_PERIOD
         self.call_time = 0.0
-        self._inbox = CommandInbox(lcm, command_channel)
-        self._link = StatusLink(lcm, status_channel)
+        DriverEnds.__init__(self, lcm, status_channel, command_channel)
         self._reads: deque[float] = deque(maxlen=PERIOD_CHECK)  # (s) each period's two reads
         self._dropped = 0
         self._pending: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
@@ -137,21 +136,6 @@ class SdkDriver:
         self.halts = {"no fresh command": 0, "a malformed command": 0}
         self.late = 0
         self.elapsed = 0.0
-
-    @property
-    def statuses(self) -> int:
-        """Statuses published."""
-        return self._link.sent
-
-    @property
-    def commands(self) -> int:
-        """Valid commands received."""
-        return self._inbox.received
-
-    @property
-    def dropped(self) -> int:
-        """Malformed commands received."""
-        return self._inbox.dropped
 
     def calibrate(self) -> float:
         """Time :data:`CALIBRATION_READS` reads of the arm (two calls each) and hold the period of
