@@ -38,7 +38,7 @@ scheme the script prints, over all ticks of all trials:
   goal differs from the reference's;
 - the accuracy (``argmax p`` equals the true goal) with the paper's metric (zeroed stretch counted
   as correct) and the strict one (stretch excluded), averaged over trials as
-  ``drake-disamb inference-benchmark`` does (:func:`~drake_disamb.core.comparison.trial_accuracy`),
+  ``drake-disamb inference-benchmark`` does (:func:`~drake_disamb.comparison.replay.trial_accuracy`),
   on the tick samples (:func:`tick_trial`);
 - whether the raw state left the simplex before the system's per-tick projection put it back: the
   most negative entry and the largest ``|sum(p) - 1|`` at the end of any integrator step;
@@ -49,7 +49,7 @@ scheme the script prints, over all ticks of all trials:
   included in every scheme alike).
 
 For comparison it also prints the authors' own discretisation replayed by the numpy core
-(:func:`~drake_disamb.core.comparison.replay_trials`: explicit Euler, clip and renormalise) at the data's
+(:func:`~drake_disamb.comparison.replay.replay_trials`: explicit Euler, clip and renormalise) at the data's
 2 ms (with the authors' parameters on all 100 trials: the numbers of docs/results.md's inference table)
 and on the tick samples at ``T``.
 
@@ -80,11 +80,11 @@ from pydrake.systems.framework import (
 )
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
-from drake_disamb.core.comparison import authors_dft_params, replay_trials, trial_accuracy
+from drake_disamb.comparison.replay import authors_dft_params, replay_trials, trial_accuracy
+from drake_disamb.comparison.trial_files import load_trials
+from drake_disamb.comparison.trials import Trial
 from drake_disamb.core.disambiguation import MICO_DFT
 from drake_disamb.core.inference import DFTParams
-from drake_disamb.core.trial_files import load_trials
-from drake_disamb.core.trials import Trial
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
 from drake_disamb.systems.loop import ControlLoop
 

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_disamb.core.comparison import METHODS, replay_trials, score_trials
-from drake_disamb.core.trial_files import load_trials, save_trial_mat
-from drake_disamb.core.trials import generate_trials
+from drake_disamb.comparison.replay import METHODS, replay_trials, score_trials
+from drake_disamb.comparison.trial_files import load_trials, save_trial_mat
+from drake_disamb.comparison.trials import generate_trials
 
 PUBLISHED = (
     Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"

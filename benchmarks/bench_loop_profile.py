@@ -73,8 +73,10 @@ class _ExclusiveTimer:
 def _project_system_classes() -> list[type]:
     """Every LeafSystem class of the project that the shared-control diagram may contain."""
     from drake_disamb.controller import systems as controller
+    from drake_disamb.interfaces import system as interfaces
     from drake_disamb.station import systems as station
-    from drake_disamb.systems import autonomy, blending, disambiguation, inference, interfaces, task, user
+    from drake_disamb.systems import autonomy, blending, disambiguation, inference, task
+    from drake_disamb.user import system as user
 
     classes = []
     for module in (

@@ -3,7 +3,7 @@ per interface, task and paradigm (a check of the calibration, not a fit). Means 
 that succeeded (the authors left their failed trials out of every mean); success over all.
 
 Runs ``--trials`` trials per condition (interface x task x paradigm) with subjects drawn by
-:func:`drake_disamb.study.design.population.draw_subjects`, each with a random intended goal and initial
+:func:`drake_disamb.user.population.draw_subjects`, each with a random intended goal and initial
 mode, through :func:`drake_disamb.trial.run_trial` (the embedded reaching and pouring scenarios,
 ``duration`` raised to ``--duration``, the joystick's mode selection the study protocol's
 ``interface_mode_selection``), and prints their means beside the means of the authors'
@@ -29,13 +29,13 @@ from pathlib import Path
 import numpy as np
 
 from drake_disamb.config import load_scenario
-from drake_disamb.core.interfaces import interface_modes
+from drake_disamb.interfaces import interface_modes
 from drake_disamb.study.data.authors import read_trials
-from drake_disamb.study.design.population import draw_subjects
 from drake_disamb.study.design.protocol import default_protocol
 from drake_disamb.study.measures.calibration import estimate_behaviour
 from drake_disamb.study.measures.metrics import summarize
 from drake_disamb.trial import run_trial
+from drake_disamb.user.population import draw_subjects
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "tnsre2020_human_study"
 CONDITIONS = [

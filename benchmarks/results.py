@@ -160,7 +160,7 @@ BENCHMARKS = {
 
 def inference_section(run: Runner) -> str:
     """The paper's inference comparison on the published trials and on 500 generated ones."""
-    from drake_disamb.core.comparison import METHOD_LABELS, PUBLISHED_ACCURACY
+    from drake_disamb.comparison.replay import METHOD_LABELS, PUBLISHED_ACCURACY
 
     commands = (
         f"drake-disamb inference-benchmark --data {PUBLISHED}",

@@ -45,9 +45,9 @@ def main(argv: list[str] | None = None) -> int:
 
     from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.config import load_scenario
-    from drake_disamb.core.interfaces import InterfaceConfig
+    from drake_disamb.interfaces import InterfaceConfig
+    from drake_disamb.interfaces.live import page_live_input
     from drake_disamb.operator_page.server import OperatorPage
-    from drake_disamb.systems.live import page_live_input
     from drake_disamb.trial import run_trial
 
     scenario = load_scenario(

@@ -46,6 +46,31 @@ def cli_process(*argv: str) -> subprocess.Popen:
     )
 
 
+MULTICAST_HELP = (
+    "UDP multicast on loopback does not work here; on Linux: `sudo ip link set lo multicast on` and "
+    "`sudo ip route add 239.0.0.0/8 dev lo` (see docs/real_arm.md, The arm on LCM)"
+)
+
+
+def multicast_url(port: int) -> str:
+    """A udpm:// URL on loopback that delivers here, or skip the test saying how to enable it."""
+    import pytest
+    from pydrake.lcm import DrakeLcm
+
+    url = f"udpm://239.255.76.67:{port}?ttl=0"
+    try:
+        lcm = DrakeLcm(url)
+    except RuntimeError as exc:
+        pytest.skip(f"{MULTICAST_HELP} ({exc})")
+    got: list[bytes] = []
+    lcm.Subscribe("DRAKE_DISAMB_PROBE", got.append)
+    lcm.Publish("DRAKE_DISAMB_PROBE", b"probe")
+    lcm.HandleSubscriptions(500)
+    if not got:
+        pytest.skip(MULTICAST_HELP)
+    return url
+
+
 def wait_for_line(proc: subprocess.Popen, text: str, timeout: float) -> list[str]:
     """Lines of ``proc``'s stdout up to the first whole line (its newline read too) holding ``text``.
     Reads the pipe's bytes directly: ``readline`` on the text wrapper would buffer lines that

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from support import benchmark_module
 
-from drake_disamb.core.trial_files import load_trials
+from drake_disamb.comparison.trial_files import load_trials
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
 

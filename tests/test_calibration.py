@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_disamb.core.interfaces import gripper_mode, interface_modes, mode_name
+from drake_disamb.interfaces import gripper_mode, interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder, save_trace
 from drake_disamb.study.data.records import TrialRecord, append_record
 from drake_disamb.study.measures.calibration import estimate_behaviour, format_estimates

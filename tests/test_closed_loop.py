@@ -136,7 +136,7 @@ def test_pouring_completes_both_stages() -> None:
     # The cup is let go at its place: the trial ends in the gripper mode (the last), changed to
     # after the end effector got there, and the stage completed once the gripper opened.
     t, mode = r.logs["mode"]
-    from drake_disamb.core.interfaces import gripper_mode
+    from drake_disamb.interfaces import gripper_mode
 
     grip = gripper_mode("joystick")
     assert mode[-1, 0] == grip

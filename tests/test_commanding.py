@@ -106,8 +106,8 @@ def test_people_translate_first_while_the_assistance_cannot_help() -> None:
 
 
 def test_mode_kinds() -> None:
-    from drake_disamb.core.interfaces import INTERFACES
     from drake_disamb.core.layout import is_rotation_mode, is_translation_mode
+    from drake_disamb.interfaces import INTERFACES
 
     joystick = INTERFACES["joystick"].modes  # {vx, vy} {vx, vz} {wx, wz} {wy} {gripper}
     assert [is_translation_mode(m) for m in joystick] == [True, True, False, False, False]

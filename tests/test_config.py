@@ -27,9 +27,9 @@ from drake_disamb.config import (
 from drake_disamb.config.validation import check_scenario
 from drake_disamb.core.disambiguation import preset
 from drake_disamb.core.inference import DFTParams
-from drake_disamb.core.user import UserConfig
 from drake_disamb.study.run.runner import check_overrides
 from drake_disamb.trial import run_trial
+from drake_disamb.user import UserConfig
 
 
 def _reaching_with(extra: str) -> str:

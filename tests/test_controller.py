@@ -142,3 +142,20 @@ def test_the_controllers_drive_every_backend_through_its_joint_level_inputs(back
     assert d.GetOutputPort("ik_status").Eval(ctx)[0] == IkStatus.OK
     if station.link is not None:
         station.link.stop_arm()
+
+
+def test_the_scenarios_joint_speed_limits_reach_the_ik_and_are_bounded_by_the_models() -> None:
+    """``joint_velocity_limits`` in a scenario (a first run on a real arm takes a fraction of the
+    model's) are the IK's limits, which the station on LCM's sender uses too; a limit above the
+    model's or not positive is refused at resolution, naming the field and the joint."""
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.config import load_scenario
+
+    slow = [0.1, 0.1, 0.1, 0.2, 0.2, 0.2]
+    handles = build_shared_control_diagram(load_scenario("reaching", {"joint_velocity_limits": slow}))
+    np.testing.assert_array_equal(handles.systems["diff_ik"].velocity_limits, slow)
+    default = build_shared_control_diagram(load_scenario("reaching")).systems["diff_ik"].velocity_limits
+    np.testing.assert_allclose(default, [0.6283185307] * 3 + [0.837758041] * 3)
+    for bad, k in (([0.1] * 5 + [2.0], 5), ([0.0] + [0.1] * 5, 0)):
+        with pytest.raises(ValueError, match=rf"scenario.joint_velocity_limits\[{k}\]: expected a speed in"):
+            load_scenario("reaching", {"joint_velocity_limits": bad})

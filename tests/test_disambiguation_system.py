@@ -201,7 +201,7 @@ def test_constructor_validation() -> None:
 def test_interface_switches_mode_the_tick_after_the_request() -> None:
     """Wired to the interface: the request latched at the press's tick is answered in that tick
     and the answer applied in the next (no latency), solved from what the press saw."""
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     builder = DiagramBuilder()
     interface = builder.AddSystem(make_interface("head_array", n_goals=2, initial_mode=0))

@@ -1,5 +1,5 @@
-"""One job per function: no function of the modules below is longer than :data:`MAX_LINES` lines
-(from its ``def`` to its last line, docstring and comments included)."""
+"""One job per function: no function of the package is longer than :data:`MAX_LINES` lines (from its
+``def`` to its last line, docstring and comments included)."""
 
 from __future__ import annotations
 
@@ -12,20 +12,8 @@ from support import SRC
 MAX_LINES = 120
 """The longest a function may be."""
 
-HELD = (
-    "drake_disamb/plotting.py",
-    "drake_disamb/study/data/authors.py",
-    "drake_disamb/study/measures",
-    "drake_disamb/study/analysis",
-    "drake_disamb/study/report",
-)
-"""The modules (and the packages, every module in them) held to :data:`MAX_LINES`, relative to
-``src``."""
-MODULES = sorted(
-    str(p.relative_to(SRC))
-    for held in HELD
-    for p in ([SRC / held] if held.endswith(".py") else (SRC / held).glob("*.py"))
-)
+MODULES = sorted(str(p.relative_to(SRC)) for p in (SRC / "drake_disamb").rglob("*.py"))
+"""Every module of the package, relative to ``src``."""
 
 
 def function_lengths(path: Path) -> list[tuple[str, int]]:

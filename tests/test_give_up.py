@@ -12,7 +12,7 @@ from support import study_trial
 from drake_disamb.config import load_scenario, scenario_from_dict, scenario_to_dict
 from drake_disamb.study.measures.metrics import summarize
 from drake_disamb.study.run.outcome import ik_held_share, trace_arrays
-from drake_disamb.trial import run_trial
+from drake_disamb.trial import GiveUpWatch, run_trial
 
 
 def _stuck(give_up_after: float | None):  # noqa: ANN202
@@ -23,6 +23,36 @@ def _stuck(give_up_after: float | None):  # noqa: ANN202
     scenario.user.config.backoff_time = 0.0
     scenario.success.give_up_after = give_up_after
     return run_trial(dataclasses.replace(scenario, duration=60.0), progress=False)
+
+
+class _Task:
+    """What the watch reads of a task manager: the stage and the goal error (tolerance units)."""
+
+    def __init__(self) -> None:
+        self.now_stage, self.error = 0, 10.0
+
+    def stage(self, context: object) -> int:
+        return self.now_stage
+
+    def goal_error(self, context: object, goal: int) -> float:
+        return self.error
+
+
+def test_the_watch_looks_every_half_second_and_counts_a_whole_unit_or_a_new_stage_as_progress() -> None:
+    task = _Task()
+    watch = GiveUpWatch(task, None, [0, 1], give_up_after=2.0)  # type: ignore[arg-type]
+    assert not watch.hopeless(0.0) and (watch.best, watch.since, watch.stage) == (10.0, 0.0, 0)
+    task.error = 9.5  # less than a unit closer: no progress
+    assert not watch.hopeless(0.3) and watch.next_look == 0.5  # between looks: not even read
+    assert not watch.hopeless(1.0) and watch.since == 0.0
+    task.error = 8.9  # a whole unit closer: progress
+    assert not watch.hopeless(1.5) and (watch.best, watch.since) == (8.9, 1.5)
+    assert not watch.hopeless(3.0) and watch.hopeless(3.5)  # 2 s without progress
+    task.now_stage = 1  # a new stage is progress, whatever its error
+    task.error = 50.0
+    assert not watch.hopeless(4.0) and (watch.stage, watch.since) == (1, 4.0)
+    task.now_stage = 2  # past the last stage (done): never hopeless
+    assert not watch.hopeless(10.0)
 
 
 @pytest.mark.slow

@@ -16,7 +16,7 @@ import pytest
 from drake_disamb.core.autonomy import PotentialFieldConfig, potential_field_commands
 from drake_disamb.core.blending import blending_alpha
 from drake_disamb.core.inference import DFTParams, dft_euler_step
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 from drake_disamb.study.data.folder import LoggedTrial
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.identify import (

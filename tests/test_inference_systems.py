@@ -15,7 +15,8 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, TrajectorySource
 from pydrake.trajectories import PiecewisePolynomial
 
-from drake_disamb.core.comparison import authors_dft_params, replay_trials
+from drake_disamb.comparison.replay import authors_dft_params, replay_trials
+from drake_disamb.comparison.trial_files import load_trial_mat
 from drake_disamb.core.inference import (
     BayesInference,
     DFTParams,
@@ -24,7 +25,6 @@ from drake_disamb.core.inference import (
     dft_mass_conserving_rhs,
     memory_step,
 )
-from drake_disamb.core.trial_files import load_trial_mat
 from drake_disamb.systems.inference import (
     FieldTheoreticIntentInference,
     MemoryBasedIntentInference,

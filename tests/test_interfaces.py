@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drake_disamb.core.interfaces import (
+from drake_disamb.core.layout import GRIPPER_DIM
+from drake_disamb.interfaces import (
     Answer,
     InterfaceConfig,
     InterfaceState,
@@ -14,8 +15,7 @@ from drake_disamb.core.interfaces import (
     interface_update,
     sanitize_raw,
 )
-from drake_disamb.core.interfaces.joystick import DIRECT_SELECT_DEFLECTION, sector_mode, sector_stick
-from drake_disamb.core.layout import GRIPPER_DIM
+from drake_disamb.interfaces.kinds.joystick import DIRECT_SELECT_DEFLECTION, sector_mode, sector_stick
 
 DT = 0.01
 
@@ -174,7 +174,7 @@ class _Driver:
 
 
 def test_joystick_mode_cycling_counts_rising_edges_only() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("joystick"))
     seen = []
@@ -200,7 +200,7 @@ def test_joystick_mode_cycling_counts_rising_edges_only() -> None:
 
 
 def test_head_array_back_cycles_seven_modes() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("head_array", initial_mode=5))
     modes = []
@@ -213,7 +213,7 @@ def test_head_array_back_cycles_seven_modes() -> None:
 
 
 def test_request_switches_mode_when_its_answer_comes() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("head_array", initial_mode=0), answer=(0.0, -1.0))
     d.tick([1, 0, 0, 1])  # left held and request pressed in the same update
@@ -234,8 +234,8 @@ def test_request_switches_mode_when_its_answer_comes() -> None:
 def test_interface_latches_each_request_when_it_starts() -> None:
     """The update that starts a disambiguation latches its belief, poses and mode (after a manual
     switch in the same update) into the ``request`` state; nothing changes it until the next one."""
+    from drake_disamb.interfaces.system import make_interface
     from drake_disamb.systems.disambiguation import LatchedRequest
-    from drake_disamb.systems.interfaces import make_interface
 
     system = make_interface("head_array", n_goals=2, initial_mode=0, request_latency=0.05)
     d = _Driver(system, answer=(0.0, -1.0))
@@ -272,8 +272,8 @@ def test_interface_latches_each_request_when_it_starts() -> None:
 
 
 def test_unconnected_request_inputs_are_latched_as_nan() -> None:
+    from drake_disamb.interfaces.system import make_interface
     from drake_disamb.systems.disambiguation import LatchedRequest
-    from drake_disamb.systems.interfaces import make_interface
 
     d = _Driver(make_interface("joystick", initial_mode=2), answer=(0.0, -1.0))
     d.tick([0, 0, 0, 1])
@@ -283,7 +283,7 @@ def test_unconnected_request_inputs_are_latched_as_nan() -> None:
 
 
 def test_request_minus_one_keeps_mode() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("joystick", initial_mode=2), answer=(0.0, -1.0))
     for request in (1.0, 2.0):
@@ -297,7 +297,7 @@ def test_request_minus_one_keeps_mode() -> None:
 
 
 def test_request_without_disambiguation_system_is_logged_only() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("joystick", initial_mode=3))  # answer left unconnected
     d.tick([0, 0, 0, 1])
@@ -306,7 +306,7 @@ def test_request_without_disambiguation_system_is_logged_only() -> None:
 
 
 def test_nonfinite_raw_gives_zero_command() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("joystick"))
     d.tick([0.5, 0.5, 0, 0])
@@ -322,7 +322,7 @@ def test_nonfinite_raw_gives_zero_command() -> None:
 
 
 def test_speed_limits_and_clipping_are_config_fields() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("joystick", max_linear_speed=0.05, max_angular_speed=0.3, initial_mode=2))
     d.tick([5.0, -5.0, 0, 0])  # clipped to [1, -1]
@@ -333,7 +333,7 @@ def test_speed_limits_and_clipping_are_config_fields() -> None:
 
 
 def test_gripper_mode_drives_only_the_gripper() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     d = _Driver(make_interface("joystick", initial_mode=4, gripper_speed=0.03))
     d.tick([-1.0, 1.0, 0, 0])
@@ -345,7 +345,7 @@ def test_gripper_mode_drives_only_the_gripper() -> None:
 
 
 def test_outputs_come_from_state() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     for system in (make_interface("joystick"), make_interface("head_array", n_goals=3)):
         for j in range(system.num_input_ports()):
@@ -359,7 +359,7 @@ def test_outputs_come_from_state() -> None:
 
 
 def test_set_mode_and_attributes() -> None:
-    from drake_disamb.systems.interfaces import make_interface
+    from drake_disamb.interfaces.system import make_interface
 
     joy = make_interface("joystick")
     assert joy.modes == [[0, 1], [0, 2], [3, 5], [4], [6]] and joy.arm_modes == joy.modes[:-1]
@@ -456,7 +456,7 @@ def test_mode_selection_validation(kwargs: dict, message: str) -> None:
 
 
 def test_registry_lists_the_kinds_in_rank_order_and_names_them_in_errors() -> None:
-    from drake_disamb.core.interfaces import INTERFACES, check_kind, interfaces_in
+    from drake_disamb.interfaces import INTERFACES, check_kind, interfaces_in
 
     assert list(INTERFACES)[:2] == ["joystick", "head_array"]
     assert [k.rank for k in INTERFACES.values()] == sorted(k.rank for k in INTERFACES.values())
@@ -465,10 +465,36 @@ def test_registry_lists_the_kinds_in_rank_order_and_names_them_in_errors() -> No
         check_kind("trackball")
 
 
+def test_a_variant_is_its_device_model_its_affordances_and_its_live_controls() -> None:
+    """The three parts of a variant, each in its own module, none holding another's members: the
+    update reads the device, the simulated user the affordances, the live page its controls."""
+    from drake_disamb.interfaces import INTERFACES
+    from drake_disamb.interfaces.affordances import Affordances
+    from drake_disamb.interfaces.device import Device
+    from drake_disamb.interfaces.live_controls import LiveControls
+
+    parts = {
+        Device: {"sanitize", "mode_event", "select", "held", "drives", "modes", "mode_steps", "mode_order"},
+        Affordances: {"drive_raw", "is_driving", "step_raw", "change_raw", "request_raw"},
+        LiveControls: {"live_controls", "live_axes", "live_help", "pulse_raw"},
+    }
+    for part, members in parts.items():
+        own = set(vars(part)) | set(part.__annotations__)
+        assert members <= own, (part, members - own)
+        others = set().union(*(m for p, m in parts.items() if p is not part))
+        assert not others & own, (part, others & own)
+    assert all(isinstance(kind, part) for kind in INTERFACES.values() for part in parts)
+    assert {part.__module__ for part in parts} == {
+        "drake_disamb.interfaces.device",
+        "drake_disamb.interfaces.affordances",
+        "drake_disamb.interfaces.live_controls",
+    }
+
+
 @pytest.mark.parametrize("name", ["joystick", "head_array"])
 def test_every_kind_drives_steps_and_requests_through_its_own_raw_signal(name: str) -> None:
     """What the simulated user and the live page rely on, read from the variant alone."""
-    from drake_disamb.core.interfaces import INTERFACES
+    from drake_disamb.interfaces import INTERFACES
 
     kind = INTERFACES[name]
     cfg = InterfaceConfig(kind=name)
@@ -488,7 +514,7 @@ def test_every_kind_drives_steps_and_requests_through_its_own_raw_signal(name: s
 
 
 def test_the_mode_order_is_a_field_of_the_variant() -> None:
-    from drake_disamb.core.interfaces.head_array import HeadArray
+    from drake_disamb.interfaces.kinds.head_array import HeadArray
 
     order = ((0,), (1,), (2,), (5,), (3,), (4,))
     cfg = InterfaceConfig(kind="head_array", variant=HeadArray(mode_order=order))
@@ -517,14 +543,14 @@ def test_the_mode_order_is_a_field_of_the_variant() -> None:
     ],
 )
 def test_mode_order_validation(order: tuple, message: str) -> None:
-    from drake_disamb.core.interfaces.head_array import HeadArray
+    from drake_disamb.interfaces.kinds.head_array import HeadArray
 
     with pytest.raises(ValueError, match=rf"HeadArray\.mode_order: .*{message}"):
         HeadArray(mode_order=order)
 
 
 def test_a_variant_of_another_kind_is_rejected() -> None:
-    from drake_disamb.core.interfaces.head_array import HeadArray
+    from drake_disamb.interfaces.kinds.head_array import HeadArray
 
     with pytest.raises(ValueError, match="InterfaceConfig.variant: expected a joystick variant"):
         InterfaceConfig(kind="joystick", variant=HeadArray())

@@ -13,15 +13,15 @@ from pydrake.systems.analysis import Simulator
 from drake_disamb.config import load_scenario, resolve_scenario
 from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import select_disambiguating_mode
-from drake_disamb.core.interfaces import (
+from drake_disamb.interfaces import (
     Answer,
     InterfaceConfig,
     InterfaceState,
     initial_state,
     interface_update,
 )
+from drake_disamb.interfaces.system import make_interface
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem, LatchedRequest
-from drake_disamb.systems.interfaces import make_interface
 from drake_disamb.systems.loop import ControlLoop
 
 DT = 0.01

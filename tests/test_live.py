@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_disamb.core.interfaces import INTERFACES, InterfaceConfig, initial_state, interface_update
-from drake_disamb.core.interfaces.joystick import sector_stick
-from drake_disamb.systems.live import (
+from drake_disamb.interfaces import INTERFACES, InterfaceConfig, initial_state, interface_update
+from drake_disamb.interfaces.kinds.joystick import sector_stick
+from drake_disamb.interfaces.live import (
     AXIS_SLIDERS,
     LiveInputConfig,
     LiveState,

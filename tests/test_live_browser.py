@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from support import screenshot_script
 
-from drake_disamb.core.interfaces import INTERFACES, InterfaceConfig
-from drake_disamb.systems.live import AXIS_SLIDERS, MeshcatLiveInput
+from drake_disamb.interfaces import INTERFACES, InterfaceConfig
+from drake_disamb.interfaces.live import AXIS_SLIDERS, MeshcatLiveInput
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMEDRIVER = shutil.which("chromedriver")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from test_live_browser import CHROMEDRIVER, CHROMIUM, KEYDOWN, _raw, _wait, page  # noqa: F401
 
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 
 pytestmark = pytest.mark.skipif(
     CHROMIUM is None or CHROMEDRIVER is None, reason="needs chromium and chromedriver"

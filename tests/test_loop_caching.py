@@ -14,12 +14,12 @@ from pydrake.systems.analysis import Simulator
 
 from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.inference import DFTParams
-from drake_disamb.core.interfaces import InterfaceConfig, InterfaceEvent
+from drake_disamb.interfaces import InterfaceConfig, InterfaceEvent
+from drake_disamb.interfaces.system import EventLog, make_interface
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import DisambiguationSystem
 from drake_disamb.systems.inference import FieldTheoreticIntentInference
-from drake_disamb.systems.interfaces import EventLog, make_interface
 from drake_disamb.systems.loop import ControlLoop
 
 IDENTITY = [1.0, 0.0, 0.0, 0.0]
@@ -139,7 +139,7 @@ def test_interface_updates_once_per_change_of_its_inputs(monkeypatch: pytest.Mon
     """An update that changes the state also checks the next one with the same inputs; the updates
     that follow with those inputs compute and write nothing (what the context records, not a memo
     on the system). ``set_mode`` makes the next update compute again."""
-    from drake_disamb.systems import interfaces as module
+    from drake_disamb.interfaces import system as module
 
     calls = _counting(monkeypatch, module, "interface_update")
     interface = make_interface(InterfaceConfig(kind="head_array", initial_mode=0))

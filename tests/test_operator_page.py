@@ -15,7 +15,8 @@ import pytest
 
 from drake_disamb.core.disambiguation import DEFAULT_CONFIG, Algorithm1, make_request
 from drake_disamb.core.disambiguation.told_apart import told_apart
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
+from drake_disamb.interfaces.live import AXIS_SLIDERS
 from drake_disamb.operator_page import server as page_server
 from drake_disamb.operator_page.model import (
     goal_rows,
@@ -26,7 +27,6 @@ from drake_disamb.operator_page.model import (
     why_line,
 )
 from drake_disamb.operator_page.server import OperatorPage
-from drake_disamb.systems.live import AXIS_SLIDERS
 
 # -- what the panel says ------------------------------------------------------------------------------
 

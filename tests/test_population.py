@@ -9,16 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_disamb.core.interfaces import InterfaceConfig, initial_state, interface_update
 from drake_disamb.core.sampling import lognormal
-from drake_disamb.core.user import (
+from drake_disamb.interfaces import InterfaceConfig, initial_state, interface_update
+from drake_disamb.user import (
     UserConfig,
     UserState,
     choose_mode,
     mode_usefulness,
     user_step,
 )
-from drake_disamb.study.design.population import (
+from drake_disamb.user.population import (
     LogNormal,
     PopulationConfig,
     Subject,
@@ -696,7 +696,7 @@ def test_calibrate_command_refuses_a_folder_without_logs(tmp_path: Path, capsys)
 def test_system_decides_at_its_decision_period_and_holds_the_raw_signal() -> None:
     from pydrake.systems.analysis import Simulator
 
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     cfg = dataclasses.replace(QUIET, decision_period=0.1, direction_kappa=10.0, seed=3)
     user = SimulatedUser("joystick", 0, 2, cfg)

@@ -16,7 +16,7 @@ import yaml
 from support import benchmark_module, study_trial
 
 from drake_disamb.cli import main as cli_main
-from drake_disamb.core.comparison import METHOD_LABELS, PUBLISHED_ACCURACY
+from drake_disamb.comparison.replay import METHOD_LABELS, PUBLISHED_ACCURACY
 from drake_disamb.study.data.records import append_record
 
 

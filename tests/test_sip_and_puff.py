@@ -13,16 +13,16 @@ import numpy as np
 import pytest
 from support import SRC, cli_process, interrupt
 
-from drake_disamb.core.interfaces import (
+from drake_disamb.interfaces import (
     INTERFACES,
     InterfaceConfig,
     command_from_raw,
     initial_state,
     interface_update,
 )
-from drake_disamb.core.interfaces.sip_and_puff import SipAndPuff
-from drake_disamb.core.user import UserConfig, UserState, user_step
-from drake_disamb.systems.live import LiveState, live_raw_step
+from drake_disamb.interfaces.kinds.sip_and_puff import SipAndPuff
+from drake_disamb.interfaces.live import LiveState, live_raw_step
+from drake_disamb.user import UserConfig, UserState, user_step
 
 CFG = InterfaceConfig(kind="sip_and_puff")
 KIND = CFG.variant

@@ -12,6 +12,7 @@ import pytest
 from drake import lcmt_jaco_command
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
+from support import multicast_url
 
 from drake_disamb.controller import build_controlled_station
 from drake_disamb.station import MICO_HOME_Q, StationConfig, build_station
@@ -404,6 +405,101 @@ def test_a_controller_that_missed_its_periods_past_the_status_timeout_latches_a_
     assert "missed its periods" in Fault.CONTROLLER_STALLED.reason
 
 
+class PacedDriver:
+    """A driver holding ``period`` (s) of wall-clock time, each status's ``utime`` one period after
+    the last (a driver on a slow link announces its period so): called before every poll, it
+    publishes the statuses that came due; ``period = None`` stops it."""
+
+    def __init__(self, lcm: DrakeLcm, period: float | None) -> None:
+        self.lcm, self.period = lcm, period
+        self.utime = 10_000
+        self.due = time.monotonic()
+
+    def __call__(self) -> None:
+        while self.period is not None and time.monotonic() >= self.due:
+            self.due += self.period
+            self.utime += int(round(self.period * 1e6))
+            self.lcm.Publish(DEFAULT_STATUS_CHANNEL, _status(utime=self.utime))
+
+
+def _paced_receiver(period: float | None, spacing: float | None, max_spacing: float | None = None):  # noqa: ANN202
+    """A receiver (its simulator, context) on statuses from a :class:`PacedDriver`, and the driver."""
+    from pydrake.systems.analysis import InitializeParams
+
+    from drake_disamb.station.lcm.bus import StatusInbox
+    from drake_disamb.station.lcm.systems import JacoStatusReceiver
+
+    lcm = DrakeLcm("memq://")
+    driver = PacedDriver(lcm, period)
+    first, _ = read_status(_status(utime=driver.utime), None, np.array(MICO_HOME_Q))
+    lower, upper = build_station(StationConfig()).geometry.joint_limits()
+    inbox = StatusInbox(lcm, DEFAULT_STATUS_CHANNEL, driver)
+    receiver = JacoStatusReceiver(
+        inbox, first, lower, upper, PERIOD, 0.03, real_time=True, spacing=spacing, max_spacing=max_spacing
+    )
+    simulator = Simulator(receiver)
+    simulator.Initialize(InitializeParams(suppress_initialization_events=True))  # (no prepare_loop)
+    return receiver, simulator, simulator.get_mutable_context(), driver
+
+
+def test_the_watchdog_follows_the_period_the_driver_announces() -> None:
+    """A driver on a slow link (statuses every 40 ms, 4 control periods): the start measures its
+    period, the watchdog's timeout is 3 of its periods, no fault and no status counted as missed;
+    when it stops, the watchdog trips after those 3 periods."""
+    from drake_disamb.station.lcm.bus import StatusInbox
+    from drake_disamb.station.lcm.station import status_spacing
+
+    lcm = DrakeLcm("memq://")
+    driver = PacedDriver(lcm, 0.04)
+    inbox = StatusInbox(lcm, DEFAULT_STATUS_CHANNEL, driver)
+    first, _ = read_status(_status(utime=driver.utime), None, np.array(MICO_HOME_Q))
+    assert status_spacing(inbox, first, 1.0, 0.05) == pytest.approx(0.04)
+
+    receiver, simulator, ctx, driver = _paced_receiver(0.04, spacing=0.04, max_spacing=0.05)
+    simulator.AdvanceTo(0.3)  # 30 ticks, one per status: 1.2 s of wall-clock time
+    assert receiver.fault(ctx) == Fault.NONE
+    assert receiver.status_timeout(ctx) == pytest.approx(0.12)
+    used, dropped, missed = receiver.GetOutputPort("status_count").Eval(ctx)
+    assert used >= 30 and (dropped, missed) == (0, 0)
+    driver.period = None
+    stopped = time.monotonic()
+    simulator.AdvanceTo(0.4)
+    assert receiver.fault(ctx) == Fault.STATUS_TIMEOUT
+    assert 0.08 <= time.monotonic() - stopped <= 0.25
+
+    # From the nominal period: the spacing is learnt from the statuses' utime steps.
+    receiver, simulator, ctx, driver = _paced_receiver(0.02, spacing=None)
+    simulator.AdvanceTo(0.15)
+    assert receiver.fault(ctx) == Fault.NONE
+    assert receiver.spacing(ctx) == pytest.approx(0.02) and receiver.status_timeout(ctx) == pytest.approx(
+        0.06
+    )
+
+
+def test_a_driver_slower_than_the_max_status_period_is_refused_and_trips_the_watchdog() -> None:
+    from drake_disamb.station.lcm.bus import StatusInbox
+    from drake_disamb.station.lcm.station import status_spacing
+
+    lcm = DrakeLcm("memq://")
+    driver = PacedDriver(lcm, 0.08)
+    inbox = StatusInbox(lcm, DEFAULT_STATUS_CHANNEL, driver)
+    first, _ = read_status(_status(utime=driver.utime), None, np.array(MICO_HOME_Q))
+    with pytest.raises(
+        RuntimeError,
+        match=r"the driver's statuses come every 0\.080 s \(12\.5 Hz\), slower than "
+        r"station\.max_status_period \(0\.05 s\): the link to the arm is too slow",
+    ):
+        status_spacing(inbox, first, 1.0, 0.05)
+    driver.period = None
+    with pytest.raises(RuntimeError, match="stopped after the first one"):
+        status_spacing(inbox, first, 0.1, 0.05)
+    # At run time the timeout is held to 3 of the slowest periods followed: 0.15 s, not 0.6 s.
+    receiver, simulator, ctx, _ = _paced_receiver(0.2, spacing=0.2, max_spacing=0.05)
+    assert receiver.status_timeout(ctx) == pytest.approx(0.15)
+    simulator.AdvanceTo(0.05)
+    assert receiver.fault(ctx) == Fault.STATUS_TIMEOUT
+
+
 def test_the_loops_first_tick_takes_a_fresh_status_and_counts_nothing_before_it_as_missed() -> None:
     wire = Wire()
     for _ in range(5):  # statuses published while the station is built, before the loop starts
@@ -515,28 +611,6 @@ def test_the_seeded_trial_on_the_wire_matches_the_simulated_one() -> None:
 # ----------------------------------------------------------------------------------------------
 # Two processes over UDP multicast on loopback: the driver, then the controller.
 # ----------------------------------------------------------------------------------------------
-MULTICAST_HELP = (
-    "UDP multicast on loopback does not work here; on Linux: `sudo ip link set lo multicast on` and "
-    "`sudo ip route add 239.0.0.0/8 dev lo` (see docs/real_arm.md, The arm on LCM)"
-)
-
-
-def multicast_url(port: int) -> str:
-    """A udpm:// URL on loopback that delivers here, or skip the test saying how to enable it."""
-    url = f"udpm://239.255.76.67:{port}?ttl=0"
-    try:
-        lcm = DrakeLcm(url)
-    except RuntimeError as exc:
-        pytest.skip(f"{MULTICAST_HELP} ({exc})")
-    got: list[bytes] = []
-    lcm.Subscribe("DRAKE_DISAMB_PROBE", got.append)
-    lcm.Publish("DRAKE_DISAMB_PROBE", b"probe")
-    lcm.HandleSubscriptions(500)
-    if not got:
-        pytest.skip(MULTICAST_HELP)
-    return url
-
-
 @pytest.mark.slow
 def test_two_processes_run_the_seeded_trial_as_the_simulation_does() -> None:
     from support import cli_process, wait_for_line
@@ -727,7 +801,7 @@ def test_a_paused_controller_latches_a_fault_and_says_so(tmp_path) -> None:  # n
 
 
 def test_the_page_deadman_releases_every_signal_when_the_page_is_gone() -> None:
-    from drake_disamb.systems.deadman import PageDeadman
+    from drake_disamb.interfaces.deadman import PageDeadman
 
     class Page:
         connections = 1

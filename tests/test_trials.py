@@ -14,7 +14,7 @@ import pytest
 from scipy.io import loadmat, savemat
 
 from drake_disamb.commands import inference_benchmark
-from drake_disamb.core.comparison import (
+from drake_disamb.comparison.replay import (
     METHODS,
     PUBLISHED_ACCURACY,
     authors_dft_params,
@@ -23,15 +23,15 @@ from drake_disamb.core.comparison import (
     score_trials,
     trial_accuracy,
 )
-from drake_disamb.core.inference import bayes_step, dft_euler_step, memory_step, uniform_belief
-from drake_disamb.core.sampling import sample_von_mises_fisher
-from drake_disamb.core.trial_files import load_trial_mat, load_trials, save_trial_mat
-from drake_disamb.core.trials import (
+from drake_disamb.comparison.trial_files import load_trial_mat, load_trials, save_trial_mat
+from drake_disamb.comparison.trials import (
     GeneratorConfig,
     Trial,
     generate_trials,
     iter_generated_chunks,
 )
+from drake_disamb.core.inference import bayes_step, dft_euler_step, memory_step, uniform_belief
+from drake_disamb.core.sampling import sample_von_mises_fisher
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tnsre2018_simulated_trajectories"
 
@@ -348,7 +348,7 @@ def test_cli_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
 
 
 def test_generated_trial_does_not_depend_on_how_many(monkeypatch: pytest.MonkeyPatch) -> None:
-    from drake_disamb.core import trials as trials_module
+    from drake_disamb.comparison import trials as trials_module
 
     monkeypatch.setattr(trials_module, "GENERATOR_CHUNK", 6)
     many, few = generate_trials(17, seed=12), generate_trials(8, seed=12)
@@ -362,7 +362,7 @@ def test_generated_trial_does_not_depend_on_how_many(monkeypatch: pytest.MonkeyP
 
 
 def test_streamed_scores_equal_the_all_at_once_path(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    from drake_disamb.core import trials as trials_module
+    from drake_disamb.comparison import trials as trials_module
 
     monkeypatch.setattr(trials_module, "GENERATOR_CHUNK", 7)
     trials = generate_trials(20, seed=6)

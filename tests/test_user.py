@@ -10,14 +10,14 @@ import pytest
 from support import integrate_pose
 
 from drake_disamb.core.geometry import quat_from_rotvec
-from drake_disamb.core.interfaces import (
+from drake_disamb.interfaces import (
     REQUEST_BUTTON,
     InterfaceConfig,
     command_from_raw,
     initial_state,
     interface_update,
 )
-from drake_disamb.core.user import (
+from drake_disamb.user import (
     NOT_COUNTING,
     UserConfig,
     UserState,
@@ -402,7 +402,7 @@ def _user_context(system, mode, ee=EE, belief=None):
 
 
 def test_system_output_is_held_state() -> None:
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     user = SimulatedUser("head_array", 0, 2, NO_REQUESTS)
     sim, ctx = _user_context(user, mode=0)
@@ -415,7 +415,7 @@ def test_system_output_is_held_state() -> None:
 
 
 def test_system_presses_mode_button_once_and_requests_with_belief() -> None:
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     cfg = UserConfig(request_at_start=True, request_when_unhelped_for=1.0)
     user = SimulatedUser(InterfaceConfig(kind="joystick"), 0, 2, cfg)
@@ -456,7 +456,7 @@ def _bad(index: int, value: float, array: np.ndarray = EE) -> np.ndarray:
     ],
 )
 def test_system_unusable_inputs_let_go_and_are_counted(port: str, value: np.ndarray) -> None:
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     user = SimulatedUser("joystick", 0, 2, NO_REQUESTS)
     sim, ctx = _user_context(user, mode=0)
@@ -475,7 +475,7 @@ def test_system_unusable_inputs_let_go_and_are_counted(port: str, value: np.ndar
 
 @pytest.mark.parametrize("error", [ValueError("ee_pose/goal_pose: expected 7 numbers"), RuntimeError("bug")])
 def test_system_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: Exception) -> None:
-    from drake_disamb.systems import user as module
+    from drake_disamb.user import system as module
 
     def broken(*args: object) -> None:
         raise error
@@ -489,7 +489,7 @@ def test_system_other_errors_propagate(monkeypatch: pytest.MonkeyPatch, error: E
 
 
 def test_system_follows_the_stage_goal_and_lets_go_when_done() -> None:
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     user = SimulatedUser("head_array", [0, 1], 2, NO_REQUESTS)
     assert user.goal_indices == (0, 1) and user.goal_index == 0
@@ -506,7 +506,7 @@ def test_system_follows_the_stage_goal_and_lets_go_when_done() -> None:
 
 
 def test_system_constructor_validation() -> None:
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     # A kind's name makes its InterfaceConfig, which checks it; the goals and the timing are the
     # resolved scenario's (scenario.user.goals, user.config.reaction_time: tests/test_bounds.py),
@@ -526,11 +526,11 @@ def test_diagram_loop_reaches_goal() -> None:
     from pydrake.systems.primitives import ConstantVectorSource
 
     from drake_disamb.core.blending import BlendingConfig
+    from drake_disamb.interfaces.system import make_interface
     from drake_disamb.systems.autonomy import PotentialFieldAutonomy
     from drake_disamb.systems.blending import SharedControlBlender
-    from drake_disamb.systems.interfaces import make_interface
     from drake_disamb.systems.loop import ControlLoop
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     class KinematicEndEffector(LeafSystem):
         """Test stand-in for the station: integrates ``ee_velocity_command`` (6) into ``ee_pose`` (7)."""
@@ -860,7 +860,7 @@ def test_a_release_stage_does_not_stop_the_user_short_of_the_goal() -> None:
 
 
 def test_system_releases_per_stage() -> None:
-    from drake_disamb.systems.user import SimulatedUser
+    from drake_disamb.user.system import SimulatedUser
 
     user = SimulatedUser("head_array", [0, 1], 2, NO_REQUESTS, releases=[False, True])
     assert user.releases == (False, True)
@@ -876,7 +876,7 @@ def test_system_releases_per_stage() -> None:
 
 
 def test_user_config_groups_take_flat_fields_and_replace() -> None:
-    from drake_disamb.core.user import FIELD_GROUPS, RequestConfig, TimingConfig
+    from drake_disamb.user import FIELD_GROUPS, RequestConfig, TimingConfig
 
     cfg = UserConfig(reaction_time=0.5, request_prob=0.4, seed=3)
     assert cfg.timing == TimingConfig(reaction_time=0.5) and cfg.requests == RequestConfig(request_prob=0.4)
@@ -900,7 +900,7 @@ def test_user_config_groups_take_flat_fields_and_replace() -> None:
 
 
 def test_the_rules_are_one_function_each_in_order() -> None:
-    from drake_disamb.core.user import rules
+    from drake_disamb.user import rules
 
     names = [rule.__name__ for rule in rules.RULES]
     assert names[0] == "release_rule" and names[-1] == "pause_rule" and len(set(names)) == len(names)

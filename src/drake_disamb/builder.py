@@ -57,12 +57,12 @@ from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPo
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink, ZeroOrderHold
 
 from drake_disamb.config import Scenario, TrialConfig, check_start_clearance, resolve_scenario
+from drake_disamb.interfaces.system import make_interface
 from drake_disamb.systems.autonomy import PotentialFieldAutonomy
 from drake_disamb.systems.blending import SharedControlBlender
 from drake_disamb.systems.disambiguation import AutomaticTrigger, DisambiguationSystem
-from drake_disamb.systems.interfaces import make_interface
 from drake_disamb.systems.task import FixedGoalSet, TaskManager
-from drake_disamb.systems.user import SimulatedUser
+from drake_disamb.user.system import SimulatedUser
 
 LOGGED_SIGNALS: tuple[tuple[str, str, str], ...] = (
     ("belief", "inference", "belief"),
@@ -288,7 +288,7 @@ def _add_user(w: _Wiring, input_source: System | None, page: Any) -> None:
         raw = input_source.GetOutputPort("raw")
         if page is not None and w.station.link is not None:
             # A person at the page drives a real arm: losing the page releases every signal.
-            from drake_disamb.systems.deadman import PageDeadman
+            from drake_disamb.interfaces.deadman import PageDeadman
 
             w.add("deadman", PageDeadman(page, config.control_period))
             w.connect(raw, "deadman", "raw_in")
@@ -375,7 +375,7 @@ def _add_panel(w: _Wiring, scenario: Scenario, meshcat: Meshcat | None, page: An
     """The operator panel (on ``page``, kept for the recording with Meshcat) and its cues in the
     scene: the belief over the goals by name, the mode and its keys, alpha, and why a request's
     mode is what it is (from the disambiguation system's answer)."""
-    from drake_disamb.systems.live import AXIS_SLIDERS
+    from drake_disamb.interfaces.live import AXIS_SLIDERS
     from drake_disamb.systems.panel import PanelConfig, PanelVisualizer
 
     config, interface = w.config, w.config.interface

@@ -23,7 +23,7 @@ from drake_disamb.config import Scenario
 from drake_disamb.progress import SimulationProgress
 from drake_disamb.systems.task import TaskManager
 
-__all__ = ["TrialResult", "run_trial"]
+__all__ = ["GiveUpWatch", "TrialResult", "run_trial"]
 
 
 @dataclass
@@ -105,6 +105,104 @@ def _log(
     return np.asarray(log.sample_times()).copy(), np.asarray(log.data()).T.copy()
 
 
+class GiveUpWatch:
+    """The experimenter's watch (``scenario.success.give_up_after``): every half second of simulated
+    time the experimenter looks at the arm's error to the current stage's intended goal (in
+    tolerance units, :meth:`~drake_disamb.systems.task.TaskManager.goal_error`); a new stage, or an
+    error a whole unit below the best so far, is progress, and the trial is hopeless once
+    ``give_up_after`` seconds pass without any.
+
+    Attributes:
+        best: The best goal error so far in the watched stage (tolerance units).
+        since: When (s) the last progress was seen.
+        stage: The stage watched (-1 before the first look).
+        next_look: When (s) the experimenter looks next.
+    """
+
+    LOOK_PERIOD = 0.5
+    """Seconds between two looks."""
+
+    def __init__(self, task: TaskManager, task_context, intended: list[int], give_up_after: float) -> None:
+        self._task = task
+        self._task_context = task_context
+        self._intended = intended
+        self._give_up_after = give_up_after
+        self.best = np.inf
+        self.since = 0.0
+        self.stage = -1
+        self.next_look = 0.0
+
+    def hopeless(self, t: float) -> bool:
+        """Whether, looking at time ``t`` (s), the experimenter gives up (False between looks)."""
+        if t < self.next_look:
+            return False
+        self.next_look = t + self.LOOK_PERIOD
+        stage = self._task.stage(self._task_context)
+        if stage >= len(self._intended):
+            return False
+        error = self._task.goal_error(self._task_context, self._intended[stage])
+        if stage != self.stage or error < self.best - 1.0:
+            self.best, self.since, self.stage = error, t, stage
+        return t - self.since >= self._give_up_after - 1e-9
+
+
+class _TrialMonitor:
+    """The simulator's monitor of one trial: progress, and the trial's end at a stop request, a
+    station fault, the task done (with ``stop_at_success``) or the experimenter giving up.
+
+    Attributes:
+        stopped: A stop request ended the trial.
+        gave_up: The experimenter gave up.
+    """
+
+    def __init__(
+        self,
+        handles: SharedControlDiagram,
+        task_context,
+        bar: SimulationProgress | None,
+        stop_requested: Callable[[], bool] | None,
+        stop_at_success: bool,
+        watch: GiveUpWatch | None,
+    ) -> None:
+        self._handles = handles
+        self._task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
+        self._task_context = task_context
+        self._bar = bar
+        self._stop_requested = stop_requested
+        self._stop_at_success = stop_at_success
+        self._watch_fault = "fault" in handles.station.outputs
+        self._watch = watch
+        self.stopped = False
+        self.gave_up = False
+
+    def needed(self) -> bool:
+        """Whether the monitor has anything to do (else the simulator runs without one)."""
+        return (
+            self._bar is not None
+            or self._stop_requested is not None
+            or self._stop_at_success
+            or self._watch_fault
+            or self._watch is not None
+        )
+
+    def __call__(self, context) -> EventStatus:
+        task = self._task
+        if self._bar is not None:
+            self._bar.update(context.get_time())
+        if self._stop_requested is not None and self._stop_requested():
+            self.stopped = True
+            return EventStatus.ReachedTermination(task, "stop requested")
+        if self._watch_fault and self._handles.station_fault(context):
+            return EventStatus.ReachedTermination(task, "station fault")
+        # ``context`` is the simulator's own root context: its task subcontext is ``task_context``.
+        if self._stop_at_success and task.is_done(self._task_context):
+            return EventStatus.ReachedTermination(task, "task done")
+        if self._watch is not None and self._watch.hopeless(context.get_time()):
+            self.gave_up = True
+            return EventStatus.ReachedTermination(task, "given up")
+        return EventStatus.DidNothing()
+
+
 def run_trial(
     scenario: Scenario | SharedControlDiagram,
     meshcat: Meshcat | None = None,
@@ -151,43 +249,10 @@ def run_trial(
     task_context = task.GetMyContextFromRoot(root)
 
     bar = SimulationProgress(sc.duration) if progress is True else (progress or None)
-    stopped = [False]
-    watch_fault = "fault" in handles.station.outputs
     give_up = sc.success.give_up_after
-    intended = list(sc.user.goals)
-    # The experimenter's watch: [best goal error so far (tolerance units), since when, stage, next look].
-    watch = [np.inf, 0.0, -1, 0.0]
-    gave_up = [False]
-
-    def hopeless(t: float) -> bool:
-        if t < watch[3]:
-            return False
-        watch[3] = t + 0.5  # the experimenter looks every half second
-        stage = task.stage(task_context)
-        if stage >= len(intended):
-            return False
-        error = task.goal_error(task_context, intended[stage])
-        if stage != watch[2] or error < watch[0] - 1.0:
-            watch[0], watch[1], watch[2] = error, t, stage
-        return t - watch[1] >= give_up - 1e-9
-
-    def monitor(context) -> EventStatus:
-        if bar is not None:
-            bar.update(context.get_time())
-        if stop_requested is not None and stop_requested():
-            stopped[0] = True
-            return EventStatus.ReachedTermination(task, "stop requested")
-        if watch_fault and handles.station_fault(context):
-            return EventStatus.ReachedTermination(task, "station fault")
-        # ``context`` is the simulator's own root context: its task subcontext is ``task_context``.
-        if stop_at_success and task.is_done(task_context):
-            return EventStatus.ReachedTermination(task, "task done")
-        if give_up is not None and hopeless(context.get_time()):
-            gave_up[0] = True
-            return EventStatus.ReachedTermination(task, "given up")
-        return EventStatus.DidNothing()
-
-    if bar is not None or stop_requested is not None or stop_at_success or watch_fault or give_up is not None:
+    watch = None if give_up is None else GiveUpWatch(task, task_context, list(sc.user.goals), give_up)
+    monitor = _TrialMonitor(handles, task_context, bar, stop_requested, stop_at_success, watch)
+    if monitor.needed():
         simulator.set_monitor(monitor)
     if record:
         meshcat.StartRecording(frames_per_second=32.0, set_visualizations_while_recording=True)
@@ -196,7 +261,7 @@ def run_trial(
         simulator.Initialize()
         simulator.AdvanceTo(sc.duration)
     except KeyboardInterrupt:
-        stopped[0] = True
+        monitor.stopped = True
     finally:
         handles.stop_station()  # on a wire: the zero command, several times (also on an exception)
     wall = _time.perf_counter() - start
@@ -205,7 +270,35 @@ def run_trial(
     if record:
         meshcat.StopRecording()
         meshcat.PublishRecording()
+    return _result(handles, root, task_context, monitor, watch, wall)
 
+
+def _end_reason(done: bool, fault: str, monitor: _TrialMonitor) -> str:
+    """Why the trial ended (:attr:`TrialResult.end_reason`)."""
+    if done:
+        return "done"
+    if fault:
+        return "station fault"
+    if monitor.stopped:
+        return "stopped"
+    if monitor.gave_up:
+        return "given up"
+    return "time limit"
+
+
+def _result(
+    handles: SharedControlDiagram,
+    root,
+    task_context,
+    monitor: _TrialMonitor,
+    watch: GiveUpWatch | None,
+    wall: float,
+) -> TrialResult:
+    """The :class:`TrialResult` of the trial that ran in the root context ``root`` for ``wall``
+    seconds of wall-clock time."""
+    sc = handles.scenario
+    task: TaskManager = handles.systems["task"]  # type: ignore[assignment]
+    intended = list(sc.user.goals)
     t_end = root.get_time()
     interface = handles.systems["interface"]
     events = tuple(interface.get_event_log(interface.GetMyContextFromRoot(root)))
@@ -216,16 +309,6 @@ def run_trial(
     reached = task.reached_goals(task_context)
     done = task.is_done(task_context)
     fault = handles.station_fault(root)
-    if done:
-        end_reason = "done"
-    elif fault:
-        end_reason = "station fault"
-    elif stopped[0]:
-        end_reason = "stopped"
-    elif gave_up[0]:
-        end_reason = "given up"
-    else:
-        end_reason = "time limit"
     success = done and reached == intended
     logs = {name: _log(handles, root, name) for name in handles.loggers}
     _, uh = logs["u_h"]
@@ -255,10 +338,10 @@ def run_trial(
         realtime_rate=float(t_end / wall) if wall > 0 else float("inf"),
         rho1=rho1,
         logs=logs,
-        interrupted=stopped[0],
+        interrupted=monitor.stopped,
         automatic_switches=len(automatic_switches),
         automatic_switch_times=automatic_switches,
         fault=fault,
-        end_reason=end_reason,
-        progress_age=float(t_end - watch[1]) if give_up is not None else float("nan"),
+        end_reason=_end_reason(done, fault, monitor),
+        progress_age=float(t_end - watch.since) if watch is not None else float("nan"),
     )

@@ -16,7 +16,7 @@ robot believes and why, :mod:`drake_disamb.operator_page`), runs the trial, prin
 - ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
 
 ``--live`` replaces the simulated user by you: the interface is driven from the operator page
-(:func:`~drake_disamb.systems.live.page_live_input`: keys, the panel's key buttons, or a browser
+(:func:`~drake_disamb.interfaces.live.page_live_input`: keys, the panel's key buttons, or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
 ``--live --record DIR --subject NAME`` also appends the person's trial to ``DIR/trials.jsonl`` as a
@@ -95,7 +95,7 @@ from drake_disamb.commands._station import (
     station_layers,
 )
 from drake_disamb.commands.study_run import EXIT_WRITE_FAILED
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 
 HELP = "Run one shared-control trial (default: reaching, head array, disambiguation) and show it."
 
@@ -523,8 +523,8 @@ def _shown_trial(
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if watching else 0.0)
     source = None
     if args.live:
-        from drake_disamb.core.interfaces import InterfaceConfig
-        from drake_disamb.systems.live import page_live_input
+        from drake_disamb.interfaces import InterfaceConfig
+        from drake_disamb.interfaces.live import page_live_input
 
         interface = InterfaceConfig(kind=scenario.interface, control_period=scenario.control_period)
         source = page_live_input(page, interface)

@@ -79,7 +79,7 @@ def _summary(scores: dict[str, dict[str, Any]]) -> dict[str, dict[str, float]]:
 
 def format_table(summary: dict[str, dict[str, float]], n_trials: int, source: str) -> str:
     """The printed comparison table (percent, mean +/- standard deviation over trials)."""
-    from drake_disamb.core.comparison import METHOD_LABELS, PUBLISHED_ACCURACY
+    from drake_disamb.comparison.replay import METHOD_LABELS, PUBLISHED_ACCURACY
 
     lines = [
         f"Intent inference accuracy over {n_trials} trials ({source})",
@@ -103,7 +103,7 @@ def plot_comparison(trial, beliefs, scores, example: int, path: str | Path) -> N
     """The paper's inference-comparison figure: accuracy distributions and one example trial.
 
     Args:
-        trial: The example :class:`~drake_disamb.core.trials.Trial` (number ``example``).
+        trial: The example :class:`~drake_disamb.comparison.trials.Trial` (number ``example``).
         beliefs: Its beliefs, ``{method: (L + 1, n)}``.
         scores: Every trial's scores, ``{method: {"published": (N,), "strict": (N,)}}``.
         example: The example's index (for the title).
@@ -115,7 +115,7 @@ def plot_comparison(trial, beliefs, scores, example: int, path: str | Path) -> N
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from drake_disamb.core.comparison import METHOD_LABELS, METHODS
+    from drake_disamb.comparison.replay import METHOD_LABELS, METHODS
     from drake_disamb.plotting import GOAL_COLORS
 
     n_trials = len(next(iter(scores.values()))["published"])
@@ -199,9 +199,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from drake_disamb.core.comparison import score_trial_stream
-    from drake_disamb.core.trial_files import iter_loaded_chunks, trial_paths
-    from drake_disamb.core.trials import chunk_seed, iter_generated_chunks
+    from drake_disamb.comparison.replay import score_trial_stream
+    from drake_disamb.comparison.trial_files import iter_loaded_chunks, trial_paths
+    from drake_disamb.comparison.trials import chunk_seed, iter_generated_chunks
 
     progress = not args.quiet and sys.stderr.isatty()
     if args.generate is not None and not 1 <= args.generate <= MAX_GENERATED:

@@ -180,9 +180,9 @@ def _one_trial(
     exit status."""
     from drake_disamb.builder import build_shared_control_diagram
     from drake_disamb.commands._first_run import announce_kernel_compilation
-    from drake_disamb.core.interfaces import InterfaceConfig
+    from drake_disamb.interfaces import InterfaceConfig
+    from drake_disamb.interfaces.live import page_live_input
     from drake_disamb.study.run.session import trial_screen
-    from drake_disamb.systems.live import page_live_input
     from drake_disamb.trial import run_trial
 
     n = f"trial {plan.specs.index(spec) + 1} of {len(plan.specs)} ({spec.trial_id})"

@@ -65,11 +65,11 @@ from drake_disamb.core.disambiguation import (
     preset,
 )
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, InferenceMethod, ProjectedInference
-from drake_disamb.core.interfaces import INTERFACES, Interface, InterfaceConfig
-from drake_disamb.core.user import UserConfig
 from drake_disamb.display import LegendRow, goal_colors, legend_rows
+from drake_disamb.interfaces import INTERFACES, Interface, InterfaceConfig
 from drake_disamb.systems.loop import ControlLoop
 from drake_disamb.systems.task import TaskConfig
+from drake_disamb.user import UserConfig
 
 T = TypeVar("T")
 
@@ -296,14 +296,16 @@ def resolve_scenario(scenario: Scenario, name: str = "scenario") -> TrialConfig:
         ),
     )
     index = {id(g): i for i, g in enumerate(s.goals)}  # a goal's place in scenario.goals
-    home = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
+    arm = {} if s.start_joint_positions is None else {"home_q": tuple(s.start_joint_positions)}
+    if s.joint_velocity_limits is not None:
+        arm["joint_velocity_limits"] = tuple(float(v) for v in s.joint_velocity_limits)
     station = _named(
         name,
         lambda: StationConfig(
             plant_config=s.plant_config,
             control_period=s.control_period,
             scene_objects=tuple(scene_objects(s)),
-            **home,
+            **arm,
         ),
     )
     return TrialConfig(

@@ -46,12 +46,12 @@ from drake_disamb.core.autonomy import PotentialFieldConfig
 from drake_disamb.core.blending import BlendingConfig
 from drake_disamb.core.disambiguation import MICO_DFT, MODE_SELECTION_METHODS, PRESETS, UPSILON_NORMALIZATIONS
 from drake_disamb.core.inference import AGREEMENT_MEASURES, INFERENCE_METHODS, DFTParams
-from drake_disamb.core.interfaces import INTERFACES, MODE_SELECTIONS
 from drake_disamb.core.layout import SHAPE_SIZES
-from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import MAX_GOALS
+from drake_disamb.interfaces import INTERFACES, MODE_SELECTIONS
 from drake_disamb.station import default_plant_config
 from drake_disamb.station.backends import Sim, StationBackend
+from drake_disamb.user import UserConfig
 
 PARADIGMS: tuple[str, ...] = ("manual", "disambiguation", "automatic")
 """Mode-switching paradigms accepted by :attr:`Scenario.paradigm`."""
@@ -139,7 +139,7 @@ UserBehaviorSpec = _spec_class(
     "UserBehaviorSpec",
     UserConfig(stall_time=None, request_when_unhelped_for=None),
     exclude=("rho1", "seed"),
-    doc="""The simulated user's behaviour: the fields of :class:`drake_disamb.core.user.UserConfig`
+    doc="""The simulated user's behaviour: the fields of :class:`drake_disamb.user.UserConfig`
     but ``seed`` and ``rho1``, which the resolver sets from :attr:`Scenario.seed` and the blending
     thresholds. ``stall_time`` and ``request_when_unhelped_for`` are off when left out (the
     embedded tasks set 2 s and 3 s).""",
@@ -366,19 +366,19 @@ class Scenario:
     Attributes:
         task: Task name (``"reaching"``, ``"pouring"``, or a user-chosen name).
         description: Free text.
-        interface: A registered interface name (:data:`drake_disamb.core.interfaces.INTERFACES`:
+        interface: A registered interface name (:data:`drake_disamb.interfaces.INTERFACES`:
             ``"joystick"``, ``"head_array"``, ...).
         interface_mode_selection: How a mode change selects a mode: ``"cycle"`` (default: the
             next mode) or ``"direct"`` (the joystick: a press with the stick deflected selects the
             mode of the stick's sector, one press per change; centred, it cycles: see
-            :mod:`drake_disamb.core.interfaces.joystick`). The simulated user selects the way the
+            :mod:`drake_disamb.interfaces.kinds.joystick`). The simulated user selects the way the
             interface offers. A kind that does not offer it (the head array, with no stick)
             cycles: the setting applies to the trials of the kinds that offer it only, so one
             setting serves a protocol with several interfaces.
         interface_mode_order: Per interface kind, its arm modes (each a list of dimension indices,
             0-2 translation, 3-5 rotation) in the order a mode change steps through them; the
             gripper mode follows. A kind left out keeps its registered order
-            (:attr:`~drake_disamb.core.interfaces.Interface.mode_order`), so one setting serves the
+            (:attr:`~drake_disamb.interfaces.Interface.mode_order`), so one setting serves the
             trials of every interface (the ``tnsre2020_study`` preset sets the head array's).
         paradigm: ``"manual"`` (mode button only), ``"disambiguation"`` (plus the request
             button) or ``"automatic"`` (plus the system's own switches, :class:`AutomaticSpec`).
@@ -401,6 +401,10 @@ class Scenario:
         initial_mode: Index into the interface's mode list of the mode at the start.
         start_joint_positions: The arm's 6 joint angles (rad) at the start; ``None`` means the
             station's home configuration.
+        joint_velocity_limits: The arm's 6 joint speed limits (rad/s, base to wrist) for the
+            differential IK and the commands sent to an arm on the wire, each in (0, the model's]
+            (0.628 rad/s for joints 1-3, 0.838 for joints 4-6); ``None`` means the model's. A first
+            run on a real arm takes a fraction of them.
         goals: Every goal of every stage.
         stages: The task's stages, in order (one for single-step tasks). Every stage has the
             same number of goals: the goal set switches when a stage completes.
@@ -432,6 +436,7 @@ class Scenario:
     seed: int = 0
     initial_mode: int = 0
     start_joint_positions: list[float] | None = field(default=None, metadata=_meta(size=(6,)))
+    joint_velocity_limits: list[float] | None = field(default=None, metadata=_meta(size=(6,)))
     goals: list[GoalSpec] = field(default_factory=list)
     stages: list[StageSpec] = field(default_factory=lambda: [StageSpec()])
     carried_object: CarriedObjectSpec | None = None

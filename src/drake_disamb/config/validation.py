@@ -279,6 +279,8 @@ def check_scenario(scenario: Scenario, name: str = "scenario") -> None:
     _check_user(s, name)
     if s.start_joint_positions is not None:
         _check_start_posture(s.start_joint_positions, held, f"{name}.start_joint_positions")
+    if s.joint_velocity_limits is not None:
+        _check_speed_limits(s.joint_velocity_limits, f"{name}.joint_velocity_limits")
 
 
 def check_hold_times(scenario: Scenario, name: str = "scenario") -> None:
@@ -427,6 +429,19 @@ def _check_separation(s: Scenario, name: str) -> None:
                 f"{fmt(ga.name)} ({name}.goals[{index[id(ga)]}]) of the same stage; goals must be at least "
                 f"{min_sep:g} m apart (twice {name}.success.position_tolerance: closer goals share positions "
                 f"that count as reaching both), got {fmt(gb.position)}"
+            )
+
+
+def _check_speed_limits(limits: Sequence[float], path: str) -> None:
+    """Reject joint speed limits that are not in (0, the model's] (a limit above the model's would
+    let the IK command what the arm's own limits refuse)."""
+    from drake_disamb.station.geometry import model_geometry
+
+    for k, (v, most) in enumerate(zip(limits, model_geometry().velocity_limits(), strict=True)):
+        if not 0.0 < v <= most:
+            raise ValueError(
+                f"{path}[{k}]: expected a speed in (0, {most:.4f}] rad/s (joint {k + 1}'s in the model), "
+                f"got {fmt(v)}"
             )
 
 

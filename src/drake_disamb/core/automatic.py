@@ -7,7 +7,7 @@ when, **since the last mode change, the user has been commanding the arm for** `
 ``confidence_threshold``, and **at least** ``min_interval`` **seconds have passed since the last
 automatic switch** (the last trigger plus the system's ``request_latency``). A fired trigger
 starts the same disambiguation a request press starts (the interface serves it
-``request_latency`` later, :func:`drake_disamb.core.interfaces.interface_update`).
+``request_latency`` later, :func:`drake_disamb.interfaces.interface_update`).
 
 Why each part:
 

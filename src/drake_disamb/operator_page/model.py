@@ -7,7 +7,8 @@ why, in words and numbers readable at arm's length:
   the most likely goal when it stands out (:data:`LEAD_MARGIN` ahead of the next);
 - :func:`mode_title` and :func:`key_actions`: the active mode in words, and what each key (and
   the gamepad) does in it now, from the interface variant's live controls
-  (:attr:`~drake_disamb.core.interfaces.Interface.live_controls`);
+  (:attr:`~drake_disamb.interfaces.live_controls.LiveControls.live_controls`, read through
+  :class:`LiveControlsLike` so that this leaf module needs nothing above it);
 - :func:`why_line`: after a request or an automatic switch, one line saying why this mode, from
   the goals the mode tells apart (:func:`~drake_disamb.core.disambiguation.told_apart.told_apart`);
 - the panel's own colours (``panel.css``) are Okabe and Ito's colour-blind-safe palette
@@ -21,15 +22,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from drake_disamb.core.interfaces import Interface
 from drake_disamb.core.layout import DIM_NAMES, GRIPPER_DIM
 
 __all__ = [
     "LEAD_MARGIN",
+    "LiveControlLike",
+    "LiveControlsLike",
     "STAMPS",
     "KeyAction",
     "display_name",
@@ -42,6 +44,34 @@ __all__ = [
     "motion_words",
     "why_line",
 ]
+
+
+class LiveControlLike(Protocol):
+    """One live control as the panel reads it (an interface's
+    :class:`~drake_disamb.interfaces.live_controls.LiveControl`): its label (empty: not shown), its
+    key's code and its role (``drive+``, ``drive-``, ``next``, ``previous``, ``request``, ...)."""
+
+    @property
+    def label(self) -> str: ...
+
+    @property
+    def keycode(self) -> str: ...
+
+    @property
+    def role(self) -> str: ...
+
+
+class LiveControlsLike(Protocol):
+    """What the panel reads of an interface variant (any
+    :class:`~drake_disamb.interfaces.registry.Interface` is one): its live controls and whether
+    it has live axes."""
+
+    @property
+    def live_controls(self) -> Sequence[LiveControlLike]: ...
+
+    @property
+    def live_axes(self) -> bool: ...
+
 
 LEAD_MARGIN = 0.05
 """How far (probability) the most likely goal must lead the next one to be named as the robot's
@@ -152,7 +182,7 @@ def _axis_action(dims: Sequence[int], axis: int) -> str:
 
 
 def key_actions(
-    variant: Interface,
+    variant: LiveControlsLike,
     modes: Sequence[Sequence[int]],
     mode: int,
     axis_keys: Sequence[tuple[str, str, str]] = (),
@@ -162,7 +192,7 @@ def key_actions(
     """What each live control of ``variant`` does in mode ``mode`` (an index into ``modes``, the
     interface's modes, gripper last), in the order of its ``live_controls``; for a kind with
     ``live_axes``, the axis keys first (``axis_keys``: ``(name, decrement code, increment code)``
-    per axis, e.g. :data:`drake_disamb.systems.live.AXIS_SLIDERS`) and the gamepad last.
+    per axis, e.g. :data:`drake_disamb.interfaces.live.AXIS_SLIDERS`) and the gamepad last.
 
     Args:
         requests_served: Whether a request press makes the robot choose a mode (the

@@ -14,8 +14,8 @@ panel beside it (``panel.js``, ``panel.css``). The page and the server talk in t
 It offers the controls part of Meshcat's API that the live input and the page's deadman use
 (``AddButton``, ``GetButtonClicks``, ``AddSlider``, ``GetSliderValue``, ``SetSliderValue``,
 ``GetGamepad``, ``GetNumActiveConnections``, ...), so
-:class:`~drake_disamb.systems.live.MeshcatLiveInput` and
-:class:`~drake_disamb.systems.deadman.PageDeadman` read this page as they read Meshcat's. A key
+:class:`~drake_disamb.interfaces.live.MeshcatLiveInput` and
+:class:`~drake_disamb.interfaces.deadman.PageDeadman` read this page as they read Meshcat's. A key
 press is a button click; a key registered with :meth:`OperatorPage.repeat_while_held` (the drive
 keys) also counts one click every :data:`HOLD_REPEAT` seconds while it is held, from the press to
 its release (the browser's own auto-repeats are ignored: a held key drives continuously in every

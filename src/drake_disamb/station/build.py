@@ -70,7 +70,13 @@ from pydrake.geometry import CollisionFilterDeclaration, Meshcat, Role, SceneGra
 from pydrake.math import RigidTransform
 from pydrake.multibody.parsing import LoadModelDirectives, ProcessModelDirectives
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlant
-from pydrake.multibody.tree import Frame, JointActuatorIndex, ModelInstanceIndex, PdControllerGains
+from pydrake.multibody.tree import (
+    Frame,
+    JointActuatorIndex,
+    JointIndex,
+    ModelInstanceIndex,
+    PdControllerGains,
+)
 from pydrake.systems.controllers import InverseDynamics
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import MatrixGain
@@ -204,27 +210,9 @@ def _check_same_layout(plant: MultibodyPlant, control_plant: MultibodyPlant) -> 
         )
 
 
-def build_station(
-    config: StationConfig | None = None,
-    scene_objects: Iterable[SceneObject] = (),
-    meshcat: Meshcat | None = None,
-) -> Station:
-    """Build the simulated MICO station Diagram (see the module docstring for its ports and subsystems).
-
-    Args:
-        config: Station settings; ``None`` uses the defaults.
-        scene_objects: Objects added after ``config.scene_objects``; names must be unique.
-        meshcat: When given, a MeshcatVisualizer (illustration role, prefix ``station``) inside the
-            station draws the scene into it.
-
-    Returns:
-        The :class:`Station`: ``station.diagram`` plus typed handles on its systems.
-
-    Raises:
-        ValueError: a scene object that is not a :class:`SceneObject`, a duplicate object name, or
-            ``config.home_q`` outside the joint limits.
-    """
-    config = config or StationConfig()
+def _checked_objects(config: StationConfig, scene_objects: Iterable[SceneObject]) -> tuple[SceneObject, ...]:
+    """``config.scene_objects`` then ``scene_objects``, checked: each a :class:`SceneObject`, the
+    names unique (``ValueError`` naming the entry otherwise)."""
     objects = tuple(config.scene_objects) + tuple(scene_objects)
     names = [o.name for o in objects]
     for k, obj in enumerate(objects):
@@ -232,8 +220,16 @@ def build_station(
             raise ValueError(f"build_station.scene_objects[{k}]: expected a SceneObject, got {obj!r}")
         if names.count(obj.name) > 1:
             raise ValueError(f"build_station.scene_objects: duplicate name {obj.name!r}")
-    builder = DiagramBuilder()
+    return objects
 
+
+def _add_plant(
+    builder: DiagramBuilder, config: StationConfig, objects: tuple[SceneObject, ...]
+) -> tuple[MultibodyPlant, SceneGraph, ModelInstanceIndex, Frame]:
+    """The station's plant and scene graph in ``builder``: the arm on its table from the model
+    directives, the scene objects, the home posture, the joint-actuator PD gains, finalized, and
+    the arm with its attached objects never colliding with itself. Returns ``(plant, scene_graph,
+    arm, end-effector frame)``."""
     plant, scene_graph = AddMultibodyPlant(config.plant_config, builder)
     ProcessModelDirectives(LoadModelDirectives(str(mico_directives())), plant, model_parser(plant))
     arm = plant.GetModelInstanceByName(ARM_MODEL_NAME)
@@ -263,6 +259,93 @@ def build_station(
     scene_graph.collision_filter_manager().Apply(
         CollisionFilterDeclaration().ExcludeWithin(plant.CollectRegisteredGeometries(arm_bodies))
     )
+    return plant, scene_graph, arm, ee_frame
+
+
+def _add_set_points(
+    builder: DiagramBuilder,
+    config: StationConfig,
+    plant: MultibodyPlant,
+    arm: ModelInstanceIndex,
+    joints: list[JointIndex],
+    limits: tuple[np.ndarray, np.ndarray],
+    measured: tuple[MatrixGain, MatrixGain],
+) -> JointVelocityIntegrator:
+    """The set points, ``[q_d; v_d]`` in ``ARM_JOINTS + FINGER_JOINTS`` order (``joints``, their
+    indices), integrated from the commanded velocities within the joint ``limits`` (lower, upper)
+    from the ``measured`` arm and finger states' systems, then mapped to the plant's actuator order
+    (each actuator drives one of those joints) into the arm's desired-state input."""
+    lower, upper = limits
+    arm_state, finger_state = measured
+    half = config.home_gripper_opening / 2
+    integrator = builder.AddNamedSystem(
+        "joint_velocity_integrator",
+        JointVelocityIntegrator(
+            config.control_period,
+            lower,
+            upper,
+            FINGER_MAX_OPENING / 2,
+            config.home_q,
+            (half, half),
+            config.reseed_tolerance,
+            config.warn_interval,
+        ),
+    )
+    builder.Connect(arm_state.get_output_port(), integrator.GetInputPort("arm_joint_state"))
+    builder.Connect(finger_state.get_output_port(), integrator.GetInputPort("finger_state"))
+    if plant.num_actuators() != plant.num_actuators(arm):  # pragma: no cover (objects are welded)
+        raise RuntimeError("station: only the MICO may have actuators")
+    S = plant.MakeActuatorSelectorMatrix(joints)  # u = S u_joints
+    zeros = np.zeros_like(S)
+    to_actuators = builder.AddNamedSystem(
+        "desired_state_to_actuators", MatrixGain(np.block([[S, zeros], [zeros, S]]))
+    )
+    builder.Connect(integrator.GetOutputPort("desired_state"), to_actuators.get_input_port())
+    builder.Connect(to_actuators.get_output_port(), plant.get_desired_state_input_port(arm))
+    return integrator
+
+
+def _add_gravity_compensation(
+    builder: DiagramBuilder, plant: MultibodyPlant, control_plant: MultibodyPlant, arm: ModelInstanceIndex
+) -> None:
+    """Gravity compensation feed-forward into the arm's actuation, computed on the control plant
+    from the measured state."""
+    gravity = builder.AddNamedSystem(
+        "gravity_compensation",
+        InverseDynamics(control_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation),
+    )
+    builder.Connect(plant.get_state_output_port(), gravity.get_input_port_estimated_state())
+    gravity_to_u = builder.AddNamedSystem(
+        "gravity_to_actuation", MatrixGain(control_plant.MakeActuationMatrixPseudoinverse().toarray())
+    )
+    builder.Connect(gravity.get_output_port_generalized_force(), gravity_to_u.get_input_port())
+    builder.Connect(gravity_to_u.get_output_port(), plant.get_actuation_input_port(arm))
+
+
+def build_station(
+    config: StationConfig | None = None,
+    scene_objects: Iterable[SceneObject] = (),
+    meshcat: Meshcat | None = None,
+) -> Station:
+    """Build the simulated MICO station Diagram (see the module docstring for its ports and subsystems).
+
+    Args:
+        config: Station settings; ``None`` uses the defaults.
+        scene_objects: Objects added after ``config.scene_objects``; names must be unique.
+        meshcat: When given, a MeshcatVisualizer (illustration role, prefix ``station``) inside the
+            station draws the scene into it.
+
+    Returns:
+        The :class:`Station`: ``station.diagram`` plus typed handles on its systems.
+
+    Raises:
+        ValueError: a scene object that is not a :class:`SceneObject`, a duplicate object name, or
+            ``config.home_q`` outside the joint limits.
+    """
+    config = config or StationConfig()
+    objects = _checked_objects(config, scene_objects)
+    builder = DiagramBuilder()
+    plant, scene_graph, arm, ee_frame = _add_plant(builder, config, objects)
 
     control_plant, _ = make_control_plant(objects)
     _check_same_layout(plant, control_plant)
@@ -285,46 +368,10 @@ def build_station(
     geometry = StationGeometry.from_plant(plant, scene_graph, arm)
     lower, upper = geometry.joint_limits()
     check_home_q(config, lower, upper)
-
-    # The set points, [q_d; v_d] in ARM_JOINTS + FINGER_JOINTS order, integrated from the commanded
-    # velocities, then mapped to the plant's actuator order (each actuator drives one of those joints).
-    half = config.home_gripper_opening / 2
-    integrator = builder.AddNamedSystem(
-        "joint_velocity_integrator",
-        JointVelocityIntegrator(
-            config.control_period,
-            lower,
-            upper,
-            FINGER_MAX_OPENING / 2,
-            config.home_q,
-            (half, half),
-            config.reseed_tolerance,
-            config.warn_interval,
-        ),
+    integrator = _add_set_points(
+        builder, config, plant, arm, arm_joints + finger_joints, (lower, upper), (arm_state, finger_state)
     )
-    builder.Connect(arm_state.get_output_port(), integrator.GetInputPort("arm_joint_state"))
-    builder.Connect(finger_state.get_output_port(), integrator.GetInputPort("finger_state"))
-    if plant.num_actuators() != plant.num_actuators(arm):  # pragma: no cover (objects are welded)
-        raise RuntimeError("station: only the MICO may have actuators")
-    S = plant.MakeActuatorSelectorMatrix(arm_joints + finger_joints)  # u = S u_joints
-    zeros = np.zeros_like(S)
-    to_actuators = builder.AddNamedSystem(
-        "desired_state_to_actuators", MatrixGain(np.block([[S, zeros], [zeros, S]]))
-    )
-    builder.Connect(integrator.GetOutputPort("desired_state"), to_actuators.get_input_port())
-    builder.Connect(to_actuators.get_output_port(), plant.get_desired_state_input_port(arm))
-
-    # Gravity compensation feed-forward, computed on the control plant from the measured state.
-    gravity = builder.AddNamedSystem(
-        "gravity_compensation",
-        InverseDynamics(control_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation),
-    )
-    builder.Connect(state, gravity.get_input_port_estimated_state())
-    gravity_to_u = builder.AddNamedSystem(
-        "gravity_to_actuation", MatrixGain(control_plant.MakeActuationMatrixPseudoinverse().toarray())
-    )
-    builder.Connect(gravity.get_output_port_generalized_force(), gravity_to_u.get_input_port())
-    builder.Connect(gravity_to_u.get_output_port(), plant.get_actuation_input_port(arm))
+    _add_gravity_compensation(builder, plant, control_plant, arm)
 
     ee_state = builder.AddNamedSystem("ee_state", EndEffectorState(int(ee_frame.body().index())))
     builder.Connect(plant.get_body_poses_output_port(), ee_state.GetInputPort("body_poses"))

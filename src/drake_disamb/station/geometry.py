@@ -121,6 +121,11 @@ class StationGeometry:
         """Lower and upper position limits (rad) of the six arm joints, base to wrist (copies)."""
         return self.lower.copy(), self.upper.copy()
 
+    def velocity_limits(self) -> NDArray[np.float64]:
+        """The model's speed limits (rad/s) of the six arm joints, base to wrist."""
+        v = self.plant.GetVelocityUpperLimits()
+        return np.array([v[self.plant.GetJointByName(j).velocity_start()] for j in ARM_JOINTS])
+
     def _poses(self, q: Sequence[float]) -> list[tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]]:
         """For the closed and the fully open gripper: (X_WE, {body name: X_WB})."""
         plant = self.plant

@@ -36,10 +36,10 @@ from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
 
 from drake_disamb.core.disambiguation import DisambiguationRequest
 from drake_disamb.core.disambiguation.told_apart import ToldApart, told_apart
-from drake_disamb.core.interfaces import Interface
 from drake_disamb.core.layout import GRIPPER_DIM, POSE_SIZE
 from drake_disamb.display import css_color
 from drake_disamb.operator_page.model import (
+    LiveControlsLike,
     goal_rows,
     key_actions,
     leading_goal,
@@ -82,13 +82,13 @@ class PanelConfig:
         goal_names: Per stage, the name of each belief slot.
         goal_colors: Per stage, the ``(r, g, b)`` of each belief slot (its object's colour).
         stage_names: The stages' names (one stage: its name is not shown).
-        axis_keys: The axis keys of a kind with ``live_axes`` (``systems.live.AXIS_SLIDERS``).
+        axis_keys: The axis keys of a kind with ``live_axes`` (``interfaces.live.AXIS_SLIDERS``).
         requests_served: Whether a request makes the robot choose a mode.
         mode_selection: The interface's ``mode_selection``.
     """
 
     title: str
-    variant: Interface
+    variant: LiveControlsLike
     modes: tuple[tuple[int, ...], ...]
     goal_names: tuple[tuple[str, ...], ...]
     goal_colors: tuple[tuple[tuple[float, float, float], ...], ...]

@@ -26,7 +26,12 @@ class Lcm:
             default).
         status_timeout: The watchdog (s, wall clock): no fresh, valid status for this long latches
             a fault and commands zero, and so does a controller that left the bus unwatched for
-            this long (its process paused or starved). 0.03 s is 3 status periods at 100 Hz.
+            this long (its process paused or starved). 0.03 s is 3 status periods at 100 Hz; a
+            driver that announces a longer period (the spacing of its statuses' ``utime``: a
+            slow link) scales it alike (3 of its periods by default).
+        max_status_period: The longest status period (s) the watchdog follows: a driver whose
+            statuses come further apart at the start is refused, and later trips the watchdog.
+            0.05 s is 20 Hz (a driver whose SDK calls take 5 ms each holds about 43 Hz).
         start_timeout: How long (s) the start waits for the first status.
         zero_command_repeats: Zero commands sent on exit, Ctrl-C, SIGTERM or an exception.
         finger_speed_limit: Largest finger slide speed sent (m/s).
@@ -38,6 +43,7 @@ class Lcm:
     status_channel: str = DEFAULT_STATUS_CHANNEL
     command_channel: str = DEFAULT_COMMAND_CHANNEL
     status_timeout: float = 0.03
+    max_status_period: float = 0.05
     start_timeout: float = 5.0
     zero_command_repeats: int = 5
     finger_speed_limit: float = 0.1
@@ -53,6 +59,7 @@ class Lcm:
                 raise ValueError(f"station.{name}: expected a channel name, got {getattr(self, name)!r}")
         for name, low, high in (
             ("status_timeout", 0.005, 1.0),
+            ("max_status_period", 0.005, 1.0),
             ("start_timeout", 0.01, 600.0),
             ("finger_speed_limit", 0.0, 1.0),
         ):

@@ -168,3 +168,27 @@ class StatusLink:
         """Publish one status."""
         self._lcm.Publish(self.channel, msg.encode())  # type: ignore[attr-defined]
         self.sent += 1
+
+
+class DriverEnds:
+    """The two ends of the wire a driver holds (the simulated one and the SDK's): the command
+    inbox and the status link on ``lcm``, and their counts."""
+
+    def __init__(self, lcm: DrakeLcm, status_channel: str, command_channel: str) -> None:
+        self._inbox = CommandInbox(lcm, command_channel)
+        self._link = StatusLink(lcm, status_channel)
+
+    @property
+    def statuses(self) -> int:
+        """Statuses published."""
+        return self._link.sent
+
+    @property
+    def commands(self) -> int:
+        """Valid commands received."""
+        return self._inbox.received
+
+    @property
+    def dropped(self) -> int:
+        """Invalid commands received (dropped)."""
+        return self._inbox.dropped

@@ -29,7 +29,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from drake_disamb.station.build import Station, build_station
 from drake_disamb.station.config import StationConfig
-from drake_disamb.station.lcm.bus import CommandInbox, StatusLink
+from drake_disamb.station.lcm.bus import DriverEnds
 from drake_disamb.station.lcm.loop import prepare_loop
 from drake_disamb.station.lcm.systems import JacoCommandReceiver, JacoStatusSender
 from drake_disamb.station.ports import SHARED_INPUTS
@@ -40,7 +40,7 @@ DEFAULT_COMMAND_CHANNEL = "KINOVA_JACO_COMMAND"
 """The command channel of Drake's Kinova Gen2 driver."""
 
 
-class SimulatedDriver:
+class SimulatedDriver(DriverEnds):
     """Our simulated MICO behind ``lcmt_jaco_status`` / ``lcmt_jaco_command`` (module docstring).
 
     Attributes:
@@ -66,8 +66,7 @@ class SimulatedDriver:
         builder = DiagramBuilder()
         self.station: Station = build_station(config, (), meshcat)
         builder.AddSystem(self.station.diagram)
-        self._inbox = CommandInbox(lcm, command_channel)
-        self._link = StatusLink(lcm, status_channel)
+        DriverEnds.__init__(self, lcm, status_channel, command_channel)
         timeout_ticks = max(1, int(round(command_timeout / self.period)))
         receiver = builder.AddNamedSystem(
             "command_receiver", JacoCommandReceiver(self._inbox, self.period, timeout_ticks)
@@ -84,21 +83,6 @@ class SimulatedDriver:
         self._steps = 0  # periods advanced: the time is steps * period (no drift from a running sum)
         self.alive = True
         self._simulator.Initialize()
-
-    @property
-    def statuses(self) -> int:
-        """Statuses published."""
-        return self._link.sent
-
-    @property
-    def commands(self) -> int:
-        """Valid commands received."""
-        return self._inbox.received
-
-    @property
-    def dropped(self) -> int:
-        """Invalid commands received (ignored)."""
-        return self._inbox.dropped
 
     def publish_status(self) -> None:
         """Publish the arm's state now (``utime`` = simulated time, us)."""

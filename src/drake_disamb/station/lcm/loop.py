@@ -1,4 +1,4 @@
-"""Readying a process for a control loop on a wire (the controller's and the simulated driver's).
+"""Readying a process for a control loop on a wire (the controller's and the drivers').
 
 A loop on a wire must answer every 10 ms, and three things in a Python process stall it far
 longer than its work (about 1-2 ms a period), each measured by ``benchmarks/bench_hardware_loop.py``:
@@ -24,10 +24,12 @@ from drake_disamb.core.warmup import warm_up
 _LIMITS: list[object] = []  # the BLAS limit stays in force for the life of the process
 
 
-def prepare_loop() -> None:
-    """Load the kernels, freeze what exists for the garbage collector, hold BLAS to one thread.
-    Call once everything the loop uses is built, just before it starts."""
-    warm_up()
+def prepare_loop(kernels: bool = True) -> None:
+    """Load the kernels (unless ``kernels`` is false: a loop that runs none, as Kinova's SDK
+    driver), freeze what exists for the garbage collector, hold BLAS to one thread. Call once
+    everything the loop uses is built, just before it starts."""
+    if kernels:
+        warm_up()
     if not _LIMITS:
         _LIMITS.append(threadpool_limits(limits=1, user_api="blas"))
     gc.collect()

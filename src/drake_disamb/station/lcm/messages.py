@@ -111,17 +111,35 @@ def make_status(
     finger_v: NDArray[np.float64],
 ) -> lcmt_jaco_status:
     """A status of our model's state: DH angles and velocities, finger slides and speeds."""
+    return wire_status(
+        utime,
+        mapping.actuator_from_dh(q),
+        mapping.dh_velocity(v),
+        mapping.finger_units(finger_q),
+        mapping.finger_unit_rate(finger_v),
+    )
+
+
+def wire_status(
+    utime: int,
+    joint_position: NDArray[np.float64],
+    joint_velocity: NDArray[np.float64],
+    finger_position: NDArray[np.float64],
+    finger_velocity: NDArray[np.float64],
+) -> lcmt_jaco_status:
+    """A status in the wire's own units (module docstring): actuator angles (rad) and velocities
+    (rad/s), finger positions and speeds in Kinova SDK units x pi/180 (per second)."""
     msg = lcmt_jaco_status()
     msg.utime = int(utime)
     msg.num_joints = NUM_JOINTS
-    msg.joint_position = mapping.actuator_from_dh(q).tolist()
-    msg.joint_velocity = mapping.dh_velocity(v).tolist()
+    msg.joint_position = np.asarray(joint_position, dtype=float).tolist()
+    msg.joint_velocity = np.asarray(joint_velocity, dtype=float).tolist()
     msg.joint_torque = [0.0] * NUM_JOINTS
     msg.joint_torque_external = [0.0] * NUM_JOINTS
     msg.joint_current = [0.0] * NUM_JOINTS
     msg.num_fingers = NUM_FINGERS
-    msg.finger_position = mapping.finger_units(finger_q).tolist()
-    msg.finger_velocity = mapping.finger_unit_rate(finger_v).tolist()
+    msg.finger_position = np.asarray(finger_position, dtype=float).tolist()
+    msg.finger_velocity = np.asarray(finger_velocity, dtype=float).tolist()
     msg.finger_torque = [0.0] * NUM_FINGERS
     msg.finger_torque_external = [0.0] * NUM_FINGERS
     msg.finger_current = [0.0] * NUM_FINGERS

@@ -54,6 +54,18 @@ STRAYS_TO_FAULT = 3
 :attr:`Fault.TWO_SOURCES` when they fall within :data:`STRAY_WINDOW`."""
 STRAY_WINDOW = 1.0
 """The window (s of the controller's time) of :data:`STRAYS_TO_FAULT`."""
+SPACING_WINDOW = 8
+"""Statuses over which the receiver takes the driver's announced period: the smallest ``utime``
+step between consecutive statuses used among the last ``SPACING_WINDOW`` (a missed status only
+lengthens a step)."""
+
+
+def within_speed_limits(v: NDArray[np.float64], limits: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The joint velocities ``v`` scaled down, all joints alike (the direction is kept), until every
+    one is within its speed limit ``limits`` (same units); unchanged when they all are already."""
+    v = np.asarray(v, dtype=float)
+    scale = float(np.min(np.asarray(limits, dtype=float) / np.maximum(np.abs(v), 1e-300)))
+    return v * scale if scale < 1.0 else v
 
 
 def posture_jump(q: NDArray[np.float64], utime: int, last_q: NDArray[np.float64], last_utime: int) -> str:
@@ -81,18 +93,26 @@ class JacoStatusReceiver(LeafSystem):
     for a fresh status; the watchdog and the missed count start there. Faults it latches:
 
     - :attr:`Fault.JOINT_LIMIT`: a status puts a joint outside the model's limits;
-    - :attr:`Fault.STATUS_TIMEOUT`: no usable status within ``status_timeout`` seconds (wall
-      clock) of the last one;
+    - :attr:`Fault.STATUS_TIMEOUT`: no usable status within the status timeout (wall clock) of
+      the last one;
     - :attr:`Fault.TWO_SOURCES`: :data:`STRAYS_TO_FAULT` statuses out of sequence (``utime`` gone
       back or repeated, or a posture that jumped) within :data:`STRAY_WINDOW`, or the watchdog's
       timeout with only such statuses since the last one used: one is a stray (a garbled or
       replayed message, dropped), a stream of them is a second driver on the channel (over UDP
       its statuses can also hide the first driver's: one message per channel is kept);
     - :attr:`Fault.CONTROLLER_STALLED` (with ``real_time``): the bus went unwatched for longer
-      than ``status_timeout`` (the process was paused or starved: what it then receives is stale,
+      than the status timeout (the process was paused or starved: what it then receives is stale,
       and the watchdog could not have tripped meanwhile); a warning names the gap.
 
     Once a fault is latched it no longer waits and its measurement holds still (velocities zero).
+
+    The status timeout follows the period the driver announces by the spacing of its statuses'
+    ``utime`` (a driver on a slow link, e.g. Kinova's SDK over USB, holds a longer period than
+    ``period``): ``status_timeout`` is for statuses every ``period``, and it is scaled by
+    ``spacing / period`` when the driver's spacing is longer, ``spacing`` the smallest ``utime``
+    step of the last :data:`SPACING_WINDOW` statuses used (``spacing`` at the start: the start
+    check's measurement), held to at most ``max_spacing``: statuses further apart than that trip
+    the watchdog. The missed count takes the same spacing.
 
     @system
     name: JacoStatusReceiver
@@ -107,9 +127,9 @@ class JacoStatusReceiver(LeafSystem):
 
     At initialisation, with ``real_time``, it readies the process for the loop
     (:meth:`_before_the_loop`). Discrete state: the four output groups, plus ``[utime of the
-    status used (us)]`` and the controller's times (s) of the last :data:`STRAYS_TO_FAULT` statuses
-    out of sequence (``-inf`` before any); all start from the ``first`` status (the station's start
-    check).
+    status used (us)]``, the controller's times (s) of the last :data:`STRAYS_TO_FAULT` statuses
+    out of sequence (``-inf`` before any) and the last :data:`SPACING_WINDOW` ``utime`` steps (s);
+    all start from the ``first`` status (the station's start check).
     """
 
     def __init__(
@@ -122,19 +142,24 @@ class JacoStatusReceiver(LeafSystem):
         status_timeout: float,
         warn_interval: float = 1.0,
         real_time: bool = True,
+        spacing: float | None = None,
+        max_spacing: float | None = None,
     ) -> None:
         super().__init__()
         self._inbox = inbox
         self._lower, self._upper = np.asarray(lower, float), np.asarray(upper, float)
         self._timeout = float(status_timeout)
         self._real_time = bool(real_time)
-        self._period_us = period * 1e6
+        self._period = float(period)
+        self._max_spacing = float(max_spacing) if max_spacing is not None else float("inf")
         self._arm = self.DeclareDiscreteState(np.concatenate([first.q, first.v]))
         self._finger = self.DeclareDiscreteState(np.concatenate([first.finger_q, first.finger_v]))
         self._fault = self.DeclareDiscreteState([float(Fault.NONE)])
         self._counts = self.DeclareDiscreteState(np.zeros(3))
         self._utime = self.DeclareDiscreteState([float(first.utime)])
         self._strays = self.DeclareDiscreteState(np.full(STRAYS_TO_FAULT, -np.inf))
+        start_spacing = period if spacing is None else spacing
+        self._steps = self.DeclareDiscreteState(np.full(SPACING_WINDOW, float(start_spacing)))
         self._sanitized = SanitizedInputCounter(self, warn_interval)
         self.DeclareStateOutputPort("arm_joint_state", self._arm)
         self.DeclareStateOutputPort("finger_state", self._finger)
@@ -159,6 +184,16 @@ class JacoStatusReceiver(LeafSystem):
         """The fault latched in ``context``."""
         return Fault(int(context.get_discrete_state(self._fault).get_value()[0]))
 
+    def spacing(self, context: Context) -> float:
+        """The driver's announced period (s) in ``context``: the smallest ``utime`` step of the last
+        statuses used, at most ``max_spacing``."""
+        return min(float(np.min(context.get_discrete_state(self._steps).get_value())), self._max_spacing)
+
+    def status_timeout(self, context: Context) -> float:
+        """The watchdog's timeout (s, wall clock) in ``context``: ``status_timeout``, scaled by the
+        announced period when it is longer than ``period`` (class docstring)."""
+        return self._timeout * max(1.0, self.spacing(context) / self._period)
+
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         if self.fault(context) != Fault.NONE:
             return EventStatus.DidNothing()
@@ -166,6 +201,8 @@ class JacoStatusReceiver(LeafSystem):
         last_utime = int(context.get_discrete_state(self._utime).get_value()[0])
         used, dropped, missed = context.get_discrete_state(self._counts).get_value()
         previous_utime = last_utime
+        timeout = self.status_timeout(context)
+        spacing_us = self.spacing(context) * 1e6
         running = used > 0  # a tick has used a status (the first either does or latches a fault)
         if not running:  # the loop's first tick: what waits on the bus predates it
             self._inbox.poll(0.0)
@@ -179,13 +216,13 @@ class JacoStatusReceiver(LeafSystem):
         stray_times = context.get_discrete_state(self._strays).get_value().copy()
         while True:
             now = time.monotonic()
-            unwatched = self._inbox.poll(min(max(self._inbox.last_good + self._timeout - now, 0.0), 0.002))
-            if self._real_time and unwatched > self._timeout:  # what it took is stale: not used
+            unwatched = self._inbox.poll(min(max(self._inbox.last_good + timeout - now, 0.0), 0.002))
+            if self._real_time and unwatched > timeout:  # what it took is stale: not used
                 fault = Fault.CONTROLLER_STALLED
                 warnings.warn(
                     f"{self.get_name() or type(self).__name__} at t = {context.get_time():.3f} s: the "
                     f"controller missed its periods: the bus went unwatched for {unwatched:.3f} s (paused "
-                    f"or starved), longer than the status timeout ({self._timeout:g} s)",
+                    f"or starved), longer than the status timeout ({timeout:g} s)",
                     RuntimeWarning,
                     stacklevel=2,
                 )
@@ -217,7 +254,7 @@ class JacoStatusReceiver(LeafSystem):
                 fault = Fault.TWO_SOURCES
             if fault != Fault.NONE or good is not None:
                 break
-            if time.monotonic() >= self._inbox.last_good + self._timeout:
+            if time.monotonic() >= self._inbox.last_good + timeout:
                 # Statuses that kept coming, none of them this arm's: another source's.
                 fault = Fault.TWO_SOURCES if strays else Fault.STATUS_TIMEOUT
                 break
@@ -242,7 +279,11 @@ class JacoStatusReceiver(LeafSystem):
             discrete_state.get_mutable_vector(self._utime).SetAtIndex(0, float(good.utime))
             used += 1
             if running:  # (the statuses before the loop's first tick were not missed by it)
-                missed += max(0, round((good.utime - previous_utime) / self._period_us) - 1)
+                missed += max(0, round((good.utime - previous_utime) / spacing_us) - 1)
+                steps = context.get_discrete_state(self._steps).get_value()
+                discrete_state.get_mutable_vector(self._steps).SetFromVector(
+                    np.append(steps[1:], (good.utime - previous_utime) * 1e-6)
+                )
         discrete_state.get_mutable_vector(self._counts).SetFromVector([used, dropped, missed])
         return EventStatus.Succeeded()
 
@@ -345,10 +386,7 @@ class JacoCommandSender(LeafSystem):
             np.all(np.isfinite(v)) and np.all(np.isfinite(fv))
         ):
             return np.zeros(6), np.zeros(2)
-        scale = float(np.min(self._vmax / np.maximum(np.abs(v), 1e-300)))
-        if scale < 1.0:
-            v = v * scale
-        return v, np.clip(fv, -self._fmax, self._fmax)
+        return within_speed_limits(v, self._vmax), np.clip(fv, -self._fmax, self._fmax)
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
         v, fv = self.command(context)
@@ -451,4 +489,5 @@ __all__ = [
     "JacoStatusSender",
     "ModelEndEffectorState",
     "posture_jump",
+    "within_speed_limits",
 ]

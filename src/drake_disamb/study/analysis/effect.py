@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from drake_disamb.core.interfaces import interfaces_in
+from drake_disamb.interfaces import interfaces_in
 from drake_disamb.study.analysis.findings import find_ranksum
 from drake_disamb.study.analysis.stats import PAIRS, TASKS, run_tests, values_of
 from drake_disamb.study.data.records import TrialRecord

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 from drake_disamb.study.measures.metrics import TrialMetrics, request_time_skewness
 
 __all__ = [

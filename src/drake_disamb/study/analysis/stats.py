@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.core.interfaces import INTERFACES
 from drake_disamb.extras import import_optional
+from drake_disamb.interfaces import INTERFACES
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.metrics import METRICS, TrialMetrics, trial_metrics
 

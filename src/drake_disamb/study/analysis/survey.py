@@ -17,7 +17,7 @@ from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 from drake_disamb.study.analysis.text_table import MISSING, grouped_table
 from drake_disamb.study.data.surveys import SurveyRecord
 from drake_disamb.study.design.survey import PREFERENCES, STATEMENTS

@@ -74,7 +74,7 @@ from numpy.typing import NDArray
 
 from drake_disamb.config import merge_layers, ordered_variant
 from drake_disamb.config.system_presets import system_layer
-from drake_disamb.core.interfaces import interface_modes, mode_name
+from drake_disamb.interfaces import interface_modes, mode_name
 from drake_disamb.study.data.folder import LoggedTrial, StudyFolder
 from drake_disamb.study.data.records import TrialRecord, assistance_onset
 

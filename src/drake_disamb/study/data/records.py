@@ -78,7 +78,7 @@ class TrialRecord:
         seed: The trial's seed (None for human trials).
         start_pose: 0-based index of the start pose (the paper's 3 home positions).
         initial_mode: Name of the mode at the start (``vx_vy``, ``vx``, ... as in
-            :data:`drake_disamb.core.interfaces`), or None if unknown.
+            :data:`drake_disamb.interfaces`), or None if unknown.
         intended_goals: Per stage, the user's intended goal index (0-based within the stage); the
             people's logs of a multi-step task name one target: one index into all its goals.
             Every index is one of the task's goals (the embedded task's).

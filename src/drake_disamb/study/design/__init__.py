@@ -1,2 +1,2 @@
 """The study's design: the protocol (a typed config; the paper's is embedded as
-``protocol.yaml``) and the simulated subjects."""
+``protocol.yaml``). The simulated subjects are drawn by :mod:`drake_disamb.user.population`."""

@@ -49,7 +49,7 @@ from drake_disamb.config.checks import check_data, check_duration, check_request
 from drake_disamb.config.schema import to_plain
 from drake_disamb.config.system_presets import SYSTEM_PRESETS
 from drake_disamb.core.disambiguation import MODE_SELECTION_METHODS
-from drake_disamb.core.interfaces import MODE_SELECTIONS
+from drake_disamb.interfaces import MODE_SELECTIONS
 from drake_disamb.yaml_safety import load_yaml_document, read_yaml_file
 
 __all__ = [
@@ -133,7 +133,7 @@ class Protocol:
     """The study protocol (see the module docstring and ``study/protocol.yaml``).
 
     Attributes:
-        subjects: Number of simulated subjects (drawn by ``drake_disamb.study.design.population``).
+        subjects: Number of simulated subjects (drawn by ``drake_disamb.user.population``).
         interfaces: Interfaces every subject uses.
         tasks: Tasks and their start poses.
         paradigms: Paradigms and their trials per condition.
@@ -448,7 +448,7 @@ def condition_order(protocol: Protocol, subject_index: int) -> list[tuple[str, s
 
 
 def _n_initial_modes(interface: str, initial_modes: str) -> int:
-    from drake_disamb.core.interfaces import arm_modes, interface_modes
+    from drake_disamb.interfaces import arm_modes, interface_modes
 
     return len(interface_modes(interface) if initial_modes == "all" else arm_modes(interface))
 

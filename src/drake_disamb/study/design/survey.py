@@ -19,7 +19,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 
 __all__ = [
     "LIKERT_POINTS",

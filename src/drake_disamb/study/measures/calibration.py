@@ -104,7 +104,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 from drake_disamb.study.data.authors import LOG_INTERFACES
 from drake_disamb.study.data.folder import LoggedTrial
 from drake_disamb.study.data.records import TrialRecord

@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from drake_disamb.core.interfaces import INTERFACES, gripper_mode
 from drake_disamb.core.layout import is_translation_mode
+from drake_disamb.interfaces import INTERFACES, gripper_mode
 from drake_disamb.study.data.folder import LoggedTrial
 
 __all__ = [

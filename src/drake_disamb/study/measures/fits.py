@@ -2,7 +2,7 @@
 
 The samples are those :mod:`drake_disamb.study.measures.calibration` measures on the people's logs (or on a
 simulated study); the fits summarise them per subject and pooled, as the population
-(:mod:`drake_disamb.study.design.population`) draws them.
+(:mod:`drake_disamb.user.population`) draws them.
 """
 
 from __future__ import annotations

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.core.interfaces import INTERFACES
+from drake_disamb.interfaces import INTERFACES
 from drake_disamb.study.data.records import TrialRecord
 
 __all__ = [

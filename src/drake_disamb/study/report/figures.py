@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from drake_disamb.config.schema import PARADIGMS
-from drake_disamb.core.interfaces import INTERFACES, interfaces_in
+from drake_disamb.interfaces import INTERFACES, interfaces_in
 from drake_disamb.study.analysis.findings import INTERFACE_NAMES, TASK_NAMES, find_ranksum, select_trials
 from drake_disamb.study.data.records import TrialRecord
 from drake_disamb.study.measures.metrics import TrialMetrics

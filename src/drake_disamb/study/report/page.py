@@ -54,7 +54,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from drake_disamb.core.interfaces import interfaces_in
+from drake_disamb.interfaces import interfaces_in
 from drake_disamb.study.analysis.effect import paradigm_effect
 from drake_disamb.study.analysis.findings import (
     COMPARED,

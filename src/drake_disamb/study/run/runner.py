@@ -32,7 +32,7 @@ of the trial's condition, :data:`CONDITION_FIELDS`). Every value passes the scen
 and an error names its layer. Each record keeps the scenario that ran (``extra.scenario``), from
 which ``study rerun`` runs the trial again.
 
-Subjects come from :func:`drake_disamb.study.design.population.draw_subjects` (``study.yaml`` names the
+Subjects come from :func:`drake_disamb.user.population.draw_subjects` (``study.yaml`` names the
 population).
 """
 
@@ -51,16 +51,16 @@ from typing import Any
 import numpy as np
 import yaml
 
-from drake_disamb.core.interfaces import arm_modes
+from drake_disamb.interfaces import arm_modes
 from drake_disamb.study.data.folder import StudyFolder
 from drake_disamb.study.data.records import TrialRecord
-from drake_disamb.study.design.population import draw_subjects
 from drake_disamb.study.design.protocol import (
     Protocol,
     TrialSpec,
     expand_trials,
     protocol_to_dict,
 )
+from drake_disamb.user.population import draw_subjects
 
 __all__ = [
     "CONDITION_FIELDS",
@@ -95,9 +95,10 @@ class StudyMismatch(ValueError):
 def draw_study_subjects(n: int, seed: int) -> tuple[list[tuple[str, dict[str, Any]]], str]:
     """``[(name, user overrides)]`` of ``n`` subjects and the population's provenance.
 
-    The subjects are drawn by :func:`drake_disamb.study.design.population.draw_subjects`. The
+    The subjects are drawn by :func:`drake_disamb.user.population.draw_subjects`. The
     provenance, part of a study's identity in ``study.yaml``, keeps the name the population had
-    before ``study/`` was split by stage, so that earlier study folders still resume.
+    before ``study/`` was split by stage (and before the population moved beside the simulated
+    user), so that earlier study folders still resume.
     """
     subjects = draw_subjects(n, seed)
     return [(s.name, dict(s.user)) for s in subjects], POPULATION

@@ -294,7 +294,7 @@ def _goal_words(scenario: Any) -> str:
 def trial_screen(plan: SessionPlan, spec: TrialSpec, scenario: Any) -> dict[str, Any]:
     """The screen before trial ``spec`` (of ``scenario``): the trial's place in the session, a rest
     before a new block, the goal, what the condition means, and the start (a page screen)."""
-    from drake_disamb.core.interfaces import INTERFACES
+    from drake_disamb.interfaces import INTERFACES
 
     position = plan.specs.index(spec)
     before = plan.specs[position - 1] if position > 0 else None

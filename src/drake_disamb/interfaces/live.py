@@ -3,8 +3,9 @@
 :class:`MeshcatLiveInput` adds controls to the Meshcat page (on-page buttons with keyboard
 shortcuts, sliders, and the browser's Gamepad API) and turns them into the interface's raw signal
 (its ``raw_layout``), the same port a simulated user or a recorded log drives. Every kind lists its
-page's buttons, their keys and what each does (``Interface.live_controls``, roles
-:data:`~drake_disamb.core.interfaces.LiveRole`) and the raw signals that drive, step the mode and
+page's buttons, their keys and what each does (its
+:class:`~drake_disamb.interfaces.live_controls.LiveControls`, roles
+:data:`~drake_disamb.interfaces.LiveRole`) and the raw signals that drive, step the mode and
 request (``drive_raw``, ``pulse_raw``); this module knows no kind by name. The mapping from what
 the page reports to the raw signal is the pure function :func:`live_raw_step`, tested without a
 browser. The same system reads the operator page
@@ -22,8 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core.interfaces import INTERFACES, LIVE_PULSES, RAW_SIZE, InterfaceConfig, check_kind
 from drake_disamb.core.validation import check_real_fields, is_real
+from drake_disamb.interfaces import INTERFACES, LIVE_PULSES, RAW_SIZE, InterfaceConfig, check_kind
 
 __all__ = [
     "AXIS_SLIDERS",
@@ -79,7 +80,7 @@ class LiveState:
     Attributes:
         clicks: Button click counts already seen, in the kind's ``live_controls`` order
             (:data:`LIVE_BUTTONS`, zeros past the kind's buttons).
-        pending: Pulses not yet passed on, per :data:`~drake_disamb.core.interfaces.LIVE_PULSES`
+        pending: Pulses not yet passed on, per :data:`~drake_disamb.interfaces.LIVE_PULSES`
             (next mode, previous mode, request): a pulse lasts one control period and is followed
             by a release, so clicks closer than two periods queue.
         hold_until: Time (s) until which the positive and negative drive buttons stay closed (2).
@@ -215,7 +216,7 @@ class MeshcatLiveInput(LeafSystem):
       takes over: left stick for the axes (up is +y), buttons 0 and 1 for mode and request.
       The axes go out with the Mode press, so with ``interface.mode_selection == "direct"`` a
       person sets the sliders (or the stick) into a mode's sector and presses Mode to select it,
-      and re-centres them (C) to cycle (:mod:`drake_disamb.core.interfaces`); no extra control.
+      and re-centres them (C) to cycle (:mod:`drake_disamb.interfaces.kinds.joystick`); no extra control.
 
     State: discrete :class:`LiveState` vector, updated every ``interface.control_period`` from
     t = 0; the page is read in that update. Run the simulator at real time (rate 1) so the person

@@ -19,7 +19,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from drake_disamb.core.interfaces.base import RAW_SIZE, Interface, LiveControl, register
+from drake_disamb.interfaces.device import RAW_SIZE
+from drake_disamb.interfaces.live_controls import LiveControl
+from drake_disamb.interfaces.registry import Interface, register
 
 
 @register

@@ -33,7 +33,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from drake_disamb.core.interfaces.base import RAW_SIZE, Interface, LiveControl, register
+from drake_disamb.interfaces.device import RAW_SIZE
+from drake_disamb.interfaces.live_controls import LiveControl
+from drake_disamb.interfaces.registry import Interface, register
 
 DIRECT_SELECT_DEFLECTION = 0.5
 """Stick deflection (norm of ``(axis_x, axis_y)``, of full deflection 1) from which a mode-button

@@ -4,7 +4,7 @@
 (reaction and timing), :class:`CommandConfig` (the command and its noise, judging where to stop),
 :class:`ModeChoiceConfig` (which mode next, stalls, reviews, overshoots), :class:`RequestConfig`
 (disambiguation requests) and :class:`PauseConfig`. Every behaviour is off by default (the
-deterministic user of :mod:`drake_disamb.core.user.rules`).
+deterministic user of :mod:`drake_disamb.user.rules`).
 
 Every field of every group also has one flat name, its own (the groups share none): a scenario's
 ``user.config``, a population's overrides and ``dataclasses.replace`` give
@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from drake_disamb.core.validation import bounded_repr, is_real
 
 if TYPE_CHECKING:
-    from drake_disamb.core.interfaces import InterfaceConfig
+    from drake_disamb.interfaces import InterfaceConfig
 
 __all__ = [
     "FIELD_GROUPS",

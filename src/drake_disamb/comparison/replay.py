@@ -1,8 +1,8 @@
 """The paper's inference comparison: trials replayed through the three inference methods, and scored.
 
 Paper Section "Field-Theoretic Intent Inference For Assistive Robotics"; the metric is in
-docs/facts.md section 3. The trials (:class:`~drake_disamb.core.trials.Trial`) come from
-:mod:`drake_disamb.core.trial_files` or :mod:`drake_disamb.core.trials`' generator.
+docs/facts.md section 3. The trials (:class:`~drake_disamb.comparison.trials.Trial`) come from
+:mod:`drake_disamb.comparison.trial_files` or :mod:`drake_disamb.comparison.trials`' generator.
 
 - :func:`replay_trials` runs all three methods of :mod:`drake_disamb.core.inference` over any
   number of trials in one vectorised numpy pass per goal count (trials padded in time), with the
@@ -22,8 +22,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from drake_disamb.comparison.trials import Trial
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTParams, RecordedSamples, path_cost_increment
-from drake_disamb.core.trials import Trial
 
 METHODS: tuple[str, ...] = INFERENCE_METHODS.names()
 """The three inference methods of the comparison (the registry's), in the order the paper lists them."""

@@ -6,8 +6,8 @@ protocol and the authors' fields are in docs/facts.md section 3). :func:`generat
 trials with the authors' protocol (seeded), so the comparison runs without any external data. It
 draws them in chunks of :data:`GENERATOR_CHUNK`, each from its own seed, so trial ``i`` depends
 only on the seed and ``i``; :func:`iter_generated_chunks` yields the chunks one at a time. The
-authors' published trials are read by :mod:`drake_disamb.core.trial_files`, and
-:mod:`drake_disamb.core.comparison` replays and scores them.
+authors' published trials are read by :mod:`drake_disamb.comparison.trial_files`, and
+:mod:`drake_disamb.comparison.replay` replays and scores them.
 
 Conventions: arrays are time-major (``(L + 1, 3)`` positions, ``(L, 3)`` commands; command ``j``
 moves the robot from sample ``j`` to sample ``j + 1``), goal indices are 0-based, and the zeroed

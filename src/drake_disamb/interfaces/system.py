@@ -1,9 +1,9 @@
 """The interface system: any registered kind of control interface as a Drake LeafSystem.
 
-The logic (raw layout, modes, speeds, edge detection, request handling) is in
-:mod:`drake_disamb.core.interfaces` (one module per kind); :class:`InterfaceSystem` holds its
-state, latches the disambiguation requests it starts and runs its update every control period,
-whatever the kind (:func:`make_interface`).
+The logic (raw layout, modes, speeds, edge detection, request handling) is numpy, in
+:mod:`~drake_disamb.interfaces.update` and the kinds' modules (:mod:`drake_disamb.interfaces.kinds`);
+:class:`InterfaceSystem` holds its state, latches the disambiguation requests it starts and runs
+its update every control period, whatever the kind (:func:`make_interface`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem, State
 
-from drake_disamb.core.interfaces import (
+from drake_disamb.core.layout import POSE_SIZE
+from drake_disamb.interfaces import (
     RAW_SIZE,
     Answer,
     InterfaceConfig,
@@ -26,7 +27,6 @@ from drake_disamb.core.interfaces import (
     initial_state,
     interface_update,
 )
-from drake_disamb.core.layout import POSE_SIZE
 from drake_disamb.system_helpers.status import DID_NOTHING
 from drake_disamb.systems.disambiguation import LatchedRequest
 
@@ -131,7 +131,7 @@ class InterfaceSystem(LeafSystem):
     State: discrete ``[mode, previous mode-button level, previous request-button level, mode-switch
     count, request count, non-finite count, held raw (4), pending switch time (s, -1 if none), pending
     is automatic, served count, automatic count seen]``
-    (:class:`~drake_disamb.core.interfaces.InterfaceState`); one more discrete group per vector
+    (:class:`~drake_disamb.interfaces.InterfaceState`); one more discrete group per vector
     output holding its value (so the outputs are state output ports, evaluated without calling
     Python); the latched ``request``; ``[stable (0/1), raw (4), automatic count, pending switch
     time]``, whether the update of that raw signal and trigger count leaves the state as it is
@@ -145,7 +145,7 @@ class InterfaceSystem(LeafSystem):
     writing nothing, so that Drake rewrites no state at such a tick.
 
     Attributes:
-        config: The :class:`~drake_disamb.core.interfaces.InterfaceConfig`.
+        config: The :class:`~drake_disamb.interfaces.InterfaceConfig`.
         n_goals: The number of goals a request's belief and goal poses cover.
         modes: All control modes as lists of dimension indices (0..5 = vx..wz, 6 = gripper);
             the gripper mode is the last entry.
@@ -311,7 +311,7 @@ class InterfaceSystem(LeafSystem):
 def make_interface(config: InterfaceConfig | str, n_goals: int = 1, **overrides: object) -> InterfaceSystem:
     """The interface system of ``config`` (or of the registered kind named ``config``, with its
     defaults) latching requests over ``n_goals`` goals, with ``overrides`` of
-    :class:`~drake_disamb.core.interfaces.InterfaceConfig` fields; named after its kind."""
+    :class:`~drake_disamb.interfaces.InterfaceConfig` fields; named after its kind."""
     cfg = InterfaceConfig(kind=config) if isinstance(config, str) else config
     if not isinstance(cfg, InterfaceConfig):
         raise ValueError(f"config: expected an InterfaceConfig or an interface name, got {config!r}")

@@ -9,16 +9,16 @@ from dataclasses import replace
 import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
-from drake_disamb.core.user import UserConfig, UserState, user_step
+from drake_disamb.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.system_helpers.sanitized import SanitizedInputCounter, usable_poses
 from drake_disamb.system_helpers.status import flag_set
+from drake_disamb.user import UserConfig, UserState, user_step
 
 __all__ = ["SimulatedUser", "UserConfig"]
 
 
 class SimulatedUser(LeafSystem):
-    """A simulated user of any registered interface (policy in :mod:`drake_disamb.core.user`).
+    """A simulated user of any registered interface (policy in :mod:`drake_disamb.user`).
 
     .. pydrake_system::
 
@@ -53,7 +53,7 @@ class SimulatedUser(LeafSystem):
             one decision period and are followed by at least two decision periods with everything released.
         sanitized_input_count (1): updates so far whose inputs were unusable (see below).
 
-    State: discrete :meth:`UserState.to_vector <drake_disamb.core.user.UserState.to_vector>` and
+    State: discrete :meth:`UserState.to_vector <drake_disamb.user.UserState.to_vector>` and
     ``raw`` again in a group of its own (the state output port ``raw``), updated every decision
     period (``config.timing.decision_period``, default the interface's ``control_period``; at least the
     control period, so each press is seen as exactly one rising edge) from t = 0; and
@@ -67,11 +67,11 @@ class SimulatedUser(LeafSystem):
     error of the policy propagates.
 
     Attributes:
-        interface: The :class:`~drake_disamb.core.interfaces.InterfaceConfig` it operates.
+        interface: The :class:`~drake_disamb.interfaces.InterfaceConfig` it operates.
         goal_indices: Its goal per stage (a single-stage task has one entry).
         releases: Per stage, whether the stage ends by letting go of the held object (at the goal
             the user changes to the gripper mode and opens it: ``user_step``'s ``release``).
-        config: Its :class:`~drake_disamb.core.user.UserConfig`.
+        config: Its :class:`~drake_disamb.user.UserConfig`.
     """
 
     def __init__(
@@ -128,7 +128,7 @@ class SimulatedUser(LeafSystem):
         return self.goal_indices[0]
 
     def get_user_state(self, context: Context) -> UserState:
-        """The user's state in ``context`` as a core :class:`~drake_disamb.core.user.UserState`."""
+        """The user's state in ``context`` as a numpy :class:`~drake_disamb.user.UserState`."""
         return UserState.from_vector(context.get_discrete_state(self._state_index).get_value())
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from drake_disamb.comparison.trials import WORKSPACE, Trial
 from drake_disamb.core.inference import (
     check_transition,
 )
-from drake_disamb.core.trials import WORKSPACE, Trial
 
 
 def _field(data: dict, path: Path, name: str) -> NDArray:

@@ -50,8 +50,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from drake_disamb.core.interfaces.base import RAW_SIZE, REQUEST_BUTTON, Interface, LiveControl, register, sign
 from drake_disamb.core.validation import is_real
+from drake_disamb.interfaces.device import RAW_SIZE, REQUEST_BUTTON, sign
+from drake_disamb.interfaces.live_controls import LiveControl
+from drake_disamb.interfaces.registry import Interface, register
 
 
 @register

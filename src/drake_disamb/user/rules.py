@@ -2,7 +2,7 @@
 
 :func:`decide` runs them in order on one :class:`Decision` (its inputs, the state so far and the
 random-draw counter); each returns the decision's new state, or ``None`` to pass on to the next.
-The order, and what each rule does, is the policy of :mod:`drake_disamb.core.user.policy`:
+The order, and what each rule does, is the policy of :mod:`drake_disamb.user.policy`:
 
 - :func:`release_rule` (rule 1 with a release): at the goal, change to the gripper mode and open;
 - :func:`await_request_rule`: after a request, wait for the mode it chooses;
@@ -31,12 +31,12 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.layout import GRIPPER_DIM, is_rotation_mode
 from drake_disamb.core.sampling import lognormal, sample_von_mises_fisher
-from drake_disamb.core.user.config import UserConfig
-from drake_disamb.core.user.judgement import choose_mode, dim_tolerances, draw, mode_remaining
-from drake_disamb.core.user.state import NOT_COUNTING, UserState, evolve
+from drake_disamb.interfaces import RAW_SIZE, InterfaceConfig
+from drake_disamb.user.config import UserConfig
+from drake_disamb.user.judgement import choose_mode, dim_tolerances, draw, mode_remaining
+from drake_disamb.user.state import NOT_COUNTING, UserState, evolve
 
 __all__ = ["RULES", "Decision", "decide"]
 
@@ -173,7 +173,7 @@ class Decision:
         )
 
     def choose(self, exclude_current: bool | None = False) -> int:
-        """The arm mode to go for next (:func:`~drake_disamb.core.user.judgement.choose_mode`);
+        """The arm mode to go for next (:func:`~drake_disamb.user.judgement.choose_mode`);
         ``exclude_current=None``: leave the current mode out only when the choice is random."""
         g = self.rng() if self.config.mode_choice.mode_temperature > 0 else None
         exclude = g is not None if exclude_current is None else exclude_current
@@ -659,7 +659,7 @@ def decide(
 ) -> UserState:
     """Rules 3 to 6 (and rule 1 with a release) at a free decision (not reacting, not letting go
     late); ``assisted``: the autonomy assists the user's goal
-    (:func:`~drake_disamb.core.user.judgement.helped`); ``releasing``: at the goal of a stage that
+    (:func:`~drake_disamb.user.judgement.helped`); ``releasing``: at the goal of a stage that
     ends by letting go of the held object; ``misled``: the autonomy assists another goal."""
     d = Decision(state, time, mode, err, interface, config, belief, assisted, releasing, misled)
     for rule in RULES:

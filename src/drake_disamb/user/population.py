@@ -1,7 +1,7 @@
 """The study's population of simulated users: each subject's behaviour drawn from documented distributions.
 
 A :class:`Subject` is a name (``"S01"``, ...) and ``user``: overrides of ``Scenario.user.config``
-(the fields of :class:`drake_disamb.core.user.UserConfig`, plain JSON values) that the study runner
+(the fields of :class:`drake_disamb.user.UserConfig`, plain JSON values) that the study runner
 applies to each of the subject's trials. :func:`draw_subjects` draws them from a
 :class:`PopulationConfig`: per parameter, a distribution *across subjects* (a subject keeps its
 values for all its trials; the within-trial randomness -- each reaction time, pause, stick
@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from drake_disamb.core.user import UserConfig
 from drake_disamb.core.validation import is_real
+from drake_disamb.user import UserConfig
 
 __all__ = ["LogNormal", "PopulationConfig", "Subject", "Uniform", "draw_subjects"]
 

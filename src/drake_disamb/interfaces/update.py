@@ -1,7 +1,7 @@
 """The interface update: settings, state and one control period of any registered kind (numpy).
 
 The update (:func:`interface_update`) is what the Drake system runs every control period: it
-sanitises the raw signal (the kind's :meth:`~drake_disamb.core.interfaces.base.Interface.sanitize`;
+sanitises the raw signal (the kind's :meth:`~drake_disamb.interfaces.device.Device.sanitize`;
 non-finite entries never reach the arm: they are read as 0 and counted), reads the kind's mode
 event (a mode-button press, or what the kind uses) and changes or selects the mode, detects the
 request button's rising edge (a held button counts once), starts a disambiguation at a request (or
@@ -23,16 +23,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.interfaces.base import (
-    INTERFACES,
-    MODE_SELECTIONS,
-    RAW_SIZE,
-    REQUEST_BUTTON,
-    Interface,
-    check_kind,
-)
 from drake_disamb.core.layout import GRIPPER_DIM
 from drake_disamb.core.validation import check_real_fields, is_real
+from drake_disamb.interfaces.device import MODE_SELECTIONS, RAW_SIZE, REQUEST_BUTTON
+from drake_disamb.interfaces.registry import INTERFACES, Interface, check_kind
 
 EventKind = Literal["mode_switch", "disambiguation_request", "disambiguation_switch", "automatic_switch"]
 
@@ -52,9 +46,9 @@ class InterfaceConfig:
     """Settings of one interface.
 
     Attributes:
-        kind: A registered interface name (:data:`~drake_disamb.core.interfaces.base.INTERFACES`).
+        kind: A registered interface name (:data:`~drake_disamb.interfaces.registry.INTERFACES`).
         max_linear_speed: Speed (m/s) of a translational dimension at full drive; ``None`` takes
-            the kind's default (:attr:`~drake_disamb.core.interfaces.base.Interface.default_speeds`).
+            the kind's default (:attr:`~drake_disamb.interfaces.device.Device.default_speeds`).
         max_angular_speed: Same for rotational dimensions (rad/s).
         gripper_speed: Finger opening speed (m/s) at full deflection / switch on (positive opens).
         button_threshold: A button or switch level ``>=`` this counts as pressed.
@@ -71,7 +65,7 @@ class InterfaceConfig:
         mode_selection: ``"cycle"`` (default): a mode change steps through the cycle.
             ``"direct"`` (a kind that offers it, the joystick): a press with the stick deflected
             selects the mode of the stick's sector, a press with it centred cycles
-            (:mod:`drake_disamb.core.interfaces.joystick`).
+            (:mod:`drake_disamb.interfaces.kinds.joystick`).
         variant: The kind's variant (its settings, e.g. the mode order); ``None`` (default): the
             registered default of ``kind``.
     """
@@ -259,7 +253,7 @@ def initial_state(config: InterfaceConfig) -> InterfaceState:
 
 def sanitize_raw(raw: ArrayLike, config: InterfaceConfig) -> tuple[NDArray[np.float64], bool]:
     """Clean a raw signal: non-finite entries -> 0, then the kind's
-    :meth:`~drake_disamb.core.interfaces.base.Interface.sanitize` (the joystick clips its axes to
+    :meth:`~drake_disamb.interfaces.device.Device.sanitize` (the joystick clips its axes to
     ``[-1, 1]``, switches and buttons become 0/1).
 
     Returns ``(clean, had_nonfinite)``. A raw signal of the wrong length is a ``ValueError``.
@@ -359,8 +353,8 @@ def interface_update(
 
     Returns:
         ``(new_state, events)``. A mode event of the kind (a mode-button rising edge, or what the
-        kind uses: :meth:`~drake_disamb.core.interfaces.base.Interface.mode_event`) steps the mode
-        or selects one (:meth:`~drake_disamb.core.interfaces.base.Interface.select`), logged as
+        kind uses: :meth:`~drake_disamb.interfaces.device.Device.mode_event`) steps the mode
+        or selects one (:meth:`~drake_disamb.interfaces.device.Device.select`), logged as
         one ``mode_switch`` per event (also when a direct selection keeps the mode). A
         request-button rising edge logs ``disambiguation_request`` (at the press) and, with
         ``config.serve_requests``, starts a disambiguation; so does a new automatic trigger. A

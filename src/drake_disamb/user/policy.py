@@ -29,7 +29,7 @@ a mode change is the joystick's mode button, the head array's back switch, or wh
    also through modes on the way that would help a little (the shorter way round on an interface
    that also steps back). With a joystick that selects modes directly
    (``InterfaceConfig.mode_selection == "direct"``) it instead deflects the stick into the
-   target's sector and presses once (:func:`~drake_disamb.core.interfaces.joystick.sector_stick`): one
+   target's sector and presses once (:func:`~drake_disamb.interfaces.kinds.joystick.sector_stick`): one
    press per change. The target is dropped when it is reached, when it has nothing left to do
    (the autonomy finished it), or after a disambiguation request (the user then re-evaluates the
    mode the disambiguation system chose).
@@ -62,18 +62,18 @@ Errors are in the world frame: position ``x_goal - x_ee`` (m) and the world-fram
 per-dimension tolerances, so "every dimension within tolerance" implies success and the user never
 runs out of useful modes before it is done.
 
-The rules are one function each (:mod:`drake_disamb.core.user.rules`), the settings one nested
-config per behaviour (:mod:`drake_disamb.core.user.config`). Randomness is optional and seeded:
+The rules are one function each (:mod:`drake_disamb.user.rules`), the settings one nested
+config per behaviour (:mod:`drake_disamb.user.config`). Randomness is optional and seeded:
 ``reaction_time_jitter`` (uniform, +/- s) and ``axis_noise``
 (Gaussian std added to joystick axes). Each draw uses ``default_rng([seed, counter])`` with a
 counter kept in the state, so a run is a pure function of the seed.
 
 **Human behaviour** (every field off by default, which is the deterministic user above; the
-population of :mod:`drake_disamb.study.design.population` turns them on, docs/population.md gives the
+population of :mod:`drake_disamb.user.population` turns them on, docs/population.md gives the
 values and where they come from):
 
 - *Decision rate*: ``decision_period`` (s) is how often the user decides (the
-  :class:`~drake_disamb.systems.user.SimulatedUser` ticks at it; the raw signal is held between
+  :class:`~drake_disamb.user.system.SimulatedUser` ticks at it; the raw signal is held between
   decisions). Every wait is at least two decision periods, so a press is one rising edge.
 - *Reaction times*: the wait after a press is lognormal with median ``reaction_time`` and log-sd
   ``reaction_log_sd``; after a mode change is finished (the target reached, or the mode a request
@@ -142,12 +142,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from drake_disamb.core.blending import RHO1_TIMES_N
-from drake_disamb.core.interfaces import RAW_SIZE, InterfaceConfig
 from drake_disamb.core.sampling import lognormal
-from drake_disamb.core.user.config import UserConfig
-from drake_disamb.core.user.judgement import draw, goal_error, goal_reached, helped, misled
-from drake_disamb.core.user.rules import decide
-from drake_disamb.core.user.state import NOT_COUNTING, UserState, evolve
+from drake_disamb.interfaces import RAW_SIZE, InterfaceConfig
+from drake_disamb.user.config import UserConfig
+from drake_disamb.user.judgement import draw, goal_error, goal_reached, helped, misled
+from drake_disamb.user.rules import decide
+from drake_disamb.user.state import NOT_COUNTING, UserState, evolve
 
 __all__ = ["user_step"]
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
 
-from drake_disamb.core.interfaces import RAW_SIZE
+from drake_disamb.interfaces import RAW_SIZE
 
 DEADMAN_TIMEOUT = 0.5
 """Seconds without a connected page before the raw signal is released (default)."""

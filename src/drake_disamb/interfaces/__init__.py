@@ -1,36 +1,31 @@
-"""Control interfaces: one module per kind, one registry, one update (pure numpy).
+"""Control interfaces: the variant of each kind (its device model, what operating it takes, its
+live page's controls), one registry, one update (numpy), and the Drake systems that run them.
 
-:class:`~drake_disamb.core.interfaces.base.Interface` is the variant every kind derives and
-:data:`INTERFACES` the registry; every kind is registered when this package is imported, so a new
-kind is one new module. The joystick and the head array are the paper's study's two interfaces.
+:class:`~drake_disamb.interfaces.registry.Interface` is the variant every kind derives and
+:data:`INTERFACES` the registry; every kind (:mod:`drake_disamb.interfaces.kinds`) is registered
+when this package is imported, so a new kind is one new module. This package's namespace is the
+numpy part; the Drake systems are imported from their modules (:mod:`~drake_disamb.interfaces.system`,
+:mod:`~drake_disamb.interfaces.live`, :mod:`~drake_disamb.interfaces.deadman`).
 
 Its modules, and where this package sits among the others: docs/architecture.md (Layout).
 """
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
-from drake_disamb.core.interfaces.base import (
+from drake_disamb.interfaces import kinds
+from drake_disamb.interfaces.device import MODE_BUTTON, MODE_SELECTIONS, RAW_SIZE, REQUEST_BUTTON, mode_name
+from drake_disamb.interfaces.live_controls import LIVE_PULSES, LiveControl, LiveRole
+from drake_disamb.interfaces.registry import (
     INTERFACES,
-    LIVE_PULSES,
-    MODE_BUTTON,
-    MODE_SELECTIONS,
-    RAW_SIZE,
-    REQUEST_BUTTON,
     Interface,
-    LiveControl,
-    LiveRole,
     arm_modes,
     check_kind,
     gripper_mode,
     interface_modes,
     interfaces_in,
-    mode_name,
     register,
 )
-from drake_disamb.core.interfaces.update import (
+from drake_disamb.interfaces.update import (
     Answer,
     EventKind,
     InterfaceConfig,
@@ -43,10 +38,6 @@ from drake_disamb.core.interfaces.update import (
     parse_disambiguation_mode,
     sanitize_raw,
 )
-
-for _module in pkgutil.iter_modules(__path__):
-    if _module.name not in ("base", "update"):
-        importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = [
     "INTERFACES",
@@ -72,6 +63,7 @@ __all__ = [
     "interface_modes",
     "interfaces_in",
     "interface_update",
+    "kinds",
     "mode_name",
     "parse_disambiguation_mode",
     "register",

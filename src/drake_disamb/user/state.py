@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drake_disamb.core.interfaces import RAW_SIZE
+from drake_disamb.interfaces import RAW_SIZE
 
 __all__ = ["NOT_COUNTING", "UserState", "evolve"]
 

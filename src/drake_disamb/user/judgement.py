@@ -9,8 +9,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drake_disamb.core.geometry import orientation_error
-from drake_disamb.core.user.config import UserConfig
 from drake_disamb.core.validation import all_finite
+from drake_disamb.user.config import UserConfig
 
 __all__ = [
     "choose_mode",
