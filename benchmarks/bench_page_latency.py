@@ -21,27 +21,19 @@ import argparse
 import shutil
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from _host import HostMeter, host_summary
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "diagrams"))
+from recording_screenshot import CHROMIUM_FLAGS  # noqa: E402 (the flags every headless page here uses)
 
 PUBLISH_PERIOD = 0.02
 """The panel's publish period (s): the longest a change waits for the next panel state."""
 
 TARGET = 0.1
 """The target (s) for the 99th percentile."""
-
-CHROMIUM_FLAGS = (
-    "--headless=new",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--window-size=1280,800",
-)
 
 
 def browser():  # noqa: ANN201 (a selenium WebDriver)
@@ -57,7 +49,7 @@ def browser():  # noqa: ANN201 (a selenium WebDriver)
     if chromium is None or driver_path is None:
         sys.exit("needs chromium and chromedriver")
     options = Options()
-    for flag in CHROMIUM_FLAGS:
+    for flag in (*CHROMIUM_FLAGS, "--window-size=1280,800"):
         options.add_argument(flag)
     options.binary_location = chromium
     return webdriver.Chrome(service=Service(driver_path), options=options)
