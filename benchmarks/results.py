@@ -154,6 +154,16 @@ BENCHMARKS = {
             "assistance without input, one belief per task, the loop paused while a request is "
             "computed (here with no request latency).",
         ),
+        Benchmark(
+            "page",
+            "The operator page's latency",
+            "python benchmarks/bench_page_latency.py",
+            "A simulated head-array user reaching at real time with the operator page open in headless "
+            "Chromium (the scene drawn in software): how long a panel state takes from the diagram's "
+            "publish to the page's drawing it, and the bound from the change itself (one 20 ms publish "
+            "period more). The target is under 100 ms at the 99th percentile "
+            "([operator_page.md](operator_page.md#latency)).",
+        ),
     )
 }
 

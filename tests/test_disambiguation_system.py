@@ -238,3 +238,22 @@ def test_interface_switches_mode_the_tick_after_the_request() -> None:
     assert interface.GetOutputPort("paused").Eval(icontext)[0] == 0.0
     events = [(e.kind, round(e.time, 6)) for e in interface.get_event_log(icontext)]
     assert events == [("disambiguation_request", 0.05), ("disambiguation_switch", 0.06)]
+
+
+def test_the_core_request_is_the_one_the_method_solved() -> None:
+    """``core_request`` rebuilds, from a latched request, the request the method was given: its
+    result is the answer's and ``last_result``'s; an unusable latched request gives None."""
+    system = DisambiguationSystem(ControlLoop(2), HEAD_ARRAY_ARM_MODES)
+    latched = _request([0.6, 0.4], current_mode=2.0)
+    answer, context = _answer(system, latched)
+    request = system.core_request(latched)
+    assert (
+        request is not None
+        and request.current_mode == 2
+        and request.modes == tuple(map(tuple, HEAD_ARRAY_ARM_MODES))
+    )
+    np.testing.assert_allclose(request.belief, [0.6, 0.4])
+    again = system.method.select(request)
+    assert answer == [1.0, float(again.mode)]
+    np.testing.assert_array_equal(again.mode_scores, system.get_last_result(context).mode_scores)
+    assert system.core_request(_request([np.nan, 1.0])) is None

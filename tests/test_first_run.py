@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import io
 import logging
+import re
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,6 +18,7 @@ from drake_disamb.cli import main
 from drake_disamb.commands import demo
 from drake_disamb.commands._first_run import COMPILING, announce_kernel_compilation
 from drake_disamb.commands._meshcat import wait_for_browser
+from drake_disamb.operator_page.server import OperatorPage
 from drake_disamb.progress import SimulationProgress, TrialProgress
 
 
@@ -157,7 +160,12 @@ def test_the_url_is_printed_once(
     monkeypatch.setattr("sys.stdin", _Script())
     assert _demo(tmp_path) == 1  # 0.3 s is too short to succeed
     out, err = capsys.readouterr()
-    assert out.count("http://localhost:") == 1 and "http://localhost:" not in err
+    # Meshcat's address and the operator page's, each once, the page's on a line of its own
+    assert out.count("http://localhost:") == 2 and "http://localhost:" not in err
+    assert out.count("Meshcat: http://localhost:") == 1
+    lines = out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("operator page"))
+    assert re.fullmatch(r"http://localhost:\d+/", lines[at + 1])
     assert not [r for r in caplog.records if "listening for connections" in r.getMessage()]
     assert "open it in a browser to watch" in out  # not a terminal: no waiting
     for name in ("goal_probabilities.png", "recording.html", "metrics.json"):
@@ -172,8 +180,16 @@ def test_from_a_terminal_the_demo_waits_for_a_browser(
     warm_ups: list[float] = []
     real_run_trial = __import__("drake_disamb.trial", fromlist=["run_trial"]).run_trial
 
-    def fake_wait(meshcat, timeout, stop, settle=1.0):  # noqa: ANN001, ANN202
-        assert meshcat.HasPath("/shared_control/goals/g0")  # the scene is drawn before anyone looks
+    started: list[Any] = []
+    real_start_meshcat = demo.start_meshcat
+
+    def recorded_start_meshcat(args):  # noqa: ANN001, ANN202
+        started.append(real_start_meshcat(args))
+        return started[-1]
+
+    def fake_wait(page, timeout, stop, settle=1.0):  # noqa: ANN001, ANN202
+        assert isinstance(page, OperatorPage)  # the operator page is what the demo waits for
+        assert started[0].HasPath("/shared_control/goals/g0")  # the scene is drawn before anyone looks
         waited.append(timeout)
         return True
 
@@ -183,11 +199,12 @@ def test_from_a_terminal_the_demo_waits_for_a_browser(
         return real_run_trial(handles, *args, **kwargs)
 
     monkeypatch.setattr(demo, "wait_for_browser", fake_wait)
+    monkeypatch.setattr(demo, "start_meshcat", recorded_start_meshcat)
     monkeypatch.setattr("drake_disamb.trial.run_trial", counting_run_trial)
     monkeypatch.setattr("sys.stdin", _Terminal())
     assert _demo(tmp_path, *(["--no-wait"] if no_wait else [])) == 1
     out = capsys.readouterr().out
-    assert out.count("http://localhost:") == 1
+    assert out.count("http://localhost:") == 2
     if no_wait:
         assert waited == [] and warm_ups == []
     else:

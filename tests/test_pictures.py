@@ -16,9 +16,9 @@ from support import screenshot_script
 
 from drake_disamb.builder import build_shared_control_diagram
 from drake_disamb.config import load_scenario, resolve_scenario
-from drake_disamb.display import add_legend_to_html, belief_caption, css_color, legend_rows
+from drake_disamb.display import OKABE_ITO, add_legend_to_html, belief_caption, css_color, legend_rows
 from drake_disamb.plotting import BeliefPlot, goal_probability_figure, trial_figure, trial_outcome, trial_plot
-from drake_disamb.systems.visualization import COLOR_LEVELS, ROOT, visualizer_for_trial
+from drake_disamb.systems.visualization import AXIS_COLORS, COLOR_LEVELS, ROOT, visualizer_for_trial
 from drake_disamb.trial import run_trial
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -237,3 +237,17 @@ def test_recording_frames_the_table_and_shows_the_legend(tmp_path: Path) -> None
         # three.js holds colours in linear light; Meshcat sends them as 8-bit sRGB.
         shown = [shots.linear_to_srgb(c) for c in measured["spheres"][f"g{i}"]["c0"]]
         assert shown == pytest.approx(rgb, abs=1.5 / 255)
+
+
+def test_every_object_and_axis_is_drawn_in_a_colour_blind_safe_colour() -> None:
+    """The embedded tasks' objects (so every picture of their goals) and the scene's x, y, z axes
+    are Okabe and Ito's colours, and the goals a belief covers are never two of the same colour."""
+    palette = list(OKABE_ITO.values())
+    for task in ("reaching", "pouring"):
+        scenario = load_scenario(task)
+        for goal in scenario.goals:
+            assert any(np.allclose(goal.object.color[:3], c, atol=2e-3) for c in palette), (task, goal.name)
+        for k in range(scenario.n_stages):
+            colors = [tuple(g.object.color[:3]) for g in scenario.belief_goals(k)]
+            assert len(set(colors)) == len(colors), (task, k)
+    assert list(AXIS_COLORS) == [OKABE_ITO["vermillion"], OKABE_ITO["bluish_green"], OKABE_ITO["blue"]]

@@ -124,3 +124,17 @@ def test_the_goals_of_every_task_are_accepted():
         _record(task="pouring", intended_goals=goals, reached_goals=[goals[0], -1])
     for goal in range(4):  # the people's pouring logs name one of the task's 4 goals
         _record(task="pouring", intended_goals=[goal], reached_goals=None)
+
+
+def test_a_reader_without_the_lock_reads_past_a_half_written_line_and_leaves_it(tmp_path) -> None:  # noqa: ANN001
+    path = tmp_path / "trials.jsonl"
+    append_record(path, _record("t0"))
+    with open(path, "a", encoding="utf-8") as f:
+        f.write(_record("t1").to_json()[:40])  # what a killed writer leaves
+    before = path.read_bytes()
+    with pytest.raises(RecordError, match="the last line is incomplete"):
+        read_records(path)
+    assert [r.trial_id for r in read_records(path, skip_incomplete=True)] == ["t0"]
+    assert path.read_bytes() == before  # nothing written
+    assert [r.trial_id for r in read_records(path, repair=True, skip_incomplete=True)] == ["t0"]
+    assert path.read_bytes() == before[: before.index(b"\n") + 1]  # the repair still cuts it

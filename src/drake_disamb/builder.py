@@ -15,7 +15,7 @@ and the loggers. The wiring (paper Figure "exp_block_diagram")::
     user.raw ------------------------------> interface.raw
     interface.u_h -------------------------> blender.u_h, inference.u_h
     autonomy.u_a --------------------------> blender.u_a, inference.u_a
-    inference.belief ----------------------> blender, interface, user, visualizer
+    inference.belief ----------------------> blender, interface, user, visualizer, panel
     interface.request ---------------------> disambiguation.request          (disambiguation, automatic)
     disambiguation.answer -----------------> interface.answer                (disambiguation, automatic)
     interface.paused ----------------------> inference, blender, user .paused  (hold_while_computing)
@@ -95,7 +95,8 @@ class SharedControlDiagram:
             ``ee_pose_sampler``, ``task_goal_poses`` (a belief over every goal of a multi-step
             task), ``diff_ik`` and ``gripper_controller`` (the controllers between the blender and
             interface and the station's joint-level inputs), ``deadman`` (an input source driving
-            an arm on a wire from the page), ``visualizer`` (with Meshcat only).
+            an arm on a wire from the page), ``visualizer`` (with Meshcat only), ``panel`` (the
+            operator panel, with Meshcat or an operator page).
         loggers: VectorLogSinks by name (see :data:`LOGGED_SIGNALS`).
         modes: The interface's control modes (dimension lists; gripper mode last).
         meshcat: The Meshcat instance, or ``None``.
@@ -175,6 +176,7 @@ def build_shared_control_diagram(
     scenario: Scenario,
     meshcat: Meshcat | None = None,
     input_source: System | None = None,
+    page: Any = None,
 ) -> SharedControlDiagram:
     """Assemble the full shared-control diagram of ``scenario``.
 
@@ -185,6 +187,11 @@ def build_shared_control_diagram(
             active mode and alpha (:class:`~drake_disamb.systems.visualization.SharedControlVisualizer`).
         input_source: A system with one 4-vector output port ``raw`` to drive the interface
             instead of the simulated user (a recorded log, a live device, a fault injector).
+        page: The operator page (:class:`~drake_disamb.operator_page.server.OperatorPage`): the
+            panel (:class:`~drake_disamb.systems.panel.PanelVisualizer`) is shown there, and its
+            deadman, not Meshcat's page, holds a live input that drives an arm on a wire. With
+            Meshcat or a page the diagram has the panel; with Meshcat it also keeps the panel's
+            states for the recording.
 
     The station is the one of the scenario's ``station`` backend (:mod:`drake_disamb.station.backends`).
 
@@ -203,7 +210,7 @@ def build_shared_control_diagram(
     interface = w.systems["interface"] = builder.AddSystem(make_interface(config.interface, config.n_goals))
     _add_task(w)
     _add_belief_and_autonomy(w)
-    _add_user(w, input_source, meshcat)
+    _add_user(w, input_source, meshcat if page is None else page)
     _add_controller(w)
     if config.disambiguation is not None:  # the preset's probing, the live inference's update
         _add_disambiguation(w)
@@ -211,6 +218,8 @@ def build_shared_control_diagram(
         _add_automatic_trigger(w)
     if meshcat is not None:
         _add_visualizer(w, meshcat, interface.modes)
+    if meshcat is not None or page is not None:
+        _add_panel(w, scenario, meshcat, page)
     loggers = _add_loggers(w)
     diagram = builder.Build()
     diagram.set_name(f"shared_control_{config.task_name}")
@@ -267,20 +276,21 @@ def _add_belief_and_autonomy(w: _Wiring) -> None:
     w.connect(w.port("inference", "belief"), "blender", "belief")
 
 
-def _add_user(w: _Wiring, input_source: System | None, meshcat: Meshcat | None) -> None:
-    """The simulated user, or ``input_source``, on the interface's ``raw`` input (behind the page's
-    deadman when a person at the page drives an arm on a wire)."""
+def _add_user(w: _Wiring, input_source: System | None, page: Any) -> None:
+    """The simulated user, or ``input_source``, on the interface's ``raw`` input (behind the
+    deadman of ``page``, the operator page or Meshcat's, when a person at the page drives an arm on
+    a wire)."""
     config = w.config
     if input_source is not None:
         w.systems["user"] = w.builder.AddSystem(input_source)
         if not input_source.get_name():
             input_source.set_name("input_source")
         raw = input_source.GetOutputPort("raw")
-        if meshcat is not None and w.station.link is not None:
+        if page is not None and w.station.link is not None:
             # A person at the page drives a real arm: losing the page releases every signal.
             from drake_disamb.interfaces.deadman import PageDeadman
 
-            w.add("deadman", PageDeadman(meshcat, config.control_period))
+            w.add("deadman", PageDeadman(page, config.control_period))
             w.connect(raw, "deadman", "raw_in")
             raw = w.port("deadman", "raw")
         w.connect(raw, "interface", "raw")
@@ -359,6 +369,50 @@ def _add_visualizer(w: _Wiring, meshcat: Meshcat, modes: list[list[int]]) -> Non
     w.connect(w.station.diagram.GetOutputPort("ee_pose"), "visualizer", "ee_pose")
     w.connect(w.port("interface", "mode"), "visualizer", "mode")
     w.connect(w.port("blender", "alpha"), "visualizer", "alpha")
+
+
+def _add_panel(w: _Wiring, scenario: Scenario, meshcat: Meshcat | None, page: Any) -> None:
+    """The operator panel (on ``page``, kept for the recording with Meshcat) and its cues in the
+    scene: the belief over the goals by name, the mode and its keys, alpha, and why a request's
+    mode is what it is (from the disambiguation system's answer)."""
+    from drake_disamb.interfaces.live import AXIS_SLIDERS
+    from drake_disamb.systems.panel import PanelConfig, PanelVisualizer
+
+    config, interface = w.config, w.config.interface
+    variant = interface.variant
+    disambiguation = w.systems.get("disambiguation")
+    panel_config = PanelConfig(
+        title=f"{config.task_name} \u00b7 {variant.label} \u00b7 {scenario.paradigm}",
+        variant=variant,
+        modes=tuple(tuple(m) for m in interface.modes),
+        goal_names=tuple(tuple(g.name for g in scenario.belief_goals(k)) for k in range(scenario.n_stages)),
+        goal_colors=tuple(tuple(tuple(c[:3]) for c in stage) for stage in config.goal_colors),
+        stage_names=tuple(stage.name for stage in scenario.stages),
+        axis_keys=AXIS_SLIDERS if variant.live_axes else (),
+        requests_served=disambiguation is not None and interface.serve_requests,
+        mode_selection=interface.mode_selection,
+    )
+    core_request = None if disambiguation is None else disambiguation.core_request
+    panel = PanelVisualizer(
+        panel_config,
+        [] if page is None else [page],
+        meshcat,
+        core_request,
+        record=meshcat is not None,
+        update_period=config.control_period,
+    )
+    w.add("panel", panel)
+    w.connect(w.port("inference", "belief"), "panel", "belief")
+    w.connect(w.goal_poses, "panel", "goal_poses")
+    w.connect(w.station.diagram.GetOutputPort("ee_pose"), "panel", "ee_pose")
+    w.connect(w.port("blender", "alpha"), "panel", "alpha")
+    for name in ("mode", "paused", "served_count", "request_count"):
+        w.connect(w.port("interface", name), "panel", name)
+    if panel.HasInputPort("stage"):
+        w.connect(w.port("task", "stage"), "panel", "stage")
+    if disambiguation is not None:
+        w.connect(w.port("interface", "request"), "panel", "request")
+        w.connect(w.port("disambiguation", "last_result"), "panel", "last_result")
 
 
 def _add_loggers(w: _Wiring) -> dict[str, VectorLogSink]:

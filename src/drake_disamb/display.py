@@ -26,6 +26,20 @@ import numpy as np
 
 from drake_disamb.core.inference import INFERENCE_METHODS, DFTInference
 
+OKABE_ITO: dict[str, tuple[float, float, float]] = {
+    "black": (0.0, 0.0, 0.0),
+    "orange": (0.902, 0.624, 0.0),
+    "sky_blue": (0.337, 0.706, 0.914),
+    "bluish_green": (0.0, 0.62, 0.451),
+    "yellow": (0.941, 0.894, 0.259),
+    "blue": (0.0, 0.447, 0.698),
+    "vermillion": (0.835, 0.369, 0.0),
+    "reddish_purple": (0.8, 0.475, 0.655),
+}
+"""Okabe and Ito's colour-blind-safe palette ("Color Universal Design", 2008), ``(r, g, b)`` in
+[0, 1]: the embedded tasks' objects (so every picture of a trial), the scene's axes and the
+operator page's own colours."""
+
 EXPLANATIONS = (
     "sphere size, opacity: goal probability",
     "at the gripper: the active mode",

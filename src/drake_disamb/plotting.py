@@ -408,24 +408,32 @@ def _save(fig: Any, path: str | Path) -> Path:
     return out
 
 
-def save_recording(meshcat: Any, path: str | Path, legend: Any = None, title: str = "") -> Path:
+def save_recording(
+    meshcat: Any, path: str | Path, legend: Any = None, title: str = "", panel_log: Any = None
+) -> Path:
     """Write Meshcat's current scene and published recording as a self-contained HTML file.
 
     ``legend`` (rows of :func:`drake_disamb.display.legend_rows`) is laid over the page, headed by
-    ``title``: Meshcat's HTML leaves out the control panel where a live page shows it."""
+    ``title``: Meshcat's HTML leaves out the control panel where a live page shows it. With
+    ``panel_log`` (the operator panel's states) the panel is replayed beside the scene
+    (:func:`drake_disamb.operator_page.replay.add_panel_replay`)."""
     from drake_disamb.display import add_legend_to_html
+    from drake_disamb.operator_page.replay import add_panel_replay
 
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     page = meshcat.StaticHtml()
     if legend:
         page = add_legend_to_html(page, legend, title)
+    if panel_log:
+        page = add_panel_replay(page, panel_log)
     out.write_text(page, encoding="utf-8")
     return out
 
 
 def write_trial_figures(result: Any, handles: Any, out_dir: str | Path) -> list[Path]:
-    """Write the goal-probability figure, the Meshcat recording (if any) and the diagram picture of a
+    """Write the goal-probability figure, the Meshcat recording (if any, with the operator panel
+    replayed beside the scene) and the diagram picture of a
     :class:`~drake_disamb.trial.TrialResult` run on ``handles``
     (:class:`~drake_disamb.builder.SharedControlDiagram`)."""
     from drake_disamb.diagram_io import write_diagram_graph
@@ -437,7 +445,9 @@ def write_trial_figures(result: Any, handles: Any, out_dir: str | Path) -> list[
     written = [write_trial_figure(result, out / "goal_probabilities.png")]
     if handles.meshcat is not None:
         title = f"{sc.task}, {sc.interface.replace('_', ' ')}, {sc.paradigm} paradigm"
-        written.append(save_recording(handles.meshcat, out / "recording.html", legend_rows(sc), title))
+        panel = handles.systems.get("panel")
+        log = panel.recorder.log if panel is not None and panel.recorder is not None else None
+        written.append(save_recording(handles.meshcat, out / "recording.html", legend_rows(sc), title, log))
     written.extend(Path(p) for p in _as_list(write_diagram_graph(handles.diagram, out / "diagram")))
     return written
 

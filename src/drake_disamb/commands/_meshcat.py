@@ -199,7 +199,8 @@ def wait_for_browser(
     stop: Callable[[], bool] = lambda: False,
     settle: float = 1.0,
 ) -> bool:
-    """Wait until a browser has the Meshcat page open (``GetNumActiveConnections() > 0``), then
+    """Wait until a browser has the page open (Meshcat's or the operator page's:
+    ``GetNumActiveConnections() > 0``), then
     ``settle`` seconds more for the page to draw the scene. Returns whether one connected within
     ``timeout`` seconds; ``stop()`` ends the wait early."""
     deadline = time.monotonic() + timeout

@@ -1,19 +1,22 @@
 """``drake-disamb demo``: one shared-control trial, shown in Meshcat, with its metrics and figures.
 
 With no arguments: the reaching task, a simulated head-array user, the disambiguation paradigm.
-Prints the Meshcat URL (unless ``--no-meshcat``), runs the trial, prints its metrics (success,
-time, mode switches, disambiguation requests, button presses) and writes into ``--out``:
+Prints the Meshcat URL and the operator page's address, on a line of its own (unless
+``--no-meshcat``; the page, docs/operator_page.md, shows the scene with a panel saying what the
+robot believes and why, :mod:`drake_disamb.operator_page`), runs the trial, prints its metrics
+(success, time, mode switches, disambiguation requests, button presses) and writes into ``--out``:
 
 - ``metrics.json``: the printed metrics, machine-readable, with the scenario's identity (task,
   interface, paradigm, goals, seed) and ``"interrupted"``;
 - ``goal_probabilities.png``: the goal probabilities over time in the style of the paper's figure
   (each goal in its object's colour, threshold rho1 dashed; requests, mode switches and non-zero
   command stretches in a strip below; the end of the trial and stage changes marked; a caption);
-- ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat);
+- ``recording.html``: the Meshcat recording as a self-contained HTML file (with Meshcat), the
+  operator panel replayed beside the scene;
 - ``diagram.dot`` / ``diagram.svg`` (when Graphviz is installed): the diagram's picture.
 
-``--live`` replaces the simulated user by you: the interface is driven from the Meshcat page
-(:class:`~drake_disamb.interfaces.live.MeshcatLiveInput`: keys, on-page buttons, sliders or a browser
+``--live`` replaces the simulated user by you: the interface is driven from the operator page
+(:func:`~drake_disamb.interfaces.live.page_live_input`: keys, the panel's key buttons, or a browser
 gamepad) and the trial runs at real time for up to 600 s (``--duration``).
 
 ``--live --record DIR --subject NAME`` also appends the person's trial to ``DIR/trials.jsonl`` as a
@@ -46,10 +49,10 @@ included) as YAML and exits: saved to a file, it loads back (``--task FILE``) to
 scenario. Nothing is run and ``--out`` is not touched.
 
 Run from a terminal with Meshcat, the demo first compiles what it needs (announced on a first run),
-prints the URL and waits up to 30 s for a browser to open it (``--no-wait`` starts at once), runs
-at real time and keeps Meshcat up 5 s afterwards. Run from a script (standard input not a
-terminal) it prints the URL, does not wait or hold, and runs as fast as it can; the recording
-replays in simulated time either way.
+prints the addresses and waits up to 30 s for a browser to open the operator page (``--no-wait``
+starts at once), runs at real time and keeps Meshcat and the page up 5 s afterwards. Run from a
+script (standard input not a terminal) it prints the addresses, does not wait or hold, and runs as
+fast as it can; the recording replays in simulated time either way.
 
 ``--out`` is checked (created if needed, a probe file written and deleted) before anything is
 built. Ctrl-C (SIGINT) or SIGTERM stops the trial between simulator steps; the command then writes
@@ -81,6 +84,8 @@ from drake_disamb.commands._meshcat import (
     wait_for_browser,
 )
 from drake_disamb.commands._outputs import check_output_dir
+from drake_disamb.commands._page import add_page_arguments, print_page_address, start_page
+from drake_disamb.commands._record import NotRecorded, append_or_keep
 from drake_disamb.commands._signals import EXIT_INTERRUPTED, StopRequest
 from drake_disamb.commands._station import (
     EXIT_STATION_FAULT,
@@ -142,6 +147,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_scenario_text_argument(parser)
     add_station_arguments(parser)
     add_meshcat_arguments(parser)
+    add_page_arguments(parser)
     add_wait_argument(parser)
     parser.add_argument(
         "--out", type=Path, default=Path("out/demo"), help="output folder (default: out/demo)"
@@ -162,8 +168,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--live",
         action="store_true",
-        help="drive the interface yourself from the Meshcat page (keys, on-page buttons, sliders or a "
-        "gamepad) instead of the simulated user; runs at real time",
+        help="drive the interface yourself from the operator page (keys, on-page buttons or a gamepad) "
+        "instead of the simulated user; runs at real time",
     )
     parser.add_argument(
         "--duration",
@@ -316,11 +322,6 @@ def human_trial_id(folder: Path, subject: str, scenario: Any) -> tuple[str, int]
     return trial_id, n
 
 
-class NotRecorded(Exception):
-    """The ``--record`` folder did not take a person's trial; the message (one line) says why and
-    names the file that keeps it."""
-
-
 def record_human_trial(result, folder: Path, subject: str, trial_id: str, repetition: int) -> str:  # noqa: ANN001 (TrialResult)
     """Append a person's trial to the study folder ``folder`` (source ``human``) with its trace in
     ``folder/traces/``, and return its ``trial_id``.
@@ -335,7 +336,7 @@ def record_human_trial(result, folder: Path, subject: str, trial_id: str, repeti
             (:func:`~drake_disamb.study.data.folder.keep_unsaved`), which the message names.
         ValueError: A value of the trial the record refuses (names the field).
     """
-    from drake_disamb.study.data.folder import StudyFolder, keep_unsaved
+    from drake_disamb.study.data.folder import StudyFolder
     from drake_disamb.study.run.outcome import record_from_result, trace_arrays
 
     sc = result.scenario
@@ -359,20 +360,8 @@ def record_human_trial(result, folder: Path, subject: str, trial_id: str, repeti
         wall_time=0.0,
         extra={"live": True, "scenario_seed": sc.seed},
     )
-    if failure is None:
-        try:
-            study.append(record, trace)
-            return trial_id
-        except (OSError, ValueError) as exc:
-            failure = exc
-    why = failure.strerror if isinstance(failure, OSError) and failure.strerror else failure
-    try:
-        kept = keep_unsaved(folder, record, trace)
-    except OSError as exc:
-        raise NotRecorded(
-            f"{folder} did not take the trial ({why}), nor could it be kept beside it ({exc})"
-        ) from None
-    raise NotRecorded(f"{folder} did not take the trial ({why}); it is kept in {kept}")
+    append_or_keep(study, record, trace, failure)
+    return trial_id
 
 
 def _record_failed(message: object) -> int:
@@ -397,18 +386,19 @@ def _waits_for_browser(args: argparse.Namespace) -> bool:
     return not (args.no_meshcat or args.no_wait) and attended()
 
 
-def _show_url(meshcat: Any, args: argparse.Namespace, stop: StopRequest) -> None:
-    """Print the Meshcat URL (once) and, from a terminal, wait for a browser to open it."""
-    url = meshcat.web_url()
+def _show_url(meshcat: Any, page: Any, args: argparse.Namespace, stop: StopRequest) -> None:
+    """Print the Meshcat URL and the operator page's address (once) and, from a terminal, wait for
+    a browser to open the page."""
+    print(f"Meshcat: {meshcat.web_url()} (the scene alone)", flush=True)
+    print_page_address(page, args.live)
     if not _waits_for_browser(args):
-        print(f"Meshcat: {url} (open it in a browser to watch)", flush=True)
         return
     print(
-        f"Meshcat: {url}\nopen it in a browser: the trial starts when the page is open "
-        f"(waiting up to {WAIT_FOR_BROWSER:g} s; --no-wait starts at once)",
+        f"the trial starts when the page is open (waiting up to {WAIT_FOR_BROWSER:g} s; "
+        "--no-wait starts at once)",
         flush=True,
     )
-    if wait_for_browser(meshcat, WAIT_FOR_BROWSER, stop=lambda: bool(stop)):
+    if wait_for_browser(page, WAIT_FOR_BROWSER, stop=lambda: bool(stop)):
         print("the page is open", flush=True)
     elif not stop:
         print(f"no browser opened the page within {WAIT_FOR_BROWSER:g} s: starting anyway", flush=True)
@@ -492,38 +482,58 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         scenario = _scenario(args)
     except ValueError as exc:
         return _error(exc)
+    record = None
     if args.record is not None:
         try:  # every name the record takes, by the record's own check, before the trial runs
-            trial_id, repetition = human_trial_id(args.record, args.subject, scenario)
+            record = human_trial_id(args.record, args.subject, scenario)
         except ValueError as exc:
             return _error(f"--record: the trial's record would be refused: {exc}")
-
-    from drake_disamb.builder import build_shared_control_diagram
-    from drake_disamb.plotting import write_trial_figures
-    from drake_disamb.progress import SimulationProgress
-    from drake_disamb.trial import run_trial
-
-    meshcat = None
+    meshcat = page = None
     if not args.no_meshcat:
         try:
             meshcat = start_meshcat(args)
+            page = start_page(
+                args, meshcat, title=f"drake-disamb demo: {scenario.task}, {scenario.interface}"
+            )
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
+    try:
+        return _shown_trial(args, stop, scenario, out, meshcat, page, record)
+    finally:
+        if page is not None:
+            page.close()
+
+
+def _shown_trial(
+    args: argparse.Namespace,
+    stop: StopRequest,
+    scenario: Any,
+    out: Path,
+    meshcat: Any,
+    page: Any,
+    record: Any,
+) -> int:
+    """Build and run the trial (on the operator page ``page`` beside ``meshcat``'s scene, if any),
+    then print, write and record what it did; the exit status."""
+    from drake_disamb.builder import build_shared_control_diagram
+    from drake_disamb.progress import SimulationProgress
+    from drake_disamb.trial import run_trial
+
     watching = meshcat is not None and attended()  # someone at a terminal may watch the page
     realtime = args.realtime_rate if args.realtime_rate is not None else (1.0 if watching else 0.0)
     source = None
     if args.live:
         from drake_disamb.interfaces import InterfaceConfig
-        from drake_disamb.interfaces.live import MeshcatLiveInput
+        from drake_disamb.interfaces.live import page_live_input
 
         interface = InterfaceConfig(kind=scenario.interface, control_period=scenario.control_period)
-        source = MeshcatLiveInput(meshcat, interface)
+        source = page_live_input(page, interface)
         source.set_name("live_input")
         realtime = args.realtime_rate if args.realtime_rate is not None else 1.0
     watched = meshcat is not None and (args.live or _waits_for_browser(args))
     with announce_kernel_compilation(_say):
         try:
-            handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source)
+            handles = build_shared_control_diagram(scenario, meshcat=meshcat, input_source=source, page=page)
         except (ValueError, RuntimeError) as exc:
             return _error(exc)
         if watched:
@@ -533,7 +543,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
 
             run_trial(dataclasses.replace(scenario, duration=WARM_UP, station=Sim()), progress=False)
     if meshcat is not None:
-        _show_url(meshcat, args, stop)
+        _show_url(meshcat, page, args, stop)
     if args.live:
         print(INTERFACES[scenario.interface].live_help, flush=True)
     print(
@@ -547,6 +557,21 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     finally:
         if source is not None:
             source.remove_controls()
+    return _report(args, stop, result, handles, out, record, watching)
+
+
+def _report(
+    args: argparse.Namespace,
+    stop: StopRequest,
+    result: Any,
+    handles: Any,
+    out: Path,
+    record: Any,
+    watching: bool,
+) -> int:
+    """Print the trial's metrics, write its files and record it (``--record``); the exit status."""
+    from drake_disamb.plotting import write_trial_figures
+
     if result.interrupted:
         print(f"stopped by {stop.signal_name or 'KeyboardInterrupt'} at {result.time:.2f} s", flush=True)
     if result.fault:
@@ -559,7 +584,7 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
         return _error(f"--out: writing into {out} failed ({exc})")
     if args.record is not None:
         try:
-            trial_id = record_human_trial(result, args.record, args.subject, trial_id, repetition)
+            trial_id = record_human_trial(result, args.record, args.subject, *record)
         except NotRecorded as exc:
             return _record_failed(exc)
         except ValueError as exc:  # a value of the trial the record refuses (names the field)
@@ -573,8 +598,8 @@ def _run(args: argparse.Namespace, stop: StopRequest) -> int:
     if result.interrupted:
         return EXIT_INTERRUPTED
     hold = args.hold if args.hold is not None else (5.0 if watching else 0.0)
-    if meshcat is not None and hold > 0 and not stop:
-        print(f"Meshcat stays up for {hold:g} s (Ctrl-C to quit)", flush=True)
+    if handles.meshcat is not None and hold > 0 and not stop:
+        print(f"Meshcat and the operator page stay up for {hold:g} s (Ctrl-C to quit)", flush=True)
         end = time.monotonic() + hold
         while not stop and time.monotonic() < end:
             time.sleep(min(0.1, max(0.0, end - time.monotonic())))

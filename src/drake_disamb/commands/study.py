@@ -16,13 +16,17 @@ import importlib
 from drake_disamb.commands.study_run import error
 from drake_disamb.extras import MissingExtra, require
 
-HELP = "Run the user study with simulated users, import the authors' human logs, and report on them."
+HELP = (
+    "Run the user study with simulated users or with people (sessions at the operator page), import the "
+    "authors' human logs, and report on them."
+)
 
 # ``study`` sub-command name -> module in drake_disamb.commands.
 STUDY_COMMANDS: dict[str, str] = {
     "run": "study_run",
     "ablate": "study_ablate",
     "rerun": "study_rerun",
+    "session": "study_session",
     "report": "study_report",
     "import-authors": "study_import_authors",
     "calibrate": "study_calibrate",

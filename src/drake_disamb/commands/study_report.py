@@ -13,7 +13,9 @@ Reads DIR/trials.jsonl and DIR/traces/ (simulated, human or the authors' records
 writes only DIR/report/: index.html (self-contained), summary.json, stats.json and the figures as
 PNG. With --compare also compare.json (the means side by side), paradigm_effect.json (the
 Manual -> Disambiguation effect here and there) and per_goal.json (the means per intended goal of
-the reaching task, here and there), whose tables are printed. On an ablation folder
+the reaching task, here and there), whose tables are printed. A folder of sessions with people
+(`study session`) that holds their questionnaires (DIR/surveys.jsonl) also gets survey.json, and
+the questionnaire's table, beside the paper's, is printed. On an ablation folder
 (DIR/ablation.json) it writes the combined ablation report.
 
 examples (from the repository root):
@@ -42,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
     import statistics
 
     from drake_disamb.study.analysis.per_goal import per_goal_text
+    from drake_disamb.study.analysis.survey import survey_text
     from drake_disamb.study.report.effect_table import effect_text
     from drake_disamb.study.report.page import write_report
 
@@ -72,6 +75,8 @@ def run(args: argparse.Namespace) -> int:
             "stopped or slowed at a singularity (ik_status STOPPED or SINGULAR) on at least half of "
             f"their last minute of commanding (median share {statistics.median(held):.2f})"
         )
+    if files.survey is not None:
+        print(survey_text(json.loads(files.survey.read_text(encoding="utf-8")), str(args.dir)))
     if files.paradigm_effect is not None:
         rows = json.loads(files.paradigm_effect.read_text(encoding="utf-8"))
         print(effect_text(rows, str(args.dir), str(args.compare)))

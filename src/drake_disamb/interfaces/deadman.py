@@ -1,9 +1,10 @@
 """The live page's deadman: no browser at the page for a set time -> every raw signal released.
 
-A person drives a live trial from the Meshcat page; when the arm is real, losing that page (the tab
-closed, the network gone, the browser frozen) must not leave a joystick axis deflected or a switch
-closed. :class:`PageDeadman` sits between the live input and the interface and passes the raw
-signal through while at least one page is connected to Meshcat; once none has been for
+A person drives a live trial from a page (the operator page, or Meshcat's: anything with
+``GetNumActiveConnections``); when the arm is real, losing that page (the tab closed, the network
+gone, the browser frozen) must not leave a joystick axis deflected or a switch closed.
+:class:`PageDeadman` sits between the live input and the interface and passes the raw signal
+through while at least one page is connected; once none has been for
 ``timeout`` seconds it outputs zeros (no deflection, no switch, no button), until a page connects
 again. The builder puts it in front of the interface when a live input drives a station on a wire.
 """

@@ -8,7 +8,9 @@ page's buttons, their keys and what each does (its
 :data:`~drake_disamb.interfaces.LiveRole`) and the raw signals that drive, step the mode and
 request (``drive_raw``, ``pulse_raw``); this module knows no kind by name. The mapping from what
 the page reports to the raw signal is the pure function :func:`live_raw_step`, tested without a
-browser.
+browser. The same system reads the operator page
+(:class:`~drake_disamb.operator_page.server.OperatorPage`, which offers Meshcat's controls API):
+:func:`page_live_input` makes one there.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ __all__ = [
     "LiveState",
     "MeshcatLiveInput",
     "live_raw_step",
+    "page_live_input",
 ]
 
 LIVE_BUTTONS = 6
@@ -284,3 +287,16 @@ class MeshcatLiveInput(LeafSystem):
         discrete_state.get_mutable_vector(self._state_index).SetFromVector(after.to_vector())
         discrete_state.get_mutable_vector(self._raw_index).SetFromVector(after.raw)
         return EventStatus.Succeeded()
+
+
+def page_live_input(
+    page: Any, interface: InterfaceConfig, config: LiveInputConfig | None = None
+) -> MeshcatLiveInput:
+    """A :class:`MeshcatLiveInput` reading the operator page ``page`` instead of Meshcat's: the
+    kind's drive keys (roles ``drive+`` / ``drive-``) repeat while held there
+    (:meth:`~drake_disamb.operator_page.server.OperatorPage.repeat_while_held`), so a held key drives
+    for as long as it is held, with no browser's auto-repeat."""
+    source = MeshcatLiveInput(page, interface, config)
+    controls = INTERFACES[interface.kind].live_controls
+    page.repeat_while_held(c.keycode for c in controls if c.role in ("drive+", "drive-"))
+    return source

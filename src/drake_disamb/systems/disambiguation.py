@@ -24,6 +24,7 @@ from pydrake.systems.framework import Context, DiscreteValues, EventStatus, Leaf
 from drake_disamb.core.automatic import AutomaticConfig, TriggerState, automatic_trigger_update
 from drake_disamb.core.disambiguation import (
     DisambiguationConfig,
+    DisambiguationRequest,
     DisambiguationResult,
     ModeSelectionMethod,
     make_request,
@@ -251,21 +252,28 @@ class DisambiguationSystem(LeafSystem):
 
     def _select(self, request: LatchedRequest) -> DisambiguationResult:
         """The method's result for a usable ``request``."""
+        return self.method.select(self._core_request(request))
+
+    def _core_request(self, request: LatchedRequest) -> DisambiguationRequest:
+        """The core's request of a usable latched ``request`` (what the method is given)."""
         p = self._normalised_belief(request.belief)
         current = round(request.current_mode)
         goals = request.goal_poses.reshape(self.n_goals, POSE_SIZE)
-        return self.method.select(
-            make_request(
-                p,
-                request.ee_pose[:3],
-                goals[:, :3],
-                self.modes,
-                self.config,
-                orientation=request.ee_pose[3:],
-                goal_orientations=goals[:, 3:],
-                current_mode=current if current >= 0 else None,
-            )
+        return make_request(
+            p,
+            request.ee_pose[:3],
+            goals[:, :3],
+            self.modes,
+            self.config,
+            orientation=request.ee_pose[3:],
+            goal_orientations=goals[:, 3:],
+            current_mode=current if current >= 0 else None,
         )
+
+    def core_request(self, request: LatchedRequest) -> DisambiguationRequest | None:
+        """The request the method solves for the latched ``request`` (None when its inputs are
+        unusable and the mode is kept): what a display reads the method's choice against."""
+        return None if self._unusable(request) is not None else self._core_request(request)
 
     def get_last_result(self, context: Context) -> DisambiguationResult | None:
         """The result of the last answered request in ``context`` (None before any, or if unusable)."""

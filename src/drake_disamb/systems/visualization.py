@@ -37,7 +37,7 @@ from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
 from drake_disamb.core.layout import GRIPPER_DIM
-from drake_disamb.display import LegendRow
+from drake_disamb.display import OKABE_ITO, LegendRow
 
 ROOT = "/shared_control"
 COLOR_LEVELS = 5
@@ -60,7 +60,9 @@ GOAL_PALETTE: tuple[tuple[float, float, float], ...] = (
 """Fallback goal colours (matplotlib's tab10) when no colours are given; a scenario's
 visualizer uses its objects' colours (:func:`drake_disamb.display.goal_colors`)."""
 
-AXIS_COLORS = ((0.9, 0.1, 0.1), (0.1, 0.8, 0.1), (0.1, 0.3, 0.95))
+AXIS_COLORS = (OKABE_ITO["vermillion"], OKABE_ITO["bluish_green"], OKABE_ITO["blue"])
+"""The x, y and z axes' colours: Okabe and Ito's colour-blind-safe vermillion, bluish green and blue
+(red, green and blue as robotics draws axes, told apart by people who confuse red and green)."""
 
 
 def goal_color(index: int) -> tuple[float, float, float]:

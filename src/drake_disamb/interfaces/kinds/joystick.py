@@ -85,7 +85,7 @@ class Joystick(Interface):
     )
     live_axes = True
     live_help = (
-        "Live: drive from the Meshcat page (click into it first) or plug in a gamepad. A/D and S/W\n"
+        "Live: drive from the operator page (click into it first) or plug in a gamepad. A/D and S/W\n"
         "step the two axes, C centres them, M switches mode, Space asks the robot for the\n"
         "disambiguating mode. The trial ends at the goal given by --goal (default 0), after --duration,\n"
         "or when you press Ctrl-C here (the metrics, figure and recording so far are kept)."

@@ -378,13 +378,17 @@ def append_record(path: str | Path, record: TrialRecord) -> None:
         os.fsync(f.fileno())
 
 
-def read_records(path: str | Path, *, repair: bool = False) -> list[TrialRecord]:
+def read_records(
+    path: str | Path, *, repair: bool = False, skip_incomplete: bool = False
+) -> list[TrialRecord]:
     """Read every record of a ``trials.jsonl`` file.
 
     Args:
         path: The file.
         repair: A last line without its newline is what a killed writer leaves: with ``repair``
             the file is truncated to drop it (its trial is run again); without, it is an error.
+        skip_incomplete: Read past such a line without an error, leaving the file as it is (a
+            reader without the folder's lock that repairs it later).
 
     Raises:
         RecordError: The file cannot be read, or a line is not a record of this format; the message
@@ -397,16 +401,19 @@ def read_records(path: str | Path, *, repair: bool = False) -> list[TrialRecord]
         raise RecordError(f"{path}: cannot read the records: {err.strerror or err}") from None
     if raw and not raw.endswith(b"\n"):
         cut = raw.rfind(b"\n") + 1
-        if not repair:
+        if skip_incomplete and not repair:
+            raw = raw[:cut]
+        elif not repair:
             line_no = raw.count(b"\n") + 1
             raise RecordError(
                 f"{path}:{line_no}: the last line is incomplete (a run was killed while writing)"
             )
-        with open(path, "r+b") as f:
-            f.truncate(cut)
-            f.flush()
-            os.fsync(f.fileno())
-        raw = raw[:cut]
+        else:
+            with open(path, "r+b") as f:
+                f.truncate(cut)
+                f.flush()
+                os.fsync(f.fileno())
+            raw = raw[:cut]
     records: list[TrialRecord] = []
     seen: set[str] = set()
     for line_no, line in enumerate(raw.split(b"\n")[:-1] if raw else [], start=1):

@@ -10,6 +10,9 @@
   ``switches_requests.png``, ``completion_times.png``, ``raster.png``, ``alpha.png`` and
   ``traces_<interface>_<task>_<paradigm>.png``; with several sources in the folder each figure is
   drawn per source (``<name>_<source>.png``);
+- ``survey.json`` (a folder with questionnaires, ``surveys.jsonl``, written by ``study session``):
+  :func:`drake_disamb.study.analysis.survey.survey_rows`, the paper's questionnaire summarised as
+  its table, beside its values;
 - ``index.html``: every table (summary, skewness, tests, "the paper's finding / ours / agree?"
   of :func:`drake_disamb.study.analysis.findings.findings`) and every figure embedded as base64 PNG; no
   network, no script.
@@ -64,8 +67,11 @@ from drake_disamb.study.analysis.findings import (
 from drake_disamb.study.analysis.per_goal import SIDE_KEYS as GOAL_SIDE_KEYS
 from drake_disamb.study.analysis.per_goal import per_goal
 from drake_disamb.study.analysis.stats import MIXED_METRICS, run_tests
+from drake_disamb.study.analysis.survey import survey_rows
 from drake_disamb.study.data.folder import StudyFolder, write_atomic
 from drake_disamb.study.data.records import RecordError, TrialRecord
+from drake_disamb.study.data.surveys import SurveyRecord, read_surveys
+from drake_disamb.study.design.survey import PREFERENCES, STATEMENTS
 from drake_disamb.study.measures.metrics import TrialMetrics, request_time_skewness, summarize, trial_metrics
 from drake_disamb.study.report.effect_table import EFFECT_HEADERS, effect_cells
 from drake_disamb.study.report.figures import ablation_figure, save_figure, source_figures, trace_figures
@@ -101,6 +107,8 @@ class ReportFiles:
     summary: Path
     paradigm_effect: Path | None = None
     """``paradigm_effect.json`` (with ``compare`` only)."""
+    survey: Path | None = None
+    """``survey.json`` (a folder with questionnaires, ``surveys.jsonl``, only)."""
     per_goal: Path | None = None
     """``per_goal.json`` (with ``compare`` only)."""
 
@@ -408,6 +416,53 @@ def _per_goal_section(out: Path, records: Sequence[TrialRecord], other: Sequence
     ]
 
 
+def _survey_section(out: Path, surveys: Sequence[SurveyRecord]) -> list[str]:
+    """``survey.json`` written, and its section: the questionnaire's table beside the paper's."""
+    rows = survey_rows(surveys)
+    _write_json(out / "survey.json", rows)
+    cells = []
+    for r in rows:
+        if "answer" in r:
+            counts = ", ".join(f"{k} {v}" for k, v in r["counts"].items())
+            cells.append(
+                {
+                    "question": r["question"],
+                    "group": r["label"],
+                    "n": r["n"],
+                    "ours": f"{r['answer'] or 'n/a'} ({counts})",
+                    "paper": r["paper"],
+                }
+            )
+        else:
+            cells.append(
+                {
+                    "question": r["question"],
+                    "group": r["label"],
+                    "n": r["n"],
+                    "ours": _mean_sd_text(r["mean"], r["sd"]),
+                    "paper": _mean_sd_text(r["paper_mean"], r["paper_sd"]),
+                }
+            )
+    questions = [*STATEMENTS, *((q, t) for q, t, _ in PREFERENCES)]
+    statements = "".join(f"<li>{html.escape(q)}: {html.escape(t)}</li>" for q, t in questions)
+    return [
+        f"<h2>Questionnaire ({len(surveys)} subjects)</h2>",
+        '<p class="note">The paper\'s questionnaire: Q1-Q3 rated from 1 (strongly disagree) to 7 '
+        "(strongly agree) for each interface and task a subject did, mean &plusmn; standard deviation "
+        "over the ratings, overall, per interface and per task; Q4-Q7 the most frequent answer (ties "
+        "joined by /) and every answer's count. The paper's values (Table \"Subjective Survey "
+        'Results") are across tasks and per task. The numbers are in survey.json.</p>',
+        f"<ul>{statements}</ul>",
+        _table(cells, ("question", "group", "n", "ours", "paper")),
+    ]
+
+
+def _mean_sd_text(mean: float | None, sd: float | None) -> str:
+    if mean is None:
+        return "n/a"
+    return f"{mean:.2f} \u00b1 {sd:.2f}" if sd is not None else f"{mean:.2f}"
+
+
 def write_report(
     folder: str | Path, compare: str | Path | None = None, mixed_model: bool = True
 ) -> ReportFiles:
@@ -444,11 +499,16 @@ def write_report(
         sections += part
         figures += drawn
     sections += _tests_sections(tests)
+    surveys = read_surveys(folder)
+    if surveys:
+        sections += _survey_section(out, surveys)
     if compare is not None and other is not None:
         sections += _means_section(out, compare, summary, other)
         sections += _effect_section(out, records, other, tests)
         sections += _per_goal_section(out, records, other)
     files = _write_page(out, f"Study report: {folder.name}", sections, figures)
+    if surveys:
+        files.survey = out / "survey.json"
     if other is not None:
         files.paradigm_effect = out / "paradigm_effect.json"
         files.per_goal = out / "per_goal.json"
