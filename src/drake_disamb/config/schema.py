@@ -255,7 +255,7 @@ class InferenceSpec:
             the forward projection: ``"dot"`` the paper's ``u_h^rot . u_a^rot`` (rad^2/s^2, at
             most about 0.08 with the head array) or ``"cosine"`` the cosine of their angle (in
             ``[-1, 1]``; the default, the ``mico`` preset's: with the dot product a joystick
-            reaching trial stalls, README "Where we differ from the paper"). See
+            reaching trial stalls, docs/choices.md, "Where we differ from the paper"). See
             :attr:`drake_disamb.core.inference.DFTParams.agreement_measure`.
         goal_set: What the belief is over in a multi-step task: ``"stage"`` (the default) the
             current stage's goals, reset to the rest state when a stage completes, or ``"task"``
@@ -264,7 +264,7 @@ class InferenceSpec:
             at one of its own goals; the same for a single-stage task. Measured with the simulated
             user, ``"task"`` keeps the belief (and the assistance) on the goal just completed, where
             the gripper still is (proximity term): it pulls the cup back toward the container and
-            2 of the 4 joystick pouring trials fail (README "Where we differ from the paper").
+            2 of the 4 joystick pouring trials fail (docs/choices.md, "Where we differ from the paper").
     """
 
     method: str = field(default="dft", metadata=_meta(choices=INFERENCE_METHODS))

@@ -158,7 +158,7 @@ class BlendingConfig:
             :class:`drake_disamb.systems.blending.SharedControlBlender` for why; measured with
             the simulated user (``benchmarks/bench_tasks.py --set
             blending.assist_without_input=true``), the paper's law fails reaching trials the
-            default completes (README, "Where we differ from the paper").
+            default completes (docs/choices.md, "Where we differ from the paper").
         max_linear_speed: Limit (m/s) on the norm of the blended translation. The default is the
             largest blended translation seen in the study logs (docs/facts.md section 6).
         max_angular_speed: Limit (rad/s) on the norm of the blended rotation; default the largest

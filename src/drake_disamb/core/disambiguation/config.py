@@ -191,8 +191,8 @@ def mico_config(**overrides: Any) -> DisambiguationConfig:
       favours a goal once the gripper is clearly nearer to it than to its neighbours.
     - Agreement is the cosine of the rotational parts (``agreement_measure="cosine"``; the paper's
       plain dot product is ``"dot"``: measured with the simulated user it leaves the first
-      requests in a translation mode and 2 of the 5 joystick reaching trials stall, see the
-      README's "Where we differ from the paper") with the per-goal potential-field commands
+      requests in a translation mode and 2 of the 5 joystick reaching trials stall, see
+      docs/choices.md, "Where we differ from the paper") with the per-goal potential-field commands
       (:func:`~drake_disamb.core.autonomy.potential_field_commands`, default gains) recomputed at
       every projected pose: this is what makes goals that differ only in orientation pick a
       rotational mode.
