@@ -101,6 +101,7 @@ STUDY_ARGV: dict[str, list[str]] = {
     "run": ["--quick", "--out", "{tmp}/out"],
     "ablate": ["--quick", "--out", "{tmp}/out", "--switch", "inference.dft.tau1=0,4"],
     "rerun": ["{tmp}/out", "T1"],
+    "session": ["--subject", "P01", "--out", "{tmp}/out"],
     "report": ["{tmp}/out"],
     "import-authors": ["{tmp}/data", "--out", "{tmp}/out"],
     "calibrate": ["{tmp}/data"],
