@@ -14,10 +14,12 @@ from drake_disamb.interfaces import INTERFACES, InterfaceConfig, initial_state, 
 from drake_disamb.interfaces.kinds.joystick import sector_stick
 from drake_disamb.interfaces.live import (
     AXIS_SLIDERS,
+    PAD_BUTTON_OF_KEY,
     LiveInputConfig,
     LiveState,
     MeshcatLiveInput,
     live_raw_step,
+    pad_buttons,
 )
 
 HEAD = InterfaceConfig(kind="head_array")
@@ -74,7 +76,7 @@ def test_gamepad_buttons_press_on_rising_edges_only() -> None:
     s = LiveState()
     presses = 0
     for k, level in enumerate([0, 1, 1, 1, 0, 0, 1, 0]):
-        s = live_raw_step(s, k * 0.01, "joystick", np.zeros(4), pad_buttons=(level, 0))
+        s = live_raw_step(s, k * 0.01, "joystick", np.zeros(4), pad=(0, 0, level, 0))
         presses += int(s.raw[2])
     assert presses == 2
 
@@ -100,6 +102,59 @@ def test_validation_and_state_round_trip() -> None:
     np.testing.assert_array_equal(back.to_vector(), s.to_vector())
     with pytest.raises(ValueError, match="LiveState vector"):
         LiveState.from_vector(np.zeros(3))
+
+
+def run_pad(kind: str, held: dict[int, tuple[float, float]], until: float) -> np.ndarray:
+    """Step :func:`live_raw_step` every 10 ms with no clicks; ``held`` maps a live control's index
+    to the ``[from, to)`` seconds its gamepad button is pressed. The raw signals, one row per tick."""
+    state, raws = LiveState(), []
+    n = len(INTERFACES[kind].live_controls)
+    for k in range(int(round(until / 0.01)) + 1):
+        t = round(k * 0.01, 10)
+        pad = [1.0 if i in held and held[i][0] <= t < held[i][1] else 0.0 for i in range(n)]
+        state = live_raw_step(state, t, kind, np.zeros(n), pad=pad)
+        raws.append(state.raw.copy())
+    return np.array(raws)
+
+
+def test_every_kind_has_a_gamepad_button_for_each_control_it_shows() -> None:
+    for kind, variant in INTERFACES.items():
+        buttons = pad_buttons(kind)
+        assert len(buttons) == len(variant.live_controls)
+        shown = [
+            b
+            for b, c in zip(buttons, variant.live_controls, strict=True)
+            if c.role in ("drive+", "drive-", "next", "previous", "request")
+        ]
+        assert all(b is not None for b in shown), (kind, buttons)
+        assert len(set(shown)) == len(shown), (kind, buttons)
+    assert pad_buttons("head_array") == tuple(
+        PAD_BUTTON_OF_KEY[c.keycode] for c in INTERFACES["head_array"].live_controls
+    )
+    assert pad_buttons("joystick") == (None, None, 0, 1)
+
+
+def test_a_gamepad_drives_a_switch_interface_while_pressed_and_no_longer() -> None:
+    t = np.arange(int(round(1.5 / 0.01)) + 1) * 0.01
+    raws = run_pad("head_array", {0: (0.1, 0.5), 1: (0.8, 0.9)}, 1.5)  # D-pad left, then right
+    left, right = raws[:, 0], raws[:, 1]
+    np.testing.assert_array_equal(left[(t >= 0.1) & (t < 0.495)], 1.0)
+    assert left[t >= 0.505].max() == 0.0  # released: open at once, no hold time
+    np.testing.assert_array_equal(right[(t >= 0.8) & (t < 0.895)], 1.0)
+    assert right[t >= 0.905].max() == 0.0
+    both = run_pad("head_array", {0: (0.1, 0.5), 1: (0.2, 0.5)}, 0.6)
+    assert np.abs(both[25:45, :2]).max() == 0.0  # both directions pressed: neither
+
+
+def test_a_held_gamepad_button_is_one_mode_event_or_request() -> None:
+    raws = run_pad("head_array", {2: (0.1, 0.6), 3: (0.3, 0.4)}, 1.0)  # Back held, Request tapped
+    assert raws[:, 2].sum() == 1 and raws[:, 3].sum() == 1
+    raws = run_pad("sip_and_puff", {2: (0.1, 0.3), 3: (0.5, 0.7)}, 1.0)  # soft puff, then soft sip
+    variant = INTERFACES["sip_and_puff"]
+    for role, start in (("next", 10), ("previous", 50)):
+        pulse = np.asarray(variant.pulse_raw(role), dtype=float)
+        hits = [k for k, r in enumerate(raws) if np.array_equal(r, pulse)]
+        assert hits == [start], (role, hits)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -195,6 +250,27 @@ def test_joystick_system_reads_sliders_or_a_gamepad_and_recentres() -> None:
     np.testing.assert_allclose(system.get_output_port().Eval(context), [0.0, 0.8, 1.0, 0.0])
     simulator.AdvanceTo(0.055)  # still held: one press only
     np.testing.assert_allclose(system.get_output_port().Eval(context), [0.0, 0.8, 0.0, 0.0])
+
+
+def test_the_head_array_system_reads_a_gamepad() -> None:
+    page = FakePage()
+    system = MeshcatLiveInput(page, HEAD)
+    simulator = Simulator(system)
+    context = simulator.get_mutable_context()
+    values = [0.0] * 17
+    values[PAD_BUTTON_OF_KEY["ArrowLeft"]] = 1.0
+    values[PAD_BUTTON_OF_KEY["Space"]] = 1.0
+    page.gamepad = SimpleNamespace(index=0, axes=[0.0, 0.0], button_values=values)
+    simulator.AdvanceTo(0.005)  # D-pad left drives +, A is the request
+    np.testing.assert_array_equal(system.get_output_port().Eval(context), [1.0, 0.0, 0.0, 1.0])
+    simulator.AdvanceTo(0.035)  # still held: the request once, the switch closed
+    np.testing.assert_array_equal(system.get_output_port().Eval(context), [1.0, 0.0, 0.0, 0.0])
+    page.gamepad = SimpleNamespace(index=0, axes=[0.0, 0.0], button_values=[0.0] * 17)
+    simulator.AdvanceTo(0.045)  # released: open at once
+    np.testing.assert_array_equal(system.get_output_port().Eval(context), np.zeros(4))
+    page.gamepad = SimpleNamespace(index=0, axes=[], button_values=[1.0])  # a pad of one button: A
+    simulator.AdvanceTo(0.055)
+    np.testing.assert_array_equal(system.get_output_port().Eval(context), [0.0, 0.0, 0.0, 1.0])
 
 
 def test_a_live_person_drives_the_arm() -> None:

@@ -70,13 +70,14 @@ def test_each_key_says_what_it_does_in_the_current_mode() -> None:
         ("\u2192", "move down (-z) (hold)"),
         ("\u2193", f"next mode: {mode_title(modes[3])}"),
         ("Space", "ask the robot to choose the mode that helps it most"),
+        ("gamepad", "the D-pad works as the arrow keys, button A (0) as Space"),
     ]
     gripper = key_actions(head, modes, len(modes) - 1, requests_served=False)
     assert gripper[0].action == "open the gripper (hold)" and gripper[1].action == "close the gripper (hold)"
     assert gripper[2].action == f"next mode: {mode_title(modes[0])}"  # the cycle wraps
     assert "logged only" in gripper[3].action
     sip = key_actions(INTERFACES["sip_and_puff"], INTERFACES["sip_and_puff"].modes, 0)
-    assert [r.keys for r in sip] == ["\u2191", "\u2193", "\u2192", "\u2190", "Space"]
+    assert [r.keys for r in sip] == ["\u2191", "\u2193", "\u2192", "\u2190", "Space", "gamepad"]
     assert sip[3].action == f"previous mode: {mode_title(INTERFACES['sip_and_puff'].modes[-1])}"
     stick = INTERFACES["joystick"]
     rows = key_actions(stick, stick.modes, 0, AXIS_SLIDERS, mode_selection="direct")

@@ -231,6 +231,8 @@ def key_actions(
         rows.append(KeyAction(key_name(control.keycode), action, (control.keycode,)))
     if variant.live_axes:
         rows.append(KeyAction("gamepad", "left stick: the two axes; button 0: mode; button 1: request"))
+    else:  # drake_disamb.interfaces.live.PAD_BUTTON_OF_KEY
+        rows.append(KeyAction("gamepad", "the D-pad works as the arrow keys, button A (0) as Space"))
     return rows
 
 

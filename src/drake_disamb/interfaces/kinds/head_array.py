@@ -41,7 +41,8 @@ class HeadArray(Interface):
         LiveControl("Request disambiguation [Space]", "Space", "request"),
     )
     live_help = (
-        "Live: drive from the operator page (click into it first). Hold the Left (+) or Right (-)\n"
+        "Live: drive from the operator page (click into it first) or a gamepad (the D-pad as the\n"
+        "arrow keys, button A as Space). Hold the Left (+) or Right (-)\n"
         "arrow key to drive the mode's dimension (a tap drives it for 0.6 s); Down switches to the\n"
         "next mode, Space asks the robot for the disambiguating mode. The trial ends at the goal\n"
         "given by --goal (default 0), after --duration, or when you press Ctrl-C here (the metrics,\n"

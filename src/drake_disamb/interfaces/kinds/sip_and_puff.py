@@ -80,7 +80,8 @@ class SipAndPuff(Interface):
         LiveControl("Request disambiguation [Space]", "Space", "request"),
     )
     live_help = (
-        "Live: drive from the operator page (click into it first). Hold Up (hard puff, +) or Down\n"
+        "Live: drive from the operator page (click into it first) or a gamepad (the D-pad as the\n"
+        "arrow keys, button A as Space). Hold Up (hard puff, +) or Down\n"
         "(hard sip, -) to drive the mode's dimension (a tap drives it for 0.6 s); Right (soft puff)\n"
         "and Left (soft sip) step to the next and previous mode, Space asks the robot for the\n"
         "disambiguating mode. The trial ends at the goal given by --goal (default 0), after\n"
