@@ -18,7 +18,7 @@ from support import REPO, SRC
 from test_study_report import synthetic_records
 
 from drake_disamb.cli import main
-from drake_disamb.commands.study import STUDY_COMMANDS
+from drake_disamb.commands.study import STUDY_COMMANDS, WITHOUT_EXTRA
 from drake_disamb.commands.study_run import check_scheduler_address
 from drake_disamb.extras import EXTRAS, MissingExtra, import_optional, missing_modules, require
 from drake_disamb.study.analysis.stats import run_tests
@@ -94,6 +94,14 @@ def test_without_the_extra_demo_runs_and_study_says_which_extra(tmp_path: Path) 
     study = run("-m", "drake_disamb.cli", "study", "run", "--quick", "--out", str(tmp_path / "study"))
     assert (study.returncode, study.stderr, study.stdout) == (2, LINE.format(command="run"), "")
     assert not (tmp_path / "study").exists()
+    # A session with a person needs no extra: its modules import, and it reaches its own checks.
+    modules = "drake_disamb.commands.study_session, drake_disamb.study.run.session, drake_disamb.trial"
+    assert run("-c", f"import {modules}").returncode == 0
+    session = run(
+        "-m", "drake_disamb.cli", "study", "session", "--subject", "../x", "--out", str(tmp_path / "s")
+    )
+    assert session.returncode == 2 and "--subject" in session.stderr and "extra" not in session.stderr
+    assert not (tmp_path / "s").exists()
 
 
 # One valid command line per study sub-command (the check comes before any of them reads its input).
@@ -101,7 +109,6 @@ STUDY_ARGV: dict[str, list[str]] = {
     "run": ["--quick", "--out", "{tmp}/out"],
     "ablate": ["--quick", "--out", "{tmp}/out", "--switch", "inference.dft.tau1=0,4"],
     "rerun": ["{tmp}/out", "T1"],
-    "session": ["--subject", "P01", "--out", "{tmp}/out"],
     "report": ["{tmp}/out"],
     "import-authors": ["{tmp}/data", "--out", "{tmp}/out"],
     "calibrate": ["{tmp}/data"],
@@ -110,7 +117,18 @@ STUDY_ARGV: dict[str, list[str]] = {
 
 
 def test_every_study_command_has_a_command_line_here() -> None:
-    assert set(STUDY_ARGV) == set(STUDY_COMMANDS)
+    assert set(STUDY_ARGV) == set(STUDY_COMMANDS) - WITHOUT_EXTRA
+    assert WITHOUT_EXTRA == {"session"}
+
+
+@pytest.mark.usefixtures("absent")
+def test_a_session_with_a_person_needs_no_extra(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``study session`` runs on the base install: past the extra, to its own checks (here the
+    subject id's); a fresh process imports its modules without the extra's (the test above)."""
+    assert main(["study", "session", "--subject", "../P01", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "--subject" in err and "extra" not in err, err
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("command", sorted(STUDY_ARGV))

@@ -4,8 +4,8 @@ Each module in :data:`STUDY_COMMANDS` defines ``HELP``, ``add_arguments(parser)`
 ``run(args) -> int``, like the top-level commands, and imports pydrake lazily.
 
 The study needs the ``study`` extra (:mod:`drake_disamb.extras`): without it every ``study``
-sub-command prints one line naming the extra and exits with status 2 before it reads or makes
-anything (``--help`` still works).
+sub-command but those of :data:`WITHOUT_EXTRA` prints one line naming the extra and exits with
+status 2 before it reads or makes anything (``--help`` still works).
 """
 
 from __future__ import annotations
@@ -33,6 +33,11 @@ STUDY_COMMANDS: dict[str, str] = {
     "identify": "study_identify",
 }
 
+WITHOUT_EXTRA = frozenset({"session"})
+"""Sub-commands that run without the ``study`` extra: a session with a person is the operator page
+with a schedule and a questionnaire (neither Dask nor statsmodels), so a lab's machine at the arm
+needs only the base install; the report on its records needs the extra."""
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="study_command", metavar="STUDY_COMMAND", required=True)
@@ -44,8 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    try:
-        require("study")
-    except MissingExtra as exc:
-        return error(args.study_command, exc)
+    if args.study_command not in WITHOUT_EXTRA:
+        try:
+            require("study")
+        except MissingExtra as exc:
+            return error(args.study_command, exc)
     return int(args._study_run(args) or 0)
