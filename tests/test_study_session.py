@@ -138,6 +138,16 @@ def test_the_survey_table_is_the_papers_beside_its_values(tmp_path: Path) -> Non
         read_surveys(tmp_path)
 
 
+def test_a_questionnaire_cut_by_a_kill_is_named_as_such(tmp_path: Path) -> None:
+    """Surveys are read as the records are: a last line without its newline is what a killed writer
+    leaves, and the error says so."""
+    append_survey(tmp_path, SurveyRecord("P1", {}, {}, "x"))
+    with open(tmp_path / "surveys.jsonl", "a", encoding="utf-8") as f:
+        f.write('{"subject": "P2", "rat')
+    with pytest.raises(ValueError, match=r"surveys.jsonl:2: the last line is incomplete"):
+        read_surveys(tmp_path)
+
+
 # -- what is refused ------------------------------------------------------------------------------------
 
 

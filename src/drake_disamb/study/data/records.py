@@ -29,10 +29,10 @@ import json
 import math
 import os
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -42,13 +42,17 @@ __all__ = [
     "SOURCES",
     "RecordError",
     "TrialRecord",
+    "append_line",
     "append_record",
     "assistance_onset",
     "check_goals",
     "check_names",
+    "read_json_lines",
     "read_records",
     "write_records",
 ]
+
+T = TypeVar("T")
 
 FORMAT = 1
 """Version of the record layout, written in every record's ``format`` field."""
@@ -365,40 +369,58 @@ def _required(cls: type, name: str) -> bool:
     return f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
 
 
-def append_record(path: str | Path, record: TrialRecord) -> None:
-    """Append ``record`` as one line to ``path``, flushed and fsync-ed before returning.
+def append_line(path: str | Path, line: str) -> None:
+    """Append ``line`` (JSON, no newline) and its newline to ``path``, flushed and fsync-ed before
+    returning.
 
     The line is written with one ``write`` call on a file opened for appending, so a reader never
-    sees two records interleaved; a kill can only leave the last line half-written.
+    sees two lines interleaved; a kill can only leave the last line half-written
+    (:func:`read_json_lines` says so, or repairs it).
     """
-    line = record.to_json() + "\n"
     with open(path, "a", encoding="utf-8") as f:
-        f.write(line)
+        f.write(line + "\n")
         f.flush()
         os.fsync(f.fileno())
 
 
-def read_records(
-    path: str | Path, *, repair: bool = False, skip_incomplete: bool = False
-) -> list[TrialRecord]:
-    """Read every record of a ``trials.jsonl`` file.
+def append_record(path: str | Path, record: TrialRecord) -> None:
+    """Append ``record`` as one line to ``path`` (:func:`append_line`)."""
+    append_line(path, record.to_json())
+
+
+def read_json_lines(
+    path: str | Path,
+    parse: Callable[[Any], T],
+    key: Callable[[T], str],
+    *,
+    what: str,
+    twice: str,
+    repair: bool = False,
+    skip_incomplete: bool = False,
+) -> list[T]:
+    """Every line of a JSON-lines file written by :func:`append_line`, each parsed by ``parse``
+    (which raises :class:`RecordError`), no two with the same ``key``.
 
     Args:
         path: The file.
+        parse: A line's JSON value to its record.
+        key: What must not repeat (a record's ``trial_id``, a questionnaire's subject).
+        what: What the file holds, for the error of an unreadable file (``"the records"``).
+        twice: The error of a repeated key, with ``{}`` for its repr (``"trial_id {} appears twice"``).
         repair: A last line without its newline is what a killed writer leaves: with ``repair``
-            the file is truncated to drop it (its trial is run again); without, it is an error.
+            the file is truncated to drop it; without, it is an error.
         skip_incomplete: Read past such a line without an error, leaving the file as it is (a
             reader without the folder's lock that repairs it later).
 
     Raises:
-        RecordError: The file cannot be read, or a line is not a record of this format; the message
-            names the file and the 1-based line number. Nothing is modified except by ``repair``.
+        RecordError: The file cannot be read, or a line is not a record; the message names the file
+            and the 1-based line number. Nothing is modified except by ``repair``.
     """
     path = Path(path)
     try:
         raw = path.read_bytes()
     except OSError as err:
-        raise RecordError(f"{path}: cannot read the records: {err.strerror or err}") from None
+        raise RecordError(f"{path}: cannot read {what}: {err.strerror or err}") from None
     if raw and not raw.endswith(b"\n"):
         cut = raw.rfind(b"\n") + 1
         if skip_incomplete and not repair:
@@ -414,23 +436,44 @@ def read_records(
                 f.flush()
                 os.fsync(f.fileno())
             raw = raw[:cut]
-    records: list[TrialRecord] = []
+    records: list[T] = []
     seen: set[str] = set()
     for line_no, line in enumerate(raw.split(b"\n")[:-1] if raw else [], start=1):
         if not line.strip():
             raise RecordError(f"{path}:{line_no}: empty line")
         try:
-            data = json.loads(line.decode("utf-8"))
-            record = TrialRecord.from_dict(data)
+            record = parse(json.loads(line.decode("utf-8")))
         except (UnicodeDecodeError, json.JSONDecodeError) as err:
             raise RecordError(f"{path}:{line_no}: not a JSON record: {err}") from None
         except RecordError as err:
             raise RecordError(f"{path}:{line_no}: {err}") from None
-        if record.trial_id in seen:
-            raise RecordError(f"{path}:{line_no}: trial_id {record.trial_id!r} appears twice")
-        seen.add(record.trial_id)
+        if key(record) in seen:
+            raise RecordError(f"{path}:{line_no}: " + twice.format(repr(key(record))))
+        seen.add(key(record))
         records.append(record)
     return records
+
+
+def read_records(
+    path: str | Path, *, repair: bool = False, skip_incomplete: bool = False
+) -> list[TrialRecord]:
+    """Read every record of a ``trials.jsonl`` file (:func:`read_json_lines`: ``repair`` drops a
+    last line a killed writer left half-written, ``skip_incomplete`` reads past it; a ``trial_id``
+    twice is an error).
+
+    Raises:
+        RecordError: The file cannot be read, or a line is not a record of this format; the message
+            names the file and the 1-based line number. Nothing is modified except by ``repair``.
+    """
+    return read_json_lines(
+        path,
+        TrialRecord.from_dict,
+        lambda r: r.trial_id,
+        what="the records",
+        twice="trial_id {} appears twice",
+        repair=repair,
+        skip_incomplete=skip_incomplete,
+    )
 
 
 def write_records(path: str | Path, records: Iterable[TrialRecord]) -> None:

@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from drake_disamb.study.data.records import _SAFE_SUBJECT, RecordError
+from drake_disamb.study.data.records import _SAFE_SUBJECT, RecordError, append_line, read_json_lines
 
 __all__ = ["SURVEYS_FILE", "SurveyRecord", "append_survey", "read_surveys"]
 
@@ -98,40 +97,28 @@ class SurveyRecord:
 
 
 def append_survey(folder: str | Path, record: SurveyRecord) -> Path:
-    """Append ``record`` to ``folder/surveys.jsonl`` (one write of one line, flushed and fsync-ed);
-    returns the file."""
+    """Append ``record`` to ``folder/surveys.jsonl`` as one line
+    (:func:`~drake_disamb.study.data.records.append_line`); returns the file."""
     path = Path(folder) / SURVEYS_FILE
-    with open(path, "a", encoding="utf-8") as f:
-        f.write(record.to_json() + "\n")
-        f.flush()
-        os.fsync(f.fileno())
+    append_line(path, record.to_json())
     return path
 
 
 def read_surveys(folder: str | Path) -> list[SurveyRecord]:
-    """The questionnaires of ``folder`` (``[]`` without ``surveys.jsonl``).
+    """The questionnaires of ``folder`` (``[]`` without ``surveys.jsonl``), read as the records are
+    (:func:`~drake_disamb.study.data.records.read_json_lines`).
 
     Raises:
-        RecordError: A line that is not a survey record, or a subject twice (file and line named).
+        RecordError: A line that is not a survey record, a last line a killed writer left
+            half-written, or a subject twice (file and line named).
     """
     path = Path(folder) / SURVEYS_FILE
     if not path.exists():
         return []
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise RecordError(f"{path}: cannot read the questionnaires: {err}") from None
-    records: list[SurveyRecord] = []
-    seen: set[str] = set()
-    for number, line in enumerate(lines, start=1):
-        try:
-            record = SurveyRecord.from_dict(json.loads(line))
-        except json.JSONDecodeError as err:
-            raise RecordError(f"{path}:{number}: not a JSON record: {err}") from None
-        except RecordError as err:
-            raise RecordError(f"{path}:{number}: {err}") from None
-        if record.subject in seen:
-            raise RecordError(f"{path}:{number}: subject {record.subject!r} answered twice")
-        seen.add(record.subject)
-        records.append(record)
-    return records
+    return read_json_lines(
+        path,
+        SurveyRecord.from_dict,
+        lambda r: r.subject,
+        what="the questionnaires",
+        twice="subject {} answered twice",
+    )
