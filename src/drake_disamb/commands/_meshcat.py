@@ -135,9 +135,9 @@ def _taken(host: str, port: int) -> str:
     return f"--meshcat-port: port {port} on {host} is taken by another program{hint}"
 
 
-def exposure_warning(host: str, port: int, live: bool) -> str | None:
-    """The warning for a Meshcat server that listens beyond this machine (None on localhost), with
-    the address(es) others can open."""
+def exposure_warning(host: str, port: int, live: bool, server: str = "Meshcat") -> str | None:
+    """The warning for a server (``server``: Meshcat, or the operator page) that listens beyond this
+    machine (None on localhost), with the address(es) others can open."""
     if host in LOCAL_HOSTS:
         return None
     if _bind_host(host) == "":
@@ -154,7 +154,7 @@ def exposure_warning(host: str, port: int, live: bool) -> str | None:
         if live
         else "can watch the arm (and the page's scene)"
     )
-    return f"warning: Meshcat listens on {where}: anyone who can reach port {port} ({urls}) {what}"
+    return f"warning: {server} listens on {where}: anyone who can reach port {port} ({urls}) {what}"
 
 
 @contextlib.contextmanager

@@ -34,9 +34,10 @@ def start_page(args: argparse.Namespace, meshcat: Any, title: str = "") -> Any:
     if port is not None and not 0 < port < 65536:
         raise ValueError(f"--page-port: expected a port in 1..65535, got {port}")
     page = OperatorPage(args.meshcat_host, port, meshcat_port=meshcat.port(), title=title)
-    warning = exposure_warning(args.meshcat_host, page.port(), live=bool(getattr(args, "live", True)))
+    live = bool(getattr(args, "live", True))
+    warning = exposure_warning(args.meshcat_host, page.port(), live=live, server="the operator page")
     if warning is not None:
-        print(warning.replace("Meshcat listens", "the operator page listens"), file=sys.stderr, flush=True)
+        print(warning, file=sys.stderr, flush=True)
     return page
 
 
