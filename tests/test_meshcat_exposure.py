@@ -32,6 +32,8 @@ def test_every_interface_warns_with_the_real_address() -> None:
     assert live is not None and "DRIVE IT" in live
     named = exposure_warning("192.0.2.7", 7002, live=True)
     assert named is not None and "http://192.0.2.7:7002" in named
+    page = exposure_warning("192.0.2.7", 7100, live=True, server="the operator page")
+    assert page is not None and page.startswith("warning: the operator page listens on 192.0.2.7:")
 
 
 @pytest.fixture
